@@ -1,0 +1,942 @@
+"""The case file: one YAML document describing a block, its contact, the ground motion and the run.
+
+A case file is plain data (``yaml.safe_load``; no tags that construct objects). Every quantity may
+be a number, taken as SI, or a string with a unit (``"800 gal"``, ``"0.1 ms"``, ``"5 deg"``; see
+:mod:`rockslide.units`). Everything inside rockslide is SI: [m], [kg], [s], [rad].
+
+The schema :data:`CASE_KEYS` drives the validation (unknown keys and their nearest valid key,
+required keys, types, unit kinds, defaults and bounds) and the key reference in the README. Checks
+that involve two keys (``mu_kinetic <= mu_static``, ``output.interval`` a multiple of
+``solver.dt``, exclusive scale keys, at least one record) are in :func:`_cross_checks`.
+
+A ``null`` value is the same as leaving the key out: the default applies, or a required key is
+reported missing.
+
+Every problem raises :class:`~rockslide.errors.CaseError` with a one-line message naming the file,
+the dotted key (``contact.mu_static``) or the line and column, what was given and what is expected.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import difflib
+import math
+import os
+import re
+import reprlib
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+
+import yaml
+
+from .errors import CaseError
+from .units import STANDARD_GRAVITY, UNITS, parse_quantity, unit_factor
+
+__all__ = [
+    "CASE_KEYS",
+    "Block",
+    "Case",
+    "Contact",
+    "Ground",
+    "Initial",
+    "Output",
+    "RecordSpec",
+    "Scale",
+    "Solver",
+    "case_to_dict",
+    "case_with",
+    "iter_case_keys",
+    "load_case",
+    "parse_case",
+]
+
+# --------------------------------------------------------------------------------------------------
+# The case as data
+# --------------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Block:
+    """A rectangular rigid block standing on its base.
+
+    Parameters
+    ----------
+    height : float
+        Full height 2h [m].
+    width : float
+        Full base width 2b [m].
+    mass : float
+        Mass [kg].
+    """
+
+    height: float
+    width: float
+    mass: float
+
+    @property
+    def half_width(self) -> float:
+        """Half the base width, b [m]."""
+        return self.width / 2.0
+
+    @property
+    def half_height(self) -> float:
+        """Half the height, h [m] (the height of the centre of mass)."""
+        return self.height / 2.0
+
+    @property
+    def b(self) -> float:
+        """Alias of :attr:`half_width` [m]."""
+        return self.half_width
+
+    @property
+    def h(self) -> float:
+        """Alias of :attr:`half_height` [m]."""
+        return self.half_height
+
+
+@dataclass(frozen=True)
+class Contact:
+    """Block-foundation contact.
+
+    Parameters
+    ----------
+    mu_static : float
+        Static friction coefficient [-], >= 0.
+    mu_kinetic : float
+        Kinetic friction coefficient [-], 0 <= mu_kinetic <= mu_static.
+    restitution : float
+        Coefficient of restitution of the rocking impacts [-], within [0, 1].
+    """
+
+    mu_static: float
+    mu_kinetic: float
+    restitution: float
+
+
+@dataclass(frozen=True)
+class RecordSpec:
+    """Where and how to read one accelerogram (the reading itself is :mod:`rockslide.records`).
+
+    Parameters
+    ----------
+    file : str
+        File name; a relative name resolves against the case file's folder first.
+    format : str, optional
+        File format; None lets the reader detect it.
+    units : str, optional
+        Acceleration unit of the values (``"g"``, ``"gal"``, ``"m/s^2"``...); None = from the file.
+    time_column, column : int or str, optional
+        1-based column number or header name of the time and of the acceleration values.
+    dt : float, optional
+        Sample interval [s] for files without time column or header.
+    skip_lines : int
+        Lines to skip before the data, >= 0.
+    """
+
+    file: str
+    format: str | None = None
+    units: str | None = None
+    time_column: int | str | None = None
+    column: int | str | None = None
+    dt: float | None = None
+    skip_lines: int = 0
+
+
+@dataclass(frozen=True)
+class Scale:
+    """Scaling of the ground motion.
+
+    Parameters
+    ----------
+    pga_horizontal : float, optional
+        Scale the horizontal record to this peak acceleration [m/s^2], > 0. Exclusive with ``factor``.
+    factor : float, optional
+        Multiply the records by this factor [-], > 0. Exclusive with ``pga_horizontal``.
+    pga_vertical : float, optional
+        Scale the vertical record to this peak acceleration [m/s^2], >= 0. Exclusive with a
+        ``vertical_factor`` other than 1.
+    vertical_factor : float
+        Extra factor on the vertical record [-], >= 0 (0 switches the vertical motion off).
+    """
+
+    pga_horizontal: float | None = None
+    factor: float | None = None
+    pga_vertical: float | None = None
+    vertical_factor: float = 1.0
+
+
+@dataclass(frozen=True)
+class Ground:
+    """The ground motion: one or two records, their scaling and timing.
+
+    Parameters
+    ----------
+    horizontal, vertical : RecordSpec or None
+        The records; at least one is given.
+    scale : Scale
+        Scaling of the records.
+    tail : float
+        Free-vibration time appended after the record ends [s], >= 0.
+    time_shift : float
+        Time shift applied to the records [s] (see :mod:`rockslide.records`).
+    """
+
+    horizontal: RecordSpec | None
+    vertical: RecordSpec | None
+    scale: Scale
+    tail: float = 0.0
+    time_shift: float = 0.0
+
+
+@dataclass(frozen=True)
+class Initial:
+    """Initial state of the block.
+
+    Parameters
+    ----------
+    rotation : float
+        Initial rotation [rad], signed, ``|rotation| < pi/2``.
+    rotation_rate : float
+        Initial angular velocity [rad/s], signed.
+    slip_rate : float
+        Initial sliding velocity relative to the ground [m/s], signed.
+    """
+
+    rotation: float = 0.0
+    rotation_rate: float = 0.0
+    slip_rate: float = 0.0
+
+
+@dataclass(frozen=True)
+class Solver:
+    """Time integration settings.
+
+    Parameters
+    ----------
+    dt : float
+        Time step [s], ``0 < dt <= 0.01``.
+    events : str
+        ``"located"`` (state changes located within the step) or ``"step-end"`` (at step ends).
+    method : str
+        ``"kernel"`` (the fast integrator) or ``"reference"`` (the slow, plain one).
+    """
+
+    dt: float = 1e-4
+    events: str = "located"
+    method: str = "kernel"
+
+
+@dataclass(frozen=True)
+class Output:
+    """Where and how often results are written.
+
+    Parameters
+    ----------
+    dir : str
+        Output folder.
+    interval : float or None
+        Output interval [s], a whole multiple of ``solver.dt``; None = every solver step.
+    """
+
+    dir: str = "out"
+    interval: float | None = None
+
+
+@dataclass(frozen=True)
+class Case:
+    """A validated case, all quantities in SI.
+
+    Parameters
+    ----------
+    name : str
+        Case name (used in file names): ``^[A-Za-z0-9][A-Za-z0-9._-]*$``.
+    gravity : float
+        Gravitational acceleration [m/s^2], > 0.
+    block, contact, ground, initial, solver, output
+        The sections.
+    source : str
+        The case file's name as used in messages.
+    base_dir : Path or None
+        Folder of the case file; record files resolve against it first.
+    text : str
+        The case file's text, stored with the results.
+    """
+
+    name: str
+    gravity: float
+    block: Block
+    contact: Contact
+    ground: Ground
+    initial: Initial
+    solver: Solver
+    output: Output
+    source: str = "<case>"
+    base_dir: Path | None = None
+    text: str = ""
+
+
+# --------------------------------------------------------------------------------------------------
+# The schema
+# --------------------------------------------------------------------------------------------------
+
+#: SI unit of each quantity kind, for messages and the README.
+SI_UNIT: dict[str, str] = {
+    "length": "m", "mass": "kg", "time": "s", "acceleration": "m/s^2", "angle": "rad",
+    "angular_rate": "rad/s", "velocity": "m/s", "dimensionless": "",
+}
+
+NAME_PATTERN = r"^[A-Za-z0-9][A-Za-z0-9._-]*$"
+_NAME_RE = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]*")
+
+# Types that are not a quantity kind (those are the keys of units.UNITS):
+#   mapping      a section; its keys in "keys"
+#   record       a record spec: a file name or a mapping with the keys in "keys"
+#   name         a string matching NAME_PATTERN
+#   string       a non-empty string
+#   choice       one of the strings in "choices"
+#   accel_unit   a string naming an acceleration unit
+#   count        an integer >= 0
+#   column       an integer >= 1 (1-based column) or a non-empty string (a header name)
+# Bounds: (op, limit) pairs, op one of ">", ">=", "<", "<=", "|<|" (absolute value below the limit).
+
+
+def _key(type_: str, doc: str, *, required: bool = False, default=None, bounds=(), choices=(),
+         keys: dict | None = None) -> dict:
+    spec = {"type": type_, "required": required, "default": default, "doc": doc}
+    if type_ in SI_UNIT:
+        spec["unit"] = SI_UNIT[type_]
+    if bounds:
+        spec["bounds"] = tuple(bounds)
+    if choices:
+        spec["choices"] = tuple(choices)
+    if keys is not None:
+        spec["keys"] = keys
+    return spec
+
+
+_RECORD_KEYS = {
+    "file": _key("string", "accelerogram file; a relative name resolves against the case file's "
+                 "folder first", required=True),
+    "format": _key("string", "file format (default: detected from the file)"),
+    "units": _key("accel_unit", "acceleration unit of the values, e.g. 'g', 'gal', 'm/s^2' "
+                  "(default: from the file)"),
+    "time_column": _key("column", "1-based column number or header name of the time values"),
+    "column": _key("column", "1-based column number or header name of the acceleration values"),
+    "dt": _key("time", "sample interval, for files without time column or header",
+               bounds=[(">", 0.0)]),
+    "skip_lines": _key("count", "lines to skip before the data", default=0),
+}
+
+CASE_KEYS: dict[str, dict] = {
+    "name": _key("name", "case name, used in output file names: letters, digits, '.', '_', '-'",
+                 required=True),
+    "gravity": _key("acceleration", "gravitational acceleration", default=STANDARD_GRAVITY,
+                    bounds=[(">", 0.0)]),
+    "block": _key("mapping", "the rectangular rigid block", required=True, keys={
+        "height": _key("length", "full height 2h", required=True, bounds=[(">", 0.0)]),
+        "width": _key("length", "full base width 2b", required=True, bounds=[(">", 0.0)]),
+        "mass": _key("mass", "mass", required=True, bounds=[(">", 0.0)]),
+    }),
+    "contact": _key("mapping", "block-foundation contact", required=True, keys={
+        "mu_static": _key("dimensionless", "static friction coefficient", required=True,
+                          bounds=[(">=", 0.0)]),
+        "mu_kinetic": _key("dimensionless", "kinetic friction coefficient, <= mu_static "
+                           "(default: mu_static)", bounds=[(">=", 0.0)]),
+        "restitution": _key("dimensionless", "coefficient of restitution of the rocking impacts",
+                            required=True, bounds=[(">=", 0.0), ("<=", 1.0)]),
+    }),
+    "ground": _key("mapping", "ground motion (at least one of horizontal, vertical)", required=True,
+                   keys={
+        "horizontal": _key("record", "horizontal record: a file name or a mapping",
+                           keys=_RECORD_KEYS),
+        "vertical": _key("record", "vertical record: a file name or a mapping", keys=_RECORD_KEYS),
+        "scale": _key("mapping", "scaling of the records", keys={
+            "pga_horizontal": _key("acceleration", "scale the horizontal record to this peak "
+                                   "acceleration (exclusive with factor)", bounds=[(">", 0.0)]),
+            "factor": _key("dimensionless", "multiply the records by this factor (exclusive with "
+                           "pga_horizontal)", bounds=[(">", 0.0)]),
+            "pga_vertical": _key("acceleration", "scale the vertical record to this peak "
+                                 "acceleration (exclusive with vertical_factor other than 1)",
+                                 bounds=[(">=", 0.0)]),
+            "vertical_factor": _key("dimensionless", "extra factor on the vertical record",
+                                    default=1.0, bounds=[(">=", 0.0)]),
+        }),
+        "tail": _key("time", "free-vibration time after the record ends", default=0.0,
+                     bounds=[(">=", 0.0)]),
+        "time_shift": _key("time", "time shift applied to the records", default=0.0),
+    }),
+    "initial": _key("mapping", "initial state", keys={
+        "rotation": _key("angle", "initial rotation, signed", default=0.0,
+                         bounds=[("|<|", math.pi / 2.0)]),
+        "rotation_rate": _key("angular_rate", "initial angular velocity, signed", default=0.0),
+        "slip_rate": _key("velocity", "initial sliding velocity, signed", default=0.0),
+    }),
+    "solver": _key("mapping", "time integration", keys={
+        "dt": _key("time", "time step", default=1e-4, bounds=[(">", 0.0), ("<=", 0.01)]),
+        "events": _key("choice", "where state changes happen: located within the step, or at "
+                       "step ends", default="located", choices=["located", "step-end"]),
+        "method": _key("choice", "integrator", default="kernel", choices=["kernel", "reference"]),
+    }),
+    "output": _key("mapping", "results", keys={
+        "dir": _key("string", "output folder", default="out"),
+        "interval": _key("time", "output interval, a whole multiple of solver.dt "
+                         "(default: every step)"),
+    }),
+}
+
+# The dataclass built from each section (by dotted path) and from each record spec.
+_SECTIONS: dict[str, type] = {
+    "block": Block, "contact": Contact, "ground.scale": Scale, "initial": Initial,
+    "solver": Solver, "output": Output,
+}
+
+
+def iter_case_keys(keys: Mapping[str, dict] = CASE_KEYS, prefix: str = "") -> Iterator[tuple[str, dict]]:
+    """Every key of the schema, depth first, as ``(dotted path, spec)``.
+
+    Parameters
+    ----------
+    keys : mapping, optional
+        A (sub-)schema; the whole :data:`CASE_KEYS` by default.
+    prefix : str, optional
+        Dotted path of ``keys``.
+    """
+    for name, spec in keys.items():
+        path = f"{prefix}.{name}" if prefix else name
+        yield path, spec
+        if "keys" in spec:
+            yield from iter_case_keys(spec["keys"], path)
+
+
+# --------------------------------------------------------------------------------------------------
+# Reading
+# --------------------------------------------------------------------------------------------------
+
+
+def load_case(path) -> Case:
+    """Read and validate a case file.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The YAML case file (UTF-8).
+
+    Returns
+    -------
+    Case
+        With ``source`` the path as given, ``base_dir`` its (absolute) folder and ``text`` its text.
+
+    Raises
+    ------
+    CaseError
+        Naming the file when it is missing, unreadable or invalid.
+    """
+    p = Path(path)
+    source = str(path)
+    try:
+        text = p.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise CaseError("case file not found", source=source) from None
+    except IsADirectoryError:
+        raise CaseError("is a folder, expected a case file (YAML)", source=source) from None
+    except PermissionError:
+        raise CaseError("cannot read the case file: permission denied", source=source) from None
+    except UnicodeDecodeError as exc:
+        raise CaseError(f"not UTF-8 text (byte {exc.start}); expected a YAML case file",
+                        source=source) from None
+    except OSError as exc:
+        raise CaseError(f"cannot read the case file: {exc.strerror or exc}", source=source) from None
+    return parse_case(text, source=source, base_dir=p.absolute().parent)
+
+
+def parse_case(text: str, *, source: str = "<case>", base_dir: Path | None = None) -> Case:
+    """Validate the text of a case file.
+
+    Parameters
+    ----------
+    text : str
+        YAML text.
+    source : str, optional
+        File name used in messages and stored in the case.
+    base_dir : Path, optional
+        Folder record files resolve against first.
+
+    Returns
+    -------
+    Case
+
+    Raises
+    ------
+    CaseError
+        On YAML syntax errors (with line and column), object tags, unknown or missing keys, wrong
+        types or units, and values out of their physical range.
+    """
+    data = _load_yaml(text, source)
+    return _build(data, source=source, base_dir=base_dir, text=text)
+
+
+# How PyYAML's safe constructors fail on explicit tags with bad values (``!!int abc``, ``!!float``).
+_CONSTRUCTOR_FAILURES = (ValueError, TypeError, IndexError, KeyError, AttributeError, OverflowError)
+
+
+def _load_yaml(text: str, source: str):
+    try:
+        return yaml.safe_load(text)
+    except yaml.constructor.ConstructorError as exc:
+        problem = _one_line(exc.problem or "")
+        if "could not determine a constructor" in problem:
+            message = (f"unsupported YAML tag: {problem} (a case file is plain data: numbers, "
+                       "strings, lists and mappings)")
+        else:
+            message = f"invalid YAML: {_yaml_problem(exc)}"
+        raise CaseError(message, source=source, field=_yaml_where(exc)) from None
+    except yaml.MarkedYAMLError as exc:
+        raise CaseError(f"invalid YAML: {_yaml_problem(exc)}", source=source,
+                        field=_yaml_where(exc)) from None
+    except yaml.reader.ReaderError as exc:
+        before = text[:exc.position] if isinstance(text, str) else ""
+        line = before.count("\n") + 1
+        column = len(before) - (before.rfind("\n") + 1) + 1
+        char = f"#x{exc.character:04x}" if isinstance(exc.character, int) else repr(exc.character)
+        raise CaseError(f"invalid YAML: character {char} not allowed ({exc.reason})",
+                        source=source, field=f"line {line}, column {column}") from None
+    except yaml.YAMLError as exc:
+        raise CaseError(f"invalid YAML: {_one_line(str(exc))}", source=source) from None
+    except RecursionError:
+        raise CaseError("invalid YAML: nested too deeply", source=source) from None
+    except _CONSTRUCTOR_FAILURES as exc:
+        # PyYAML's constructors fail like this on explicit tags with bad values (``!!int abc``).
+        node = _bad_scalar(text)
+        if node is None:
+            raise CaseError(f"invalid YAML: a value cannot be read ({_one_line(str(exc))})",
+                            source=source) from None
+        tag = node.tag.replace("tag:yaml.org,2002:", "!!")
+        mark = node.start_mark
+        raise CaseError(f"invalid YAML: {node.value!r} is not a valid {tag} value", source=source,
+                        field=f"line {mark.line + 1}, column {mark.column + 1}") from None
+
+
+def _bad_scalar(text: str):
+    """The first scalar node PyYAML's safe constructor fails on (outside its own error type)."""
+    try:
+        root = yaml.compose(text, Loader=yaml.SafeLoader)
+    except (yaml.YAMLError, RecursionError):
+        return None
+    stack, seen = [root], set()
+    while stack:
+        node = stack.pop()
+        if node is None or id(node) in seen:
+            continue
+        seen.add(id(node))
+        if isinstance(node, yaml.ScalarNode):
+            try:
+                yaml.constructor.SafeConstructor().construct_object(node)
+            except yaml.YAMLError:
+                pass
+            except _CONSTRUCTOR_FAILURES:
+                return node
+        elif isinstance(node, yaml.SequenceNode):
+            stack.extend(reversed(node.value))
+        elif isinstance(node, yaml.MappingNode):
+            stack.extend(n for pair in reversed(node.value) for n in reversed(pair))
+    return None
+
+
+def _yaml_where(exc: yaml.MarkedYAMLError) -> str | None:
+    mark = exc.problem_mark or exc.context_mark
+    if mark is None:
+        return None
+    return f"line {mark.line + 1}, column {mark.column + 1}"
+
+
+def _yaml_problem(exc: yaml.MarkedYAMLError) -> str:
+    context = exc.context
+    if context and exc.context_mark is not None and exc.problem_mark is not None \
+            and exc.context_mark.line != exc.problem_mark.line:
+        context += f" (from line {exc.context_mark.line + 1}, column {exc.context_mark.column + 1})"
+    parts = [p for p in (context, exc.problem) if p]
+    return _one_line(", ".join(parts)) or "syntax error"
+
+
+# --------------------------------------------------------------------------------------------------
+# Validation, driven by CASE_KEYS
+# --------------------------------------------------------------------------------------------------
+
+_repr = reprlib.Repr()
+_repr.maxstring = 60
+_repr.maxother = 60
+_repr.maxlist = _repr.maxdict = _repr.maxtuple = _repr.maxset = _repr.maxfrozenset = 4
+_repr.maxlevel = 2
+
+
+def _one_line(text: str) -> str:
+    return " ".join(str(text).split())
+
+
+def _show(value) -> str:
+    """A short, one-line description of a user-given value."""
+    if value is None:
+        return "null"
+    if isinstance(value, bool):
+        kind = "a boolean"
+    elif isinstance(value, Mapping):
+        kind = "a mapping"
+    elif isinstance(value, (list, tuple)):
+        kind = "a list"
+    elif isinstance(value, str):
+        kind = "a string"
+    elif isinstance(value, int):
+        kind = "an integer"
+    elif isinstance(value, float):
+        kind = "a number"
+    else:
+        kind = f"a {type(value).__name__}"
+    return f"{kind} {_one_line(_repr.repr(value))}"
+
+
+def _key_text(key) -> str:
+    """A user's key as it appears in a dotted path: itself if printable, else its repr."""
+    return key if isinstance(key, str) and key.isprintable() and key.strip() == key else repr(key)
+
+
+def _num(x: float) -> str:
+    return f"{x:.10g}"
+
+
+def _with_unit(x: float, unit: str) -> str:
+    return f"{_num(x)} {unit}" if unit else _num(x)
+
+
+class _Ctx:
+    """Where the data came from, for messages."""
+
+    def __init__(self, source: str):
+        self.source = source
+
+    def fail(self, path: str | None, message: str):
+        raise CaseError(_one_line(message), source=self.source, field=path or None)
+
+
+def _read_mapping(data, keys: Mapping[str, dict], path: str, ctx: _Ctx, what: str) -> dict:
+    """Check a mapping against ``keys`` and return its converted values (defaults filled in)."""
+    if not isinstance(data, Mapping):
+        ctx.fail(path, f"expected {what} (keys: {', '.join(keys)}), got {_show(data)}")
+    for key in data:
+        if not isinstance(key, str) or key not in keys:
+            name = _key_text(key)
+            ctx.fail(f"{path}.{name}" if path else name, f"unknown key ({_suggest(name, keys)})")
+    out = {}
+    for name, spec in keys.items():
+        sub = f"{path}.{name}" if path else name
+        value = data.get(name)
+        if value is None:
+            if spec["required"]:
+                unit = f" [{spec['unit']}]" if spec.get("unit") else ""
+                problem = "is null, a value is required" if name in data else "missing required key"
+                ctx.fail(sub, f"{problem} ({spec['doc']}{unit})")
+            if spec["type"] == "mapping":
+                value = {}
+            else:
+                out[name] = spec["default"]
+                continue
+        out[name] = _read_value(value, spec, sub, ctx)
+    return out
+
+
+def _suggest(name: str, keys: Mapping[str, dict]) -> str:
+    close = difflib.get_close_matches(name, list(keys), n=1)
+    if close:
+        return f"did you mean {close[0]!r}?"
+    elsewhere = [p for p, _ in iter_case_keys() if p.rsplit(".", 1)[-1] == name]
+    if elsewhere:
+        parent = elsewhere[0].rsplit(".", 1)[0]
+        return f"did you mean {elsewhere[0]!r}? it belongs under {parent!r}"
+    return f"expected one of: {', '.join(keys)}"
+
+
+def _read_value(value, spec: dict, path: str, ctx: _Ctx):
+    """Convert one present (non-null) value according to its spec."""
+    kind = spec["type"]
+    if kind == "mapping":
+        return _read_mapping(value, spec["keys"], path, ctx, "a mapping")
+    if kind == "record":
+        if isinstance(value, str):
+            value = {"file": value}
+        elif not isinstance(value, Mapping):
+            ctx.fail(path, f"expected a file name or a mapping (keys: {', '.join(spec['keys'])}), "
+                     f"got {_show(value)}")
+        return _read_mapping(value, spec["keys"], path, ctx, "a file name or a mapping")
+    if kind in UNITS:
+        return _read_quantity(value, spec, path, ctx)
+    if kind == "name":
+        if not isinstance(value, str) or not _NAME_RE.fullmatch(value):
+            ctx.fail(path, f"expected a name made of letters, digits, '.', '_' and '-', starting with "
+                     f"a letter or digit ({NAME_PATTERN}), got {_show(value)}")
+        return value
+    if kind == "string":
+        if not isinstance(value, str) or not value.strip():
+            ctx.fail(path, f"expected a non-empty string, got {_show(value)}")
+        return value
+    if kind == "choice":
+        choices = spec["choices"]
+        if not isinstance(value, str) or value not in choices:
+            hint = ""
+            if isinstance(value, str):
+                close = difflib.get_close_matches(value, choices, n=1)
+                hint = f" (did you mean {close[0]!r}?)" if close else ""
+            ctx.fail(path, f"expected one of {', '.join(repr(c) for c in choices)}, "
+                     f"got {_show(value)}{hint}")
+        return value
+    if kind == "accel_unit":
+        if not isinstance(value, str):
+            ctx.fail(path, f"expected an acceleration unit such as 'g', 'gal' or 'm/s^2', "
+                     f"got {_show(value)}")
+        unit_factor(value, "acceleration", source=ctx.source, field=path)
+        return value
+    if kind == "count":
+        if not isinstance(value, int) or isinstance(value, bool) or value < 0:
+            ctx.fail(path, f"expected a whole number >= 0, got {_show(value)}")
+        return value
+    if kind == "column":
+        if isinstance(value, int) and not isinstance(value, bool):
+            if value < 1:
+                ctx.fail(path, f"expected a column number >= 1 (1-based) or a header name, "
+                         f"got {_show(value)}")
+            return value
+        if not isinstance(value, str) or not value.strip():
+            ctx.fail(path, f"expected a column number >= 1 (1-based) or a non-empty header name, "
+                     f"got {_show(value)}")
+        return value
+    raise AssertionError(f"schema error: unknown type {kind!r} at {path}")  # pragma: no cover
+
+
+_OPS = {
+    ">": (lambda x, lim: x > lim, "greater than"),
+    ">=": (lambda x, lim: x >= lim, "at least"),
+    "<": (lambda x, lim: x < lim, "less than"),
+    "<=": (lambda x, lim: x <= lim, "at most"),
+    "|<|": (lambda x, lim: abs(x) < lim, "in absolute value less than"),
+}
+
+
+def _read_quantity(value, spec: dict, path: str, ctx: _Ctx) -> float:
+    kind = spec["type"]
+    try:
+        number = parse_quantity(value, kind, source=ctx.source, field=path)
+    except OverflowError:
+        ctx.fail(path, f"{_show(value)} is too large (expected a finite {kind})")
+    unit = spec.get("unit", "")
+    for op, limit in spec.get("bounds", ()):
+        if not _OPS[op][0](number, limit):
+            expected = " and ".join(f"{_OPS[o][1]} {_limit_text(lim, spec)}"
+                                    for o, lim in spec["bounds"])
+            given = _with_unit(number, unit)
+            if isinstance(value, str):
+                given += f" (from {value!r})"
+            ctx.fail(path, f"must be {expected}, got {given}")
+    return number
+
+
+def _limit_text(limit: float, spec: dict) -> str:
+    if spec["type"] == "angle" and math.isclose(limit, math.pi / 2.0):
+        return "pi/2 rad (90 deg)"
+    return _with_unit(limit, spec.get("unit", ""))
+
+
+def _cross_checks(raw: dict, ctx: _Ctx) -> None:
+    """Checks that involve more than one key; ``raw`` is the converted nested dict."""
+    contact = raw["contact"]
+    if contact["mu_kinetic"] is None:
+        contact["mu_kinetic"] = contact["mu_static"]
+    elif contact["mu_kinetic"] > contact["mu_static"]:
+        ctx.fail("contact.mu_kinetic", f"mu_kinetic ({_num(contact['mu_kinetic'])}) must not exceed "
+                 f"mu_static ({_num(contact['mu_static'])})")
+
+    ground = raw["ground"]
+    scale = ground["scale"]
+    if ground["horizontal"] is None and ground["vertical"] is None:
+        ctx.fail("ground", "needs at least one record: ground.horizontal or ground.vertical "
+                 "(a file name or a mapping with 'file')")
+    if scale["pga_horizontal"] is not None and scale["factor"] is not None:
+        ctx.fail("ground.scale", f"pga_horizontal ({_with_unit(scale['pga_horizontal'], 'm/s^2')}) "
+                 f"and factor ({_num(scale['factor'])}) are exclusive: give one of them")
+    if scale["pga_vertical"] is not None and scale["vertical_factor"] != 1.0:
+        ctx.fail("ground.scale", f"pga_vertical ({_with_unit(scale['pga_vertical'], 'm/s^2')}) and "
+                 f"vertical_factor ({_num(scale['vertical_factor'])}) are exclusive: give one of "
+                 "them (or vertical_factor 1)")
+    if scale["pga_horizontal"] is not None and ground["horizontal"] is None:
+        ctx.fail("ground.scale.pga_horizontal", "given, but there is no ground.horizontal record "
+                 "to scale")
+    if ground["vertical"] is None:
+        if scale["pga_vertical"] is not None:
+            ctx.fail("ground.scale.pga_vertical", "given, but there is no ground.vertical record "
+                     "to scale")
+        if scale["vertical_factor"] != 1.0:
+            ctx.fail("ground.scale.vertical_factor", f"given ({_num(scale['vertical_factor'])}), but "
+                     "there is no ground.vertical record to scale")
+
+    dt = raw["solver"]["dt"]
+    interval = raw["output"]["interval"]
+    if interval is not None:
+        ratio = interval / dt
+        if ratio < 1.0 - 1e-9:
+            ctx.fail("output.interval", f"must be at least solver.dt ({_with_unit(dt, 's')}), "
+                     f"got {_with_unit(interval, 's')}")
+        if abs(ratio - round(ratio)) > 1e-9 * ratio:
+            ctx.fail("output.interval", f"must be a whole multiple of solver.dt ({_with_unit(dt, 's')}),"
+                     f" got {_with_unit(interval, 's')} ({_num(ratio)} steps)")
+
+
+def _build(data, *, source: str, base_dir: Path | None, text: str) -> Case:
+    ctx = _Ctx(source)
+    if data is None:
+        ctx.fail(None, f"the case file is empty (expected a mapping with keys: {', '.join(CASE_KEYS)})")
+    if not isinstance(data, Mapping):
+        ctx.fail(None, f"the top level must be a mapping (keys: {', '.join(CASE_KEYS)}), "
+                 f"got {_show(data)}")
+    raw = _read_mapping(data, CASE_KEYS, "", ctx, "a mapping")
+    _cross_checks(raw, ctx)
+    ground = raw["ground"]
+    records = {k: None if ground[k] is None else RecordSpec(**ground[k])
+               for k in ("horizontal", "vertical")}
+    sections = {path: cls(**_at(raw, path)) for path, cls in _SECTIONS.items()}
+    return Case(
+        name=raw["name"], gravity=raw["gravity"], block=sections["block"],
+        contact=sections["contact"],
+        ground=Ground(scale=sections["ground.scale"], tail=ground["tail"],
+                      time_shift=ground["time_shift"], **records),
+        initial=sections["initial"], solver=sections["solver"], output=sections["output"],
+        source=source, base_dir=base_dir, text=text,
+    )
+
+
+def _at(tree: dict, path: str):
+    for part in path.split("."):
+        tree = tree[part]
+    return tree
+
+
+# --------------------------------------------------------------------------------------------------
+# Changing and exporting
+# --------------------------------------------------------------------------------------------------
+
+
+def case_to_dict(case: Case) -> dict:
+    """The case as a plain nested dict of SI values, keys as in the case file.
+
+    Keys whose value is None (not given, no default) are left out, so the dict suits HDF5
+    attributes and JSON. ``parse_case(yaml.safe_dump(case_to_dict(c)))`` gives back ``c`` apart
+    from ``text``, ``source`` and ``base_dir``.
+
+    Parameters
+    ----------
+    case : Case
+
+    Returns
+    -------
+    dict
+        Lengths [m], mass [kg], times [s], accelerations [m/s^2], angles [rad], rates [rad/s], [m/s].
+    """
+    def plain(obj) -> dict:
+        return {f.name: getattr(obj, f.name) for f in dataclasses.fields(obj)
+                if getattr(obj, f.name) is not None}
+
+    ground = {"horizontal": case.ground.horizontal, "vertical": case.ground.vertical}
+    ground = {k: plain(v) for k, v in ground.items() if v is not None}
+    ground.update(scale=plain(case.ground.scale), tail=case.ground.tail,
+                  time_shift=case.ground.time_shift)
+    return {
+        "name": case.name,
+        "gravity": case.gravity,
+        "block": plain(case.block),
+        "contact": plain(case.contact),
+        "ground": ground,
+        "initial": plain(case.initial),
+        "solver": plain(case.solver),
+        "output": plain(case.output),
+    }
+
+
+def case_with(case: Case, changes: Mapping[str, object]) -> Case:
+    """A new case with some keys changed, validated like a parsed case file.
+
+    Parameters
+    ----------
+    case : Case
+        The case to start from (its SI values, :func:`case_to_dict`).
+    changes : mapping of str to object
+        Dotted keys and new values, e.g. ``{"contact.mu_static": 0.5, "block.width": "50 mm",
+        "ground.scale.pga_horizontal": 8.0}``. Values are SI numbers or strings with units, as in a
+        case file; None removes a key (its default applies), which is how to switch between
+        exclusive keys (``{"ground.scale.factor": None, "ground.scale.pga_horizontal": 8.0}``). A
+        whole section or record may be given as a mapping (or a record as a file name).
+
+    Returns
+    -------
+    Case
+        Same ``source`` and ``base_dir``; ``text`` is the original text followed by a YAML comment
+        block listing the changes (so the stored text remains the file as written; the effective
+        values are those of :func:`case_to_dict`).
+
+    Raises
+    ------
+    CaseError
+        For an unknown key (with the nearest valid one) or an invalid resulting case; messages name
+        the changed keys.
+
+    Notes
+    -----
+    When ``contact.mu_static`` is changed and ``contact.mu_kinetic`` is not, and the case has
+    ``mu_kinetic == mu_static`` (the default), ``mu_kinetic`` follows the new ``mu_static``. An
+    explicitly different ``mu_kinetic`` is kept, and a ``mu_static`` below it is rejected.
+    """
+    ctx = _Ctx(case.source)
+    data = case_to_dict(case)
+    if ("contact.mu_static" in changes and "contact.mu_kinetic" not in changes
+            and case.contact.mu_kinetic == case.contact.mu_static):
+        data["contact"].pop("mu_kinetic", None)
+    for key, value in changes.items():
+        if not isinstance(key, str) or not key or not key.isprintable():
+            ctx.fail(None, f"a change needs a dotted key like 'contact.mu_static', got {_show(key)}")
+        _check_key_path(key, ctx)
+        if isinstance(value, os.PathLike):
+            value = os.fspath(value)
+        parts = key.split(".")
+        node = data
+        for part in parts[:-1]:
+            child = node.get(part)
+            if isinstance(child, str):  # a record given as a file name
+                child = {"file": child}
+            if not isinstance(child, dict):
+                child = {}
+            node[part] = child
+            node = child
+        if value is None:
+            node.pop(parts[-1], None)
+        else:
+            node[parts[-1]] = value
+    summary = ", ".join(f"{k}={_one_line(_repr.repr(v))}" for k, v in changes.items())
+    try:
+        new = _build(data, source=case.source, base_dir=case.base_dir, text=case.text)
+    except CaseError as exc:
+        raise CaseError(f"{exc.message} (after changing {summary})", source=exc.source,
+                        field=exc.field) from None
+    text = case.text
+    if text and not text.endswith("\n"):
+        text += "\n"
+    text += "# case_with changes:\n" + "".join(f"#   {k}: {_one_line(repr(v))}\n"
+                                               for k, v in changes.items())
+    return dataclasses.replace(new, text=text)
+
+
+def _check_key_path(key: str, ctx: _Ctx) -> None:
+    keys: Mapping[str, dict] | None = CASE_KEYS
+    done: list[str] = []
+    for part in key.split("."):
+        if keys is None:
+            ctx.fail(key, f"unknown key: {'.'.join(done)} has no sub-keys")
+        if part not in keys:
+            ctx.fail(".".join([*done, part]), f"unknown key ({_suggest(part, keys)})")
+        done.append(part)
+        keys = keys[part].get("keys")

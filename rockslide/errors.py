@@ -1,0 +1,44 @@
+"""The one exception family of rockslide.
+
+Exceptions are for bad input and broken files only. Physical outcomes (overturning, flight, the
+Painleve case) are data in the result, never exceptions. The CLI turns every ``RockslideError``
+into one line on stderr and exit code 2.
+"""
+
+from __future__ import annotations
+
+
+class RockslideError(Exception):
+    """A user error: a bad case file, record, option or output location.
+
+    Parameters
+    ----------
+    message : str
+        What is wrong and what was expected.
+    source : str, optional
+        The file (or option) the error is about.
+    field : str, optional
+        The key path (``contact.mu_static``), line (``line 12``) or column the error is about.
+    """
+
+    def __init__(self, message: str, *, source: str | None = None, field: str | None = None):
+        self.message = message
+        self.source = source
+        self.field = field
+        super().__init__(self.__str__())
+
+    def __str__(self) -> str:
+        parts = [p for p in (self.source, self.field) if p]
+        return ": ".join(parts + [self.message])
+
+
+class CaseError(RockslideError):
+    """A case file (YAML) or a command-line option is invalid."""
+
+
+class RecordError(RockslideError):
+    """An accelerogram file cannot be found, read or used."""
+
+
+class OutputError(RockslideError):
+    """A result cannot be written (exists already, unwritable folder) or read back."""

@@ -1,0 +1,741 @@
+"""The compiled fixed-step state machine (docs/model.md, 'Transitions' and 'Integration').
+
+Plain floats and arrays only, no I/O. `simulate.py` builds the inputs and reads the outputs; the
+sweep runs `run` over many cases. Everything is resumable: the integration state lives in the
+array ``st`` (indices ``S_*``), so a long record can be computed in chunks with bounded memory.
+
+Time is organised by ground-motion samples. The record (with its tail of zeros) is linear between
+samples ``k`` and ``k+1`` (interval ``k``); each interval is cut into ``n_sub`` steps of length
+``h = dt_record / n_sub <= dt``, so that the kinks of the input fall on step boundaries. Within an
+interval, local time ``tau`` runs from 0 to ``dt_record``.
+
+- REST costs no integration: the exit conditions (eqs. 6 and 11, and flight) are linear in
+  ``tau`` within an interval, so their first crossing is computed exactly, per interval.
+- SLIP, ROCK and ROCKSLIP are integrated with the classical fourth-order Runge-Kutta method. After
+  each step the event functions of the state (``g >= 0`` while the state holds, in the order of
+  model.md's table) are evaluated. With located events (``P_LOCATED = 1``) the earliest crossing
+  inside the step is found by Illinois regula falsi on RK4 sub-steps from the step's start, the
+  transition is applied there and the rest of the step is integrated in the new state. With
+  step-end switching (``P_LOCATED = 0``, the paper's ACSL-like scheme) the first event in table
+  order is applied at the end of the step with the state found there.
+- After any transition, the tests of the new state apply at once (model.md: 'REST (then REST's
+  tests apply at once)').
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from .physics import (
+    OVERTURNED, REST, ROCK, ROCKSLIP, SLIP,
+    contact_forces, kinetic_energy, liftoff_margin, potential_energy, rebound,
+    rock_acceleration, rockslip_accelerations, slip_acceleration, slip_margin,
+)
+
+# --- parameter vector ``p`` -------------------------------------------------------------------
+(P_R, P_ALPHA, P_TAN_ALPHA, P_G, P_MU, P_NU, P_E, P_H, P_DT_REC, P_N_SUB, P_LOCATED, P_T0,
+ P_ENERGY) = range(13)
+N_PARAMS = 13
+
+# --- state vector ``st`` ----------------------------------------------------------------------
+(S_MODE, S_LAM, S_SIGMA, S_THETA, S_THETADOT, S_X, S_XDOT,   # the mechanical state
+ S_STATUS, S_K, S_STARTED, S_END_TIME,                      # bookkeeping
+ S_MAX_THETA, S_MAX_X, S_IMPACTS, S_FALL_START, S_OVERTURN_TIME, S_DIRECTION,
+ S_T_REST, S_T_SLIP, S_T_ROCK, S_T_ROCKSLIP,                # time spent in each state [s]
+ S_N_EVENTS,
+ S_W_GROUND, S_W_FRICTION, S_W_IMPACT,                      # energy ledger [J/kg]
+ S_FALL_CANDIDATE, S_THETA_MAX_TIME, S_E_INITIAL) = range(28)
+N_STATE = 28
+
+# --- outcomes ---------------------------------------------------------------------------------
+STATUS_OK, STATUS_FLIGHT, STATUS_PAINLEVE = 0, 1, 2
+STATUS_NAMES = ("ok", "flight", "painleve")
+
+# --- event causes (the event log's ``cause`` column) -------------------------------------------
+(C_SLIP_START, C_LIFTOFF, C_SLIP_STOP, C_SLIP_REVERSAL, C_IMPACT, C_LIFTOFF_END,
+ C_OVERTURN, C_FLIGHT, C_PAINLEVE) = range(9)
+CAUSE_NAMES = ("slip-start", "liftoff", "slip-stop", "slip-reversal", "impact",
+               "liftoff-end", "overturn", "flight", "painleve")
+
+# --- event kinds: which condition of model.md's table a crossing is ----------------------------
+K_FLIGHT, K_PAINLEVE, K_SLIP_START, K_LIFTOFF, K_SLIP_STOP, K_IMPACT, K_OVERTURN = range(7)
+MAX_EVENTS_PER_MODE = 5
+
+# history columns: time, rotation phi = lam theta, rotation rate, slip, slip rate, state
+HISTORY_COLUMNS = ("time", "rotation", "rotation_rate", "slip", "slip_rate", "state")
+# event log columns
+EVENT_COLUMNS = ("time", "from", "to", "cause", "edge", "slip_direction")
+
+HALF_PI = 0.5 * math.pi
+MAX_TRANSITIONS_PER_STEP = 200
+
+
+def new_state():
+    """A state vector at rest, before the first call of `run`."""
+    st = np.zeros(N_STATE)
+    st[S_LAM] = 1.0
+    st[S_SIGMA] = 1.0
+    st[S_FALL_START] = math.nan
+    st[S_OVERTURN_TIME] = math.nan
+    st[S_END_TIME] = math.nan
+    st[S_FALL_CANDIDATE] = math.nan
+    return st
+
+
+# ============================================================================================
+# The equations of motion of each state and its event functions
+# ============================================================================================
+
+@njit(cache=True, inline='always')
+def accelerations(mode, lam, sigma, theta, thetadot, ah, G, p):
+    """``(thetaddot, xddot)`` of a state (eqs. 3, 9, 15-16 with 22)."""
+    if mode == ROCK:
+        return rock_acceleration(theta, ah, G, lam, p[P_R], p[P_ALPHA]), 0.0
+    if mode == SLIP:
+        return 0.0, slip_acceleration(ah, G, p[P_NU], sigma)
+    if mode == ROCKSLIP:
+        thetaddot, xddot, _ = rockslip_accelerations(theta, thetadot, ah, G, lam, sigma,
+                                                     p[P_NU], p[P_R], p[P_ALPHA])
+        return thetaddot, xddot
+    return 0.0, 0.0
+
+
+@njit(cache=True, inline='always')
+def powers(mode, lam, sigma, theta, thetadot, xdot, ah, av, G, thetaddot, p):
+    """Power per unit mass of the ground's inertia forces and of friction [W/kg].
+
+    The ground acts through ``-ah`` and ``-av`` on the centre of gravity, whose velocity relative to
+    the foundation is ``(xdot - lam R c thetadot, R s thetadot)`` (the virtual displacements of
+    eq. 14); kinetic friction dissipates ``nu N |xdot|`` (eqs. 9 and 22).
+    """
+    if mode == REST:
+        return 0.0, 0.0
+    R = p[P_R]
+    s = math.sin(p[P_ALPHA] - theta)
+    c = math.cos(p[P_ALPHA] - theta)
+    ground = -ah * (xdot - lam * R * c * thetadot) - av * R * s * thetadot
+    if mode == SLIP:
+        return ground, -p[P_NU] * G * abs(xdot)
+    if mode == ROCKSLIP:
+        _, N = contact_forces(theta, thetadot, thetaddot, ah, G, lam, R, p[P_ALPHA])
+        return ground, -p[P_NU] * N * abs(xdot)
+    return ground, 0.0
+
+
+@njit(cache=True, inline='always')
+def derivatives(mode, lam, sigma, th, thd, xd, t, a0, sa, v0, sv, p):
+    """Right-hand side at local time ``t``: ``(thetaddot, xddot, ground power, friction power)``."""
+    ah = a0 + sa * t
+    av = v0 + sv * t
+    G = p[P_G] + av
+    thdd, xdd = accelerations(mode, lam, sigma, th, thd, ah, G, p)
+    if p[P_ENERGY] != 0.0:
+        pg, pf = powers(mode, lam, sigma, th, thd, xd, ah, av, G, thdd, p)
+        return thdd, xdd, pg, pf
+    return thdd, xdd, 0.0, 0.0
+
+
+@njit(cache=True, inline='always')
+def rk4(mode, lam, sigma, y, tau, hh, a0, sa, v0, sv, p, out):
+    """One classical fourth-order Runge-Kutta step of length ``hh`` from local time ``tau``.
+
+    ``y`` and ``out`` hold ``theta, thetadot, x, xdot, w_ground, w_friction``; the ground is
+    ``ah = a0 + sa t``, ``av = v0 + sv t`` (linear within the interval).
+    """
+    th, thd, x, xd = y[0], y[1], y[2], y[3]
+    half = 0.5 * hh
+    a1, b1, pg1, pf1 = derivatives(mode, lam, sigma, th, thd, xd, tau, a0, sa, v0, sv, p)
+    th2 = th + half * thd
+    thd2 = thd + half * a1
+    xd2 = xd + half * b1
+    a2, b2, pg2, pf2 = derivatives(mode, lam, sigma, th2, thd2, xd2, tau + half, a0, sa, v0, sv, p)
+    th3 = th + half * thd2
+    thd3 = thd + half * a2
+    xd3 = xd + half * b2
+    a3, b3, pg3, pf3 = derivatives(mode, lam, sigma, th3, thd3, xd3, tau + half, a0, sa, v0, sv, p)
+    th4 = th + hh * thd3
+    thd4 = thd + hh * a3
+    xd4 = xd + hh * b3
+    a4, b4, pg4, pf4 = derivatives(mode, lam, sigma, th4, thd4, xd4, tau + hh, a0, sa, v0, sv, p)
+    f = hh / 6.0
+    out[0] = th + f * (thd + 2.0 * thd2 + 2.0 * thd3 + thd4)
+    out[1] = thd + f * (a1 + 2.0 * a2 + 2.0 * a3 + a4)
+    out[2] = x + f * (xd + 2.0 * xd2 + 2.0 * xd3 + xd4)
+    out[3] = xd + f * (b1 + 2.0 * b2 + 2.0 * b3 + b4)
+    out[4] = y[4] + f * (pg1 + 2.0 * pg2 + 2.0 * pg3 + pg4)
+    out[5] = y[5] + f * (pf1 + 2.0 * pf2 + 2.0 * pf3 + pf4)
+
+
+@njit(cache=True, inline='always')
+def event_values(mode, lam, sigma, y, ah, G, p, gv, kinds):
+    """Fill ``gv`` with the event functions of ``mode`` at state ``y`` (``g >= 0`` while the state
+    holds) and ``kinds`` with what each one is, in the order of model.md's table; return the count.
+    """
+    th, thd, xd = y[0], y[1], y[3]
+    R = p[P_R]
+    alpha = p[P_ALPHA]
+    if mode == SLIP:
+        xdd = slip_acceleration(ah, G, p[P_NU], sigma)
+        gv[0] = G
+        kinds[0] = K_FLIGHT
+        gv[1] = sigma * xd
+        kinds[1] = K_SLIP_STOP
+        gv[2] = liftoff_margin(p[P_TAN_ALPHA], G, xdd + ah)       # eq. 23
+        kinds[2] = K_LIFTOFF
+        return 3
+    if mode == ROCK:
+        thdd = rock_acceleration(th, ah, G, lam, R, alpha)
+        Rx, N = contact_forces(th, thd, thdd, ah, G, lam, R, alpha)
+        gv[0] = N
+        kinds[0] = K_FLIGHT
+        gv[1] = slip_margin(p[P_MU], N, Rx)                        # eq. 21
+        kinds[1] = K_SLIP_START
+        gv[2] = th
+        kinds[2] = K_IMPACT
+        gv[3] = HALF_PI - th
+        kinds[3] = K_OVERTURN
+        return 4
+    if mode == ROCKSLIP:
+        thdd, _, D = rockslip_accelerations(th, thd, ah, G, lam, sigma, p[P_NU], R, alpha)
+        _, N = contact_forces(th, thd, thdd, ah, G, lam, R, alpha)
+        gv[0] = N
+        kinds[0] = K_FLIGHT
+        gv[1] = D
+        kinds[1] = K_PAINLEVE
+        gv[2] = sigma * xd
+        kinds[2] = K_SLIP_STOP
+        gv[3] = th
+        kinds[3] = K_IMPACT
+        gv[4] = HALF_PI - th
+        kinds[4] = K_OVERTURN
+        return 5
+    if mode == REST:
+        # At rest N = G and Rx = ah; both edges and both slip directions (eqs. 6 and 11).
+        gv[0] = G
+        kinds[0] = K_FLIGHT
+        gv[1] = slip_margin(p[P_MU], G, ah)
+        kinds[1] = K_SLIP_START
+        gv[2] = liftoff_margin(p[P_TAN_ALPHA], G, ah)
+        kinds[2] = K_LIFTOFF
+        return 3
+    return 0
+
+
+# ============================================================================================
+# Bookkeeping: events, outputs, summary
+# ============================================================================================
+
+@njit(cache=True)
+def log_event(st, events, t, mode_from, mode_to, cause):
+    n = int(st[S_N_EVENTS])
+    if n < events.shape[0]:
+        events[n, 0] = t
+        events[n, 1] = mode_from
+        events[n, 2] = mode_to
+        events[n, 3] = cause
+        events[n, 4] = st[S_LAM]
+        events[n, 5] = st[S_SIGMA]
+    st[S_N_EVENTS] = n + 1
+
+
+@njit(cache=True, inline='always')
+def note_extremes(st, t):
+    if st[S_THETA] > st[S_MAX_THETA]:
+        st[S_MAX_THETA] = st[S_THETA]
+        st[S_THETA_MAX_TIME] = t
+    ax = abs(st[S_X])
+    if ax > st[S_MAX_X]:
+        st[S_MAX_X] = ax
+
+
+@njit(cache=True, inline='always')
+def write_history(st, history, every, offset, n, t):
+    """Store the state at grid point ``n`` if it is on the output grid."""
+    if every <= 0 or n % every != 0:
+        return
+    i = n // every - offset
+    if 0 <= i < history.shape[0]:
+        lam = st[S_LAM]
+        history[i, 0] = t
+        history[i, 1] = lam * st[S_THETA]
+        history[i, 2] = lam * st[S_THETADOT]
+        history[i, 3] = st[S_X]
+        history[i, 4] = st[S_XDOT]
+        history[i, 5] = st[S_MODE]
+
+
+@njit(cache=True, inline='always')
+def add_time(st, mode, duration):
+    if mode == REST:
+        st[S_T_REST] += duration
+    elif mode == SLIP:
+        st[S_T_SLIP] += duration
+    elif mode == ROCK:
+        st[S_T_ROCK] += duration
+    elif mode == ROCKSLIP:
+        st[S_T_ROCKSLIP] += duration
+
+
+@njit(cache=True)
+def stop(st, t):
+    st[S_END_TIME] = t
+
+
+@njit(cache=True, inline='always')
+def finished(st):
+    return st[S_MODE] == OVERTURNED or st[S_STATUS] != STATUS_OK
+
+
+# ============================================================================================
+# Transitions (model.md's table)
+# ============================================================================================
+
+@njit(cache=True)
+def mechanical_energy(st, p):
+    return (kinetic_energy(st[S_THETA], st[S_THETADOT], st[S_XDOT], st[S_LAM], p[P_R], p[P_ALPHA])
+            + potential_energy(st[S_THETA], p[P_G], p[P_R], p[P_ALPHA]))
+
+
+@njit(cache=True)
+def apply_event(kind, st, p, t, ah, G, events):
+    """Apply the transition of event ``kind`` to ``st`` at time ``t`` (ground ``ah``, ``G``)."""
+    mode = int(st[S_MODE])
+    lam = st[S_LAM]
+    sigma = st[S_SIGMA]
+    R = p[P_R]
+    alpha = p[P_ALPHA]
+    mu = p[P_MU]
+
+    if kind == K_FLIGHT:
+        st[S_STATUS] = STATUS_FLIGHT
+        log_event(st, events, t, mode, mode, C_FLIGHT)
+        stop(st, t)
+    elif kind == K_PAINLEVE:
+        st[S_STATUS] = STATUS_PAINLEVE
+        log_event(st, events, t, mode, mode, C_PAINLEVE)
+        stop(st, t)
+    elif kind == K_OVERTURN:
+        st[S_THETA] = HALF_PI
+        st[S_MODE] = OVERTURNED
+        st[S_OVERTURN_TIME] = t
+        st[S_DIRECTION] = lam
+        st[S_FALL_START] = st[S_FALL_CANDIDATE]
+        note_extremes(st, t)
+        log_event(st, events, t, mode, OVERTURNED, C_OVERTURN)
+        stop(st, t)
+    elif kind == K_SLIP_START:
+        if mode == REST:                                   # eq. 11: sigma = -sign(ah)
+            st[S_SIGMA] = -1.0 if ah > 0.0 else 1.0
+            st[S_XDOT] = 0.0
+            st[S_MODE] = SLIP
+            log_event(st, events, t, REST, SLIP, C_SLIP_START)
+        else:                                              # ROCK, eq. 21: sigma = -sign(Rx)
+            thdd = rock_acceleration(st[S_THETA], ah, G, lam, R, alpha)
+            Rx, _ = contact_forces(st[S_THETA], st[S_THETADOT], thdd, ah, G, lam, R, alpha)
+            st[S_SIGMA] = -1.0 if Rx > 0.0 else 1.0
+            st[S_XDOT] = 0.0
+            st[S_MODE] = ROCKSLIP
+            log_event(st, events, t, ROCK, ROCKSLIP, C_SLIP_START)
+    elif kind == K_LIFTOFF:
+        st[S_THETA] = 0.0
+        st[S_THETADOT] = 0.0
+        if mode == REST:                                   # eq. 7: lam = sign(ah)
+            st[S_LAM] = 1.0 if ah > 0.0 else -1.0
+            st[S_MODE] = ROCK
+            log_event(st, events, t, REST, ROCK, C_LIFTOFF)
+        else:                                              # SLIP, eq. 24: lam = sign(xddot + ah)
+            push = slip_acceleration(ah, G, p[P_NU], sigma) + ah
+            st[S_LAM] = 1.0 if push > 0.0 else -1.0
+            st[S_MODE] = ROCKSLIP
+            log_event(st, events, t, SLIP, ROCKSLIP, C_LIFTOFF)
+    elif kind == K_SLIP_STOP:
+        st[S_XDOT] = 0.0
+        if mode == SLIP:
+            if slip_margin(mu, G, ah) >= 0.0:
+                st[S_MODE] = REST
+                log_event(st, events, t, SLIP, REST, C_SLIP_STOP)
+            else:
+                st[S_SIGMA] = -1.0 if ah > 0.0 else 1.0
+                log_event(st, events, t, SLIP, SLIP, C_SLIP_REVERSAL)
+        else:                                              # ROCKSLIP, with ROCK's Rx and N
+            thdd = rock_acceleration(st[S_THETA], ah, G, lam, R, alpha)
+            Rx, N = contact_forces(st[S_THETA], st[S_THETADOT], thdd, ah, G, lam, R, alpha)
+            if slip_margin(mu, N, Rx) >= 0.0:
+                st[S_MODE] = ROCK
+                log_event(st, events, t, ROCKSLIP, ROCK, C_SLIP_STOP)
+            else:
+                st[S_SIGMA] = -1.0 if Rx > 0.0 else 1.0
+                log_event(st, events, t, ROCKSLIP, ROCKSLIP, C_SLIP_REVERSAL)
+    elif kind == K_IMPACT:
+        st[S_IMPACTS] += 1.0
+        energy_before = mechanical_energy(st, p)
+        st[S_THETA] = 0.0
+        w = rebound(st[S_THETADOT], p[P_E])
+        st[S_LAM] = -lam
+        # End of liftoff (model.md decision 3): the new edge's liftoff condition (eq. 6 from ROCK,
+        # eq. 23 from ROCKSLIP) is the sign of thetaddot at theta = thetadot = 0; when it does not
+        # hold and the rebound would land again within one step (2 w / |thetaddot| <= h), the
+        # impacts have become too small to matter.
+        thdd0, _ = accelerations(mode, -lam, sigma, 0.0, 0.0, ah, G, p)
+        if thdd0 <= 0.0 and w <= 0.5 * abs(thdd0) * p[P_H]:
+            st[S_THETADOT] = 0.0
+            new_mode = REST if mode == ROCK else SLIP
+            st[S_MODE] = new_mode
+            log_event(st, events, t, mode, new_mode, C_LIFTOFF_END)
+        else:
+            st[S_THETADOT] = w
+            log_event(st, events, t, mode, mode, C_IMPACT)
+        st[S_W_IMPACT] += mechanical_energy(st, p) - energy_before
+        st[S_FALL_CANDIDATE] = math.nan
+
+
+@njit(cache=True)
+def settle(st, p, t, ah, av, events, gv, kinds, y):
+    """Apply at once every condition of the current state that already holds at time ``t``."""
+    G = p[P_G] + av
+    for _ in range(MAX_TRANSITIONS_PER_STEP):
+        if finished(st):
+            return
+        y[0] = st[S_THETA]
+        y[1] = st[S_THETADOT]
+        y[2] = st[S_X]
+        y[3] = st[S_XDOT]
+        n = event_values(int(st[S_MODE]), st[S_LAM], st[S_SIGMA], y, ah, G, p, gv, kinds)
+        fired = -1
+        for i in range(n):
+            if gv[i] < 0.0:
+                fired = i
+                break
+        if fired < 0:
+            return
+        apply_event(kinds[fired], st, p, t, ah, G, events)
+
+
+# ============================================================================================
+# REST: exact exits of a linear input, no integration
+# ============================================================================================
+
+@njit(cache=True)
+def first_negative(A, B, tau, tau_end):
+    """First local time in ``[tau, tau_end]`` at which ``A + B t`` is negative (its zero crossing),
+    or ``inf``."""
+    if A + B * tau < 0.0:
+        return tau
+    if B < 0.0:
+        r = -A / B
+        if r < tau:
+            r = tau
+        if r <= tau_end:
+            return r
+    return math.inf
+
+
+@njit(cache=True)
+def rest_exit(tau, tau_end, a0, sa, v0, sv, p, step_end, h):
+    """When and why the block leaves REST within ``[tau, tau_end]`` of the current interval.
+
+    The conditions are linear in time (eq. 6, eq. 11, and flight ``G < 0``). Returns
+    ``(time, kind)``; ``kind = -1`` if the block rests through. Ties go to the first row of
+    model.md's table (flight, then slip, then liftoff); with ``step_end`` the transition happens at
+    the end of the step in which the first condition was met, and among the conditions met within
+    that step the first row wins (decision 1).
+    """
+    g0 = p[P_G] + v0
+    mu = p[P_MU]
+    ta = p[P_TAN_ALPHA]
+    t_flight = first_negative(g0, sv, tau, tau_end)
+    t_slip = min(first_negative(mu * g0 - a0, mu * sv - sa, tau, tau_end),
+                 first_negative(mu * g0 + a0, mu * sv + sa, tau, tau_end))
+    t_lift = min(first_negative(ta * g0 - a0, ta * sv - sa, tau, tau_end),
+                 first_negative(ta * g0 + a0, ta * sv + sa, tau, tau_end))
+    best = min(t_flight, min(t_slip, t_lift))
+    if best == math.inf:
+        return best, -1
+    if step_end and best > tau:
+        # Move to the end of the step containing the first crossing; among the conditions met
+        # within that step the first row of the table wins (decision 1).
+        best = (math.floor(best / h) + 1.0) * h
+        if best >= tau_end:
+            best = tau_end
+            # a crossing exactly at the interval's end is not yet a negative margin
+            if min(t_flight, min(t_slip, t_lift)) >= tau_end:
+                return math.inf, -1
+        if t_flight < best:
+            return best, K_FLIGHT
+        if t_slip < best:
+            return best, K_SLIP_START
+        return best, K_LIFTOFF
+    if t_flight <= best:
+        return best, K_FLIGHT
+    if t_slip <= best:
+        return best, K_SLIP_START
+    return best, K_LIFTOFF
+
+
+# ============================================================================================
+# Moving states: RK4 steps with event location
+# ============================================================================================
+
+@njit(cache=True)
+def event_value_at(i, mode, lam, sigma, y0, tau_a, dtau, a0, sa, v0, sv, p, ytmp, gv, kinds):
+    """Event function ``i`` at ``tau_a + dtau``, reached by one RK4 step from ``y0``."""
+    rk4(mode, lam, sigma, y0, tau_a, dtau, a0, sa, v0, sv, p, ytmp)
+    t = tau_a + dtau
+    event_values(mode, lam, sigma, ytmp, a0 + sa * t, p[P_G] + v0 + sv * t, p, gv, kinds)
+    return gv[i]
+
+
+@njit(cache=True)
+def locate(i, mode, lam, sigma, y0, tau_a, tau_b, g_a, g_b, a0, sa, v0, sv, p, ytmp, gv, kinds):
+    """Local time of the zero crossing of event function ``i`` in ``(tau_a, tau_b]`` (Illinois).
+
+    ``g_a >= 0 > g_b``. Returns the upper end of the final bracket, where the event function is
+    already negative, so the new state's conditions hold there.
+    """
+    lo = 0.0
+    hi = tau_b - tau_a
+    glo = g_a
+    ghi = g_b
+    side = 0
+    tol = 1e-15 + 1e-13 * hi
+    for _ in range(200):
+        if hi - lo <= tol:
+            break
+        if glo > 0.0 and ghi < 0.0:
+            m = hi - ghi * (hi - lo) / (ghi - glo)
+            if not (lo < m < hi):
+                m = 0.5 * (lo + hi)
+        else:
+            m = 0.5 * (lo + hi)
+        # keep the secant away from the ends so that the bracket always shrinks
+        width = hi - lo
+        if m - lo < 0.01 * width:
+            m = lo + 0.01 * width
+        elif hi - m < 0.01 * width:
+            m = hi - 0.01 * width
+        gm = event_value_at(i, mode, lam, sigma, y0, tau_a, m, a0, sa, v0, sv, p, ytmp, gv, kinds)
+        if gm < 0.0:
+            hi = m
+            ghi = gm
+            if side == -1:
+                glo *= 0.5
+            side = -1
+        else:
+            lo = m
+            glo = gm
+            if side == 1:
+                ghi *= 0.5
+            side = 1
+    return tau_a + hi
+
+
+@njit(cache=True, inline='always')
+def step_without_event(st, p, mode, tau_a, tau_b, tk, a0, sa, v0, sv, y0, y1, gv, kinds):
+    """One RK4 step of the moving state ``mode`` from ``tau_a`` to ``tau_b``; if no event function
+    of the state turns negative, take it into ``st`` and return True. Otherwise leave ``st`` as it
+    was (``y0`` holds the start, ``y1`` the end of the step) and return False."""
+    lam = st[S_LAM]
+    sigma = st[S_SIGMA]
+    y0[0] = st[S_THETA]
+    y0[1] = st[S_THETADOT]
+    y0[2] = st[S_X]
+    y0[3] = st[S_XDOT]
+    y0[4] = st[S_W_GROUND]
+    y0[5] = st[S_W_FRICTION]
+    rk4(mode, lam, sigma, y0, tau_a, tau_b - tau_a, a0, sa, v0, sv, p, y1)
+    n = event_values(mode, lam, sigma, y1, a0 + sa * tau_b, p[P_G] + v0 + sv * tau_b, p, gv, kinds)
+    for i in range(n):
+        if gv[i] < 0.0:
+            return False
+    accept(st, y1, mode, tau_a, tau_b, tk, p)
+    return True
+
+
+@njit(cache=True)
+def advance(st, p, tau_a, tau_b, tk, a0, sa, v0, sv, events, y0, y1, ytmp, gv, kinds):
+    """Integrate the moving state from local time ``tau_a`` to ``tau_b`` (one step), handling
+    every transition inside it. Returns the local time reached: ``tau_b``, or earlier if the block
+    came to REST (the caller handles REST) or the run ended."""
+    located = p[P_LOCATED] != 0.0
+    g = p[P_G]
+    for _ in range(MAX_TRANSITIONS_PER_STEP):
+        mode = int(st[S_MODE])
+        if mode == REST or finished(st):
+            return tau_a
+        hh = tau_b - tau_a
+        if hh <= 0.0:
+            return tau_b
+        if step_without_event(st, p, mode, tau_a, tau_b, tk, a0, sa, v0, sv, y0, y1, gv, kinds):
+            return tau_b
+        lam = st[S_LAM]
+        sigma = st[S_SIGMA]
+        n = event_values(mode, lam, sigma, y1, a0 + sa * tau_b, g + v0 + sv * tau_b, p, gv, kinds)
+        first = -1
+        for i in range(n):
+            if gv[i] < 0.0:
+                first = i
+                break
+        # an event inside this step
+        if located:
+            g_end = gv.copy()
+            kinds_end = kinds.copy()
+            # event values at the start of the step (all >= 0 by construction)
+            event_values(mode, lam, sigma, y0, a0 + sa * tau_a, g + v0 + sv * tau_a, p, gv, kinds)
+            g_start = gv.copy()
+            best = math.inf
+            best_i = -1
+            for i in range(n):
+                if g_end[i] < 0.0:
+                    ga = g_start[i] if g_start[i] > 0.0 else 0.0
+                    te_i = locate(i, mode, lam, sigma, y0, tau_a, tau_b, ga, g_end[i],
+                                  a0, sa, v0, sv, p, ytmp, gv, kinds)
+                    if te_i < best:
+                        best = te_i
+                        best_i = i
+            te = best
+            kind = kinds_end[best_i]
+            if te < tau_b:
+                rk4(mode, lam, sigma, y0, tau_a, te - tau_a, a0, sa, v0, sv, p, y1)
+        else:
+            te = tau_b
+            kind = kinds[first]
+        accept(st, y1, mode, tau_a, te, tk, p)
+        if kind == K_IMPACT:
+            if not located:
+                land_on_the_ground(st, p, g + v0 + sv * te)
+            st[S_THETA] = 0.0
+        elif kind == K_SLIP_STOP:
+            st[S_XDOT] = 0.0
+        ah_e = a0 + sa * te
+        av_e = v0 + sv * te
+        apply_event(kind, st, p, tk + te, ah_e, g + av_e, events)
+        settle(st, p, tk + te, ah_e, av_e, events, gv, kinds, ytmp)
+        tau_a = te
+    return tau_a
+
+
+@njit(cache=True)
+def land_on_the_ground(st, p, G):
+    """Step-end switching only: a landing found at the end of a step has ``theta < 0``. Bring
+    the block back to ``theta = 0`` at constant energy (the rise of potential energy in ``G`` is
+    taken from the rotation rate), otherwise each late landing would add energy and the impacts
+    of a block coming to rest would never die out."""
+    th = st[S_THETA]
+    if th >= 0.0:
+        return
+    R = p[P_R]
+    alpha = p[P_ALPHA]
+    rise = G * R * (math.cos(alpha) - math.cos(alpha - th))        # > 0 for th < 0
+    w2 = st[S_THETADOT] * st[S_THETADOT] - rise / ((2.0 / 3.0) * R * R)
+    st[S_THETADOT] = -math.sqrt(w2) if w2 > 0.0 else 0.0
+
+
+@njit(cache=True, inline='always')
+def accept(st, y1, mode, tau_a, tau_b, tk, p):
+    """Take the integrated state ``y1`` at local time ``tau_b`` into ``st``."""
+    theta_before = st[S_THETA]
+    st[S_THETA] = y1[0]
+    st[S_THETADOT] = y1[1]
+    st[S_X] = y1[2]
+    st[S_XDOT] = y1[3]
+    st[S_W_GROUND] = y1[4]
+    st[S_W_FRICTION] = y1[5]
+    add_time(st, mode, tau_b - tau_a)
+    alpha = p[P_ALPHA]
+    # The fall that ends in overturning starts when theta last passed alpha upwards.
+    if theta_before <= alpha < y1[0]:
+        f = (alpha - theta_before) / (y1[0] - theta_before)
+        st[S_FALL_CANDIDATE] = tk + tau_a + f * (tau_b - tau_a)
+    elif y1[0] <= alpha:
+        st[S_FALL_CANDIDATE] = math.nan
+    note_extremes(st, tk + tau_b)
+
+
+# ============================================================================================
+# The driver
+# ============================================================================================
+
+@njit(cache=True)
+def run(p, ah, av, st, history, every, offset, events, k_end):
+    """Integrate from the interval ``st[S_K]`` up to (not including) ``k_end``.
+
+    Parameters
+    ----------
+    p : float64[N_PARAMS]
+        Constants (``P_*``).
+    ah, av : float64[K + 1]
+        Ground acceleration samples [m/s^2], tail of zeros included; interval ``k`` is
+        ``[t0 + k dt_rec, t0 + (k + 1) dt_rec]``.
+    st : float64[N_STATE]
+        The integration state, updated in place (resumable).
+    history : float64[n, 6]
+        Output rows (``HISTORY_COLUMNS``) for every ``every``-th grid point; row
+        ``n // every - offset``. ``every = 0`` keeps no history.
+    events : float64[m, 6]
+        Event log rows (``EVENT_COLUMNS``); ``st[S_N_EVENTS]`` counts all events, including those
+        beyond the log's capacity.
+    k_end : int
+        Stop before this interval (at most ``len(ah) - 1``).
+    """
+    n_sub = int(p[P_N_SUB])
+    h = p[P_H]
+    dt_rec = p[P_DT_REC]
+    t0 = p[P_T0]
+    step_end = p[P_LOCATED] == 0.0
+    y0 = np.zeros(6)
+    y1 = np.zeros(6)
+    ytmp = np.zeros(6)
+    gv = np.zeros(MAX_EVENTS_PER_MODE)
+    kinds = np.zeros(MAX_EVENTS_PER_MODE, dtype=np.int64)
+    k = int(st[S_K])
+    if st[S_STARTED] == 0.0:
+        st[S_STARTED] = 1.0
+        st[S_E_INITIAL] = mechanical_energy(st, p)
+        settle(st, p, t0, ah[0], av[0], events, gv, kinds, ytmp)
+        note_extremes(st, t0)
+        write_history(st, history, every, offset, 0, t0)
+    while k < k_end and not finished(st):
+        a0 = ah[k]
+        sa = (ah[k + 1] - a0) / dt_rec
+        v0 = av[k]
+        sv = (av[k + 1] - v0) / dt_rec
+        tk = t0 + k * dt_rec
+        n_base = k * n_sub
+        tau = 0.0
+        j = 1                                   # next grid point of this interval
+        while j <= n_sub and not finished(st):
+            if st[S_MODE] == REST:
+                te, kind = rest_exit(tau, dt_rec, a0, sa, v0, sv, p, step_end, h)
+                if kind < 0:
+                    add_time(st, REST, dt_rec - tau)
+                    if every > 0:
+                        for jj in range(j, n_sub + 1):
+                            write_history(st, history, every, offset, n_base + jj, t0 + (n_base + jj) * h)
+                    j = n_sub + 1
+                    tau = dt_rec
+                    break
+                add_time(st, REST, te - tau)
+                while j <= n_sub and j * h <= te * (1.0 + 1e-14):
+                    write_history(st, history, every, offset, n_base + j, t0 + (n_base + j) * h)
+                    j += 1
+                tau = te
+                ah_e = a0 + sa * te
+                av_e = v0 + sv * te
+                apply_event(kind, st, p, tk + te, ah_e, p[P_G] + av_e, events)
+                settle(st, p, tk + te, ah_e, av_e, events, gv, kinds, ytmp)
+                continue
+            tau_b = j * h if j < n_sub else dt_rec
+            if step_without_event(st, p, int(st[S_MODE]), tau, tau_b, tk, a0, sa, v0, sv,
+                                  y0, y1, gv, kinds):
+                tau = tau_b
+            else:
+                tau = advance(st, p, tau, tau_b, tk, a0, sa, v0, sv, events, y0, y1, ytmp, gv, kinds)
+            if tau >= tau_b:
+                write_history(st, history, every, offset, n_base + j, t0 + (n_base + j) * h)
+                j += 1
+        k += 1
+    st[S_K] = k
+    return k

@@ -1,0 +1,894 @@
+"""Accelerograms: find them, read them into SI, scale and align the two components.
+
+Every reader returns an :class:`obspy.Trace` whose data are float64 acceleration in [m/s^2],
+``stats.delta`` the sampling step [s], and ``stats.rockslide`` an :class:`obspy.core.AttribDict`
+with the provenance of the samples: ``format``, ``units`` (the unit of the file's numbers),
+``path``, ``sha256`` (of the file's bytes) and ``start`` [s] (time of the first sample: 0 unless a
+time column says otherwise).
+
+Supported formats (``format=None`` sniffs them in this order):
+
+``at2``
+    PEER NGA ``.AT2``: 4 header lines (units on line 3, ``NPTS``/``DT`` on line 4), then values.
+``knet``
+    K-NET / KiK-net ASCII (NIED), read by obspy; counts times the scale factor, mean removed.
+``column``
+    Numbers separated by commas and/or whitespace, ``#`` comments, an optional header row of
+    column names: a time column and an acceleration column. One column is ``values``.
+``values``
+    All numbers in reading order, several per line allowed, after ``skip_lines`` lines; needs ``dt``.
+any obspy waveform format
+    ``SAC``, ``MSEED``, ...: the first and only trace, in the ``units`` given.
+
+This is the only module of rockslide that imports obspy.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import io
+import itertools
+import math
+import os
+import re
+import warnings
+from dataclasses import dataclass
+from decimal import Decimal
+from pathlib import Path
+
+import numpy as np
+import obspy
+from obspy.core import AttribDict
+from obspy.core.util.base import ENTRY_POINTS
+
+from .errors import CaseError, RecordError
+from .units import STANDARD_GRAVITY, unit_factor
+
+RECORDS_ENV = "ROCKSLIDE_RECORDS"
+
+#: Formats rockslide reads itself (the obspy ones are added by name).
+OWN_FORMATS = ("at2", "knet", "column", "values")
+OBSPY_FORMATS = tuple(sorted(ENTRY_POINTS["waveform"]))
+
+#: A peak above this [m/s^2] is almost certainly a unit mistake: warn.
+ABSURD_PEAK = 10.0 * STANDARD_GRAVITY
+
+_SUPPORTED = ("PEER NGA .AT2, K-NET/KiK-net ASCII, column text (time and acceleration), "
+              "values text (format: values, with dt), or a waveform format obspy reads "
+              "(SAC, MSEED, ...)")
+_UNITS_HINT = "g, gal, m/s^2"
+
+# A number as written in accelerograms, Fortran's .1234E-02 and 1.0D-02 included; nan and inf are
+# read too, so that they can be reported as such.
+_NUMBER_TEXT = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eEdD][-+]?\d+)?"
+_NUMBER = re.compile(rf"{_NUMBER_TEXT}|[-+]?(?:nan|inf|infinity)", re.IGNORECASE)
+_FIELD_SEPARATOR = re.compile(r"\s*,\s*|\s+")
+_AT2_NPTS = re.compile(r"\bNPTS\s*=\s*(\d{1,12})\b", re.IGNORECASE)
+_AT2_DT = re.compile(rf"\bDT\s*=\s*({_NUMBER_TEXT})", re.IGNORECASE)
+_AT2_OLD_STYLE = re.compile(rf"^\s*(\d{{1,12}})\s+({_NUMBER_TEXT})\s+NPTS\s*,?\s*DT\b", re.IGNORECASE)
+_AT2_UNITS = re.compile(r"\bUNITS\s+OF\s+([A-Za-z/^*0-9]+)", re.IGNORECASE)
+
+
+class RecordWarning(UserWarning):
+    """A record that can be read but looks wrong (a peak above 10 g, most likely a unit mistake)."""
+
+
+# --------------------------------------------------------------------------------------------------
+# Where records are
+# --------------------------------------------------------------------------------------------------
+
+def records_dir(option: str | os.PathLike | None = None) -> Path:
+    """The records directory.
+
+    Parameters
+    ----------
+    option : str or path-like, optional
+        The ``--records-dir`` option; wins when given (and not empty).
+
+    Returns
+    -------
+    Path
+        ``option``, else ``$ROCKSLIDE_RECORDS`` when set and not empty, else ``Path("records")``.
+    """
+    if option is not None and str(option) != "":
+        return Path(option).expanduser()
+    env = os.environ.get(RECORDS_ENV)
+    if env:
+        return Path(env).expanduser()
+    return Path("records")
+
+
+def resolve_record_path(name: str, *, case_dir: Path | None, records_dir: Path,
+                        source: str | None = None, field: str | None = None) -> Path:
+    """Find a record file named in a case or on the command line.
+
+    Parameters
+    ----------
+    name : str
+        An absolute path (used as is) or a path relative to the case folder or the records folder.
+    case_dir : Path or None
+        The folder of the case file; looked in first.
+    records_dir : Path
+        The records folder (see :func:`records_dir`); looked in second.
+    source, field : str, optional
+        Named by the error (the case file and its key).
+
+    Returns
+    -------
+    Path
+        The first existing file: ``name`` if absolute, else ``case_dir / name``, else
+        ``records_dir / name``.
+
+    Raises
+    ------
+    RecordError
+        Naming every place tried, when none is a file.
+    """
+    if str(name).strip() == "":
+        raise RecordError("empty record name: expected a file name or path", source=source, field=field)
+    path = Path(name).expanduser()
+    if path.is_absolute():
+        tried = [path]
+    else:
+        tried = [folder / path for folder in (case_dir, records_dir) if folder is not None]
+    for candidate in tried:
+        if candidate.is_file():
+            return candidate
+    places = ", ".join(str(p) for p in tried)
+    raise RecordError(f"record file {str(name)!r} not found; tried: {places} "
+                      f"(set --records-dir or ${RECORDS_ENV}, or give a path)", source=source, field=field)
+
+
+# --------------------------------------------------------------------------------------------------
+# Reading
+# --------------------------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class _Context:
+    """The file being read and how its errors are reported."""
+
+    path: Path
+    source: str | None
+    field: str | None
+
+    def error(self, message: str, where: str | None = None, *, cls=RecordError) -> RecordError:
+        """A one-line RecordError naming the file, the place in it (``line 4``) and ``message``.
+
+        The error keeps ``reason`` (``message``) and ``where`` for messages that quote it.
+        """
+        message = " ".join(message.split())
+        if self.source is None:
+            field = ", ".join(p for p in (self.field, where) if p) or None
+            error = cls(message, source=str(self.path), field=field)
+        else:
+            location = ", ".join(p for p in (str(self.path), where) if p)
+            error = cls(f"{location}: {message}", source=self.source, field=self.field)
+        error.reason, error.where = message, where
+        return error
+
+
+class _Unrecognised(RecordError):
+    """obspy's format detection found nothing (raised only while sniffing)."""
+
+
+@dataclass(frozen=True)
+class _Options:
+    """The user's reading options (``None``: not given)."""
+
+    units: str | None
+    time_column: int | str | None
+    column: int | str | None
+    dt: float | None
+    skip_lines: int
+
+
+@dataclass
+class _Parsed:
+    """What a format reader found, before the checks common to all formats."""
+
+    values: np.ndarray            # [m/s^2]
+    dt: float                     # [s]
+    units: str                    # unit of the file's numbers
+    start: float = 0.0            # [s]
+    lines: np.ndarray | None = None   # line number of each sample (text formats)
+    stats: obspy.core.Stats | None = None   # obspy's header, kept for obspy formats
+
+
+def read_record(path, *, format: str | None = None, units: str | None = None,
+                time_column: int | str | None = None, column: int | str | None = None,
+                dt: float | None = None, skip_lines: int = 0,
+                source: str | None = None, field: str | None = None) -> obspy.Trace:
+    """Read an accelerogram into SI units.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The record file.
+    format : str, optional
+        ``"at2"``, ``"knet"``, ``"column"``, ``"values"`` or an obspy format name (any case);
+        ``None`` sniffs: AT2, K-NET, text, then obspy's own detection.
+    units : str, optional
+        Unit of the file's numbers (``"g"``, ``"gal"``, ``"m/s^2"``...). Required for column text,
+        values and obspy formats; for AT2 and K-NET, which state their unit, it must agree.
+    time_column, column : int or str, optional
+        Column text: 1-based numbers, or names from the header row, of the time [s] and the
+        acceleration columns. Required when the file has more than two columns; two columns are
+        (time, acceleration).
+    dt : float, optional
+        Sampling step [s]. Required for values; for other formats it must agree with the file.
+    skip_lines : int, optional
+        Lines skipped at the top of a text file (column or values) before reading.
+    source, field : str, optional
+        What errors name (a case file and its key); by default the record file.
+
+    Returns
+    -------
+    obspy.Trace
+        float64 data in [m/s^2], ``stats.delta`` [s], ``stats.calib`` 1, and ``stats.rockslide``
+        (``format``, ``units``, ``path``, ``sha256``, ``start`` [s]). For obspy formats the
+        samples are taken as they are in the file, times the unit factor (``calib`` is not applied).
+
+    Raises
+    ------
+    RecordError
+        One line naming the file (and line or sample), what is wrong and what was expected.
+
+    Warns
+    -----
+    RecordWarning
+        When the peak is above 10 g.
+    """
+    path = Path(path)
+    ctx = _Context(path, source, field)
+    raw = _read_bytes(ctx)
+    options = _Options(units, time_column, column, _check_dt_option(ctx, dt),
+                       _check_skip_lines(ctx, skip_lines))
+    kind = _choose_format(ctx, raw, format, options)
+    if kind == "at2":
+        parsed = _read_at2(ctx, _decode(raw), options)
+    elif kind == "knet":
+        parsed = _read_knet(ctx, raw)
+    elif kind in ("column", "values"):
+        parsed, kind = _read_text(ctx, _decode(raw), options, values_only=(kind == "values"))
+    elif kind == "obspy":
+        parsed, kind = _read_unrecognised(ctx, raw, options)
+    else:
+        parsed, kind = _read_obspy(ctx, raw, options, kind)
+    return _finish(ctx, parsed, kind, options, hashlib.sha256(raw).hexdigest())
+
+
+def record_info(path, **options) -> dict:
+    """Summary of a record, for ``rockslide info RECORD``.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The record file.
+    **options
+        The keyword options of :func:`read_record`.
+
+    Returns
+    -------
+    dict
+        ``format``, ``path``, ``npts``, ``dt`` [s], ``duration`` [s] (``npts * dt``, as PEER
+        counts it), ``units`` (of the file), ``start`` [s], ``peak`` [m/s^2] (max ``|a|``),
+        ``peak_gal``, ``peak_g``, ``peak_signed`` [m/s^2] (the sample at the peak, with its sign),
+        ``peak_time`` [s] (its time, first one if tied), ``mean`` [m/s^2], ``sha256``.
+    """
+    trace = read_record(path, **options)
+    meta = trace.stats.rockslide
+    data = trace.data
+    index = int(np.argmax(np.abs(data)))
+    peak = float(abs(data[index]))
+    dt = float(trace.stats.delta)
+    return {
+        "format": meta.format,
+        "path": meta.path,
+        "npts": int(trace.stats.npts),
+        "dt": dt,
+        "duration": trace.stats.npts * dt,
+        "units": meta.units,
+        "start": meta.start,
+        "peak": peak,
+        "peak_gal": peak / unit_factor("gal", "acceleration"),
+        "peak_g": peak / STANDARD_GRAVITY,
+        "peak_signed": float(data[index]),
+        "peak_time": meta.start + index * dt,
+        "mean": float(np.mean(data)),
+        "sha256": meta.sha256,
+    }
+
+
+def _read_bytes(ctx: _Context) -> bytes:
+    if not ctx.path.exists():
+        raise ctx.error("record file not found")
+    if not ctx.path.is_file():
+        raise ctx.error("is not a file (expected an accelerogram file)")
+    try:
+        raw = ctx.path.read_bytes()
+    except OSError as exc:
+        raise ctx.error(f"cannot read the file: {exc.strerror or exc}") from exc
+    if not raw.strip():
+        raise ctx.error("the file is empty (no samples)")
+    return raw
+
+
+def _decode(raw: bytes) -> str:
+    try:
+        return raw.decode("utf-8-sig")
+    except UnicodeDecodeError:
+        return raw.decode("latin-1")
+
+
+def _check_dt_option(ctx: _Context, dt) -> float | None:
+    if dt is None:
+        return None
+    if isinstance(dt, bool) or not isinstance(dt, (int, float, np.number)) \
+            or not math.isfinite(dt) or dt <= 0:
+        raise ctx.error(f"dt = {dt!r}; expected a positive sampling step in seconds")
+    return float(dt)
+
+
+def _check_skip_lines(ctx: _Context, skip_lines) -> int:
+    if isinstance(skip_lines, bool) or not isinstance(skip_lines, (int, np.integer)) or skip_lines < 0:
+        raise ctx.error(f"skip_lines = {skip_lines!r}; expected a whole number >= 0")
+    return int(skip_lines)
+
+
+def _choose_format(ctx: _Context, raw: bytes, format: str | None, options: _Options) -> str:
+    """``"at2"``, ``"knet"``, ``"column"``, ``"values"``, an obspy name, or ``"obspy"`` (detect)."""
+    if format is not None:
+        name = str(format).strip()
+        if name.lower() in OWN_FORMATS:
+            return name.lower()
+        if name.upper() in OBSPY_FORMATS:
+            return name.upper()
+        raise ctx.error(f"unknown format {format!r}; expected one of {', '.join(OWN_FORMATS)} "
+                        f"or an obspy format ({', '.join(OBSPY_FORMATS)})", "format")
+    first_line = raw.split(b"\n", 1)[0]
+    if b"PEER NGA" in first_line.upper() or ctx.path.suffix.lower() == ".at2":
+        return "at2"
+    if raw.startswith(b"Origin Time"):
+        return "knet"
+    if b"\0" not in raw[:4096] and _looks_like_text_table(_decode(raw), options.skip_lines):
+        return "column"
+    return "obspy"
+
+
+def _looks_like_text_table(text: str, skip_lines: int) -> bool:
+    """Whether the first lines are numbers (after at most one header row of names)."""
+    rows = list(itertools.islice(_content_lines(text, skip_lines), 6))
+    if not rows:
+        return True  # only comments: the text reader says there are no samples
+    numeric = [all(_number(t) is not None for t in tokens) for _, tokens in rows]
+    return all(numeric) or (len(rows) > 1 and _is_header(rows[0][1]) and all(numeric[1:]))
+
+
+def _is_header(tokens: list[str]) -> bool:
+    """A row of column names: no field empty, none a number."""
+    return all(token and _number(token) is None for token in tokens)
+
+
+def _reject_unused_options(ctx: _Context, kind: str, options: _Options) -> None:
+    """time_column, column and skip_lines mean something for text records only."""
+    if kind in ("column", "values"):
+        return  # a values record refuses the column options itself
+    given = (("time_column", options.time_column), ("column", options.column),
+             ("skip_lines", options.skip_lines or None))
+    unused = [name for name, value in given if value is not None]
+    if unused:
+        raise ctx.error(f"{' and '.join(unused)} only apply to text records (column or values), "
+                        f"not to this {kind.upper()} record; remove them", unused[0])
+
+
+def _finish(ctx: _Context, parsed: _Parsed, kind: str, options: _Options, sha256: str) -> obspy.Trace:
+    """Checks common to all formats, then the Trace with its provenance."""
+    _reject_unused_options(ctx, kind, options)
+    values = np.asarray(parsed.values, dtype=np.float64)
+    _require_samples(ctx, values.size)
+    if not (math.isfinite(parsed.dt) and parsed.dt > 0):
+        raise ctx.error(f"dt = {parsed.dt} s; expected a positive sampling step")
+    if options.dt is not None and abs(options.dt - parsed.dt) > 1e-9 * parsed.dt:
+        raise ctx.error(f"dt = {options.dt} s was given but the file's step is {parsed.dt} s; "
+                        "remove dt or fix it", "dt")
+    if options.units is not None and parsed.units != options.units and \
+            _unit_to_si(ctx, options.units) != _unit_to_si(ctx, parsed.units):
+        raise ctx.error(f"units {options.units!r} were given but the file is in {parsed.units!r}; "
+                        "remove units or fix them", "units")
+    bad = np.flatnonzero(~np.isfinite(values))
+    if bad.size:
+        i = int(bad[0])
+        where = f"line {int(parsed.lines[i])}" if parsed.lines is not None else None
+        raise ctx.error(f"sample {i + 1} of {values.size} is {values[i]} (after conversion to m/s^2); "
+                        "expected finite numbers", where)
+    peak = float(np.max(np.abs(values)))
+    if peak > ABSURD_PEAK:
+        warnings.warn(f"{ctx.path}: peak acceleration {peak / STANDARD_GRAVITY:.4g} g is above 10 g "
+                      f"(units {parsed.units!r}); check the units", RecordWarning, stacklevel=3)
+    trace = obspy.Trace(data=values, header=parsed.stats)
+    trace.stats.delta = parsed.dt
+    trace.stats.calib = 1.0
+    trace.stats.rockslide = AttribDict({
+        "format": kind, "units": parsed.units, "path": str(ctx.path), "sha256": sha256,
+        "start": float(parsed.start),
+    })
+    return trace
+
+
+def _require_samples(ctx: _Context, count: int) -> None:
+    if count == 0:
+        raise ctx.error("the record is empty (no samples)")
+    if count < 2:
+        raise ctx.error(f"the record has {count} sample; expected at least 2")
+
+
+def _unit_to_si(ctx: _Context, units: str | None, kind: str = "record") -> float:
+    """Factor [m/s^2 per file unit]; RecordError when missing or unknown."""
+    if units is None:
+        raise ctx.error(f"give `units:` ({_UNITS_HINT}) for a {kind} record; the file does not "
+                        "say in which unit its numbers are", "units")
+    try:
+        return unit_factor(str(units), "acceleration")
+    except CaseError as exc:
+        raise ctx.error(exc.message, "units") from None
+
+
+# --------------------------------------------------------------------------------------------------
+# Text: shared line handling
+# --------------------------------------------------------------------------------------------------
+
+def _number(token: str) -> float | None:
+    """The float written in ``token`` (Fortran D exponent included), or None if it is not one."""
+    if _NUMBER.fullmatch(token) is None:
+        return None
+    return float(token.replace("d", "e").replace("D", "E"))
+
+
+def _content_lines(text: str, skip_lines: int = 0, first: int = 0):
+    """Yield ``(line_number, tokens)`` of the lines holding data.
+
+    Lines before ``max(skip_lines, first)`` are skipped; so are blank lines and comment lines
+    (starting with ``#`` or ``;``). A ``#`` ends a line; fields are separated by commas and/or
+    whitespace (a trailing comma is ignored).
+    """
+    start = max(skip_lines, first)
+    for number, line in enumerate(text.splitlines()[start:], start=start + 1):
+        content = line.split("#", 1)[0].strip()
+        if content.startswith(";"):
+            continue
+        content = content.rstrip(",").strip()
+        if content:
+            yield number, _FIELD_SEPARATOR.split(content)
+
+
+def _numbers(ctx: _Context, number: int, tokens: list[str]) -> list[float]:
+    """The numbers of one line; RecordError naming the line and the offending field."""
+    values = []
+    for position, token in enumerate(tokens, start=1):
+        value = _number(token)
+        if value is None:
+            shown = repr(token) if token else "an empty field"
+            raise ctx.error(f"cannot read {shown} (field {position}) as a number", f"line {number}")
+        values.append(value)
+    return values
+
+
+def _values_in_order(ctx: _Context, rows) -> tuple[np.ndarray, np.ndarray]:
+    """All numbers of ``rows`` in reading order, with the line number of each."""
+    values: list[float] = []
+    lines: list[int] = []
+    for number, tokens in rows:
+        row = _numbers(ctx, number, tokens)
+        values.extend(row)
+        lines.extend([number] * len(row))
+    return np.array(values, dtype=np.float64), np.array(lines, dtype=np.int64)
+
+
+# --------------------------------------------------------------------------------------------------
+# PEER NGA AT2
+# --------------------------------------------------------------------------------------------------
+
+def _read_at2(ctx: _Context, text: str, options: _Options) -> _Parsed:
+    """PEER AT2: 4 header lines (units on line 3, NPTS and DT on line 4), then values."""
+    header = text.splitlines()[:4]
+    if len(header) < 4:
+        raise ctx.error(f"only {len(header)} line(s); a PEER AT2 file has 4 header lines, then values")
+    units = _at2_units(ctx, header[2]) or options.units
+    factor = _unit_to_si(ctx, units, "PEER AT2")
+    npts, dt = _at2_npts_dt(ctx, header[3])
+    values, lines = _values_in_order(ctx, _content_lines(text, first=4))
+    if values.size != npts:
+        raise ctx.error(f"header says NPTS = {npts} but the file has {values.size} values; "
+                        "the record is truncated or the header is wrong", "line 4")
+    return _Parsed(values * factor, dt, units, lines=lines)
+
+
+def _at2_units(ctx: _Context, line: str) -> str | None:
+    """The unit named on AT2 line 3 (``UNITS OF G``, ``CM/S/S``, ``CM/SEC^2``...), normalised."""
+    match = _AT2_UNITS.search(line)
+    if match is None:
+        return None
+    unit = match.group(1).lower().replace("sec", "s")
+    unit = re.sub(r"/s/s$", "/s^2", unit)
+    try:
+        unit_factor(unit, "acceleration")
+    except CaseError:
+        raise ctx.error(f"units {match.group(1)!r} are not an acceleration unit "
+                        f"({_UNITS_HINT}, cm/s/s); is this an acceleration (.AT2) record?",
+                        "line 3") from None
+    return unit
+
+
+def _at2_npts_dt(ctx: _Context, line: str) -> tuple[int, float]:
+    """NPTS and DT [s] from AT2 line 4, in the PEER NGA (``NPTS=``, ``NPTS =``) or old style."""
+    npts, dt = _AT2_NPTS.search(line), _AT2_DT.search(line)
+    if npts and dt:
+        count, step = int(npts.group(1)), _number(dt.group(1))
+    elif old := _AT2_OLD_STYLE.match(line):
+        count, step = int(old.group(1)), _number(old.group(2))
+    else:
+        raise ctx.error(f"cannot find NPTS and DT in {line.strip()[:60]!r}; expected "
+                        "'NPTS=   7500, DT=   .0200 SEC' or '  4000    0.0100    NPTS, DT'", "line 4")
+    if not (math.isfinite(step) and step > 0):
+        raise ctx.error(f"DT = {step}; expected a positive sampling step in seconds", "line 4")
+    return count, step
+
+
+# --------------------------------------------------------------------------------------------------
+# Column and values text
+# --------------------------------------------------------------------------------------------------
+
+def _read_text(ctx: _Context, text: str, options: _Options, *, values_only: bool) -> tuple[_Parsed, str]:
+    """Column text (time and acceleration columns) or values text; returns the format found."""
+    rows = list(_content_lines(text, options.skip_lines))
+    if not rows:
+        raise ctx.error("the record is empty: no data lines (only blank or comment lines"
+                        + (f" after skipping {options.skip_lines}" if options.skip_lines else "") + ")")
+    if values_only:
+        return _values_record(ctx, rows, options), "values"
+    header = None
+    if _is_header(rows[0][1]):
+        (header_line, header), rows = rows[0], rows[1:]
+        if not rows:
+            raise ctx.error("the record is empty: a header row and no data lines")
+    columns = len(rows[0][1])
+    if header is not None and len(header) != columns:
+        raise ctx.error(f"the header row has {len(header)} names but the first data line has "
+                        f"{columns} values", f"line {header_line}")
+    if columns == 1:
+        return _values_record(ctx, rows, options), "values"
+    table = []
+    for number, tokens in rows:
+        if len(tokens) != columns:
+            raise ctx.error(f"{len(tokens)} values where line {rows[0][0]} has {columns}; column text "
+                            "needs the same number of columns on every line (for several values per "
+                            "line in reading order use format: values, with dt and skip_lines)",
+                            f"line {number}")
+        table.append(_numbers(ctx, number, tokens))
+    table = np.array(table, dtype=np.float64)
+    lines = np.array([number for number, _ in rows], dtype=np.int64)
+    time_index, value_index = _time_and_value_columns(ctx, options, header, columns)
+    _require_samples(ctx, len(table))
+    resolution = _printed_resolution(tokens[time_index] for _, tokens in rows)
+    start, dt = _uniform_time(ctx, table[:, time_index], lines, resolution)
+    values = table[:, value_index] * _unit_to_si(ctx, options.units, "column text")
+    return _Parsed(values, dt, options.units, start=start, lines=lines), "column"
+
+
+def _values_record(ctx: _Context, rows, options: _Options) -> _Parsed:
+    if options.time_column is not None or options.column is not None:
+        raise ctx.error("time_column and column were given but the file has one value per line "
+                        "(values text, which needs dt)", "column")
+    if options.dt is None:
+        raise ctx.error("give `dt:` (the sampling step in s) for a values record: the file has no "
+                        "time column", "dt")
+    values, lines = _values_in_order(ctx, rows)
+    return _Parsed(values * _unit_to_si(ctx, options.units, "values"), options.dt, options.units,
+                   lines=lines)
+
+
+def _time_and_value_columns(ctx: _Context, options: _Options, header, columns: int) -> tuple[int, int]:
+    """0-based indices of the time and acceleration columns."""
+    time_spec, value_spec = options.time_column, options.column
+    if columns == 2:
+        time_spec = 1 if time_spec is None else time_spec
+        if value_spec is None:
+            value_spec = 2 if _column_index(ctx, time_spec, "time_column", header, columns) == 0 else 1
+    elif time_spec is None or value_spec is None:
+        names = f" ({', '.join(header)})" if header else ""
+        raise ctx.error(f"the file has {columns} columns{names}; give `time_column:` and `column:` "
+                        f"(numbers 1 to {columns}" + (" or header names" if header else "") + ")",
+                        "column")
+    time_index = _column_index(ctx, time_spec, "time_column", header, columns)
+    value_index = _column_index(ctx, value_spec, "column", header, columns)
+    if time_index == value_index:
+        raise ctx.error(f"time_column and column are both column {time_index + 1}; "
+                        "expected two different columns", "column")
+    return time_index, value_index
+
+
+def _column_index(ctx: _Context, spec, what: str, header, columns: int) -> int:
+    """0-based index of a column given by 1-based number or header name."""
+    if isinstance(spec, str) and not spec.strip().isdigit():
+        if header is None:
+            raise ctx.error(f"{what} {spec!r} is a name but the file has no header row; give a "
+                            f"column number from 1 to {columns}", what)
+        wanted = spec.strip()
+        exact = [i for i, name in enumerate(header) if name == wanted]
+        folded = [i for i, name in enumerate(header) if name.casefold() == wanted.casefold()]
+        if exact or folded:
+            return (exact or folded)[0]
+        raise ctx.error(f"{what} {spec!r} is not a column name; the {columns} columns are "
+                        f"{', '.join(header)}", what)
+    if isinstance(spec, bool) or not isinstance(spec, (int, np.integer, str)):
+        raise ctx.error(f"{what} = {spec!r}; expected a column number (1 to {columns}) or name", what)
+    number = int(spec)
+    if not 1 <= number <= columns:
+        raise ctx.error(f"{what} = {spec!r} is out of range: the file has {columns} columns "
+                        f"(numbers 1 to {columns})", what)
+    return number - 1
+
+
+def _printed_resolution(tokens) -> float:
+    """[s] One unit in the last printed digit of the coarsest time value (``64.43999`` -> 1e-5)."""
+    exponents = [Decimal(token.replace("d", "e").replace("D", "E")).as_tuple().exponent
+                 for token in tokens]
+    exponent = max((e for e in exponents if isinstance(e, int)), default=0)  # nan/inf: 'n', 'F'
+    return 10.0 ** max(-300, min(300, exponent))
+
+
+def _uniform_time(ctx: _Context, time: np.ndarray, lines: np.ndarray,
+                  resolution: float) -> tuple[float, float]:
+    """Start [s] and step [s] of a time column; RecordError unless finite, increasing and uniform.
+
+    Uniform means every step is within ``1e-6 * dt + 1e-9`` s of the median step, plus one unit
+    of the last printed digit of the times (``resolution`` [s], at most ``1e-3 * dt``): rounding
+    each printed time moves a step by up to that much (the SCT 1985 file has 0.01999 and 0.02001
+    among its 0.02 s steps). The step returned is the mean one, ``(t[-1] - t[0]) / (n - 1)``.
+    """
+    bad = np.flatnonzero(~np.isfinite(time))
+    if bad.size:
+        raise ctx.error(f"time {time[bad[0]]} is not a finite number", f"line {int(lines[bad[0]])}")
+    with np.errstate(over="ignore", invalid="ignore"):
+        steps = np.diff(time)
+        median = float(np.median(steps))
+        if not (math.isfinite(median) and median > 0):
+            raise ctx.error("the time column does not increase; expected times in seconds, "
+                            "evenly spaced", "time_column")
+        tolerance = 1e-6 * median + 1e-9 + min(resolution, 1e-3 * median)
+        off = np.flatnonzero(~(np.abs(steps - median) <= tolerance))
+    if off.size:
+        i = int(off[0])
+        raise ctx.error(f"time step {steps[i]:.9g} s (from {time[i]:.9g} to {time[i + 1]:.9g} s) differs "
+                        f"from the usual step {median:.9g} s by more than {tolerance:.3g} s; the time "
+                        "column must be uniform (resample the record)", f"line {int(lines[i + 1])}")
+    return float(time[0]), float((time[-1] - time[0]) / (time.size - 1))
+
+
+# --------------------------------------------------------------------------------------------------
+# obspy: K-NET and every waveform format it reads
+# --------------------------------------------------------------------------------------------------
+
+def _obspy_trace(ctx: _Context, raw: bytes, obspy_format: str | None) -> obspy.Trace:
+    """The one trace of a file read by obspy (``obspy_format`` None: obspy detects it)."""
+    try:
+        stream = obspy.read(io.BytesIO(raw), format=obspy_format)
+    except Exception as exc:  # obspy's readers raise anything on a file that is not theirs
+        unknown = isinstance(exc, TypeError) and "Unknown format" in str(exc)
+        detail = "" if unknown else f" ({type(exc).__name__}: {exc})"
+        if obspy_format is None:
+            raise ctx.error(f"unknown format{detail}; supported: {_SUPPORTED}", cls=_Unrecognised) from exc
+        raise ctx.error(f"cannot read as {obspy_format}{detail}") from exc
+    if len(stream) != 1:
+        raise ctx.error(f"the file has {len(stream)} traces; expected exactly one (one component per "
+                        "file: split it, e.g. with obspy's Stream.select and write)")
+    return stream[0]
+
+
+def _read_knet(ctx: _Context, raw: bytes) -> _Parsed:
+    """K-NET / KiK-net ASCII: counts times the header's scale factor, in gal, mean removed.
+
+    obspy puts the ``Scale Factor  2000(gal)/8388608`` line into ``stats.calib`` as
+    [m/s^2 per count] and leaves the counts in the data; NIED recommends removing the mean.
+    """
+    trace = _obspy_trace(ctx, raw, "KNET")
+    if "knet" not in trace.stats:
+        raise ctx.error("incomplete K-NET header (no 'Memo.' line, the last of the 17 header lines)")
+    values = trace.data.astype(np.float64) * trace.stats.calib
+    return _Parsed(values - values.mean(), trace.stats.delta, "gal", stats=trace.stats)
+
+
+def _read_obspy(ctx: _Context, raw: bytes, options: _Options, obspy_format: str | None) -> tuple[_Parsed, str]:
+    """Any obspy waveform format: the samples as they are, times the unit factor of ``units``."""
+    trace = _obspy_trace(ctx, raw, obspy_format)
+    kind = str(trace.stats.get("_format") or obspy_format).lower()
+    factor = _unit_to_si(ctx, options.units, kind.upper())
+    return _Parsed(trace.data.astype(np.float64) * factor, float(trace.stats.delta), options.units,
+                   stats=trace.stats), kind
+
+
+def _read_unrecognised(ctx: _Context, raw: bytes, options: _Options) -> tuple[_Parsed, str]:
+    """Neither AT2, K-NET nor clean text: obspy's detection, then column text as a last resort.
+
+    A text file that obspy does not know either is most likely column text with a flaw in its
+    first lines: the text reader's complaint, with its line number, then goes into the message.
+    """
+    try:
+        return _read_obspy(ctx, raw, options, None)
+    except _Unrecognised:
+        if b"\0" in raw[:4096]:
+            raise
+        try:
+            return _read_text(ctx, _decode(raw), options, values_only=False)
+        except RecordError as text_error:
+            where = f"{text_error.where}: " if text_error.where else ""
+            raise ctx.error(f"unknown format; read as column text, {where}{text_error.reason}; "
+                            f"supported: {_SUPPORTED}") from None
+
+
+# --------------------------------------------------------------------------------------------------
+# Two components
+# --------------------------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class GroundMotion:
+    """The ground acceleration applied to the block, both components on one time grid.
+
+    Attributes
+    ----------
+    dt : float
+        [s] sampling step of both components.
+    start : float
+        [s] time of the first sample.
+    horizontal, vertical : numpy.ndarray
+        [m/s^2] accelerations as applied (scaled); zeros when the record is absent. Read-only.
+    horizontal_factor, vertical_factor : float
+        Scale factors applied to each record (1.0 when the record is absent).
+    files : tuple of dict
+        One dict per record given: ``role`` (``"horizontal"`` or ``"vertical"``), ``path``,
+        ``sha256``, ``format``, ``units``.
+    """
+
+    dt: float
+    start: float
+    horizontal: np.ndarray
+    vertical: np.ndarray
+    horizontal_factor: float
+    vertical_factor: float
+    files: tuple
+
+
+def combine(horizontal: obspy.Trace | None, vertical: obspy.Trace | None, *,
+            pga_horizontal: float | None = None, factor: float | None = None,
+            pga_vertical: float | None = None, vertical_factor: float = 1.0,
+            source: str | None = None) -> GroundMotion:
+    """Scale and align a horizontal and a vertical record (the paper's Table 1 convention).
+
+    Parameters
+    ----------
+    horizontal, vertical : obspy.Trace or None
+        Records from :func:`read_record` ([m/s^2]); at least one. Both: same ``delta``
+        (relative 1e-9), number of samples and start.
+    pga_horizontal : float, optional
+        [m/s^2] peak to scale the horizontal to; sets the common factor ``k = pga / max|h|``.
+    factor : float, optional
+        The common factor ``k`` itself (exclusive with ``pga_horizontal``); default 1.
+    pga_vertical : float, optional
+        [m/s^2] peak to scale the vertical to, instead of ``k * vertical_factor``.
+    vertical_factor : float, optional
+        Extra factor of the vertical: it is multiplied by ``k * vertical_factor``, so scaling to a
+        PGA keeps the record's V/H ratio (times this factor).
+    source : str, optional
+        What errors name (the case file).
+
+    Returns
+    -------
+    GroundMotion
+
+    Raises
+    ------
+    RecordError
+        On conflicting options, a missing component to scale, a zero peak to scale to a PGA, or
+        records that do not share one time grid (rockslide does not resample).
+    """
+    if horizontal is None and vertical is None:
+        raise RecordError("no record: give a horizontal and/or a vertical record", source=source)
+    if pga_horizontal is not None and factor is not None:
+        raise RecordError("give either pga_horizontal or factor, not both", source=source,
+                          field="factor")
+    if pga_vertical is not None and vertical_factor != 1.0:
+        raise RecordError("give either pga_vertical or vertical_factor, not both", source=source,
+                          field="vertical_factor")
+    for name, value, positive in (("pga_horizontal", pga_horizontal, True), ("factor", factor, False),
+                                  ("pga_vertical", pga_vertical, True),
+                                  ("vertical_factor", vertical_factor, False)):
+        _check_scale(name, value, positive, source)
+    if horizontal is not None and vertical is not None:
+        _check_same_grid(horizontal, vertical, source)
+    h = None if horizontal is None else np.asarray(horizontal.data, dtype=np.float64)
+    v = None if vertical is None else np.asarray(vertical.data, dtype=np.float64)
+
+    if pga_horizontal is not None:
+        if h is None:
+            raise RecordError("pga_horizontal is given but there is no horizontal record to scale "
+                              "(use pga_vertical for a vertical record alone)", source=source,
+                              field="pga_horizontal")
+        k = pga_horizontal / _peak_to_scale(horizontal, h, "pga_horizontal", source)
+    else:
+        k = 1.0 if factor is None else float(factor)
+    if pga_vertical is not None:
+        if v is None:
+            raise RecordError("pga_vertical is given but there is no vertical record to scale",
+                              source=source, field="pga_vertical")
+        kv = pga_vertical / _peak_to_scale(vertical, v, "pga_vertical", source)
+    else:
+        kv = k * float(vertical_factor)
+
+    reference = horizontal if horizontal is not None else vertical
+    npts = len(reference.data)
+    return GroundMotion(
+        dt=float(reference.stats.delta),
+        start=_start(reference),
+        horizontal=_frozen(np.zeros(npts) if h is None else k * h),
+        vertical=_frozen(np.zeros(npts) if v is None else kv * v),
+        horizontal_factor=1.0 if h is None else k,
+        vertical_factor=1.0 if v is None else kv,
+        files=tuple(_file_entry(role, trace) for role, trace in
+                    (("horizontal", horizontal), ("vertical", vertical)) if trace is not None),
+    )
+
+
+def _check_scale(name: str, value, positive: bool, source: str | None) -> None:
+    if value is None:
+        return
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.number)) \
+            or not math.isfinite(value) or (positive and value <= 0):
+        expected = "a positive acceleration in m/s^2" if positive else "a finite number"
+        raise RecordError(f"{name} = {value!r}; expected {expected}", source=source, field=name)
+
+
+def _check_same_grid(horizontal: obspy.Trace, vertical: obspy.Trace, source: str | None) -> None:
+    dh, dv = float(horizontal.stats.delta), float(vertical.stats.delta)
+    names = f"horizontal {_trace_name(horizontal)} and vertical {_trace_name(vertical)}"
+    if abs(dh - dv) > 1e-9 * max(dh, dv):
+        raise RecordError(f"{names} have different dt ({dh} s and {dv} s); resample one of them "
+                          "(rockslide does not resample)", source=source)
+    nh, nv = len(horizontal.data), len(vertical.data)
+    if nh != nv:
+        raise RecordError(f"{names} have different lengths ({nh} and {nv} samples); expected the "
+                          "same number of samples (cut or pad one of them)", source=source)
+    sh, sv = _start(horizontal), _start(vertical)
+    if abs(sh - sv) > 1e-6 * dh:
+        raise RecordError(f"{names} start at different times ({sh} s and {sv} s); expected the "
+                          "same start", source=source)
+
+
+def _peak_to_scale(trace: obspy.Trace, data: np.ndarray, option: str, source: str | None) -> float:
+    peak = float(np.max(np.abs(data))) if data.size else 0.0
+    if peak == 0.0:
+        raise RecordError(f"the record {_trace_name(trace)} is all zeros: it cannot be scaled to "
+                          f"{option}", source=source, field=option)
+    return peak
+
+
+def _meta(trace: obspy.Trace) -> dict:
+    return dict(trace.stats.get("rockslide", {}))
+
+
+def _start(trace: obspy.Trace) -> float:
+    return float(_meta(trace).get("start", 0.0))
+
+
+def _trace_name(trace: obspy.Trace) -> str:
+    return str(_meta(trace).get("path") or trace.id)
+
+
+def _file_entry(role: str, trace: obspy.Trace) -> dict:
+    meta = _meta(trace)
+    return {"role": role, **{key: meta.get(key) for key in ("path", "sha256", "format", "units")}}
+
+
+def _frozen(array: np.ndarray) -> np.ndarray:
+    array = np.array(array, dtype=np.float64)
+    array.setflags(write=False)
+    return array

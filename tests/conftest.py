@@ -1,0 +1,43 @@
+"""Shared fixtures: where the real (third-party) records are, and how tests that need one skip.
+
+The real accelerograms of the paper are never copied into the project. Tests look for them in
+``$ROCKSLIDE_RECORDS`` if set, else in ``../shared/records`` beside the repository (where CI and the
+developers' machines have them). A test that needs one and cannot find it is skipped with a message
+naming the file.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[1]
+
+
+def real_records_dir() -> Path | None:
+    env = os.environ.get("ROCKSLIDE_RECORDS")
+    candidates = [Path(env)] if env else []
+    candidates.append(REPO.parent / "shared" / "records")
+    for folder in candidates:
+        if folder.is_dir():
+            return folder
+    return None
+
+
+def real_record(name: str) -> Path:
+    """Path of a real record, or skip the calling test with a message naming the file."""
+    folder = real_records_dir()
+    if folder is None or not (folder / name).is_file():
+        pytest.skip(f"needs the real record {name}: not found in $ROCKSLIDE_RECORDS or ../shared/records "
+                    "(see README, 'The paper's records')")
+    return folder / name
+
+
+@pytest.fixture
+def records_dir_real() -> Path:
+    folder = real_records_dir()
+    if folder is None:
+        pytest.skip("needs the paper's records: set ROCKSLIDE_RECORDS or place them in ../shared/records")
+    return folder
