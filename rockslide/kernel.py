@@ -70,6 +70,7 @@ HISTORY_COLUMNS = ("time", "rotation", "rotation_rate", "slip", "slip_rate", "st
 EVENT_COLUMNS = ("time", "from", "to", "cause", "edge", "slip_direction")
 
 HALF_PI = 0.5 * math.pi
+THETA_END = 1e-7   # [rad] a rebound predicted to rise less than this ends the liftoff (decision 3)
 MAX_TRANSITIONS_PER_STEP = 200
 
 
@@ -377,10 +378,10 @@ def apply_event(kind, st, p, t, ah, G, events):
         st[S_LAM] = -lam
         # End of liftoff (model.md decision 3): the new edge's liftoff condition (eq. 6 from ROCK,
         # eq. 23 from ROCKSLIP) is the sign of thetaddot at theta = thetadot = 0; when it does not
-        # hold and the rebound would land again within one step (2 w / |thetaddot| <= h), the
-        # impacts have become too small to matter.
+        # hold and the rebound would rise less than THETA_END (predicted peak w^2 / (2 |thetaddot|)),
+        # the impacts have become too small to matter. The rule does not depend on the step.
         thdd0, _ = accelerations(mode, -lam, sigma, 0.0, 0.0, ah, G, p)
-        if thdd0 <= 0.0 and w <= 0.5 * abs(thdd0) * p[P_H]:
+        if thdd0 <= 0.0 and w * w <= 2.0 * THETA_END * abs(thdd0):
             st[S_THETADOT] = 0.0
             new_mode = REST if mode == ROCK else SLIP
             st[S_MODE] = new_mode

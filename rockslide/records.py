@@ -892,3 +892,24 @@ def _frozen(array: np.ndarray) -> np.ndarray:
     array = np.array(array, dtype=np.float64)
     array.setflags(write=False)
     return array
+
+
+# --------------------------------------------------------------------------------------------------
+# Writing
+# --------------------------------------------------------------------------------------------------
+
+def write_at2(path, values_g, dt: float, *, title: str, component: str) -> Path:
+    """Write accelerations [g] as a PEER NGA ``.AT2`` file (4-line header, 5 values per line).
+
+    Used for the records the project makes itself (``records/``); ``read_record`` reads them back.
+    """
+    path = Path(path)
+    values = np.asarray(values_g, dtype=np.float64)
+    lines = ["PEER NGA STRONG MOTION DATABASE RECORD", f"{title}, {component}",
+             "ACCELERATION TIME SERIES IN UNITS OF G", f"NPTS= {values.size:7d}, DT= {dt:9.4f} SEC,"]
+    for i in range(0, values.size, 5):
+        lines.append("".join(f"{v:15.7E}" for v in values[i:i + 5]))
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    tmp.write_text("\n".join(lines) + "\n")
+    os.replace(tmp, path)
+    return path

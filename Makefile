@@ -1,0 +1,47 @@
+# rockslide: common tasks. The paper's records are read from RECORDS (default ../shared/records when
+# that folder exists, else ./records); override with `make table1 RECORDS=/path/to/records`.
+PYTHON ?= python
+RECORDS ?= $(if $(wildcard ../shared/records/*),../shared/records,records)
+export ROCKSLIDE_RECORDS := $(abspath $(RECORDS))
+
+.PHONY: help install test test-fast check lint bench table1 example records clean
+
+help:
+	@echo "make install   install rockslide with its test tools (pip install -e '.[test]')"
+	@echo "make test      the whole test suite"
+	@echo "make test-fast the suite without tests marked slow"
+	@echo "make check     lint, import contracts, then the tests"
+	@echo "make bench     speed and accuracy benchmarks -> results/bench.md, results/work_precision.png"
+	@echo "make table1    the paper's Table 1 and Figures 5-10 -> results/ (needs the paper's records)"
+	@echo "make example   run configs/example.yaml"
+	@echo "make records   regenerate the synthetic records shipped in records/"
+
+install:
+	$(PYTHON) -m pip install -e ".[test]"
+
+test:
+	$(PYTHON) -m pytest
+
+test-fast:
+	$(PYTHON) -m pytest -m "not slow"
+
+lint:
+	ruff check rockslide tests
+	lint-imports
+
+check: lint test
+
+bench:
+	$(PYTHON) -m rockslide.bench --out results
+
+table1:
+	$(PYTHON) -m rockslide.table1 --records-dir "$(RECORDS)" --out results
+
+example:
+	rockslide run configs/example.yaml --overwrite
+
+records:
+	$(PYTHON) records/make_example_records.py
+
+clean:
+	rm -rf out .pytest_cache .hypothesis build *.egg-info

@@ -1,0 +1,220 @@
+"""The command line: a thin click layer over the library.
+
+Every `RockslideError` (bad case, record, option or output) becomes one line on stderr,
+``rockslide: error: <file>: <field>: <what is wrong and what is expected>``, and exit code 2, here
+and nowhere else. ``--debug`` shows the traceback instead. Ctrl-C exits with 130; results are
+written atomically, so an interrupted run leaves the previous result or none.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+import time
+import warnings
+from pathlib import Path
+
+import click
+
+from . import __version__
+from .errors import OutputError, RockslideError
+
+EXIT_USER_ERROR = 2
+EXIT_INTERRUPTED = 130
+
+
+class RockslideGroup(click.Group):
+    """Turns the one exception family into messages, once."""
+
+    def invoke(self, ctx):
+        debug = "--debug" in sys.argv[1:] or bool(ctx.params.get("debug"))
+        with warnings.catch_warnings():
+            warnings.showwarning = _show_warning
+            try:
+                return super().invoke(ctx)
+            except RockslideError as exc:
+                if debug:
+                    raise
+                click.echo(f"rockslide: error: {exc}", err=True)
+                ctx.exit(EXIT_USER_ERROR)
+            except KeyboardInterrupt:
+                if debug:
+                    raise
+                click.echo("rockslide: interrupted (no partial result was written)", err=True)
+                ctx.exit(EXIT_INTERRUPTED)
+
+
+def _show_warning(message, category, filename, lineno, file=None, line=None):
+    click.echo(f"rockslide: warning: {message}", err=True)
+
+
+@click.group(cls=RockslideGroup, context_settings={"help_option_names": ["-h", "--help"]})
+@click.option("--debug", is_flag=True, help="Show Python tracebacks instead of one-line errors.")
+@click.version_option(__version__, prog_name="rockslide")
+def main(debug):
+    """Nonlinear seismic response of free-standing rectangular rigid blocks.
+
+    Rest, slip, liftoff (rocking with impacts), liftoff-slip interaction and overturning of a block
+    on a rigid foundation shaken horizontally and vertically.
+
+    \b
+    Example:
+        rockslide run configs/example.yaml
+    """
+
+
+records_dir_option = click.option(
+    "--records-dir", type=click.Path(file_okay=False, path_type=Path), default=None,
+    help="Folder of accelerograms (default: $ROCKSLIDE_RECORDS, else ./records). Record files "
+         "resolve against the case file's folder first.")
+
+
+@main.command()
+@click.argument("case_file", type=click.Path(path_type=Path))
+@records_dir_option
+@click.option("--out-dir", type=click.Path(file_okay=False, path_type=Path), default=None,
+              help="Output folder (default: the case's output.dir).")
+@click.option("--json", "as_json", is_flag=True, help="Print the summary as one JSON object on stdout.")
+@click.option("--overwrite", is_flag=True, help="Replace existing results of this case.")
+@click.option("--no-plot", is_flag=True, help="Do not draw the PNG figure.")
+def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot):
+    """Compute one case: CASE_FILE (YAML) -> OUT/NAME.h5 and OUT/NAME.png.
+
+    \b
+    Example:
+        rockslide run configs/example.yaml --json
+    """
+    from . import records, results, runner
+    from .case import load_case
+
+    started = time.perf_counter()
+    case = load_case(case_file)
+    folder = Path(out_dir) if out_dir is not None else Path(case.output.dir)
+    h5_path = folder / f"{case.name}.h5"
+    png_path = folder / f"{case.name}.png"
+    for path in (h5_path, png_path if not no_plot else None):
+        if path is not None and path.exists() and not overwrite:
+            raise OutputError(f"{path} exists (use --overwrite to replace it)")
+    prepared = runner.prepare(case, records.records_dir(records_dir))
+    with results.ResultWriter(h5_path, overwrite=overwrite) as writer:
+        streamed = prepared.case.solver.method == "kernel"
+        result = runner.simulate_prepared(prepared, on_chunk=writer.append_history if streamed else None)
+        writer.finish(result, name=case.name, case_text=case.text, case=_case_dict(case),
+                      records=runner.record_entries(prepared))
+    if not no_plot:
+        _draw(results.read_result(h5_path), png_path, overwrite=overwrite,
+              time_shift=0.0)
+    elapsed = time.perf_counter() - started
+    summary = result.summary
+    if as_json:
+        payload = {"name": case.name, **results.summary_to_json_dict(summary, result.events),
+                   "files": {"hdf5": str(h5_path), "png": None if no_plot else str(png_path)},
+                   "elapsed_s": round(elapsed, 3)}
+        click.echo(json.dumps(payload, allow_nan=False, default=_json_default))
+    else:
+        click.echo(human_summary(case.name, summary))
+        written = f"{h5_path}" + ("" if no_plot else f" and {png_path}")
+        click.echo(f"  wrote {written} in {elapsed:.2f} s")
+
+
+@main.command()
+@click.argument("result_file", type=click.Path(path_type=Path))
+@click.option("-o", "--output", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              help="PNG to write (default: the result's name with .png, next to it).")
+@click.option("--time-shift", type=float, default=0.0, show_default=True,
+              help="Seconds added to the time axis (to lay the figure beside another's).")
+def plot(result_file, output, time_shift):
+    """Redraw the figure of a result file (replaces its PNG).
+
+    \b
+    Example:
+        rockslide plot out/example.h5
+    """
+    from . import results
+
+    stored = results.read_result(result_file)
+    png = output if output is not None else Path(result_file).with_suffix(".png")
+    _draw(stored, png, overwrite=True, time_shift=time_shift)
+    click.echo(f"redrew {png}")
+
+
+@main.command()
+@click.argument("record", type=click.Path(path_type=Path))
+@click.option("--format", "fmt", default=None, help="File format (default: detected): at2, knet, column, values, or an obspy format.")
+@click.option("--units", default=None, help="Acceleration unit of the values (g, gal, m/s^2) where the file does not say.")
+@click.option("--time-column", default=None, help="Column text: 1-based number or header name of the time column.")
+@click.option("--column", default=None, help="Column text: 1-based number or header name of the acceleration column.")
+@click.option("--dt", type=float, default=None, help="Sampling step [s] for the values format.")
+@click.option("--skip-lines", type=int, default=0, help="Header lines to skip (values format).")
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object.")
+def info(record, fmt, units, time_column, column, dt, skip_lines, as_json):
+    """Describe an accelerogram: format, dt, duration, units and peaks.
+
+    \b
+    Example:
+        rockslide info records/synthetic_kt_h.at2
+    """
+    from .records import record_info
+
+    details = record_info(record, format=fmt, units=units, time_column=_column(time_column),
+                          column=_column(column), dt=dt, skip_lines=skip_lines)
+    if as_json:
+        click.echo(json.dumps(details, default=_json_default))
+        return
+    click.echo(f"{record}")
+    click.echo(f"  format    {details['format']}")
+    click.echo(f"  units     {details['units']} (converted to m/s^2)")
+    click.echo(f"  samples   {details['npts']}, dt = {details['dt']:g} s, duration {details['duration']:g} s, "
+               f"starts at {details['start']:g} s")
+    click.echo(f"  peak      {details['peak_gal']:.2f} gal = {details['peak_g']:.4f} g "
+               f"({'+' if details['peak_signed'] > 0 else '-'}) at t = {details['peak_time']:g} s")
+    click.echo(f"  mean      {details['mean'] / 0.01:.3f} gal")
+    click.echo(f"  sha256    {details['sha256']}")
+
+
+def _column(value):
+    if value is None:
+        return None
+    return int(value) if str(value).isdigit() else value
+
+
+def _draw(stored, png_path, *, overwrite, time_shift):
+    from .plots import response_figure, save_figure
+
+    figure = response_figure(stored.result, title=stored.name, time_shift=time_shift)
+    save_figure(figure, png_path, overwrite=overwrite)
+
+
+def _case_dict(case):
+    from .case import case_to_dict
+    return case_to_dict(case)
+
+
+def _json_default(value):
+    if hasattr(value, "item"):
+        return value.item()
+    if isinstance(value, Path):
+        return str(value)
+    raise TypeError(f"cannot serialise {type(value).__name__}")
+
+
+def human_summary(name, summary) -> str:
+    """A short text summary of one run."""
+    lines = [f"{name}: {summary.verdict}"]
+    if summary.overturned:
+        direction = "+" if summary.direction > 0 else "-"
+        fall = ("" if summary.fall_start_time is None
+                else f", falling since {summary.fall_start_time:.4f} s (rotation past alpha)")
+        lines.append(f"  overturned at {summary.overturn_time:.4f} s, rotation {direction}pi/2{fall}")
+    lines.append(f"  max rotation {summary.max_rotation:.5f} rad ({math.degrees(summary.max_rotation):.3f} deg)"
+                 f" at {summary.max_rotation_time:.3f} s; impacts {summary.impacts}")
+    lines.append(f"  max slip {1000 * summary.max_slip:.2f} mm; residual slip {1000 * summary.residual_slip:.2f} mm")
+    seen = ", ".join(f"{s} {summary.time_in_state.get(s, 0.0):.2f} s" if s != "OVERTURNED" else s
+                     for s in summary.states_seen)
+    lines.append(f"  states: {seen}")
+    return "\n".join(lines)
+
+
+if __name__ == "__main__":  # pragma: no cover
+    main()

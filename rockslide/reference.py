@@ -1,0 +1,174 @@
+"""The reference solver: the same state machine, integrated adaptively with located events.
+
+It shares everything with the kernel except the integrator: the equations of motion
+(`kernel.derivatives`, from `physics`), the event functions of each state (`kernel.event_values`),
+the transitions (`kernel.apply_event`, `kernel.settle`), the exact exits from REST
+(`kernel.rest_exit`) and the bookkeeping (`kernel.accept`). Between transitions it integrates with
+scipy's DOP853 (8th order) at tight tolerances, record interval by record interval (the input is
+piecewise linear, so each interval is smooth), and locates each event by scipy's root finding on
+the dense output. Slow (Python in the loop): meant for short inputs and for checking the kernel.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.integrate import solve_ivp
+
+from . import kernel as K
+from .physics import REST
+from .simulate import (Model, Result, Settings, event_table, extend_with_tail, history_dict,
+                       initial_state, parameters, summarise)
+
+RTOL = 1e-12
+ATOL = 1e-14
+
+
+def simulate_reference(model: Model, dt_record: float, horizontal, vertical,
+                       settings: Settings = Settings(), start: float = 0.0,
+                       rtol: float = RTOL, atol: float = ATOL) -> Result:
+    """Same inputs and result as `simulate.simulate`, computed with DOP853 and located events.
+
+    The history is sampled on the same grid as the kernel's (every ``history_every``-th multiple of
+    the kernel's step ``h``), from the solver's dense output. ``settings.events`` is ignored (events
+    are always located); ``settings.dt`` only sets the history grid.
+    """
+    ah, av = extend_with_tail(horizontal, vertical, dt_record, settings.tail)
+    if ah.size < 2:
+        ah, av = np.zeros(2), np.zeros(2)
+    p = parameters(model, dt_record, settings, start)
+    p[K.P_LOCATED] = 1.0
+    h = p[K.P_H]
+    n_sub = int(p[K.P_N_SUB])
+    every = int(settings.history_every)
+    st = initial_state(settings)
+    events = np.zeros((100_000, len(K.EVENT_COLUMNS)))
+    gv = np.zeros(K.MAX_EVENTS_PER_MODE)
+    kinds = np.zeros(K.MAX_EVENTS_PER_MODE, dtype=np.int64)
+    ytmp = np.zeros(6)
+    rows = []
+
+    st[K.S_STARTED] = 1.0
+    st[K.S_E_INITIAL] = K.mechanical_energy(st, p)
+    K.settle(st, p, start, ah[0], av[0], events, gv, kinds, ytmp)
+    K.note_extremes(st, start)
+    if every > 0:
+        rows.append(_row(st, start))
+
+    for k in range(ah.size - 1):
+        if K.finished(st):
+            break
+        a0, v0 = ah[k], av[k]
+        sa = (ah[k + 1] - a0) / dt_record
+        sv = (av[k + 1] - v0) / dt_record
+        tk = start + k * dt_record
+        grid = [(k * n_sub + j) for j in range(1, n_sub + 1) if every > 0 and (k * n_sub + j) % every == 0]
+        tau = 0.0
+        while tau < dt_record and not K.finished(st):
+            mode = int(st[K.S_MODE])
+            if mode == REST:
+                te, kind = K.rest_exit(tau, dt_record, a0, sa, v0, sv, p, False, h)
+                end = dt_record if kind < 0 else te
+                K.add_time(st, REST, end - tau)
+                rows += [_row(st, start + n * h) for n in grid if tau < n * h - k * dt_record <= end + 1e-15]
+                tau = end
+                if kind >= 0:
+                    K.apply_event(kind, st, p, tk + te, a0 + sa * te, p[K.P_G] + v0 + sv * te, events)
+                    K.settle(st, p, tk + te, a0 + sa * te, v0 + sv * te, events, gv, kinds, ytmp)
+                continue
+            tau = _integrate_moving(st, p, tau, dt_record, tk, a0, sa, v0, sv, events, gv, kinds, ytmp,
+                                    grid, start, h, k * dt_record, rows, rtol, atol)
+
+    n_events = int(st[K.S_N_EVENTS])
+    history_rows = np.array(rows) if rows else np.zeros((0, 6))
+    return Result(
+        history=history_dict(history_rows),
+        events=event_table(events[:n_events]),
+        summary=summarise(st, model, start + (ah.size - 1) * dt_record),
+        step=h,
+        ground_time=start + dt_record * np.arange(ah.size),
+        ground_horizontal=ah,
+        ground_vertical=av,
+    )
+
+
+def _row(st, t):
+    lam = st[K.S_LAM]
+    return [t, lam * st[K.S_THETA], lam * st[K.S_THETADOT], st[K.S_X], st[K.S_XDOT], st[K.S_MODE]]
+
+
+def _integrate_moving(st, p, tau, tau_end, tk, a0, sa, v0, sv, events, gv, kinds, ytmp,
+                      grid, start, h, interval_start, rows, rtol, atol):
+    """Integrate the current moving state from ``tau`` until the interval's end or its first event;
+    apply the event. Returns the local time reached."""
+    mode = int(st[K.S_MODE])
+    lam, sigma = st[K.S_LAM], st[K.S_SIGMA]
+    y0 = np.array([st[K.S_THETA], st[K.S_THETADOT], st[K.S_X], st[K.S_XDOT],
+                   st[K.S_W_GROUND], st[K.S_W_FRICTION]])
+
+    def rhs(t, y):
+        thdd, xdd, pg, pf = K.derivatives(mode, lam, sigma, y[0], y[1], y[3], t, a0, sa, v0, sv, p)
+        return [y[1], thdd, y[3], xdd, pg, pf]
+
+    n_events = K.event_values(mode, lam, sigma, y0, a0 + sa * tau, p[K.P_G] + v0 + sv * tau, p, gv, kinds)
+    event_kinds = kinds[:n_events].copy()
+
+    starts_at_zero = gv[:n_events] == 0.0
+
+    def make_event(i):
+        g = np.zeros(K.MAX_EVENTS_PER_MODE)
+        kk = np.zeros(K.MAX_EVENTS_PER_MODE, dtype=np.int64)
+
+        def event(t, y):
+            # An event function that starts at exactly zero (theta after an impact or a liftoff,
+            # the slip rate after a slip start) must first leave zero upwards; divided by the time
+            # since the start, its root at the start disappears and the next root stays.
+            if starts_at_zero[i]:
+                if t <= tau:
+                    return 1.0
+                K.event_values(mode, lam, sigma, np.asarray(y), a0 + sa * t, p[K.P_G] + v0 + sv * t, p, g, kk)
+                return g[i] / (t - tau)
+            K.event_values(mode, lam, sigma, np.asarray(y), a0 + sa * t, p[K.P_G] + v0 + sv * t, p, g, kk)
+            return g[i]
+        event.terminal = True
+        event.direction = -1
+        return event
+
+    solution = solve_ivp(rhs, (tau, tau_end), y0, method="DOP853", rtol=rtol, atol=atol,
+                         events=[make_event(i) for i in range(n_events)], dense_output=True)
+    t_stop = solution.t[-1]
+    fired = [(solution.t_events[i][0], i) for i in range(n_events) if len(solution.t_events[i])]
+    # history rows on the grid up to the stop
+    for n in grid:
+        local = n * h - interval_start
+        if tau < local <= t_stop + 1e-15 and local <= t_stop:
+            y = solution.sol(local)
+            rows.append([start + n * h, lam * y[0], lam * y[1], y[2], y[3], mode])
+    # bookkeeping along the solver's steps (extremes, time in state, the fall past alpha)
+    previous = tau
+    for t_i, y_i in zip(solution.t[1:], solution.y.T[1:]):
+        K.accept(st, y_i.copy(), mode, previous, t_i, tk, p)
+        previous = t_i
+    if not fired:
+        return tau_end
+    # earliest event; ties go to the first row of the table (lowest index)
+    te, index = min(fired)
+    y_e = solution.y_events[index][0].copy()
+    _set_state(st, y_e)
+    kind = event_kinds[index]
+    if kind == K.K_IMPACT:
+        st[K.S_THETA] = 0.0
+    elif kind == K.K_SLIP_STOP:
+        st[K.S_XDOT] = 0.0
+    ah_e, av_e = a0 + sa * te, v0 + sv * te
+    K.apply_event(kind, st, p, tk + te, ah_e, p[K.P_G] + av_e, events)
+    K.settle(st, p, tk + te, ah_e, av_e, events, gv, kinds, ytmp)
+    # grid rows exactly at the event time that were before the stop are already written
+    return te if te < tau_end else tau_end
+
+
+def _set_state(st, y):
+    st[K.S_THETA], st[K.S_THETADOT], st[K.S_X], st[K.S_XDOT] = y[0], y[1], y[2], y[3]
+    st[K.S_W_GROUND], st[K.S_W_FRICTION] = y[4], y[5]
+
+
+__all__ = ["simulate_reference", "RTOL", "ATOL"]

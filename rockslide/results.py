@@ -1,0 +1,702 @@
+"""Result <-> HDF5, with units and provenance (h5py lives here only).
+
+A result file holds one simulation: the time histories, the ground motion as applied, the event
+log, the summary, the case and the records it came from. Every file is written atomically: into a
+temporary file in the destination folder (``.NAME.<pid>.tmp``, e.g. ``.kobe.h5.4711.tmp``), flushed,
+synced and closed, then renamed onto ``NAME`` with `os.replace`. An exception (Ctrl-C included)
+deletes the temporary file; a process killed outright (SIGKILL, power loss) may leave one behind,
+but never a half-written ``NAME``: the previous file, if any, stays intact until the rename. Leftover
+temporary files always start with ``.`` and end in ``.tmp``; they can be deleted at any time when no
+run is writing.
+
+Layout (format ``rockslide-result``, version 1):
+
+| path | type | units | content |
+|---|---|---|---|
+| `/` | group (attributes) | | summary, status, verdict, provenance (below) |
+| `/time_history` | group | | the response on the output grid |
+| `/time_history/time` | float64[n] | s | time |
+| `/time_history/rotation` | float64[n] | rad | signed rotation `phi = lam * theta` |
+| `/time_history/rotation_rate` | float64[n] | rad/s | `d phi / dt` |
+| `/time_history/slip` | float64[n] | m | slip displacement `x` relative to the ground |
+| `/time_history/slip_rate` | float64[n] | m/s | slip velocity `d x / dt` |
+| `/time_history/state` | int8[n] | - | state code; attribute `codes` = "0 REST, 1 SLIP, 2 ROCK, 3 ROCKSLIP, 4 OVERTURNED" |
+| `/ground` | group | | the ground motion as applied (scaled, tail included) |
+| `/ground/time` | float64[m] | s | sample times |
+| `/ground/horizontal` | float64[m] | m/s^2 | horizontal ground acceleration |
+| `/ground/vertical` | float64[m] | m/s^2 | vertical ground acceleration (up positive) |
+| `/events` | compound[k] | | event log: `time` f8 [s]; `from`, `to` (S10, state names); `cause` (S14); `edge` i1 (pivot `lam`: +1 left, -1 right); `slip_direction` i1 (`sigma`) |
+| `/case` | group (attributes) | | if a case is given: attribute `yaml` (the case file's text) and the case as flattened attributes (dotted keys such as `contact.mu_static`, SI values, None stored as "") |
+| `/records` | group | | if records are given |
+| `/records/horizontal` | group (attributes) | | `role`, `path` (the file name only), `sha256`, `format`, `units`, `scale_factor` |
+| `/records/vertical` | group (attributes) | | the same for the vertical record |
+
+Every dataset carries a ``units`` attribute; the time histories are chunked and compressed (gzip
+level 4 with shuffle). Root attributes:
+
+- the summary: ``overturned`` (bool), ``overturn_time`` [s], ``direction``, ``fall_start_time`` [s],
+  ``max_rotation`` [rad], ``max_rotation_time`` [s], ``max_slip`` [m], ``residual_slip`` [m],
+  ``impacts``, ``states_seen`` (comma-joined names), ``status`` (ok | flight | painleve),
+  ``end_time`` [s], ``time_in_state_REST`` ... [s] (one per state), ``energy_kinetic`` ... [J] (one
+  per energy term). A time that is None is stored as NaN, a direction that is None as 0;
+  `read_result` gives back None.
+- ``verdict``, ``name``, ``integration_step`` [s], ``format`` = "rockslide-result",
+  ``format_version`` = 1, ``created`` (ISO 8601, UTC);
+- versions: ``rockslide_version``, ``python_version``, ``numpy_version``, ``numba_version``,
+  ``h5py_version``, ``obspy_version``, ``scipy_version``, ``matplotlib_version`` ("not installed"
+  when missing);
+- any ``extra_attrs`` given to the writer.
+
+Records keep their file name only, never a folder; the case is stored as written.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import importlib.metadata
+import math
+import os
+import platform
+from dataclasses import dataclass
+from datetime import datetime, timezone
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+from . import __version__
+from .errors import OutputError
+from .kernel import HISTORY_COLUMNS
+from .physics import STATE_NAMES
+from .simulate import EVENT_DTYPE, Result, Summary
+
+FORMAT = "rockslide-result"
+FORMAT_VERSION = 1
+
+#: Units of the time-history columns (``kernel.HISTORY_COLUMNS``).
+HISTORY_UNITS = {"time": "s", "rotation": "rad", "rotation_rate": "rad/s", "slip": "m",
+                 "slip_rate": "m/s", "state": "-"}
+#: The ``codes`` attribute of ``/time_history/state``.
+STATE_CODES = ", ".join(f"{code} {name}" for code, name in enumerate(STATE_NAMES))
+GROUND_UNITS = {"time": "s", "horizontal": "m/s^2", "vertical": "m/s^2"}
+RECORD_KEYS = ("role", "path", "sha256", "format", "units", "scale_factor")
+#: Packages whose versions are stored as ``<name>_version`` root attributes.
+VERSIONED_PACKAGES = ("rockslide", "python", "numpy", "numba", "h5py", "obspy", "scipy", "matplotlib")
+
+_CHUNK_ROWS = 16384
+_COMPRESSION = {"compression": "gzip", "compression_opts": 4, "shuffle": True}
+_SUMMARY_SCALARS = ("overturned", "overturn_time", "direction", "fall_start_time", "max_rotation",
+                    "max_rotation_time", "max_slip", "residual_slip", "impacts", "status", "end_time")
+_PROVENANCE = ("verdict", "name", "integration_step", "format", "format_version", "created",
+               *(f"{p}_version" for p in VERSIONED_PACKAGES))
+
+
+@dataclass
+class StoredResult:
+    """A result file read back.
+
+    Attributes
+    ----------
+    name : str
+        The case name stored with the result.
+    result : Result
+        Histories, events, summary, step and ground motion, as `simulate` returned them.
+    case_text : str
+        The case file's text ("" if none was stored).
+    case : dict
+        The case as a nested dict (``{}`` if none was stored); values "" are given back as None.
+    records : list of dict
+        One dict per record (keys ``RECORD_KEYS``), horizontal first.
+    attrs : dict
+        All root attributes as plain Python values (summary, provenance, extra attributes).
+    """
+
+    name: str
+    result: Result
+    case_text: str
+    case: dict
+    records: list[dict]
+    attrs: dict
+
+
+# --------------------------------------------------------------------------------------------------
+# Writing
+# --------------------------------------------------------------------------------------------------
+
+
+def check_destination(path, *, overwrite: bool = False) -> Path:
+    """Refuse an existing ``path`` unless ``overwrite``; create its folder if missing.
+
+    Call it before any long computation, so that a run is not wasted on a result it may not write.
+
+    Returns
+    -------
+    Path
+        ``path`` as a `Path`.
+
+    Raises
+    ------
+    OutputError
+        ``path`` exists and ``overwrite`` is false, ``path`` is a folder, or its folder cannot be
+        created.
+    """
+    path = Path(path)
+    if path.is_dir():
+        raise OutputError("is a folder; expected a result file name such as out/case.h5", source=str(path))
+    if not overwrite and (path.exists() or path.is_symlink()):
+        raise OutputError(f"{path} exists (use --overwrite to replace it)")
+    folder = path.parent
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise OutputError(f"cannot create the output folder: {exc.strerror or exc}",
+                          source=str(folder)) from None
+    if not folder.is_dir():
+        raise OutputError("cannot create the output folder: a file of that name exists",
+                          source=str(folder))
+    return path
+
+
+def temporary_path(path) -> Path:
+    """The temporary file a result (or figure) is written to before it is renamed onto ``path``."""
+    path = Path(path)
+    return path.with_name(f".{path.name}.{os.getpid()}.tmp")
+
+
+def publish(tmp: Path, path: Path, *, overwrite: bool) -> None:
+    """Sync ``tmp`` to disk and rename it onto ``path`` (atomic on POSIX and Windows).
+
+    Raises OutputError (and deletes ``tmp``) if ``path`` appeared meanwhile and ``overwrite`` is false.
+    """
+    try:
+        if not overwrite and (path.exists() or path.is_symlink()):
+            raise OutputError(f"{path} exists (use --overwrite to replace it)")
+        _fsync(tmp)
+        os.replace(tmp, path)
+    except BaseException:
+        _remove(tmp)
+        raise
+    _fsync_folder(path.parent)
+
+
+class ResultWriter:
+    """Write one result file, streaming the time history (bounded memory).
+
+    Parameters
+    ----------
+    path : str or Path
+        The result file (``.h5``). Its folder is created if missing.
+    overwrite : bool
+        Replace an existing file. Without it an existing file is an `OutputError`, raised here,
+        before any computation.
+
+    Notes
+    -----
+    Use it as a context manager::
+
+        with ResultWriter("out/kobe.h5") as writer:
+            result = simulate(model, dt, ah, av, settings, on_chunk=writer.append_history)
+            writer.finish(result, name="kobe", case_text=text)
+
+    Nothing appears at ``path`` until `finish` returns. An exception in the ``with`` block
+    (KeyboardInterrupt included) closes and deletes the temporary file and propagates; leaving the
+    block without calling `finish` discards the temporary file as well.
+    """
+
+    def __init__(self, path, *, overwrite: bool = False):
+        self.path = check_destination(path, overwrite=overwrite)
+        self.overwrite = overwrite
+        self.tmp = temporary_path(self.path)
+        self._rows = 0
+        self._done = False
+        try:
+            with open(self.tmp, "wb"):   # a plain open first: clear messages for unwritable folders
+                pass
+            self._file = h5py.File(self.tmp, "w", track_order=True)
+        except OSError as exc:
+            _remove(self.tmp)
+            raise OutputError(f"cannot write in this folder ({_reason(exc)})",
+                              source=str(self.path.parent)) from None
+        try:
+            self._history = self._file.create_group("time_history", track_order=True)
+            for name in HISTORY_COLUMNS:
+                dtype = np.int8 if name == "state" else np.float64
+                ds = self._history.create_dataset(name, shape=(0,), maxshape=(None,), dtype=dtype,
+                                                  chunks=(_CHUNK_ROWS,), **_COMPRESSION)
+                ds.attrs["units"] = HISTORY_UNITS[name]
+                if name == "state":
+                    ds.attrs["codes"] = STATE_CODES
+        except BaseException:
+            self.discard()
+            raise
+
+    # -- context manager ---------------------------------------------------------------------------
+    def __enter__(self) -> ResultWriter:
+        return self
+
+    def __exit__(self, exc_type, exc, tb) -> bool:
+        if not self._done:
+            self.discard()
+        return False
+
+    # -- streaming ---------------------------------------------------------------------------------
+    @property
+    def rows_written(self) -> int:
+        """Number of history rows appended so far."""
+        return self._rows
+
+    def append_history(self, rows: np.ndarray) -> None:
+        """Append history rows (``float64[n, 6]``, columns ``kernel.HISTORY_COLUMNS``)."""
+        self._check_open()
+        rows = np.asarray(rows, dtype=np.float64)
+        if rows.ndim != 2 or rows.shape[1] != len(HISTORY_COLUMNS):
+            raise ValueError(f"history rows must be float64[n, {len(HISTORY_COLUMNS)}], got {rows.shape}")
+        n = rows.shape[0]
+        if n == 0:
+            return
+        try:
+            start, end = self._rows, self._rows + n
+            for i, name in enumerate(HISTORY_COLUMNS):
+                ds = self._history[name]
+                ds.resize((end,))
+                ds[start:end] = rows[:, i].astype(ds.dtype) if name == "state" else rows[:, i]
+            self._rows = end
+        except BaseException:
+            self.discard()
+            raise
+
+    def finish(self, result: Result, *, name: str, case_text: str = "", case: dict | None = None,
+               records=(), extra_attrs: dict | None = None) -> Path:
+        """Write the ground motion, events, summary and metadata, then publish the file.
+
+        The streamed history is used if rows were appended; otherwise ``result.history``.
+
+        Returns
+        -------
+        Path
+            The result file.
+        """
+        self._check_open()
+        try:
+            if self._rows == 0 and result.history and len(result.history.get("time", ())):
+                self._write_history_dict(result.history)
+            _write_body(self._file, result, name=name, case_text=case_text, case=case,
+                        records=records, extra_attrs=extra_attrs)
+            self._file.flush()
+            self._file.close()
+        except BaseException:
+            self.discard()
+            raise
+        self._done = True
+        publish(self.tmp, self.path, overwrite=self.overwrite)
+        return self.path
+
+    def discard(self) -> None:
+        """Close and delete the temporary file (nothing is published). Safe to call twice."""
+        self._done = True
+        try:
+            if self._file.id.valid:
+                self._file.close()
+        except Exception:  # noqa: BLE001 - closing a broken file must not hide the first error
+            pass
+        _remove(self.tmp)
+
+    # -- internals ---------------------------------------------------------------------------------
+    def _check_open(self) -> None:
+        if self._done:
+            raise OutputError("the result writer is closed (finish() was called or it failed)",
+                              source=str(self.path))
+
+    def _write_history_dict(self, history: dict) -> None:
+        n = len(history["time"])
+        for name in HISTORY_COLUMNS:
+            ds = self._history[name]
+            ds.resize((n,))
+            ds[...] = np.asarray(history[name], dtype=ds.dtype)
+        self._rows = n
+
+
+def write_result(path, result: Result, *, name: str, case_text: str = "", case: dict | None = None,
+                 records=(), extra_attrs: dict | None = None, overwrite: bool = False) -> Path:
+    """Write ``result`` to the HDF5 file ``path`` (layout in the module docstring), atomically.
+
+    Parameters
+    ----------
+    path : str or Path
+        The result file; its folder is created if missing.
+    result : Result
+    name : str
+        The case name.
+    case_text : str
+        The case file's text (stored as ``/case`` attribute ``yaml``).
+    case : dict, optional
+        The case as a nested dict (``case.case_to_dict``), stored as flattened ``/case`` attributes.
+    records : list of dict
+        The record files (``role``, ``path``, ``sha256``, ``format``, ``units``, ``scale_factor``);
+        only the file name of ``path`` is stored.
+    extra_attrs : dict, optional
+        More root attributes (scalars or strings); they may not replace the standard ones.
+    overwrite : bool
+        Replace an existing file.
+
+    Returns
+    -------
+    Path
+
+    Raises
+    ------
+    OutputError
+        The file exists (without ``overwrite``) or cannot be written.
+    """
+    with ResultWriter(path, overwrite=overwrite) as writer:
+        return writer.finish(result, name=name, case_text=case_text, case=case, records=records,
+                             extra_attrs=extra_attrs)
+
+
+def _write_body(f: h5py.File, result: Result, *, name, case_text, case, records, extra_attrs) -> None:
+    ground = f.create_group("ground", track_order=True)
+    for key, values in (("time", result.ground_time), ("horizontal", result.ground_horizontal),
+                        ("vertical", result.ground_vertical)):
+        values = np.asarray(values, dtype=np.float64)
+        options = {"chunks": (min(values.size, _CHUNK_ROWS),), **_COMPRESSION} if values.size else {}
+        ds = ground.create_dataset(key, data=values, **options)
+        ds.attrs["units"] = GROUND_UNITS[key]
+
+    events = np.asarray(result.events).astype(EVENT_DTYPE)
+    ds = f.create_dataset("events", data=events, dtype=EVENT_DTYPE)
+    ds.attrs["units"] = "time: s"
+    ds.attrs["description"] = ("time [s], from/to: state names, cause, edge: pivot lam (+1 left, "
+                               "-1 right, 0 none), slip_direction: sigma")
+
+    if case_text or case:
+        group = f.create_group("case", track_order=True)
+        group.attrs["yaml"] = case_text or ""
+        for key, value in _flatten(case or {}).items():
+            if key == "yaml":
+                raise ValueError("a case key may not be called 'yaml'")
+            group.attrs[key] = value
+
+    records = list(records or ())
+    if records:
+        top = f.create_group("records", track_order=True)
+        for record in records:
+            role = str(record.get("role") or "")
+            if role not in ("horizontal", "vertical"):
+                raise ValueError(f"record role must be 'horizontal' or 'vertical', got {role!r}")
+            group = top.create_group(role, track_order=True)
+            for key in RECORD_KEYS:
+                value = record.get(key)
+                if key == "path" and value not in (None, ""):
+                    value = _file_name(value)
+                group.attrs[key] = _attr_value(value)
+
+    attrs = f.attrs
+    for key, value in _summary_attrs(result.summary).items():
+        attrs[key] = value
+    attrs["verdict"] = result.summary.verdict
+    attrs["name"] = name
+    attrs["integration_step"] = float(result.step)
+    attrs["format"] = FORMAT
+    attrs["format_version"] = FORMAT_VERSION
+    attrs["created"] = datetime.now(timezone.utc).isoformat(timespec="seconds")
+    for key, value in versions().items():
+        attrs[key] = value
+    for key, value in (extra_attrs or {}).items():
+        if key in attrs:
+            raise ValueError(f"extra attribute {key!r} would replace a standard attribute")
+        attrs[key] = _attr_value(value)
+
+
+def _summary_attrs(summary: Summary) -> dict:
+    out = {}
+    for key in _SUMMARY_SCALARS:
+        value = getattr(summary, key)
+        if key in ("overturn_time", "fall_start_time"):
+            value = math.nan if value is None else float(value)
+        elif key == "direction":
+            value = 0 if value is None else int(value)
+        elif key == "overturned":
+            value = bool(value)
+        elif key == "impacts":
+            value = int(value)
+        elif key == "status":
+            value = str(value)
+        else:
+            value = float(value)
+        out[key] = value
+    out["states_seen"] = ",".join(summary.states_seen)
+    for state, seconds in summary.time_in_state.items():
+        out[f"time_in_state_{state}"] = float(seconds)
+    for term, joules in summary.energy.items():
+        out[f"energy_{term}"] = float(joules)
+    return out
+
+
+def versions() -> dict[str, str]:
+    """Versions of Python and of the packages a result depends on (``<name>_version`` keys)."""
+    out = {}
+    for package in VERSIONED_PACKAGES:
+        if package == "python":
+            version = platform.python_version()
+        else:
+            try:
+                version = importlib.metadata.version(package)
+            except importlib.metadata.PackageNotFoundError:
+                version = __version__ if package == "rockslide" else "not installed"
+        out[f"{package}_version"] = version
+    return out
+
+
+def _flatten(tree: dict, prefix: str = "") -> dict:
+    out = {}
+    for key, value in tree.items():
+        dotted = f"{prefix}{key}"
+        if isinstance(value, dict):
+            out.update(_flatten(value, dotted + "."))
+        else:
+            out[dotted] = _attr_value(value)
+    return out
+
+
+def _attr_value(value):
+    """A value HDF5 can hold as an attribute: None -> "", paths and other objects -> str."""
+    if value is None:
+        return ""
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    if isinstance(value, (int, np.integer)):
+        return int(value)
+    if isinstance(value, (float, np.floating)):
+        return float(value)
+    if isinstance(value, str):
+        return value
+    if isinstance(value, (list, tuple, np.ndarray)) and all(
+            isinstance(v, (int, float, np.number)) and not isinstance(v, bool) for v in value):
+        return np.asarray(value)
+    return str(value)
+
+
+def _file_name(path) -> str:
+    """The last component of a path, POSIX or Windows style."""
+    return str(path).replace("\\", "/").rstrip("/").rsplit("/", 1)[-1]
+
+
+# --------------------------------------------------------------------------------------------------
+# Reading
+# --------------------------------------------------------------------------------------------------
+
+
+def read_result(path) -> StoredResult:
+    """Read a result file written by `write_result` or `ResultWriter`.
+
+    Returns
+    -------
+    StoredResult
+        Its ``result`` plots and summarises like a fresh `Result`.
+
+    Raises
+    ------
+    OutputError
+        The file is missing, not HDF5, or not a rockslide result (of a known version).
+    """
+    source = str(path)
+    path = Path(path)
+    if not path.exists():
+        raise OutputError("result file not found", source=source)
+    if path.is_dir():
+        raise OutputError("is a folder, expected a result file (.h5)", source=source)
+    try:
+        f = h5py.File(path, "r")
+    except OSError as exc:
+        reason = "not an HDF5 file" if "signature" in str(exc) or "file format" in str(exc) else _reason(exc)
+        raise OutputError(f"cannot read as a rockslide result ({reason})", source=source) from None
+    with f:
+        if _plain(f.attrs.get("format")) != FORMAT:
+            raise OutputError(f"not a rockslide result (an HDF5 file without format = {FORMAT!r})",
+                              source=source)
+        version = _plain(f.attrs.get("format_version"))
+        if version != FORMAT_VERSION:
+            raise OutputError(f"result format version {version!r} is not supported "
+                              f"(this rockslide reads version {FORMAT_VERSION})", source=source)
+        try:
+            return _read_body(f)
+        except (KeyError, ValueError, TypeError, OSError) as exc:
+            raise OutputError(f"damaged rockslide result ({_reason(exc)})", source=source) from None
+
+
+def _read_body(f: h5py.File) -> StoredResult:
+    attrs = {key: _plain(value) for key, value in f.attrs.items()}
+    history = {}
+    for name in HISTORY_COLUMNS:
+        values = f["time_history"][name][()]
+        history[name] = values.astype(np.int8) if name == "state" else values.astype(np.float64)
+    ground = f["ground"]
+    events = f["events"][()].astype(EVENT_DTYPE)
+    result = Result(
+        history=history,
+        events=events,
+        summary=_summary_from_attrs(attrs),
+        step=float(attrs["integration_step"]),
+        ground_time=ground["time"][()].astype(np.float64),
+        ground_horizontal=ground["horizontal"][()].astype(np.float64),
+        ground_vertical=ground["vertical"][()].astype(np.float64),
+    )
+    case_text, case = "", {}
+    if "case" in f:
+        case_attrs = {key: _plain(value) for key, value in f["case"].attrs.items()}
+        case_text = case_attrs.pop("yaml", "")
+        case = _unflatten(case_attrs)
+    records = []
+    if "records" in f:
+        for role in ("horizontal", "vertical"):
+            if role in f["records"]:
+                group = f["records"][role]
+                records.append({key: _none_if_empty(_plain(group.attrs.get(key, "")))
+                                for key in RECORD_KEYS})
+    return StoredResult(name=str(attrs.get("name", "")), result=result, case_text=case_text,
+                        case=case, records=records, attrs=attrs)
+
+
+def _summary_from_attrs(attrs: dict) -> Summary:
+    def time_or_none(key):
+        value = attrs[key]
+        return None if math.isnan(value) else float(value)
+
+    overturned = bool(attrs["overturned"])
+    direction = int(attrs["direction"])
+    seen = attrs["states_seen"]
+    return Summary(
+        overturned=overturned,
+        overturn_time=time_or_none("overturn_time"),
+        direction=None if direction == 0 else direction,
+        fall_start_time=time_or_none("fall_start_time"),
+        max_rotation=float(attrs["max_rotation"]),
+        max_rotation_time=float(attrs["max_rotation_time"]),
+        max_slip=float(attrs["max_slip"]),
+        residual_slip=float(attrs["residual_slip"]),
+        impacts=int(attrs["impacts"]),
+        states_seen=seen.split(",") if seen else [],
+        time_in_state={key[len("time_in_state_"):]: float(value) for key, value in attrs.items()
+                       if key.startswith("time_in_state_")},
+        status=str(attrs["status"]),
+        end_time=float(attrs["end_time"]),
+        energy={key[len("energy_"):]: float(value) for key, value in attrs.items()
+                if key.startswith("energy_")},
+    )
+
+
+def _plain(value):
+    """An attribute value as a plain Python value (numpy scalars -> Python, bytes -> str)."""
+    if isinstance(value, bytes):
+        return value.decode("utf-8", "replace")
+    if isinstance(value, np.ndarray):
+        return value.tolist() if value.dtype.kind != "S" else [v.decode() for v in value.tolist()]
+    if isinstance(value, np.generic):
+        return value.item()
+    return value
+
+
+def _none_if_empty(value):
+    return None if isinstance(value, str) and value == "" else value
+
+
+def _unflatten(flat: dict) -> dict:
+    tree: dict = {}
+    for dotted, value in flat.items():
+        node = tree
+        *parents, leaf = dotted.split(".")
+        for part in parents:
+            node = node.setdefault(part, {})
+        node[leaf] = _none_if_empty(value)
+    return tree
+
+
+# --------------------------------------------------------------------------------------------------
+# JSON
+# --------------------------------------------------------------------------------------------------
+
+
+def summary_to_json_dict(summary: Summary, events=()) -> dict:
+    """The summary (and event log) as a JSON-ready dict (``rockslide run --json``).
+
+    None stays None (``null``); a non-finite float becomes None too, so the output is strict JSON.
+    ``events`` (EVENT_DTYPE array or list of dicts) becomes a list of
+    ``{"time", "from", "to", "cause"}``.
+    """
+    out = {}
+    for f in dataclasses.fields(summary):
+        out[f.name] = _json_value(getattr(summary, f.name))
+        if f.name == "status":
+            out["verdict"] = summary.verdict
+    out["events"] = [_event_dict(e) for e in events]
+    return out
+
+
+def _json_value(value):
+    if value is None or isinstance(value, (bool, str)):
+        return value
+    if isinstance(value, np.bool_):
+        return bool(value)
+    if isinstance(value, (int, np.integer)):
+        return int(value)
+    if isinstance(value, (float, np.floating)):
+        return float(value) if math.isfinite(value) else None
+    if isinstance(value, dict):
+        return {str(k): _json_value(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple, np.ndarray)):
+        return [_json_value(v) for v in value]
+    return str(value)
+
+
+def _event_dict(event) -> dict:
+    def text(v):
+        return v.decode() if isinstance(v, bytes) else str(v)
+
+    return {"time": _json_value(float(event["time"])), "from": text(event["from"]),
+            "to": text(event["to"]), "cause": text(event["cause"])}
+
+
+# --------------------------------------------------------------------------------------------------
+# Files
+# --------------------------------------------------------------------------------------------------
+
+
+def _remove(path: Path) -> None:
+    try:
+        os.unlink(path)
+    except FileNotFoundError:
+        pass
+    except OSError:  # pragma: no cover - best effort; the name marks it as a leftover
+        pass
+
+
+def _fsync(path: Path) -> None:
+    fd = os.open(path, os.O_RDONLY)
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)
+
+
+def _fsync_folder(folder: Path) -> None:
+    """Make the rename durable (POSIX); a no-op where folders cannot be opened."""
+    try:
+        fd = os.open(folder, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:  # pragma: no cover
+        pass
+    finally:
+        os.close(fd)
+
+
+def _reason(exc: BaseException) -> str:
+    text = getattr(exc, "strerror", None) or str(exc) or type(exc).__name__
+    return " ".join(str(text).split())
+
+
+__all__ = ["write_result", "read_result", "ResultWriter", "StoredResult", "summary_to_json_dict",
+           "check_destination", "temporary_path", "versions", "FORMAT", "FORMAT_VERSION",
+           "HISTORY_UNITS", "GROUND_UNITS", "STATE_CODES"]

@@ -1,0 +1,125 @@
+"""Case -> records -> checks -> simulation: the one orchestrator behind `run`, `sweep` and `table1`.
+
+It reads the records a case names (`records.py`), scales and aligns them, checks what can only be
+checked with the records at hand (the step against the record's sampling, flight before the run),
+builds the `Model` and `Settings` of the pure core and calls `simulate` (or the reference solver).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from . import records as rec
+from .case import Case
+from .errors import CaseError
+from .simulate import Model, Result, Settings, simulate
+
+
+@dataclass(frozen=True)
+class Prepared:
+    """A case with its ground motion loaded: everything needed to simulate it."""
+
+    case: Case
+    ground: rec.GroundMotion
+    model: Model
+    settings: Settings
+
+
+def load_ground(case: Case, records_dir: Path | None = None) -> rec.GroundMotion:
+    """Read, scale and align the case's records (``ground.horizontal`` and ``ground.vertical``)."""
+    folder = records_dir if records_dir is not None else rec.records_dir()
+    traces = {}
+    for role in ("horizontal", "vertical"):
+        spec = getattr(case.ground, role)
+        if spec is None:
+            traces[role] = None
+            continue
+        field = f"ground.{role}.file"
+        path = rec.resolve_record_path(spec.file, case_dir=case.base_dir, records_dir=folder,
+                                       source=case.source, field=field)
+        traces[role] = rec.read_record(path, format=spec.format, units=spec.units,
+                                       time_column=spec.time_column, column=spec.column, dt=spec.dt,
+                                       skip_lines=spec.skip_lines)
+    scale = case.ground.scale
+    return rec.combine(traces["horizontal"], traces["vertical"], pga_horizontal=scale.pga_horizontal,
+                       factor=scale.factor, pga_vertical=scale.pga_vertical,
+                       vertical_factor=scale.vertical_factor, source=case.source)
+
+
+def model_for(case: Case) -> Model:
+    return Model.from_block(case.block.height, case.block.width, case.contact.mu_static,
+                            case.contact.mu_kinetic, case.contact.restitution, case.gravity,
+                            case.block.mass)
+
+
+def settings_for(case: Case, *, history: bool = True, energy: bool = True) -> Settings:
+    every = 0
+    if history:
+        interval = case.output.interval
+        every = 1 if interval is None else max(1, round(interval / case.solver.dt))
+    return Settings(dt=case.solver.dt, events=case.solver.events, tail=case.ground.tail,
+                    rotation=case.initial.rotation, rotation_rate=case.initial.rotation_rate,
+                    slip_rate=case.initial.slip_rate, history_every=every, energy=energy)
+
+
+def check_against_ground(case: Case, ground: rec.GroundMotion) -> None:
+    """Checks that need the records: the step is not coarser than the record's sampling, and the
+    scaled vertical motion never lifts the block off the ground (``g + av > 0``, model.md's 'no free
+    flight'), reported before any computation."""
+    if case.solver.dt > ground.dt * (1.0 + 1e-9):
+        raise CaseError(f"dt = {case.solver.dt:g} s is larger than the record's sampling step "
+                        f"{ground.dt:g} s; expected dt <= {ground.dt:g} s",
+                        source=case.source, field="solver.dt")
+    if ground.vertical.size:
+        lowest = float(np.min(ground.vertical))
+        if case.gravity + lowest <= 0.0:
+            i = int(np.argmin(ground.vertical))
+            raise CaseError(
+                f"the scaled vertical acceleration reaches {lowest / 0.01:.1f} gal at "
+                f"t = {ground.start + i * ground.dt:.3f} s, so g + av = {case.gravity + lowest:.3f} m/s^2 "
+                f"<= 0 (the block would fly, outside the model); lower ground.scale",
+                source=case.source, field="ground.scale")
+
+
+def prepare(case: Case, records_dir: Path | None = None, *, history: bool = True) -> Prepared:
+    ground = load_ground(case, records_dir)
+    check_against_ground(case, ground)
+    return Prepared(case, ground, model_for(case), settings_for(case, history=history))
+
+
+def start_time(prepared: Prepared) -> float:
+    """Time of the first sample on the case's time axis (``ground.time_shift`` added)."""
+    return prepared.ground.start + prepared.case.ground.time_shift
+
+
+def simulate_prepared(prepared: Prepared, on_chunk=None) -> Result:
+    """Run the prepared case with the method its solver section asks for."""
+    g = prepared.ground
+    if prepared.case.solver.method == "reference":
+        from .reference import simulate_reference
+        return simulate_reference(prepared.model, g.dt, g.horizontal, g.vertical, prepared.settings,
+                                  start=start_time(prepared))
+    return simulate(prepared.model, g.dt, g.horizontal, g.vertical, prepared.settings,
+                    start=start_time(prepared), on_chunk=on_chunk)
+
+
+def run_case(case: Case, records_dir: Path | None = None, *, history: bool = True) -> tuple[Prepared, Result]:
+    prepared = prepare(case, records_dir, history=history)
+    return prepared, simulate_prepared(prepared)
+
+
+def record_entries(prepared: Prepared) -> list[dict]:
+    """The records' provenance for the result file (file name only, checksum, format, scale)."""
+    out = []
+    for entry in prepared.ground.files:
+        role = entry["role"]
+        factor = prepared.ground.horizontal_factor if role == "horizontal" else prepared.ground.vertical_factor
+        out.append({**entry, "path": Path(str(entry["path"])).name, "scale_factor": float(factor)})
+    return out
+
+
+__all__ = ["Prepared", "load_ground", "model_for", "settings_for", "check_against_ground", "prepare",
+           "simulate_prepared", "run_case", "record_entries", "start_time"]
