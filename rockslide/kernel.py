@@ -31,8 +31,9 @@ from numba import njit
 
 from .physics import (
     OVERTURNED, REST, ROCK, ROCKSLIP, SLIP,
-    contact_forces, kinetic_energy, liftoff_margin, potential_energy, rebound,
-    rock_acceleration, rockslip_accelerations, slip_acceleration, slip_margin,
+    contact_forces, contact_forces_sc, kinetic_energy, liftoff_margin, potential_energy, rebound,
+    rock_acceleration, rock_acceleration_sc, rockslip_accelerations_sc, slip_acceleration,
+    slip_margin, tilt,
 )
 
 # --- parameter vector ``p`` -------------------------------------------------------------------
@@ -47,8 +48,10 @@ N_PARAMS = 13
  S_T_REST, S_T_SLIP, S_T_ROCK, S_T_ROCKSLIP,                # time spent in each state [s]
  S_N_EVENTS,
  S_W_GROUND, S_W_FRICTION, S_W_IMPACT,                      # energy ledger [J/kg]
- S_FALL_CANDIDATE, S_THETA_MAX_TIME, S_E_INITIAL) = range(28)
-N_STATE = 28
+ S_FALL_CANDIDATE, S_THETA_MAX_TIME, S_E_INITIAL,
+ S_K1_VALID, S_K1_THDD, S_K1_XDD, S_K1_PG, S_K1_PF,  # first RK4 stage of the next step
+ S_ROWS) = range(34)                                 # history columns written by the last call
+N_STATE = 34
 
 # --- outcomes ---------------------------------------------------------------------------------
 STATUS_OK, STATUS_FLIGHT, STATUS_PAINLEVE = 0, 1, 2
@@ -91,76 +94,78 @@ def new_state():
 # ============================================================================================
 
 @njit(cache=True, inline='always')
-def accelerations(mode, lam, sigma, theta, thetadot, ah, G, p):
-    """``(thetaddot, xddot)`` of a state (eqs. 3, 9, 15-16 with 22)."""
+def accelerations_sc(mode, lam, sigma, s, c, thetadot, ah, G, p):
+    """``(thetaddot, xddot, D)`` of a state (eqs. 3, 9, 15-16 with 22); ``D = 1`` unless ROCKSLIP."""
     if mode == ROCK:
-        return rock_acceleration(theta, ah, G, lam, p[P_R], p[P_ALPHA]), 0.0
+        return rock_acceleration_sc(s, c, ah, G, lam, p[P_R]), 0.0, 1.0
     if mode == SLIP:
-        return 0.0, slip_acceleration(ah, G, p[P_NU], sigma)
+        return 0.0, slip_acceleration(ah, G, p[P_NU], sigma), 1.0
     if mode == ROCKSLIP:
-        thetaddot, xddot, _ = rockslip_accelerations(theta, thetadot, ah, G, lam, sigma,
-                                                     p[P_NU], p[P_R], p[P_ALPHA])
-        return thetaddot, xddot
-    return 0.0, 0.0
+        return rockslip_accelerations_sc(s, c, thetadot, ah, G, lam, sigma, p[P_NU], p[P_R])
+    return 0.0, 0.0, 1.0
+
+
+@njit(cache=True)
+def accelerations(mode, lam, sigma, theta, thetadot, ah, G, p):
+    """``(thetaddot, xddot)`` of a state at angle ``theta``."""
+    s, c = tilt(theta, p[P_ALPHA])
+    thdd, xdd, _ = accelerations_sc(mode, lam, sigma, s, c, thetadot, ah, G, p)
+    return thdd, xdd
 
 
 @njit(cache=True, inline='always')
-def powers(mode, lam, sigma, theta, thetadot, xdot, ah, av, G, thetaddot, p):
-    """Power per unit mass of the ground's inertia forces and of friction [W/kg].
+def evaluate(mode, lam, sigma, th, thd, xd, t, a0, sa, v0, sv, p):
+    """Everything the integrator needs at one instant (local time ``t``, ground linear in it).
 
-    The ground acts through ``-ah`` and ``-av`` on the centre of gravity, whose velocity relative to
-    the foundation is ``(xdot - lam R c thetadot, R s thetadot)`` (the virtual displacements of
-    eq. 14); kinetic friction dissipates ``nu N |xdot|`` (eqs. 9 and 22).
+    Returns ``(thetaddot, xddot, ground power, friction power, s, c, D, ah, G)``. The powers
+    [W/kg] are those of the ground's inertia forces ``-ah``, ``-av`` on the centre of gravity, whose
+    velocity relative to the foundation is ``(xdot - lam R c thetadot, R s thetadot)`` (the virtual
+    displacements of eq. 14), and of kinetic friction, ``-nu N |xdot|`` (eqs. 9 and 22); they are
+    computed only when the energy ledger is on.
     """
-    if mode == REST:
-        return 0.0, 0.0
-    R = p[P_R]
-    s = math.sin(p[P_ALPHA] - theta)
-    c = math.cos(p[P_ALPHA] - theta)
-    ground = -ah * (xdot - lam * R * c * thetadot) - av * R * s * thetadot
-    if mode == SLIP:
-        return ground, -p[P_NU] * G * abs(xdot)
-    if mode == ROCKSLIP:
-        _, N = contact_forces(theta, thetadot, thetaddot, ah, G, lam, R, p[P_ALPHA])
-        return ground, -p[P_NU] * N * abs(xdot)
-    return ground, 0.0
-
-
-@njit(cache=True, inline='always')
-def derivatives(mode, lam, sigma, th, thd, xd, t, a0, sa, v0, sv, p):
-    """Right-hand side at local time ``t``: ``(thetaddot, xddot, ground power, friction power)``."""
     ah = a0 + sa * t
     av = v0 + sv * t
     G = p[P_G] + av
-    thdd, xdd = accelerations(mode, lam, sigma, th, thd, ah, G, p)
-    if p[P_ENERGY] != 0.0:
-        pg, pf = powers(mode, lam, sigma, th, thd, xd, ah, av, G, thdd, p)
-        return thdd, xdd, pg, pf
-    return thdd, xdd, 0.0, 0.0
+    if mode == SLIP:            # upright: theta = 0, no trigonometry needed
+        xdd = slip_acceleration(ah, G, p[P_NU], sigma)
+        if p[P_ENERGY] != 0.0:
+            return 0.0, xdd, -ah * xd, -p[P_NU] * G * abs(xd), 0.0, 0.0, 1.0, ah, G
+        return 0.0, xdd, 0.0, 0.0, 0.0, 0.0, 1.0, ah, G
+    s, c = tilt(th, p[P_ALPHA])
+    thdd, xdd, D = accelerations_sc(mode, lam, sigma, s, c, thd, ah, G, p)
+    pg = 0.0
+    pf = 0.0
+    if p[P_ENERGY] != 0.0 and mode != REST:
+        R = p[P_R]
+        pg = -ah * (xd - lam * R * c * thd) - av * R * s * thd
+        if mode == ROCKSLIP:
+            _, N = contact_forces_sc(s, c, thd, thdd, ah, G, lam, R)
+            pf = -p[P_NU] * N * abs(xd)
+    return thdd, xdd, pg, pf, s, c, D, ah, G
 
 
 @njit(cache=True, inline='always')
-def rk4(mode, lam, sigma, y, tau, hh, a0, sa, v0, sv, p, out):
+def rk4(mode, lam, sigma, y, tau, hh, a0, sa, v0, sv, p, out, a1, b1, pg1, pf1):
     """One classical fourth-order Runge-Kutta step of length ``hh`` from local time ``tau``.
 
     ``y`` and ``out`` hold ``theta, thetadot, x, xdot, w_ground, w_friction``; the ground is
-    ``ah = a0 + sa t``, ``av = v0 + sv t`` (linear within the interval).
+    ``ah = a0 + sa t``, ``av = v0 + sv t`` (linear within the interval). ``a1, b1, pg1, pf1`` are
+    the derivatives at the start (the first stage, from `evaluate`).
     """
     th, thd, x, xd = y[0], y[1], y[2], y[3]
     half = 0.5 * hh
-    a1, b1, pg1, pf1 = derivatives(mode, lam, sigma, th, thd, xd, tau, a0, sa, v0, sv, p)
     th2 = th + half * thd
     thd2 = thd + half * a1
     xd2 = xd + half * b1
-    a2, b2, pg2, pf2 = derivatives(mode, lam, sigma, th2, thd2, xd2, tau + half, a0, sa, v0, sv, p)
+    a2, b2, pg2, pf2, _, _, _, _, _ = evaluate(mode, lam, sigma, th2, thd2, xd2, tau + half, a0, sa, v0, sv, p)
     th3 = th + half * thd2
     thd3 = thd + half * a2
     xd3 = xd + half * b2
-    a3, b3, pg3, pf3 = derivatives(mode, lam, sigma, th3, thd3, xd3, tau + half, a0, sa, v0, sv, p)
+    a3, b3, pg3, pf3, _, _, _, _, _ = evaluate(mode, lam, sigma, th3, thd3, xd3, tau + half, a0, sa, v0, sv, p)
     th4 = th + hh * thd3
     thd4 = thd + hh * a3
     xd4 = xd + hh * b3
-    a4, b4, pg4, pf4 = derivatives(mode, lam, sigma, th4, thd4, xd4, tau + hh, a0, sa, v0, sv, p)
+    a4, b4, pg4, pf4, _, _, _, _, _ = evaluate(mode, lam, sigma, th4, thd4, xd4, tau + hh, a0, sa, v0, sv, p)
     f = hh / 6.0
     out[0] = th + f * (thd + 2.0 * thd2 + 2.0 * thd3 + thd4)
     out[1] = thd + f * (a1 + 2.0 * a2 + 2.0 * a3 + a4)
@@ -170,26 +175,30 @@ def rk4(mode, lam, sigma, y, tau, hh, a0, sa, v0, sv, p, out):
     out[5] = y[5] + f * (pf1 + 2.0 * pf2 + 2.0 * pf3 + pf4)
 
 
+@njit(cache=True)
+def rk4_from(mode, lam, sigma, y, tau, hh, a0, sa, v0, sv, p, out):
+    """`rk4` computing its own first stage (for the event-location paths)."""
+    a1, b1, pg1, pf1, _, _, _, _, _ = evaluate(mode, lam, sigma, y[0], y[1], y[3], tau, a0, sa, v0, sv, p)
+    rk4(mode, lam, sigma, y, tau, hh, a0, sa, v0, sv, p, out, a1, b1, pg1, pf1)
+
+
 @njit(cache=True, inline='always')
-def event_values(mode, lam, sigma, y, ah, G, p, gv, kinds):
+def event_values_sc(mode, lam, sigma, y, ah, G, s, c, thdd, D, p, gv, kinds):
     """Fill ``gv`` with the event functions of ``mode`` at state ``y`` (``g >= 0`` while the state
     holds) and ``kinds`` with what each one is, in the order of model.md's table; return the count.
+    ``s``, ``c``, ``thdd`` and ``D`` are `evaluate`'s at the same instant.
     """
-    th, thd, xd = y[0], y[1], y[3]
-    R = p[P_R]
-    alpha = p[P_ALPHA]
+    th, xd = y[0], y[3]
     if mode == SLIP:
-        xdd = slip_acceleration(ah, G, p[P_NU], sigma)
         gv[0] = G
         kinds[0] = K_FLIGHT
         gv[1] = sigma * xd
         kinds[1] = K_SLIP_STOP
-        gv[2] = liftoff_margin(p[P_TAN_ALPHA], G, xdd + ah)       # eq. 23
+        gv[2] = liftoff_margin(p[P_TAN_ALPHA], G, slip_acceleration(ah, G, p[P_NU], sigma) + ah)  # eq. 23
         kinds[2] = K_LIFTOFF
         return 3
     if mode == ROCK:
-        thdd = rock_acceleration(th, ah, G, lam, R, alpha)
-        Rx, N = contact_forces(th, thd, thdd, ah, G, lam, R, alpha)
+        Rx, N = contact_forces_sc(s, c, y[1], thdd, ah, G, lam, p[P_R])
         gv[0] = N
         kinds[0] = K_FLIGHT
         gv[1] = slip_margin(p[P_MU], N, Rx)                        # eq. 21
@@ -200,8 +209,7 @@ def event_values(mode, lam, sigma, y, ah, G, p, gv, kinds):
         kinds[3] = K_OVERTURN
         return 4
     if mode == ROCKSLIP:
-        thdd, _, D = rockslip_accelerations(th, thd, ah, G, lam, sigma, p[P_NU], R, alpha)
-        _, N = contact_forces(th, thd, thdd, ah, G, lam, R, alpha)
+        _, N = contact_forces_sc(s, c, y[1], thdd, ah, G, lam, p[P_R])
         gv[0] = N
         kinds[0] = K_FLIGHT
         gv[1] = D
@@ -223,6 +231,14 @@ def event_values(mode, lam, sigma, y, ah, G, p, gv, kinds):
         kinds[2] = K_LIFTOFF
         return 3
     return 0
+
+
+@njit(cache=True)
+def event_values(mode, lam, sigma, y, ah, G, p, gv, kinds):
+    """`event_values_sc` at state ``y`` with ground ``ah``, ``G``."""
+    s, c = tilt(y[0], p[P_ALPHA])
+    thdd, _, D = accelerations_sc(mode, lam, sigma, s, c, y[1], ah, G, p)
+    return event_values_sc(mode, lam, sigma, y, ah, G, s, c, thdd, D, p, gv, kinds)
 
 
 # ============================================================================================
@@ -254,18 +270,21 @@ def note_extremes(st, t):
 
 @njit(cache=True, inline='always')
 def write_history(st, history, every, offset, n, t):
-    """Store the state at grid point ``n`` if it is on the output grid."""
+    """Store the state at grid point ``n`` in column ``n // every - offset`` of ``history``
+    (rows: ``HISTORY_COLUMNS``) if ``n`` is on the output grid; count the columns written."""
     if every <= 0 or n % every != 0:
         return
     i = n // every - offset
-    if 0 <= i < history.shape[0]:
+    if 0 <= i < history.shape[1]:
         lam = st[S_LAM]
-        history[i, 0] = t
-        history[i, 1] = lam * st[S_THETA]
-        history[i, 2] = lam * st[S_THETADOT]
-        history[i, 3] = st[S_X]
-        history[i, 4] = st[S_XDOT]
-        history[i, 5] = st[S_MODE]
+        history[0, i] = t
+        history[1, i] = lam * st[S_THETA]
+        history[2, i] = lam * st[S_THETADOT]
+        history[3, i] = st[S_X]
+        history[4, i] = st[S_XDOT]
+        history[5, i] = st[S_MODE]
+        if i + 1 > st[S_ROWS]:
+            st[S_ROWS] = i + 1
 
 
 @njit(cache=True, inline='always')
@@ -303,6 +322,7 @@ def mechanical_energy(st, p):
 @njit(cache=True)
 def apply_event(kind, st, p, t, ah, G, events):
     """Apply the transition of event ``kind`` to ``st`` at time ``t`` (ground ``ah``, ``G``)."""
+    st[S_K1_VALID] = 0.0
     mode = int(st[S_MODE])
     lam = st[S_LAM]
     sigma = st[S_SIGMA]
@@ -483,7 +503,7 @@ def rest_exit(tau, tau_end, a0, sa, v0, sv, p, step_end, h):
 @njit(cache=True)
 def event_value_at(i, mode, lam, sigma, y0, tau_a, dtau, a0, sa, v0, sv, p, ytmp, gv, kinds):
     """Event function ``i`` at ``tau_a + dtau``, reached by one RK4 step from ``y0``."""
-    rk4(mode, lam, sigma, y0, tau_a, dtau, a0, sa, v0, sv, p, ytmp)
+    rk4_from(mode, lam, sigma, y0, tau_a, dtau, a0, sa, v0, sv, p, ytmp)
     t = tau_a + dtau
     event_values(mode, lam, sigma, ytmp, a0 + sa * t, p[P_G] + v0 + sv * t, p, gv, kinds)
     return gv[i]
@@ -537,7 +557,11 @@ def locate(i, mode, lam, sigma, y0, tau_a, tau_b, g_a, g_b, a0, sa, v0, sv, p, y
 def step_without_event(st, p, mode, tau_a, tau_b, tk, a0, sa, v0, sv, y0, y1, gv, kinds):
     """One RK4 step of the moving state ``mode`` from ``tau_a`` to ``tau_b``; if no event function
     of the state turns negative, take it into ``st`` and return True. Otherwise leave ``st`` as it
-    was (``y0`` holds the start, ``y1`` the end of the step) and return False."""
+    was (``y0`` holds the start, ``y1`` the end of the step) and return False.
+
+    The derivatives evaluated at the end of an accepted step (for its event functions) are kept in
+    ``st[S_K1_*]`` as the first stage of the next step, until a transition changes the state.
+    """
     lam = st[S_LAM]
     sigma = st[S_SIGMA]
     y0[0] = st[S_THETA]
@@ -546,12 +570,24 @@ def step_without_event(st, p, mode, tau_a, tau_b, tk, a0, sa, v0, sv, y0, y1, gv
     y0[3] = st[S_XDOT]
     y0[4] = st[S_W_GROUND]
     y0[5] = st[S_W_FRICTION]
-    rk4(mode, lam, sigma, y0, tau_a, tau_b - tau_a, a0, sa, v0, sv, p, y1)
-    n = event_values(mode, lam, sigma, y1, a0 + sa * tau_b, p[P_G] + v0 + sv * tau_b, p, gv, kinds)
+    if st[S_K1_VALID] != 0.0:
+        a1, b1, pg1, pf1 = st[S_K1_THDD], st[S_K1_XDD], st[S_K1_PG], st[S_K1_PF]
+    else:
+        a1, b1, pg1, pf1, _, _, _, _, _ = evaluate(mode, lam, sigma, y0[0], y0[1], y0[3], tau_a,
+                                                   a0, sa, v0, sv, p)
+    rk4(mode, lam, sigma, y0, tau_a, tau_b - tau_a, a0, sa, v0, sv, p, y1, a1, b1, pg1, pf1)
+    thdd, xdd, pg, pf, s, c, D, ah, G = evaluate(mode, lam, sigma, y1[0], y1[1], y1[3], tau_b,
+                                                 a0, sa, v0, sv, p)
+    n = event_values_sc(mode, lam, sigma, y1, ah, G, s, c, thdd, D, p, gv, kinds)
     for i in range(n):
         if gv[i] < 0.0:
             return False
     accept(st, y1, mode, tau_a, tau_b, tk, p)
+    st[S_K1_VALID] = 1.0
+    st[S_K1_THDD] = thdd
+    st[S_K1_XDD] = xdd
+    st[S_K1_PG] = pg
+    st[S_K1_PF] = pf
     return True
 
 
@@ -599,7 +635,7 @@ def advance(st, p, tau_a, tau_b, tk, a0, sa, v0, sv, events, y0, y1, ytmp, gv, k
             te = best
             kind = kinds_end[best_i]
             if te < tau_b:
-                rk4(mode, lam, sigma, y0, tau_a, te - tau_a, a0, sa, v0, sv, p, y1)
+                rk4_from(mode, lam, sigma, y0, tau_a, te - tau_a, a0, sa, v0, sv, p, y1)
         else:
             te = tau_b
             kind = kinds[first]
@@ -637,6 +673,7 @@ def land_on_the_ground(st, p, G):
 @njit(cache=True, inline='always')
 def accept(st, y1, mode, tau_a, tau_b, tk, p):
     """Take the integrated state ``y1`` at local time ``tau_b`` into ``st``."""
+    st[S_K1_VALID] = 0.0
     theta_before = st[S_THETA]
     st[S_THETA] = y1[0]
     st[S_THETADOT] = y1[1]
@@ -672,9 +709,9 @@ def run(p, ah, av, st, history, every, offset, events, k_end):
         ``[t0 + k dt_rec, t0 + (k + 1) dt_rec]``.
     st : float64[N_STATE]
         The integration state, updated in place (resumable).
-    history : float64[n, 6]
-        Output rows (``HISTORY_COLUMNS``) for every ``every``-th grid point; row
-        ``n // every - offset``. ``every = 0`` keeps no history.
+    history : float64[6, n]
+        Output (rows ``HISTORY_COLUMNS``) for every ``every``-th grid point ``n``, in column
+        ``n // every - offset``; ``st[S_ROWS]`` counts the columns written. ``every = 0`` keeps none.
     events : float64[m, 6]
         Event log rows (``EVENT_COLUMNS``); ``st[S_N_EVENTS]`` counts all events, including those
         beyond the log's capacity.

@@ -52,6 +52,19 @@ def block_constants(half_width, half_height, gravity):
 
 
 @njit(cache=True)
+def tilt(theta, alpha):
+    """``(s, c) = (sin(alpha - theta), cos(alpha - theta))``: the trigonometry of every equation
+    below, computed once per state by the solvers."""
+    return math.sin(alpha - theta), math.cos(alpha - theta)
+
+
+@njit(cache=True)
+def rock_acceleration_sc(s, c, ah, G, lam, R):
+    """Eq. 3 with ``s``, ``c`` from `tilt`: ``thetaddot = (3 / (4 R)) (-G s + lam ah c)``."""
+    return 0.75 / R * (-G * s + lam * ah * c)
+
+
+@njit(cache=True)
 def rock_acceleration(theta, ah, G, lam, R, alpha):
     """Angular acceleration of liftoff without slip, eq. 3 (eq. 29 in compact form).
 
@@ -63,13 +76,28 @@ def rock_acceleration(theta, ah, G, lam, R, alpha):
     float
         ``thetaddot`` [rad/s^2].
     """
-    return 0.75 / R * (-G * math.sin(alpha - theta) + lam * ah * math.cos(alpha - theta))
+    s, c = tilt(theta, alpha)
+    return rock_acceleration_sc(s, c, ah, G, lam, R)
 
 
 @njit(cache=True)
 def slip_acceleration(ah, G, nu, sigma):
     """Slip acceleration of the upright block, eq. 9: ``xddot = -ah - nu sigma G`` [m/s^2]."""
     return -ah - nu * sigma * G
+
+
+@njit(cache=True)
+def rockslip_accelerations_sc(s, c, thetadot, ah, G, lam, sigma, nu, R):
+    """Eqs. 15, 16 and 22 with ``s``, ``c`` from `tilt`; see `rockslip_accelerations`."""
+    b1 = -G * s + lam * ah * c
+    b2 = -ah - nu * sigma * G + R * thetadot * thetadot * (nu * sigma * c + lam * s)
+    a21 = R * (nu * sigma * s - lam * c)
+    D = (4.0 / 3.0) * R + lam * c * a21
+    if D <= 0.0:
+        return 0.0, 0.0, D
+    thetaddot = (b1 + lam * c * b2) / D
+    xddot = ((4.0 / 3.0) * R * b2 - a21 * b1) / D
+    return thetaddot, xddot, D
 
 
 @njit(cache=True)
@@ -90,19 +118,19 @@ def rockslip_accelerations(theta, thetadot, ah, G, lam, sigma, nu, R, alpha):
         [m/s^2]
     D : float
         The determinant ``R (4/3 - c^2 + lam nu sigma s c)`` [m]. ``D <= 0`` is the Painleve
-        case (no unique solution); the caller must stop before using the accelerations then.
+        case (no unique solution); the accelerations are then returned as 0 and the caller must stop.
     """
-    s = math.sin(alpha - theta)
-    c = math.cos(alpha - theta)
-    b1 = -G * s + lam * ah * c
-    b2 = -ah - nu * sigma * G + R * thetadot * thetadot * (nu * sigma * c + lam * s)
-    a21 = R * (nu * sigma * s - lam * c)
-    D = (4.0 / 3.0) * R + lam * c * a21
-    if D <= 0.0:
-        return 0.0, 0.0, D
-    thetaddot = (b1 + lam * c * b2) / D
-    xddot = ((4.0 / 3.0) * R * b2 - a21 * b1) / D
-    return thetaddot, xddot, D
+    s, c = tilt(theta, alpha)
+    return rockslip_accelerations_sc(s, c, thetadot, ah, G, lam, sigma, nu, R)
+
+
+@njit(cache=True)
+def contact_forces_sc(s, c, thetadot, thetaddot, ah, G, lam, R):
+    """Eqs. 19 and 20 per unit mass with ``s``, ``c`` from `tilt`; see `contact_forces`."""
+    w2 = thetadot * thetadot
+    Rx = ah - lam * R * w2 * s - lam * R * thetaddot * c
+    N = G - R * w2 * c + R * thetaddot * s
+    return Rx, N
 
 
 @njit(cache=True)
@@ -117,12 +145,8 @@ def contact_forces(theta, thetadot, thetaddot, ah, G, lam, R, alpha):
     N : float
         Normal force [m/s^2]: ``G - R thetadot^2 c + R thetaddot s``.
     """
-    s = math.sin(alpha - theta)
-    c = math.cos(alpha - theta)
-    w2 = thetadot * thetadot
-    Rx = ah - lam * R * w2 * s - lam * R * thetaddot * c
-    N = G - R * w2 * c + R * thetaddot * s
-    return Rx, N
+    s, c = tilt(theta, alpha)
+    return contact_forces_sc(s, c, thetadot, thetaddot, ah, G, lam, R)
 
 
 @njit(cache=True)

@@ -183,7 +183,9 @@ def response_figure(result, *, title: str = "", time_shift: float = 0.0,
     Returns
     -------
     matplotlib.figure.Figure
-        11 x 8 in; save it with `save_figure`.
+        11 x 8 in; save it with `save_figure`. Its axes are labelled (``Axes.get_label``)
+        ``"record"`` and ``"record-slip"`` (whole record: rotation, and the slip twin), ``"zoom"`` and
+        ``"zoom-slip"`` (if magnified) and ``"ground"``.
     """
     if hasattr(result, "result") and hasattr(result, "case_text"):   # a StoredResult
         title = title or result.name
@@ -198,19 +200,20 @@ def response_figure(result, *, title: str = "", time_shift: float = 0.0,
     ground.sharex(top)
     t0, t1 = _record_range(result)
 
-    _response_panel(top, result, shift, (t0, t1), window=window)
+    _response_panel(top, result, shift, (t0, t1), window=window, label="record")
     top.set_title("whole record", loc="left", fontsize=10)
     if window:
         zax = axes[1]
-        _response_panel(zax, result, shift, (window[0] - shift, window[1] - shift))
+        _response_panel(zax, result, shift, (window[0] - shift, window[1] - shift), label="zoom")
         zax.set_title(f"magnified: {window[0]:.2f} to {window[1]:.2f} s", loc="left", fontsize=10)
     _ground_panel(ground, result, shift, (t0, t1))
+    ground.set_label("ground")
     ground.set_xlim(t0 + shift, t1 + shift)
     for ax in axes:
         ax.set_xlabel("time [s]")
 
     fig.suptitle(_title(result, title), fontsize=12)
-    fig.legend(handles=_legend_handles(result), loc="outside upper center", ncols=7, frameon=False,
+    fig.legend(handles=_legend_handles(result), loc="outside lower center", ncols=7, frameon=False,
                fontsize=9)
     return fig
 
@@ -244,8 +247,11 @@ def _title(result, name: str) -> str:
     return head + "\n" + ",  ".join(facts)
 
 
-def _response_panel(ax, result, shift, span, *, window=None):
-    """Rotation (left axis) and slip in mm (right axis) over the shaded states, for ``span``."""
+def _response_panel(ax, result, shift, span, *, label, window=None):
+    """Rotation (left axis) and slip in mm (right axis) over the shaded states, for ``span``.
+
+    The axes are labelled ``label`` (rotation) and ``label + "-slip"`` (the twin, slip).
+    """
     a, b = span
     _shade_states(ax, result, shift, span)
     history = result.history or {}
@@ -257,6 +263,8 @@ def _response_panel(ax, result, shift, span, *, window=None):
     x_mm = 1e3 * np.asarray(history.get("slip", np.zeros(0)))[i0:i1]
 
     slip_ax = ax.twinx()
+    ax.set_label(label)
+    slip_ax.set_label(f"{label}-slip")
     if t.size:
         ax.plot(*_envelope(t + shift, phi), color=ROTATION_COLOUR, lw=1.0, zorder=3)
         slip_ax.plot(*_envelope(t + shift, x_mm), color=SLIP_COLOUR, lw=1.0, zorder=3)
@@ -310,6 +318,9 @@ def _mark_end(ax, result, shift, span, *, label):
     if not (a <= t <= b):
         return
     ax.axvline(t + shift, color=colour, ls=ls, lw=1.4, zorder=5)
+    if label:   # nothing is computed after this time: hatch it
+        ax.axvspan(t + shift, b + shift, facecolor="none", edgecolor="0.85", hatch="//", lw=0.0,
+                   zorder=0)
     if label:
         right_half = (t - a) > 0.6 * (b - a)
         ax.text(t + shift, 0.97, f" {text} " if not right_half else f"{text} ",
@@ -368,10 +379,10 @@ def _aligned_limits(phi: np.ndarray, x_mm: np.ndarray):
     zero = min(max(zero, 0.1), 0.9) if 0.0 < zero < 1.0 else zero
     limits = []
     for lo, hi, default in ranges:
-        if hi - lo <= 0.0:
-            lo, hi = -default, default
-        size = max(-lo / zero if zero > 0 else 0.0, hi / (1.0 - zero) if zero < 1 else 0.0)
-        size *= 1.08
+        if hi - lo <= 0.0:   # a flat line at zero: a small default range
+            size = 2.0 * default
+        else:
+            size = 1.08 * max(-lo / zero if zero > 0 else 0.0, hi / (1.0 - zero) if zero < 1 else 0.0)
         limits.append((-zero * size, (1.0 - zero) * size))
     return limits
 

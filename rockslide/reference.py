@@ -1,7 +1,7 @@
 """The reference solver: the same state machine, integrated adaptively with located events.
 
 It shares everything with the kernel except the integrator: the equations of motion
-(`kernel.derivatives`, from `physics`), the event functions of each state (`kernel.event_values`),
+(`kernel.evaluate`, from `physics`), the event functions of each state (`kernel.event_values`),
 the transitions (`kernel.apply_event`, `kernel.settle`), the exact exits from REST
 (`kernel.rest_exit`) and the bookkeeping (`kernel.accept`). Between transitions it integrates with
 scipy's DOP853 (8th order) at tight tolerances, record interval by record interval (the input is
@@ -79,9 +79,9 @@ def simulate_reference(model: Model, dt_record: float, horizontal, vertical,
                                     grid, start, h, k * dt_record, rows, rtol, atol)
 
     n_events = int(st[K.S_N_EVENTS])
-    history_rows = np.array(rows) if rows else np.zeros((0, 6))
+    history_columns = np.array(rows).T if rows else np.zeros((6, 0))
     return Result(
-        history=history_dict(history_rows),
+        history=history_dict(history_columns),
         events=event_table(events[:n_events]),
         summary=summarise(st, model, start + (ah.size - 1) * dt_record),
         step=h,
@@ -106,7 +106,7 @@ def _integrate_moving(st, p, tau, tau_end, tk, a0, sa, v0, sv, events, gv, kinds
                    st[K.S_W_GROUND], st[K.S_W_FRICTION]])
 
     def rhs(t, y):
-        thdd, xdd, pg, pf = K.derivatives(mode, lam, sigma, y[0], y[1], y[3], t, a0, sa, v0, sv, p)
+        thdd, xdd, pg, pf, _, _, _, _, _ = K.evaluate(mode, lam, sigma, y[0], y[1], y[3], t, a0, sa, v0, sv, p)
         return [y[1], thdd, y[3], xdd, pg, pf]
 
     n_events = K.event_values(mode, lam, sigma, y0, a0 + sa * tau, p[K.P_G] + v0 + sv * tau, p, gv, kinds)

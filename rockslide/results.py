@@ -13,23 +13,32 @@ Layout (format ``rockslide-result``, version 1):
 
 | path | type | units | content |
 |---|---|---|---|
-| `/` | group (attributes) | | summary, status, verdict, provenance (below) |
+| `/` | group (attrs) | | summary, status, verdict, provenance (below) |
 | `/time_history` | group | | the response on the output grid |
 | `/time_history/time` | float64[n] | s | time |
 | `/time_history/rotation` | float64[n] | rad | signed rotation `phi = lam * theta` |
 | `/time_history/rotation_rate` | float64[n] | rad/s | `d phi / dt` |
 | `/time_history/slip` | float64[n] | m | slip displacement `x` relative to the ground |
 | `/time_history/slip_rate` | float64[n] | m/s | slip velocity `d x / dt` |
-| `/time_history/state` | int8[n] | - | state code; attribute `codes` = "0 REST, 1 SLIP, 2 ROCK, 3 ROCKSLIP, 4 OVERTURNED" |
+| `/time_history/state` | int8[n] | - | state code; attribute `codes` (below) |
 | `/ground` | group | | the ground motion as applied (scaled, tail included) |
 | `/ground/time` | float64[m] | s | sample times |
 | `/ground/horizontal` | float64[m] | m/s^2 | horizontal ground acceleration |
 | `/ground/vertical` | float64[m] | m/s^2 | vertical ground acceleration (up positive) |
-| `/events` | compound[k] | | event log: `time` f8 [s]; `from`, `to` (S10, state names); `cause` (S14); `edge` i1 (pivot `lam`: +1 left, -1 right); `slip_direction` i1 (`sigma`) |
-| `/case` | group (attributes) | | if a case is given: attribute `yaml` (the case file's text) and the case as flattened attributes (dotted keys such as `contact.mu_static`, SI values, None stored as "") |
+| `/events` | compound[k] | | the event log (fields below) |
+| `/case` | group (attrs) | | if a case is given: `yaml` (the case file's text) and the case's keys |
 | `/records` | group | | if records are given |
-| `/records/horizontal` | group (attributes) | | `role`, `path` (the file name only), `sha256`, `format`, `units`, `scale_factor` |
-| `/records/vertical` | group (attributes) | | the same for the vertical record |
+| `/records/horizontal` | group (attrs) | | the horizontal record file (attributes below) |
+| `/records/vertical` | group (attrs) | | the same for the vertical record |
+
+- ``/time_history/state`` attribute ``codes`` = "0 REST, 1 SLIP, 2 ROCK, 3 ROCKSLIP, 4 OVERTURNED".
+- ``/events`` fields: ``time`` (f8) [s]; ``from``, ``to`` (S10, state names); ``cause`` (S14:
+  slip-start, liftoff, slip-stop, slip-reversal, impact, liftoff-end, overturn, flight, painleve);
+  ``edge`` (i1, the pivot ``lam``: +1 left, -1 right); ``slip_direction`` (i1, ``sigma``).
+- ``/records/<role>`` attributes: ``role``, ``path`` (the file name only, never a folder),
+  ``sha256`` (of the file's bytes), ``format``, ``units`` (of the file), ``scale_factor``.
+- ``/case`` holds the case (``case.case_to_dict``) as attributes with dotted keys such as
+  ``contact.mu_static`` (SI values; None stored as "").
 
 Every dataset carries a ``units`` attribute; the time histories are chunked and compressed (gzip
 level 4 with shuffle). Root attributes:
@@ -52,11 +61,14 @@ Records keep their file name only, never a folder; the case is stored as written
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import importlib.metadata
 import math
 import os
 import platform
+import signal
+import threading
 from dataclasses import dataclass
 from datetime import datetime, timezone
 from pathlib import Path
@@ -218,14 +230,16 @@ class ResultWriter:
             raise OutputError(f"cannot write in this folder ({_reason(exc)})",
                               source=str(self.path.parent)) from None
         try:
-            self._history = self._file.create_group("time_history", track_order=True)
+            history = self._file.create_group("time_history", track_order=True)
+            self._datasets = {}
             for name in HISTORY_COLUMNS:
                 dtype = np.int8 if name == "state" else np.float64
-                ds = self._history.create_dataset(name, shape=(0,), maxshape=(None,), dtype=dtype,
-                                                  chunks=(_CHUNK_ROWS,), **_COMPRESSION)
+                ds = history.create_dataset(name, shape=(0,), maxshape=(None,), dtype=dtype,
+                                            chunks=(_CHUNK_ROWS,), **_COMPRESSION)
                 ds.attrs["units"] = HISTORY_UNITS[name]
                 if name == "state":
                     ds.attrs["codes"] = STATE_CODES
+                self._datasets[name] = ds
         except BaseException:
             self.discard()
             raise
@@ -257,7 +271,7 @@ class ResultWriter:
         try:
             start, end = self._rows, self._rows + n
             for i, name in enumerate(HISTORY_COLUMNS):
-                ds = self._history[name]
+                ds = self._datasets[name]
                 ds.resize((end,))
                 ds[start:end] = rows[:, i].astype(ds.dtype) if name == "state" else rows[:, i]
             self._rows = end
@@ -292,14 +306,20 @@ class ResultWriter:
         return self.path
 
     def discard(self) -> None:
-        """Close and delete the temporary file (nothing is published). Safe to call twice."""
-        self._done = True
-        try:
-            if self._file.id.valid:
-                self._file.close()
-        except Exception:  # noqa: BLE001 - closing a broken file must not hide the first error
-            pass
-        _remove(self.tmp)
+        """Close and delete the temporary file (nothing is published). Safe to call twice.
+
+        A second Ctrl-C cannot interrupt it: SIGINT is held back until the file is gone.
+        """
+        with _sigint_held():
+            self._done = True
+            self._datasets = {}
+            _remove(self.tmp)          # POSIX: unlink first, so that nothing is left even if closing fails
+            try:
+                if self._file.id.valid:
+                    self._file.close()
+            except Exception:  # noqa: BLE001 - closing a broken file must not hide the first error
+                pass
+            _remove(self.tmp)          # Windows cannot unlink an open file
 
     # -- internals ---------------------------------------------------------------------------------
     def _check_open(self) -> None:
@@ -310,7 +330,7 @@ class ResultWriter:
     def _write_history_dict(self, history: dict) -> None:
         n = len(history["time"])
         for name in HISTORY_COLUMNS:
-            ds = self._history[name]
+            ds = self._datasets[name]
             ds.resize((n,))
             ds[...] = np.asarray(history[name], dtype=ds.dtype)
         self._rows = n
@@ -659,6 +679,19 @@ def _event_dict(event) -> dict:
 # --------------------------------------------------------------------------------------------------
 # Files
 # --------------------------------------------------------------------------------------------------
+
+
+@contextlib.contextmanager
+def _sigint_held():
+    """Hold SIGINT back (POSIX, main thread) for a short cleanup; it is delivered afterwards."""
+    held = (hasattr(signal, "pthread_sigmask") and threading.current_thread() is threading.main_thread())
+    if held:
+        old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        if held:
+            signal.pthread_sigmask(signal.SIG_SETMASK, old)
 
 
 def _remove(path: Path) -> None:

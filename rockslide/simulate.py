@@ -208,7 +208,7 @@ def simulate(model: Model, dt_record: float, horizontal, vertical, settings: Set
     start : float
         Time of the first sample [s].
     on_chunk : callable, optional
-        ``on_chunk(history_rows)`` receives the history chunk by chunk (``float64[n, 6]``,
+        ``on_chunk(rows)`` receives the history chunk by chunk (``float64[n, 6]``, columns
         ``kernel.HISTORY_COLUMNS``) instead of keeping it in the result (bounded memory).
 
     Returns
@@ -230,17 +230,17 @@ def simulate(model: Model, dt_record: float, horizontal, vertical, settings: Set
     k = 0
     while k < n_intervals and not K.finished(st):
         k_end = min(n_intervals, k + settings.chunk_intervals)
-        # history rows on the output grid between steps k*n_sub (exclusive, except at the start)
-        # and k_end*n_sub (inclusive)
+        # history columns on the output grid between steps k*n_sub (exclusive, except at the
+        # start) and k_end*n_sub (inclusive)
         if every > 0:
             first = 0 if k == 0 else (k * n_sub) // every + 1
-            last = (k_end * n_sub) // every
-            history = np.full((max(0, last - first + 1), 6), np.nan)
+            history = np.empty((len(K.HISTORY_COLUMNS), max(0, (k_end * n_sub) // every - first + 1)))
         else:
-            first, history = 0, np.zeros((0, 6))
+            first, history = 0, np.empty((len(K.HISTORY_COLUMNS), 0))
         saved = st.copy()
         while True:
             st[K.S_N_EVENTS] = 0
+            st[K.S_ROWS] = 0
             K.run(p, ah, av, st, history, every, first, events, k_end)
             n_events = int(st[K.S_N_EVENTS])
             if n_events <= events.shape[0]:
@@ -248,18 +248,18 @@ def simulate(model: Model, dt_record: float, horizontal, vertical, settings: Set
             events = np.zeros((2 * n_events, len(K.EVENT_COLUMNS)))
             st[:] = saved
         event_chunks.append(events[:n_events].copy())
-        if every > 0:
-            valid = history[~np.isnan(history[:, 0])]
-            if on_chunk is not None:
-                on_chunk(valid)
-            else:
-                kept.append(valid)
+        written = history[:, :int(st[K.S_ROWS])]
+        if on_chunk is not None:
+            on_chunk(written.T)
+        elif every > 0:
+            kept.append(written)
         k = int(st[K.S_K])
-    rows = np.concatenate(kept) if kept else np.zeros((0, 6))
+    columns = kept[0] if len(kept) == 1 else (np.concatenate(kept, axis=1) if kept
+                                              else np.empty((len(K.HISTORY_COLUMNS), 0)))
     n_total = ah.size
     ground_time = start + dt_record * np.arange(n_total)
     return Result(
-        history=history_dict(rows),
+        history=history_dict(columns),
         events=event_table(np.concatenate(event_chunks) if event_chunks else np.zeros((0, 6))),
         summary=summarise(st, model, start + (n_total - 1) * dt_record),
         step=p[K.P_H],
@@ -269,8 +269,9 @@ def simulate(model: Model, dt_record: float, horizontal, vertical, settings: Set
     )
 
 
-def history_dict(rows: np.ndarray) -> dict[str, np.ndarray]:
-    out = {name: rows[:, i].copy() for i, name in enumerate(K.HISTORY_COLUMNS)}
+def history_dict(columns: np.ndarray) -> dict[str, np.ndarray]:
+    """History arrays by name from the kernel's ``float64[6, n]`` output (views, no copies)."""
+    out = {name: columns[i] for i, name in enumerate(K.HISTORY_COLUMNS)}
     out["state"] = out["state"].astype(np.int8)
     return out
 

@@ -1,0 +1,534 @@
+"""Result <-> HDF5: exact round trips, the documented layout, atomic writes, clear errors."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import os
+import re
+import signal
+import subprocess
+import sys
+import textwrap
+from datetime import datetime
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pytest
+
+from rockslide import results
+from rockslide.errors import OutputError
+from rockslide.kernel import HISTORY_COLUMNS
+from rockslide.results import ResultWriter, StoredResult, read_result, summary_to_json_dict, write_result
+from rockslide.simulate import EVENT_DTYPE, Model, Settings, Summary, simulate
+
+REPO = Path(__file__).resolve().parents[1]
+TEMP_NAME = re.compile(r"^\..+\.\d+\.tmp$")
+
+
+def pulse_result(amplitude=6.0, mu=0.52, vertical=0.3, frequency=1.5, **settings):
+    t = np.arange(0, 10, 0.01)
+    ah = amplitude * np.sin(2 * np.pi * frequency * t) * np.exp(-((t - 4) / 2) ** 2)
+    model = Model.from_block(0.2, 0.1, mu, 0.95 * mu, 0.8)
+    return simulate(model, 0.01, ah, vertical * ah, Settings(tail=2.0, **settings))
+
+
+@pytest.fixture(scope="module")
+def result():
+    r = pulse_result()
+    assert {"SLIP", "ROCK", "ROCKSLIP"} <= set(r.summary.states_seen) and len(r.events) > 10
+    return r
+
+
+@pytest.fixture(scope="module")
+def overturned():
+    r = pulse_result(amplitude=5.5, mu=0.8, vertical=0.0)
+    assert r.summary.overturned
+    return r
+
+
+CASE = {"name": "demo", "gravity": 9.80665,
+        "block": {"height": 0.2, "width": 0.1, "mass": 10.0},
+        "contact": {"mu_static": 0.52, "mu_kinetic": 0.494, "restitution": 0.8},
+        "ground": {"horizontal": {"file": "kobe_ns.at2", "skip_lines": 0},
+                   "scale": {"pga_horizontal": 6.0, "vertical_factor": 1.0}, "tail": 2.0,
+                   "time_shift": 0.0},
+        "output": {"dir": "out", "interval": None}}
+CASE_TEXT = "name: demo  # Kobe, µ = 0.52\nblock: {height: 0.2 m, width: 0.1 m, mass: 10 kg}\n"
+
+
+def records_for(folder: Path) -> list[dict]:
+    return [{"role": "horizontal", "path": str(folder / "records" / "kobe_ns.at2"), "sha256": "a" * 64,
+             "format": "at2", "units": "g", "scale_factor": 0.73},
+            {"role": "vertical", "path": str(folder / "records" / "kobe_ud.at2"), "sha256": "b" * 64,
+             "format": "at2", "units": "g", "scale_factor": 0.73}]
+
+
+def write_full(path, result, folder, **kwargs):
+    return write_result(path, result, name="demo", case_text=CASE_TEXT, case=CASE,
+                        records=records_for(folder), extra_attrs={"command": "rockslide run"}, **kwargs)
+
+
+def file_contents(path) -> dict:
+    """Every dataset and attribute of an HDF5 file, keyed by path (``created`` left out)."""
+    out = {}
+
+    def visit(name, obj):
+        for key, value in obj.attrs.items():
+            out[f"{name}@{key}"] = value
+        if isinstance(obj, h5py.Dataset):
+            out[name] = obj[()]
+            out[f"{name}#dtype"] = obj.dtype
+
+    with h5py.File(path, "r") as f:
+        visit("/", f)
+        f.visititems(visit)
+    out.pop("/@created")
+    return out
+
+
+def assert_same_contents(a: dict, b: dict):
+    assert a.keys() == b.keys()
+    for key in a:
+        if isinstance(a[key], np.ndarray):
+            assert a[key].dtype == b[key].dtype, key
+            assert np.array_equal(a[key], b[key], equal_nan=a[key].dtype.kind == "f"), key
+        elif isinstance(a[key], float) and math.isnan(a[key]):
+            assert math.isnan(b[key]), key
+        else:
+            assert a[key] == b[key], key
+
+
+def leftovers(folder: Path) -> list[str]:
+    return sorted(p.name for p in folder.iterdir())
+
+
+# --------------------------------------------------------------------------------------------------
+# Round trip
+# --------------------------------------------------------------------------------------------------
+
+
+def test_round_trip_is_exact(tmp_path, result):
+    path = write_full(tmp_path / "out" / "demo.h5", result, tmp_path)
+    assert path == tmp_path / "out" / "demo.h5" and path.is_file()
+    stored = read_result(path)
+    assert isinstance(stored, StoredResult)
+    back = stored.result
+    assert back.history.keys() == result.history.keys()
+    for key in HISTORY_COLUMNS:
+        assert back.history[key].dtype == result.history[key].dtype, key
+        assert np.array_equal(back.history[key], result.history[key]), key
+    assert back.events.dtype == EVENT_DTYPE
+    assert np.array_equal(back.events, result.events)
+    assert back.summary == result.summary
+    assert back.summary.verdict == result.summary.verdict
+    assert back.step == result.step
+    for key in ("ground_time", "ground_horizontal", "ground_vertical"):
+        assert np.array_equal(getattr(back, key), getattr(result, key)), key
+    assert back.events_as_dicts() == result.events_as_dicts()
+    assert stored.name == "demo"
+    assert stored.case_text == CASE_TEXT
+    assert stored.case == CASE
+    assert [r["path"] for r in stored.records] == ["kobe_ns.at2", "kobe_ud.at2"]
+    assert stored.records[0] == {**records_for(tmp_path)[0], "path": "kobe_ns.at2"}
+    assert stored.attrs["command"] == "rockslide run"
+    assert stored.attrs["verdict"] == "standing" and stored.attrs["status"] == "ok"
+
+
+def test_none_fields_are_restored(tmp_path, result, overturned):
+    standing = read_result(write_result(tmp_path / "a.h5", result, name="a")).result.summary
+    assert standing.overturn_time is None and standing.direction is None
+    assert standing.fall_start_time is None and standing.overturned is False
+    fallen = read_result(write_result(tmp_path / "b.h5", overturned, name="b")).result.summary
+    assert fallen == overturned.summary
+    assert fallen.overturned is True and fallen.direction in (-1, 1)
+    assert fallen.overturn_time == overturned.summary.overturn_time
+    assert fallen.fall_start_time == overturned.summary.fall_start_time
+    with h5py.File(tmp_path / "a.h5") as f:
+        assert math.isnan(f.attrs["overturn_time"]) and math.isnan(f.attrs["fall_start_time"])
+        assert f.attrs["direction"] == 0
+
+
+def test_outcomes_outside_the_model_round_trip(tmp_path):
+    r = pulse_result(amplitude=3.0, mu=2.0, vertical=0.0, rotation=0.05, slip_rate=0.5)
+    assert r.summary.status == "painleve"
+    back = read_result(write_result(tmp_path / "p.h5", r, name="p")).result
+    assert back.summary == r.summary
+    assert back.summary.verdict.startswith("outside the model (painleve")
+
+
+def test_result_without_history(tmp_path):
+    r = pulse_result(history_every=0)
+    assert r.history["time"].size == 0
+    back = read_result(write_result(tmp_path / "n.h5", r, name="n")).result
+    assert all(back.history[k].size == 0 for k in HISTORY_COLUMNS)
+    assert back.history["state"].dtype == np.int8
+    assert back.summary == r.summary and np.array_equal(back.events, r.events)
+
+
+def test_minimal_result_has_no_case_or_records(tmp_path, result):
+    path = write_result(tmp_path / "m.h5", result, name="m")
+    with h5py.File(path) as f:
+        assert "case" not in f and "records" not in f
+    stored = read_result(path)
+    assert stored.case == {} and stored.case_text == "" and stored.records == []
+
+
+# --------------------------------------------------------------------------------------------------
+# Layout
+# --------------------------------------------------------------------------------------------------
+
+
+def documented_paths() -> set[str]:
+    """The paths listed in the module docstring's layout table."""
+    paths = re.findall(r"^\| `(/[^`]*)` \|", results.__doc__, flags=re.MULTILINE)
+    assert paths, "no layout table in rockslide/results.py's docstring"
+    return set(paths)
+
+
+def test_layout_is_exactly_as_documented(tmp_path, result):
+    path = write_full(tmp_path / "demo.h5", result, tmp_path)
+    names = {"/"}
+    with h5py.File(path) as f:
+        f.visit(lambda name: names.add("/" + name))
+    assert names == documented_paths()
+
+
+def test_units_compression_and_codes(tmp_path, result):
+    path = write_full(tmp_path / "demo.h5", result, tmp_path)
+    expected_units = {"time": "s", "rotation": "rad", "rotation_rate": "rad/s", "slip": "m",
+                      "slip_rate": "m/s"}
+    with h5py.File(path) as f:
+        for name, units in expected_units.items():
+            ds = f["time_history"][name]
+            assert ds.attrs["units"] == units and ds.dtype == np.float64
+        for name in HISTORY_COLUMNS:
+            ds = f["time_history"][name]
+            assert ds.chunks and ds.compression == "gzip" and ds.compression_opts == 4 and ds.shuffle
+        state = f["time_history/state"]
+        assert state.dtype == np.int8
+        assert state.attrs["codes"] == "0 REST, 1 SLIP, 2 ROCK, 3 ROCKSLIP, 4 OVERTURNED"
+        assert [f["ground"][k].attrs["units"] for k in ("time", "horizontal", "vertical")] == \
+            ["s", "m/s^2", "m/s^2"]
+
+        def has_units(name, obj):
+            if isinstance(obj, h5py.Dataset):
+                assert "units" in obj.attrs, name
+        f.visititems(has_units)
+        assert f["events"].dtype.names == ("time", "from", "to", "cause", "edge", "slip_direction")
+        assert f["events"].dtype["cause"].kind == "S" and f["events"].dtype["edge"] == np.int8
+
+
+def test_root_attributes(tmp_path, result):
+    path = write_full(tmp_path / "demo.h5", result, tmp_path)
+    with h5py.File(path) as f:
+        attrs = dict(f.attrs)
+    s = result.summary
+    for field in dataclasses.fields(Summary):
+        if field.name in ("time_in_state", "energy"):
+            continue
+        assert field.name in attrs, field.name
+    assert attrs["states_seen"] == ",".join(s.states_seen)
+    for state, seconds in s.time_in_state.items():
+        assert attrs[f"time_in_state_{state}"] == seconds
+    for term, joules in s.energy.items():
+        assert attrs[f"energy_{term}"] == joules
+    assert attrs["format"] == "rockslide-result" and attrs["format_version"] == 1
+    assert attrs["name"] == "demo" and attrs["verdict"] == s.verdict
+    assert attrs["integration_step"] == result.step
+    assert isinstance(attrs["overturned"], (bool, np.bool_))
+    created = datetime.fromisoformat(attrs["created"])
+    assert created.utcoffset().total_seconds() == 0
+    for package in ("rockslide", "python", "numpy", "numba", "h5py", "obspy", "scipy", "matplotlib"):
+        assert isinstance(attrs[f"{package}_version"], str) and attrs[f"{package}_version"]
+    assert attrs["h5py_version"] == h5py.__version__
+
+
+def test_case_is_flattened_with_dotted_keys(tmp_path, result):
+    path = write_full(tmp_path / "demo.h5", result, tmp_path)
+    with h5py.File(path) as f:
+        case = f["case"].attrs
+        assert case["yaml"] == CASE_TEXT
+        assert case["contact.mu_static"] == 0.52
+        assert case["ground.horizontal.file"] == "kobe_ns.at2"
+        assert case["output.interval"] == ""            # None
+        assert f["records/vertical"].attrs["scale_factor"] == 0.73
+
+
+def test_no_absolute_path_is_stored(tmp_path, result):
+    path = write_full(tmp_path / "demo.h5", result, tmp_path)
+    strings = []
+
+    def collect(name, obj):
+        strings.extend(v for v in obj.attrs.values() if isinstance(v, str))
+
+    with h5py.File(path) as f:
+        collect("/", f)
+        f.visititems(collect)
+    assert strings
+    for text in strings:
+        assert str(tmp_path) not in text and not text.startswith("/"), text
+        assert str(REPO) not in text, text
+
+
+def test_extra_attributes_cannot_replace_standard_ones(tmp_path, result):
+    with pytest.raises(ValueError, match="verdict"):
+        write_result(tmp_path / "x.h5", result, name="x", extra_attrs={"verdict": "fine"})
+    assert leftovers(tmp_path) == []
+
+
+# --------------------------------------------------------------------------------------------------
+# Streaming
+# --------------------------------------------------------------------------------------------------
+
+
+def test_streaming_gives_the_same_file(tmp_path, result):
+    whole = write_full(tmp_path / "whole.h5", result, tmp_path)
+    with ResultWriter(tmp_path / "streamed.h5") as writer:
+        t = np.arange(0, 10, 0.01)
+        ah = 6.0 * np.sin(2 * np.pi * 1.5 * t) * np.exp(-((t - 4) / 2) ** 2)
+        streamed_result = simulate(Model.from_block(0.2, 0.1, 0.52, 0.494, 0.8), 0.01, ah, 0.3 * ah,
+                                   Settings(tail=2.0, chunk_intervals=97),
+                                   on_chunk=writer.append_history)
+        assert streamed_result.history["time"].size == 0          # streamed, not kept
+        assert writer.rows_written == result.history["time"].size
+        assert not (tmp_path / "streamed.h5").exists()             # nothing before finish()
+        writer.finish(streamed_result, name="demo", case_text=CASE_TEXT, case=CASE,
+                      records=records_for(tmp_path), extra_attrs={"command": "rockslide run"})
+    assert_same_contents(file_contents(whole), file_contents(tmp_path / "streamed.h5"))
+    assert leftovers(tmp_path) == ["streamed.h5", "whole.h5"]
+
+
+def test_streamed_rows_win_over_result_history(tmp_path, result):
+    rows = np.column_stack([result.history[k] for k in HISTORY_COLUMNS])
+    with ResultWriter(tmp_path / "s.h5") as writer:
+        writer.append_history(rows[:10])
+        writer.append_history(rows[10:25])
+        writer.append_history(np.zeros((0, 6)))
+        writer.finish(result, name="s")
+    back = read_result(tmp_path / "s.h5").result
+    assert np.array_equal(back.history["rotation"], result.history["rotation"][:25])
+    assert np.array_equal(back.history["state"], result.history["state"][:25])
+
+
+def test_writer_rejects_bad_rows_and_second_finish(tmp_path, result):
+    with ResultWriter(tmp_path / "w.h5") as writer:
+        with pytest.raises(ValueError, match=r"float64\[n, 6\]"):
+            writer.append_history(np.zeros((3, 5)))
+    assert leftovers(tmp_path) == []
+    with ResultWriter(tmp_path / "w.h5") as writer:
+        writer.finish(result, name="w")
+        with pytest.raises(OutputError, match="closed"):
+            writer.finish(result, name="w")
+    assert leftovers(tmp_path) == ["w.h5"]
+
+
+@pytest.mark.parametrize("error", [RuntimeError("boom"), KeyboardInterrupt()])
+def test_exception_in_the_block_leaves_nothing(tmp_path, result, error):
+    with pytest.raises(type(error)):
+        with ResultWriter(tmp_path / "out" / "x.h5") as writer:
+            writer.append_history(np.zeros((1000, 6)))
+            assert TEMP_NAME.match(writer.tmp.name) and writer.tmp.exists()
+            raise error
+    assert leftovers(tmp_path / "out") == []
+
+
+def test_leaving_the_block_without_finish_publishes_nothing(tmp_path):
+    with ResultWriter(tmp_path / "x.h5") as writer:
+        writer.append_history(np.zeros((10, 6)))
+    assert leftovers(tmp_path) == []
+
+
+def test_failed_rewrite_keeps_the_previous_file(tmp_path, result, overturned):
+    path = write_full(tmp_path / "x.h5", result, tmp_path)
+    before = path.read_bytes()
+    with pytest.raises(RuntimeError, match="midway"):
+        with ResultWriter(path, overwrite=True) as writer:
+            writer.append_history(np.ones((5000, 6)))
+            assert read_result(path).result.summary == result.summary   # still the old file
+            raise RuntimeError("midway")
+    assert path.read_bytes() == before
+    assert leftovers(tmp_path) == ["x.h5"]
+    # and a successful rewrite replaces it
+    write_result(path, overturned, name="again", overwrite=True)
+    assert read_result(path).name == "again"
+    assert leftovers(tmp_path) == ["x.h5"]
+
+
+# --------------------------------------------------------------------------------------------------
+# Errors
+# --------------------------------------------------------------------------------------------------
+
+
+def test_existing_file_is_refused_before_any_work(tmp_path, result, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    write_result("out/x.h5", result, name="x")
+    before = (tmp_path / "out" / "x.h5").read_bytes()
+    for attempt in (lambda: ResultWriter("out/x.h5"), lambda: write_result("out/x.h5", result, name="y")):
+        with pytest.raises(OutputError) as info:
+            attempt()
+        assert str(info.value) == "out/x.h5 exists (use --overwrite to replace it)"
+    assert leftovers(tmp_path / "out") == ["x.h5"]
+    assert (tmp_path / "out" / "x.h5").read_bytes() == before
+
+
+def test_folder_is_created(tmp_path, result):
+    path = write_result(tmp_path / "a" / "b" / "c.h5", result, name="c")
+    assert path.is_file()
+
+
+def test_unwritable_folder(tmp_path, result):
+    blocker = tmp_path / "plainfile"
+    blocker.write_text("not a folder")
+    target = blocker / "sub" / "x.h5"
+    with pytest.raises(OutputError) as info:
+        write_result(target, result, name="x")
+    message = str(info.value)
+    assert str(blocker / "sub") in message and "folder" in message and "\n" not in message
+    with pytest.raises(OutputError, match="plainfile"):
+        ResultWriter(blocker / "x.h5")
+
+
+def test_result_path_that_is_a_folder(tmp_path, result):
+    (tmp_path / "x.h5").mkdir()
+    with pytest.raises(OutputError, match="is a folder"):
+        write_result(tmp_path / "x.h5", result, name="x", overwrite=True)
+
+
+def test_read_missing_file(tmp_path):
+    with pytest.raises(OutputError) as info:
+        read_result(tmp_path / "nothing.h5")
+    assert "nothing.h5" in str(info.value) and "not found" in str(info.value)
+
+
+def test_read_a_file_that_is_not_hdf5(tmp_path):
+    path = tmp_path / "notes.h5"
+    path.write_text("time,rotation\n0,0\n")
+    with pytest.raises(OutputError) as info:
+        read_result(path)
+    message = str(info.value)
+    assert "notes.h5" in message and "not an HDF5 file" in message and "\n" not in message
+
+
+def test_read_an_hdf5_file_that_is_not_a_result(tmp_path):
+    path = tmp_path / "other.h5"
+    with h5py.File(path, "w") as f:
+        f["x"] = np.arange(3)
+    with pytest.raises(OutputError, match=r"other\.h5.*not a rockslide result"):
+        read_result(path)
+
+
+def test_read_a_damaged_result(tmp_path, result):
+    path = write_result(tmp_path / "d.h5", result, name="d")
+    with h5py.File(path, "a") as f:
+        del f["events"]
+    with pytest.raises(OutputError, match=r"d\.h5: damaged rockslide result"):
+        read_result(path)
+
+
+# --------------------------------------------------------------------------------------------------
+# Kill and Ctrl-C in the middle of a write
+# --------------------------------------------------------------------------------------------------
+
+WRITER_SCRIPT = textwrap.dedent("""
+    import signal, sys, time
+    import numpy as np
+    from rockslide.results import ResultWriter
+    # Ctrl-C raises KeyboardInterrupt even if this process inherited an ignored SIGINT (background jobs)
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+    rows = np.random.default_rng(1).random((200_000, 6))
+    with ResultWriter(sys.argv[1], overwrite=True) as writer:
+        writer.append_history(rows)
+        print("appending", flush=True)
+        for _ in range(2_000):
+            writer.append_history(rows[:20_000])
+            time.sleep(0.005)
+    print("not interrupted", flush=True)
+""")
+
+
+def start_writer(target: Path) -> subprocess.Popen:
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(
+        [str(REPO)] + ([os.environ["PYTHONPATH"]] if os.environ.get("PYTHONPATH") else []))}
+    proc = subprocess.Popen([sys.executable, "-c", WRITER_SCRIPT, str(target)], env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    line = proc.stdout.readline()
+    if line.strip() != "appending":
+        proc.kill()
+        pytest.fail(f"writer did not start: {line!r} {proc.stderr.read()}")
+    return proc
+
+
+@pytest.mark.parametrize("previous", [False, True], ids=["new", "rewrite"])
+def test_killed_writer_never_leaves_a_half_written_result(tmp_path, result, previous):
+    target = tmp_path / "x.h5"
+    before = write_result(target, result, name="old").read_bytes() if previous else None
+    proc = start_writer(target)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait(timeout=30)
+    assert proc.returncode == -signal.SIGKILL
+    names = leftovers(tmp_path)
+    if previous:
+        assert target.read_bytes() == before
+        assert read_result(target).name == "old"
+        names.remove("x.h5")
+    else:
+        assert not target.exists()
+    # a killed process may leave its temporary file: a dot file ending in .tmp, never the result name
+    assert names in ([], [f".x.h5.{proc.pid}.tmp"])
+    assert all(TEMP_NAME.match(name) for name in names)
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="SIGINT to a child process is POSIX-only")
+def test_ctrl_c_during_a_write_leaves_nothing(tmp_path):
+    target = tmp_path / "x.h5"
+    proc = start_writer(target)
+    # Python may swallow a KeyboardInterrupt raised inside a weakref callback ("Exception ignored
+    # in ..."); like a user, press Ctrl-C again if the first one was lost.
+    for _ in range(20):
+        proc.send_signal(signal.SIGINT)
+        try:
+            _, err = proc.communicate(timeout=3)
+            break
+        except subprocess.TimeoutExpired:
+            continue
+    else:
+        proc.kill()
+        proc.communicate()
+        pytest.fail("the writer did not stop on SIGINT")
+    assert proc.returncode != 0 and "KeyboardInterrupt" in err
+    assert leftovers(tmp_path) == []
+
+
+# --------------------------------------------------------------------------------------------------
+# JSON
+# --------------------------------------------------------------------------------------------------
+
+
+def test_summary_to_json_dict(result, overturned):
+    out = summary_to_json_dict(result.summary, result.events)
+    text = json.dumps(out, allow_nan=False)
+    back = json.loads(text)
+    assert back["overturned"] is False and back["overturn_time"] is None
+    assert back["direction"] is None and back["fall_start_time"] is None
+    assert back["verdict"] == "standing" and back["status"] == "ok"
+    assert back["states_seen"] == result.summary.states_seen
+    assert back["time_in_state"] == result.summary.time_in_state
+    assert back["max_rotation"] == result.summary.max_rotation
+    assert back["events"] == result.events_as_dicts()
+    assert set(back["events"][0]) == {"time", "from", "to", "cause"}
+    fallen = json.loads(json.dumps(summary_to_json_dict(overturned.summary, overturned.events)))
+    assert fallen["overturned"] is True and fallen["overturn_time"] == overturned.summary.overturn_time
+    assert fallen["events"][-1]["to"] == "OVERTURNED"
+
+
+def test_summary_to_json_dict_is_strict_json():
+    s = Summary(overturned=False, overturn_time=None, direction=None, fall_start_time=None,
+                max_rotation=0.0, max_rotation_time=0.0, max_slip=0.0, residual_slip=0.0, impacts=0,
+                states_seen=["REST"], time_in_state={"REST": 1.0}, status="ok", end_time=1.0,
+                energy={"balance_residual": float("nan")})
+    out = summary_to_json_dict(s)
+    assert out["energy"] == {"balance_residual": None} and out["events"] == []
+    json.dumps(out, allow_nan=False)
