@@ -173,6 +173,72 @@ def info(record, fmt, units, time_column, column, dt, skip_lines, as_json):
     click.echo(f"  sha256    {details['sha256']}")
 
 
+@main.command()
+@records_dir_option
+@click.option("--configs", type=click.Path(file_okay=False, path_type=Path), default=Path("configs/table1"),
+              show_default=True, help="Folder of the Table 1 case files.")
+@click.option("--out", type=click.Path(file_okay=False, path_type=Path), default=Path("results"),
+              show_default=True, help="Where table1.md, table1.csv and fig05-fig10.png go (replaced).")
+def table1(records_dir, configs, out):
+    """Reproduce the paper's Table 1 and Figures 5-10 from its records (make table1).
+
+    \b
+    Example:
+        rockslide table1 --records-dir ../shared/records
+    """
+    from . import records
+    from .table1 import reproduce
+
+    report = reproduce(configs, records.records_dir(records_dir), out)
+    for gravity, s in report["summary"].items():
+        click.echo(f"g = {gravity}: {s['verdicts']}/{s['rows']} verdicts match the paper, "
+                   f"{s['all']}/{s['rows']} verdicts and descriptions")
+    click.echo(f"wrote {', '.join(str(p) for p in report['files'])} and {len(report['figures'])} figures "
+               f"in {report['elapsed']:.1f} s")
+
+
+@main.command()
+@click.option("--height", type=str, default="0.2 m", show_default=True, help="Block height.")
+@click.option("--width", type=str, default="0.1 m", show_default=True, help="Block width.")
+@click.option("--av", "vertical", type=str, default="-0.5,0,0.5", show_default=True,
+              help="Vertical accelerations in g, comma separated (one panel each).")
+@click.option("--ah-max", type=float, default=1.5, show_default=True, help="Largest |A_h| [g] on the map.")
+@click.option("--mu-max", type=float, default=1.2, show_default=True, help="Largest mu on the map.")
+@click.option("-o", "--output", type=click.Path(dir_okay=False, path_type=Path), default=Path("criteria.png"),
+              show_default=True, help="PNG to write.")
+@click.option("--overwrite", is_flag=True, help="Replace an existing PNG.")
+def criteria(height, width, vertical, ah_max, mu_max, output, overwrite):
+    """Draw the mode-initiation map (rest / slip / liftoff / liftoff-slip) of a block, from eqs. 6, 11, 26.
+
+    \b
+    Example:
+        rockslide criteria --height 0.2m --width 0.1m -o criteria.png
+    """
+    import numpy as np
+
+    from . import criteria as crit
+    from .errors import CaseError
+    from .plots import criteria_figure, save_figure
+    from .units import parse_quantity
+
+    h = parse_quantity(height, "length", source="--height")
+    w = parse_quantity(width, "length", source="--width")
+    if h <= 0 or w <= 0:
+        raise CaseError("height and width must be positive lengths", source="--height/--width")
+    try:
+        avs = [float(v) for v in vertical.split(",") if v.strip()]
+    except ValueError:
+        raise CaseError(f"expected numbers in g separated by commas, got {vertical!r}", source="--av") from None
+    if not avs or any(not -1.0 < a for a in avs):
+        raise CaseError("each vertical acceleration must be above -1 g (the block would fly)", source="--av")
+    ah = np.linspace(0.0, ah_max, 301)
+    mu = np.linspace(0.0, mu_max, 241)
+    maps = [(f"A_v = {a:+.2f} g", crit.mode_map(ah, mu, a, w / 2, h / 2)) for a in avs]
+    figure = criteria_figure(ah, mu, maps, title=f"modes initiated from rest: {w:g} m wide, {h:g} m high")
+    save_figure(figure, output, overwrite=overwrite)
+    click.echo(f"wrote {output}")
+
+
 def _column(value):
     if value is None:
         return None

@@ -74,6 +74,9 @@ EVENT_COLUMNS = ("time", "from", "to", "cause", "edge", "slip_direction")
 
 HALF_PI = 0.5 * math.pi
 THETA_END = 1e-7   # [rad] a rebound predicted to rise less than this ends the liftoff (decision 3)
+STEP_END_FLIGHT_STEPS = 4.0   # step-end switching also ends liftoff for flights shorter than this
+LOCATE_TOLERANCE = 1e-13      # event location: bracket width relative to the step
+TIE_TOLERANCE = 1e-12         # located crossings closer than this (relative to the step) are ties
 MAX_TRANSITIONS_PER_STEP = 200
 
 
@@ -400,8 +403,13 @@ def apply_event(kind, st, p, t, ah, G, events):
         # eq. 23 from ROCKSLIP) is the sign of thetaddot at theta = thetadot = 0; when it does not
         # hold and the rebound would rise less than THETA_END (predicted peak w^2 / (2 |thetaddot|)),
         # the impacts have become too small to matter. The rule does not depend on the step.
+        # With step-end switching a landing is only seen at a step's end, so flights of a few steps
+        # cannot be resolved (they would chatter for ever): they end the liftoff too.
         thdd0, _ = accelerations(mode, -lam, sigma, 0.0, 0.0, ah, G, p)
-        if thdd0 <= 0.0 and w * w <= 2.0 * THETA_END * abs(thdd0):
+        too_small = w * w <= 2.0 * THETA_END * abs(thdd0)
+        if p[P_LOCATED] == 0.0:
+            too_small = too_small or 2.0 * w <= STEP_END_FLIGHT_STEPS * p[P_H] * abs(thdd0)
+        if thdd0 <= 0.0 and too_small:
             st[S_THETADOT] = 0.0
             new_mode = REST if mode == ROCK else SLIP
             st[S_MODE] = new_mode
@@ -521,7 +529,7 @@ def locate(i, mode, lam, sigma, y0, tau_a, tau_b, g_a, g_b, a0, sa, v0, sv, p, y
     glo = g_a
     ghi = g_b
     side = 0
-    tol = 1e-15 + 1e-13 * hi
+    tol = 1e-15 + LOCATE_TOLERANCE * hi
     for _ in range(200):
         if hi - lo <= tol:
             break
@@ -622,17 +630,19 @@ def advance(st, p, tau_a, tau_b, tk, a0, sa, v0, sv, events, y0, y1, ytmp, gv, k
             # event values at the start of the step (all >= 0 by construction)
             event_values(mode, lam, sigma, y0, a0 + sa * tau_a, g + v0 + sv * tau_a, p, gv, kinds)
             g_start = gv.copy()
-            best = math.inf
-            best_i = -1
+            times = np.full(n, math.inf)
             for i in range(n):
                 if g_end[i] < 0.0:
                     ga = g_start[i] if g_start[i] > 0.0 else 0.0
-                    te_i = locate(i, mode, lam, sigma, y0, tau_a, tau_b, ga, g_end[i],
-                                  a0, sa, v0, sv, p, ytmp, gv, kinds)
-                    if te_i < best:
-                        best = te_i
-                        best_i = i
-            te = best
+                    times[i] = locate(i, mode, lam, sigma, y0, tau_a, tau_b, ga, g_end[i],
+                                      a0, sa, v0, sv, p, ytmp, gv, kinds)
+            # The earliest wins; crossings within the location tolerance of it are ties, which go
+            # to the first row of the table (e.g. flight before the eq. 23 liftoff at G = 0).
+            best = times.min()
+            best_i = 0
+            while times[best_i] > best + TIE_TOLERANCE * hh + 1e-15:
+                best_i += 1
+            te = times[best_i]
             kind = kinds_end[best_i]
             if te < tau_b:
                 rk4_from(mode, lam, sigma, y0, tau_a, te - tau_a, a0, sa, v0, sv, p, y1)

@@ -218,6 +218,97 @@ def response_figure(result, *, title: str = "", time_shift: float = 0.0,
     return fig
 
 
+def paper_figure(panels, *, title: str = "", time_shift: float = 0.0) -> Figure:
+    """Several responses in the layout of the paper's Figures 6 to 10: one row per sub-figure
+    ((a), (b), (c)), the whole record on the left and the magnified window on the right.
+
+    Parameters
+    ----------
+    panels : list of (label, result, caption)
+        ``label`` like ``"(a)"``; ``caption`` a short text (conditions, verdict).
+    title : str
+        Figure title.
+    time_shift : float
+        Added to every time [s] (the paper's time axis).
+    """
+    fig = Figure(figsize=(12.0, 3.1 * len(panels) + 0.8), dpi=DPI, layout="constrained")
+    axes = fig.subplots(len(panels), 2, squeeze=False, gridspec_kw={"width_ratios": [1.6, 1.0]})
+    for row, (label, result, caption) in enumerate(panels):
+        whole, zoomed = axes[row]
+        t0, t1 = _active_range(result)
+        window = _choose_zoom(result, "auto", time_shift)
+        _response_panel(whole, result, time_shift, (t0, t1), window=window, label=f"record{row}")
+        whole.set_title(f"{label} {caption}", loc="left", fontsize=10)
+        if window is None:
+            window = (t0 + time_shift, t1 + time_shift)
+        _response_panel(zoomed, result, time_shift, (window[0] - time_shift, window[1] - time_shift),
+                        label=f"zoom{row}")
+        zoomed.set_title(f"magnified: {window[0]:.2f} to {window[1]:.2f} s", loc="left", fontsize=10)
+        for ax in (whole, zoomed):
+            ax.set_xlabel("time [s]")
+    if title:
+        fig.suptitle(title, fontsize=12)
+    handles = [h for _, r, _ in panels for h in _legend_handles(r)]
+    unique = {h.get_label(): h for h in handles}
+    fig.legend(handles=list(unique.values()), loc="outside lower center", ncols=7, frameon=False,
+               fontsize=9)
+    return fig
+
+
+def _active_range(result, fraction: float = 0.02, pad: float = 2.0) -> tuple[float, float]:
+    """The part of the record where the ground moves (above ``fraction`` of its peak), padded, and
+    extended to the end of the computation if that comes later (zero-padded records otherwise
+    leave most of a panel empty)."""
+    t0, t1 = _record_range(result)
+    ground = np.maximum(np.abs(result.ground_horizontal), np.abs(result.ground_vertical))
+    if ground.size == 0 or ground.max() == 0.0:
+        return t0, t1
+    moving = np.flatnonzero(ground > fraction * ground.max())
+    times = result.ground_time
+    start = max(t0, times[moving[0]] - pad)
+    end = min(t1, max(times[moving[-1]] + pad, result.summary.end_time if result.summary.status != "ok"
+                      or result.summary.overturned else -math.inf))
+    return start, end
+
+
+CRITERIA_COLOURS = {REST: "#ffffff", SLIP: STATE_COLOURS[SLIP], ROCK: STATE_COLOURS[ROCK],
+                    ROCKSLIP: STATE_COLOURS[ROCKSLIP]}
+
+
+def criteria_figure(ah_over_g, mu_values, maps, *, title: str = "") -> Figure:
+    """Mode-initiation maps (the paper's Figure 5): one panel per vertical acceleration.
+
+    Parameters
+    ----------
+    ah_over_g, mu_values : 1-D arrays
+        The grid: horizontal acceleration [g] (x axis) and static friction (y axis).
+    maps : list of (caption, codes)
+        ``codes`` from `criteria.mode_map` (rows mu, columns ah): REST, SLIP, ROCK (liftoff) or
+        ROCKSLIP (liftoff-slip).
+    """
+    from matplotlib.colors import BoundaryNorm, ListedColormap
+
+    fig = Figure(figsize=(4.2 * len(maps), 4.6), dpi=DPI, layout="constrained")
+    axes = fig.subplots(1, len(maps), squeeze=False, sharey=True)[0]
+    order = [REST, SLIP, ROCK, ROCKSLIP]
+    cmap = ListedColormap([CRITERIA_COLOURS[c] for c in order])
+    norm = BoundaryNorm(np.arange(len(order) + 1) - 0.5, cmap.N)
+    for ax, (caption, codes) in zip(axes, maps):
+        index = np.vectorize(order.index)(codes)
+        ax.pcolormesh(ah_over_g, mu_values, index, cmap=cmap, norm=norm, shading="nearest")
+        ax.contour(ah_over_g, mu_values, index, levels=np.arange(len(order)) + 0.5, colors="0.3",
+                   linewidths=0.8)
+        ax.set_title(caption, fontsize=10)
+        ax.set_xlabel("horizontal acceleration |A_h| [g]")
+    axes[0].set_ylabel("static friction coefficient μ")
+    names = {REST: "rest", SLIP: "slip", ROCK: "liftoff", ROCKSLIP: "liftoff-slip"}
+    fig.legend(handles=[Patch(facecolor=CRITERIA_COLOURS[c], edgecolor="0.3", label=names[c]) for c in order],
+               loc="outside lower center", ncols=4, frameon=False)
+    if title:
+        fig.suptitle(title, fontsize=12)
+    return fig
+
+
 def _choose_zoom(result, zoom, shift):
     if zoom is None:
         return None

@@ -122,4 +122,33 @@ def record_entries(prepared: Prepared) -> list[dict]:
 
 
 __all__ = ["Prepared", "load_ground", "model_for", "settings_for", "check_against_ground", "prepare",
-           "simulate_prepared", "run_case", "record_entries", "start_time"]
+           "simulate_prepared", "run_case", "record_entries", "start_time", "verdict_robustness"]
+
+
+ROBUSTNESS_VARIANTS = (("dt/2", 0.5, 1.0), ("mu-1%", 1.0, 0.99), ("mu+1%", 1.0, 1.01))
+
+
+def verdict_robustness(prepared: Prepared) -> dict:
+    """Rerun a case at half the step and with the friction coefficients 1 % lower and higher
+    (``mu_kinetic`` scaled with ``mu_static``), and say whether the overturning verdict holds.
+
+    Returns ``{"holds": bool, "variants": {name: {"overturned": bool, "overturn_time": float|None,
+    "max_rotation": float, "residual_slip": float}}}``. A verdict that does not hold sits on a knife
+    edge: a fraction of a percent in friction, or the step, decides it.
+    """
+    from dataclasses import replace
+
+    g = prepared.ground
+    base = simulate_prepared(Prepared(prepared.case, g, prepared.model,
+                                      replace(prepared.settings, history_every=0, energy=False)))
+    variants = {}
+    for name, dt_factor, mu_factor in ROBUSTNESS_VARIANTS:
+        model = replace(prepared.model, mu_static=prepared.model.mu_static * mu_factor,
+                        mu_kinetic=prepared.model.mu_kinetic * mu_factor)
+        settings = replace(prepared.settings, dt=prepared.settings.dt * dt_factor, history_every=0,
+                           energy=False)
+        s = simulate(model, g.dt, g.horizontal, g.vertical, settings, start=start_time(prepared)).summary
+        variants[name] = {"overturned": s.overturned, "overturn_time": s.overturn_time,
+                          "max_rotation": s.max_rotation, "residual_slip": s.residual_slip}
+    holds = all(v["overturned"] == base.summary.overturned for v in variants.values())
+    return {"holds": holds, "overturned": base.summary.overturned, "variants": variants}
