@@ -31,6 +31,7 @@ import itertools
 import math
 import os
 import re
+import tempfile
 import warnings
 from dataclasses import dataclass
 from decimal import Decimal
@@ -39,7 +40,7 @@ from pathlib import Path
 import numpy as np
 import obspy
 from obspy.core import AttribDict
-from obspy.core.util.base import ENTRY_POINTS
+from obspy.core.util.base import ENTRY_POINTS, buffered_load_entry_point
 
 from .errors import CaseError, RecordError
 from .units import STANDARD_GRAVITY, unit_factor
@@ -48,7 +49,10 @@ RECORDS_ENV = "ROCKSLIDE_RECORDS"
 
 #: Formats rockslide reads itself (the obspy ones are added by name).
 OWN_FORMATS = ("at2", "knet", "column", "values")
-OBSPY_FORMATS = tuple(sorted(ENTRY_POINTS["waveform"]))
+#: obspy formats never used: reading (or even detecting) a PICKLE file unpickles it, which runs any
+#: code the file holds. A record file is data, like a case file.
+UNSAFE_OBSPY_FORMATS = frozenset({"PICKLE"})
+OBSPY_FORMATS = tuple(sorted(set(ENTRY_POINTS["waveform"]) - UNSAFE_OBSPY_FORMATS))
 
 #: A peak above this [m/s^2] is almost certainly a unit mistake: warn.
 ABSURD_PEAK = 10.0 * STANDARD_GRAVITY
@@ -671,18 +675,42 @@ def _uniform_time(ctx: _Context, time: np.ndarray, lines: np.ndarray,
 
 def _obspy_trace(ctx: _Context, raw: bytes, obspy_format: str | None) -> obspy.Trace:
     """The one trace of a file read by obspy (``obspy_format`` None: obspy detects it)."""
+    detected = obspy_format is None
+    if detected:
+        obspy_format = _detect_obspy_format(raw)
+        if obspy_format is None:
+            raise ctx.error(f"unknown format; supported: {_SUPPORTED}", cls=_Unrecognised)
     try:
         stream = obspy.read(io.BytesIO(raw), format=obspy_format)
     except Exception as exc:  # obspy's readers raise anything on a file that is not theirs
-        unknown = isinstance(exc, TypeError) and "Unknown format" in str(exc)
-        detail = "" if unknown else f" ({type(exc).__name__}: {exc})"
-        if obspy_format is None:
+        detail = f" ({type(exc).__name__}: {exc})"
+        if detected:
             raise ctx.error(f"unknown format{detail}; supported: {_SUPPORTED}", cls=_Unrecognised) from exc
         raise ctx.error(f"cannot read as {obspy_format}{detail}") from exc
     if len(stream) != 1:
         raise ctx.error(f"the file has {len(stream)} traces; expected exactly one (one component per "
                         "file: split it, e.g. with obspy's Stream.select and write)")
     return stream[0]
+
+
+def _detect_obspy_format(raw: bytes) -> str | None:
+    """The first obspy waveform format whose detector accepts ``raw`` (obspy's own order), None if
+    none does. Like ``obspy.read(format=None)``, but never tries the UNSAFE_OBSPY_FORMATS."""
+    with tempfile.TemporaryDirectory(prefix="rockslide-") as folder:
+        path = os.path.join(folder, "record")
+        with open(path, "wb") as file:
+            file.write(raw)
+        for name, entry in ENTRY_POINTS["waveform"].items():
+            if name in UNSAFE_OBSPY_FORMATS:
+                continue
+            try:
+                is_format = buffered_load_entry_point(entry.dist.name, f"obspy.plugin.waveform.{name}",
+                                                      "isFormat")
+                if is_format(path):
+                    return name
+            except Exception:  # noqa: BLE001 - a detector failing on a file that is not its format
+                continue
+    return None
 
 
 def _read_knet(ctx: _Context, raw: bytes) -> _Parsed:

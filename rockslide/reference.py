@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 from scipy.integrate import solve_ivp
+from scipy.optimize import brentq
 
 from . import kernel as K
 from .physics import REST
@@ -61,7 +62,7 @@ def simulate_reference(model: Model, dt_record: float, horizontal, vertical,
         sa = (ah[k + 1] - a0) / dt_record
         sv = (av[k + 1] - v0) / dt_record
         tk = start + k * dt_record
-        grid = [(k * n_sub + j) for j in range(1, n_sub + 1) if every > 0 and (k * n_sub + j) % every == 0]
+        grid = [j for j in range(1, n_sub + 1) if every > 0 and (k * n_sub + j) % every == 0]
         tau = 0.0
         while tau < dt_record and not K.finished(st):
             mode = int(st[K.S_MODE])
@@ -69,14 +70,15 @@ def simulate_reference(model: Model, dt_record: float, horizontal, vertical,
                 te, kind = K.rest_exit(tau, dt_record, a0, sa, v0, sv, p, False, h)
                 end = dt_record if kind < 0 else te
                 K.add_time(st, REST, end - tau)
-                rows += [_row(st, start + n * h) for n in grid if tau < n * h - k * dt_record <= end + 1e-15]
+                rows += [_row(st, start + (k * n_sub + j) * h) for j in grid
+                         if tau < _local(j, n_sub, h, dt_record) <= end]
                 tau = end
                 if kind >= 0:
                     K.apply_event(kind, st, p, tk + te, a0 + sa * te, p[K.P_G] + v0 + sv * te, events)
                     K.settle(st, p, tk + te, a0 + sa * te, v0 + sv * te, events, gv, kinds, ytmp)
                 continue
             tau = _integrate_moving(st, p, tau, dt_record, tk, a0, sa, v0, sv, events, gv, kinds, ytmp,
-                                    grid, start, h, k * dt_record, rows, rtol, atol)
+                                    grid, start, h, k * n_sub, n_sub, rows, rtol, atol)
 
     n_events = int(st[K.S_N_EVENTS])
     history_columns = np.array(rows).T if rows else np.zeros((6, 0))
@@ -96,8 +98,13 @@ def _row(st, t):
     return [t, lam * st[K.S_THETA], lam * st[K.S_THETADOT], st[K.S_X], st[K.S_XDOT], st[K.S_MODE]]
 
 
+def _local(j, n_sub, h, dt_record):
+    """Local time of grid point ``j`` of an interval (the last one exactly at its end)."""
+    return dt_record if j == n_sub else j * h
+
+
 def _integrate_moving(st, p, tau, tau_end, tk, a0, sa, v0, sv, events, gv, kinds, ytmp,
-                      grid, start, h, interval_start, rows, rtol, atol):
+                      grid, start, h, n_first, n_sub, rows, rtol, atol):
     """Integrate the current moving state from ``tau`` until the interval's end or its first event;
     apply the event. Returns the local time reached."""
     mode = int(st[K.S_MODE])
@@ -138,16 +145,17 @@ def _integrate_moving(st, p, tau, tau_end, tk, a0, sa, v0, sv, events, gv, kinds
     t_stop = solution.t[-1]
     fired = [(solution.t_events[i][0], i) for i in range(n_events) if len(solution.t_events[i])]
     # history rows on the grid up to the stop
-    for n in grid:
-        local = n * h - interval_start
-        if tau < local <= t_stop + 1e-15 and local <= t_stop:
+    for j in grid:
+        local = _local(j, n_sub, h, tau_end)
+        if tau < local <= t_stop:
             y = solution.sol(local)
-            rows.append([start + n * h, lam * y[0], lam * y[1], y[2], y[3], mode])
+            rows.append([start + (n_first + j) * h, lam * y[0], lam * y[1], y[2], y[3], mode])
     # bookkeeping along the solver's steps (extremes, time in state, the fall past alpha)
     previous = tau
     for t_i, y_i in zip(solution.t[1:], solution.y.T[1:]):
         K.accept(st, y_i.copy(), mode, previous, t_i, tk, p)
         previous = t_i
+    _exact_peaks(st, solution, tk)
     if not fired:
         return tau_end
     # earliest event; ties go to the first row of the table (lowest index)
@@ -164,6 +172,21 @@ def _integrate_moving(st, p, tau, tau_end, tk, a0, sa, v0, sv, events, gv, kinds
     K.settle(st, p, tk + te, ah_e, av_e, events, gv, kinds, ytmp)
     # grid rows exactly at the event time that were before the stop are already written
     return te if te < tau_end else tau_end
+
+
+def _exact_peaks(st, solution, tk):
+    """Peaks of theta and |x| inside the solver's (long) steps, from its dense output."""
+    t, y = solution.t, solution.y
+    for i in range(len(t) - 1):
+        for component, rate, slot in ((0, 1, K.S_MAX_THETA), (2, 3, K.S_MAX_X)):
+            r0, r1 = y[rate, i], y[rate, i + 1]
+            if r0 * r1 < 0.0 and (component == 2 or r0 > 0.0):
+                t_peak = brentq(lambda s: solution.sol(s)[rate], t[i], t[i + 1], xtol=1e-15)
+                value = abs(solution.sol(t_peak)[component])
+                if value > st[slot]:
+                    st[slot] = value
+                    if slot == K.S_MAX_THETA:
+                        st[K.S_THETA_MAX_TIME] = tk + t_peak
 
 
 def _set_state(st, y):

@@ -413,7 +413,7 @@ def reproduce(configs: Path, records_dir: Path, out: Path) -> dict:
                             "all": sum(c["verdict_ok"] and c["description_ok"] for c in checks),
                             "rows": len(checks)}
     return {"elapsed": elapsed, "summary": summary, "figures": figures,
-            "files": [out / "table1.md", out / "table1.csv"]}
+            "files": [out / "table1.md", out / "table1.csv"], "rows": rows, "results": results}
 
 
 __all__ = ["PAPER_TABLE", "reproduce", "run_table", "motion", "criteria_map_figure"]

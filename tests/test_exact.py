@@ -259,12 +259,13 @@ def test_ramp_thresholds_located(k, av, kind):
     sign(ah) (eq. 7), sigma = -sign(ah) (model.md)."""
     mu = 10.0 if kind == "liftoff" else 0.2
     model = Model.from_block(0.2, 0.1, mu, 0.8 * mu, 0.8)
+    ratio = 0.5 if kind == "liftoff" else mu
+    exact = ratio * (G0 + av) / abs(k)
     dt_record = 1e-3
-    t = np.arange(0.0, 3.0 + 0.5 * dt_record, dt_record)
+    t = np.arange(0.0, exact + 0.05, dt_record)      # the record ends 50 ms after the threshold
     result = simulate(model, dt_record, k * t, np.full(t.size, av), Settings())
     first = result.events[0]
-    ratio = 0.5 if kind == "liftoff" else mu
-    assert first["time"] == pytest.approx(ratio * (G0 + av) / abs(k), abs=1e-8)
+    assert first["time"] == pytest.approx(exact, abs=1e-8)
     if kind == "liftoff":
         assert (first["cause"], first["to"], first["edge"]) == (b"liftoff", b"ROCK", np.sign(k))
     else:
@@ -278,11 +279,11 @@ def test_ramp_thresholds_step_end(k, mu):
     """Step-end switching moves the threshold crossing to the end of its step (decision 1: with
     mu = tan(alpha) = 0.5 the block slips): t_event = ceil(t_exact / h) h (to 1e-12 s rounding)."""
     model = Model.from_block(0.2, 0.1, mu, 0.8 * mu, 0.8)
+    exact = min(mu, 0.5) * G0 / abs(k)
     dt_record = 1e-3
-    t = np.arange(0.0, 2.0 + 0.5 * dt_record, dt_record)
+    t = np.arange(0.0, exact + 0.05, dt_record)
     result = simulate(model, dt_record, k * t, np.zeros(t.size), Settings(events="step-end"))
     first = result.events[0]
-    exact = min(mu, 0.5) * G0 / abs(k)
     h = result.step
     assert first["time"] == pytest.approx(math.ceil(exact / h) * h, abs=1e-12)
     assert first["cause"] == (b"liftoff" if mu > 0.5 else b"slip-start")
