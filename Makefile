@@ -32,10 +32,10 @@ lint:
 check: lint test
 
 bench:
-	$(PYTHON) -m rockslide.bench --out results
+	$(PYTHON) benchmarks/bench.py --out results
 
 table1:
-	$(PYTHON) -m rockslide.table1 --records-dir "$(RECORDS)" --out results
+	rockslide table1 --records-dir "$(RECORDS)" --out results
 
 example:
 	rockslide run configs/example.yaml --overwrite

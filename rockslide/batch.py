@@ -3,42 +3,54 @@
 Pure numerical core: numpy and numba only, no I/O. A sweep (``rockslide sweep``) builds one
 parameter vector (``kernel.P_*``) and one initial state vector (``kernel.S_*``) per case, and the
 ground motion once, unscaled; each case scales its own copy of the ground motion by its factors
-(``ah = kh * base_h``, ``av = kv * base_v``, the same product, element by element, as
-`records.combine`), so that a case of a batch is computed with exactly the arithmetic of a single
-run (`simulate.simulate`): same kernel, same inputs, bit-identical results.
+(``ah = kh * base_h``, ``av = kv * base_v``: the product `records.combine` forms, element by
+element), so that a case of a batch is computed with exactly the arithmetic of a single run
+(`simulate.simulate`): same kernel, same inputs, bit-identical results.
 
 No history and no event log are kept (``every = 0`` and an event array of shape ``(0, 6)``); the
-kernel still counts events and keeps every summary quantity in the state vector. Each case ends
-at overturning or when it leaves the model, and the kernel does no work while a block rests.
+kernel still counts events and keeps every summary quantity in the state vector, which is what
+the drivers give back. A case ends at overturning or when it leaves the model, and the kernel does
+no work while a block rests.
 
 Two drivers share one case routine:
 
 - `run_parallel`: ``prange`` over the cases on numba's threads (``numba.set_num_threads`` sets how
   many). Costs vary a lot between cases (a block at rest costs nothing), so call it under
-  ``numba.parallel_chunksize(1)`` to hand the cases out one by one (dynamic scheduling).
-- `run_serial`: the same loop on the calling thread, releasing the GIL, for callers that bring
-  their own parallelism (a dask worker's threads).
+  ``numba.parallel_chunksize(1)`` to hand the cases out one at a time (dynamic scheduling).
+- `run_serial`: the same loop on the calling thread with the GIL released, for callers that bring
+  their own parallelism (the threads of a dask worker).
 
-The drivers are compiled without numba's on-disk cache on purpose: numba invalidates a cached
-function when its own file changes, not when a function it calls (`kernel.run`, in another file)
-does, so a cached batch driver could silently run an outdated kernel. `kernel.run` itself is cached
-with its module; compiling the small drivers around it takes a few seconds once per process.
+Compiled code is cached on disk. numba keys a cached function on its own source file, not on the
+files of the functions it calls, so a batch driver cached before an edit of ``kernel.py`` or
+``physics.py`` would go on running the old kernel. `SOURCE_STAMP`, a hash of those files, is
+therefore compiled into the drivers as a closure constant, which numba's cache index includes: an
+edited kernel compiles new drivers (once, a few seconds) instead of reusing stale ones.
 """
 
 from __future__ import annotations
+
+import hashlib
+from pathlib import Path
 
 import numpy as np
 from numba import njit, prange
 
 from . import kernel as K
+from . import physics
 
-__all__ = ["run_parallel", "run_serial", "run_case", "ground_length"]
+__all__ = ["run_parallel", "run_serial", "run_case", "SOURCE_STAMP"]
 
 
-@njit
-def ground_length(n_samples):
-    """Number of ground samples the kernel needs: at least two (as `simulate.simulate` pads)."""
-    return max(n_samples, 2)
+def _source_stamp() -> int:
+    """A 60-bit hash of the source files the drivers compile in (kernel and physics)."""
+    digest = hashlib.sha256()
+    for module in (K, physics):
+        digest.update(Path(module.__file__).read_bytes())
+    return int(digest.hexdigest()[:15], 16)
+
+
+#: Hash of ``kernel.py`` and ``physics.py`` compiled into the drivers (see the module notes).
+SOURCE_STAMP = _source_stamp()
 
 
 @njit
@@ -57,7 +69,7 @@ def run_case(p, st, base_h, base_v, kh, kv):
         The case's horizontal and vertical scale factors.
     """
     m = base_h.shape[0]
-    n = ground_length(m)
+    n = max(m, 2)                 # `simulate` pads a record of one sample to two
     ah = np.zeros(n)
     av = np.zeros(n)
     for j in range(m):
@@ -65,35 +77,46 @@ def run_case(p, st, base_h, base_v, kh, kv):
         av[j] = kv * base_v[j]
     history = np.empty((len(K.HISTORY_COLUMNS), 0))
     events = np.empty((0, len(K.EVENT_COLUMNS)))
-    # contiguous copies: the kernel is called with the array types `simulate` uses, so its cached
-    # compilation serves both
+    every = history.shape[1]      # 0, not a literal: the kernel's cached signature is reused
+    # contiguous copies: the kernel gets the array types `simulate` gives it
     p_case = p.copy()
     st_case = st.copy()
-    K.run(p_case, ah, av, st_case, history, 0, 0, events, n - 1)
+    K.run(p_case, ah, av, st_case, history, every, every, events, n - 1)
     st[:] = st_case
 
 
-@njit(parallel=True)
-def run_parallel(params, states, base_h, base_v, kh, kv):
-    """Run every case of a batch, in parallel over the cases (numba threads).
+def _drivers(stamp):
+    """The two drivers, with ``stamp`` compiled in (their cache key changes with it)."""
 
-    Parameters
-    ----------
-    params : float64[n, N_PARAMS]
-        One parameter vector per case.
-    states : float64[n, N_STATE]
-        Initial states, replaced by the final states (read the results from them).
-    base_h, base_v : float64[m]
-        Unscaled ground accelerations [m/s^2] shared by the cases, tail included.
-    kh, kv : float64[n]
-        Horizontal and vertical scale factors of each case.
-    """
-    for i in prange(params.shape[0]):
-        run_case(params[i], states[i], base_h, base_v, kh[i], kv[i])
+    @njit(parallel=True, cache=True)
+    def run_parallel(params, states, base_h, base_v, kh, kv):
+        if stamp == 0:            # folded away; it makes ``stamp`` part of the cache key
+            return
+        for i in prange(params.shape[0]):
+            run_case(params[i], states[i], base_h, base_v, kh[i], kv[i])
+
+    @njit(nogil=True, cache=True)
+    def run_serial(params, states, base_h, base_v, kh, kv):
+        if stamp == 0:
+            return
+        for i in range(params.shape[0]):
+            run_case(params[i], states[i], base_h, base_v, kh[i], kv[i])
+
+    return run_parallel, run_serial
 
 
-@njit(nogil=True)
-def run_serial(params, states, base_h, base_v, kh, kv):
-    """`run_parallel` on the calling thread only (the GIL released); same arguments."""
-    for i in range(params.shape[0]):
-        run_case(params[i], states[i], base_h, base_v, kh[i], kv[i])
+run_parallel, run_serial = _drivers(SOURCE_STAMP)
+run_parallel.__doc__ = """Run every case of a batch, in parallel over the cases (numba threads).
+
+Parameters
+----------
+params : float64[n, N_PARAMS]
+    One parameter vector per case (``kernel.P_*``).
+states : float64[n, N_STATE]
+    Initial states (``kernel.S_*``), replaced by the final states (the results are read from them).
+base_h, base_v : float64[m]
+    Unscaled ground accelerations [m/s^2] shared by the cases, tail of zeros included.
+kh, kv : float64[n]
+    Horizontal and vertical scale factors of each case.
+"""
+run_serial.__doc__ = """`run_parallel` on the calling thread only, with the GIL released; same arguments."""

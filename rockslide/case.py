@@ -480,9 +480,30 @@ def parse_case(text: str, *, source: str = "<case>", base_dir: Path | None = Non
 _CONSTRUCTOR_FAILURES = (ValueError, TypeError, IndexError, KeyError, AttributeError, OverflowError)
 
 
+class _CaseLoader(yaml.SafeLoader):
+    """PyYAML's safe loader, refusing a key given twice in one mapping (``safe_load`` keeps the last)."""
+
+    def construct_mapping(self, node, deep=False):
+        if isinstance(node, yaml.MappingNode):
+            seen: dict = {}
+            for key_node, _ in node.value:
+                if key_node.tag == "tag:yaml.org,2002:merge":
+                    continue
+                key = self.construct_object(key_node, deep=True)
+                try:
+                    first = seen.setdefault(key, key_node.start_mark)
+                except TypeError:
+                    continue  # an unhashable key: the base class reports it
+                if first is not key_node.start_mark:
+                    raise yaml.constructor.ConstructorError(
+                        None, None, f"duplicate key {key!r} (first given on line {first.line + 1}); "
+                        "give each key once", key_node.start_mark)
+        return super().construct_mapping(node, deep=deep)
+
+
 def _load_yaml(text: str, source: str):
     try:
-        return yaml.safe_load(text)
+        return yaml.load(text, Loader=_CaseLoader)  # a SafeLoader: plain data only
     except yaml.constructor.ConstructorError as exc:
         problem = _one_line(exc.problem or "")
         if "could not determine a constructor" in problem:
@@ -492,7 +513,8 @@ def _load_yaml(text: str, source: str):
             message = f"invalid YAML: {_yaml_problem(exc)}"
         raise CaseError(message, source=source, field=_yaml_where(exc)) from None
     except yaml.MarkedYAMLError as exc:
-        raise CaseError(f"invalid YAML: {_yaml_problem(exc)}", source=source,
+        hint = " (indent with spaces; YAML does not allow tabs)" if "'\\t'" in str(exc.problem) else ""
+        raise CaseError(f"invalid YAML: {_yaml_problem(exc)}{hint}", source=source,
                         field=_yaml_where(exc)) from None
     except yaml.reader.ReaderError as exc:
         before = text[:exc.position] if isinstance(text, str) else ""
@@ -734,8 +756,15 @@ def _read_quantity(value, spec: dict, path: str, ctx: _Ctx) -> float:
             given = _with_unit(number, unit)
             if isinstance(value, str):
                 given += f" (from {value!r})"
+            elif unit and number > 0:
+                given += f" (a number without unit is in {unit}; write e.g. {_unit_example(kind)!r})"
             ctx.fail(path, f"must be {expected}, got {given}")
     return number
+
+
+def _unit_example(kind: str) -> str:
+    return {"time": "0.1 ms", "length": "200 mm", "acceleration": "800 gal", "angle": "2 deg",
+            "mass": "10 kg", "angular_rate": "0.5 rad/s", "velocity": "0.1 m/s"}.get(kind, "")
 
 
 def _limit_text(limit: float, spec: dict) -> str:

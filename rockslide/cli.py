@@ -18,8 +18,9 @@ from pathlib import Path
 import click
 
 from . import __version__
-from .errors import OutputError, RockslideError
+from .errors import CaseError, OutputError, RockslideError
 
+EXIT_INTERNAL_ERROR = 1
 EXIT_USER_ERROR = 2
 EXIT_INTERRUPTED = 130
 
@@ -43,6 +44,26 @@ class RockslideGroup(click.Group):
                     raise
                 click.echo("rockslide: interrupted (no partial result was written)", err=True)
                 ctx.exit(EXIT_INTERRUPTED)
+            except (click.exceptions.ClickException, click.exceptions.Exit, click.exceptions.Abort):
+                raise
+            except Exception as exc:  # noqa: BLE001 - anything else is a bug or a system failure
+                if debug:
+                    raise
+                click.echo(f"rockslide: {_unexpected(exc)} (run again with --debug for the traceback)",
+                           err=True)
+                ctx.exit(EXIT_INTERNAL_ERROR)
+
+
+def _unexpected(exc: Exception) -> str:
+    """One line about an exception that is not a RockslideError."""
+    if isinstance(exc, OSError) and exc.strerror:
+        where = f"{exc.filename}: " if exc.filename else ""
+        return f"error: {where}{exc.strerror}"
+    text = " ".join(str(exc).split())
+    if len(text) > 200:
+        text = text[:197] + "..."
+    detail = f"{type(exc).__name__}: {text}" if text else type(exc).__name__
+    return f"internal error: {detail}; this is a bug in rockslide, please report it"
 
 
 def _show_warning(message, category, filename, lineno, file=None, line=None):
@@ -78,7 +99,9 @@ records_dir_option = click.option(
 @click.option("--json", "as_json", is_flag=True, help="Print the summary as one JSON object on stdout.")
 @click.option("--overwrite", is_flag=True, help="Replace existing results of this case.")
 @click.option("--no-plot", is_flag=True, help="Do not draw the PNG figure.")
-def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot):
+@click.option("--robustness", is_flag=True,
+              help="Also rerun at dt/2 and with mu 1 % lower and higher, and say whether the verdict holds.")
+def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, robustness):
     """Compute one case: CASE_FILE (YAML) -> OUT/NAME.h5 and OUT/NAME.png.
 
     \b
@@ -93,15 +116,18 @@ def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot):
     folder = Path(out_dir) if out_dir is not None else Path(case.output.dir)
     h5_path = folder / f"{case.name}.h5"
     png_path = folder / f"{case.name}.png"
+    prepared = runner.prepare(case, records.records_dir(records_dir))   # input errors first
     for path in (h5_path, png_path if not no_plot else None):
         if path is not None and path.exists() and not overwrite:
             raise OutputError(f"{path} exists (use --overwrite to replace it)")
-    prepared = runner.prepare(case, records.records_dir(records_dir))
     with results.ResultWriter(h5_path, overwrite=overwrite) as writer:
         streamed = prepared.case.solver.method == "kernel"
         result = runner.simulate_prepared(prepared, on_chunk=writer.append_history if streamed else None)
+        check = runner.verdict_robustness(prepared) if robustness else None
+        extra = {} if check is None else {"verdict_robust": check["holds"],
+                                          "robustness": json.dumps(check["variants"], default=_json_default)}
         writer.finish(result, name=case.name, case_text=case.text, case=_case_dict(case),
-                      records=runner.record_entries(prepared))
+                      records=runner.record_entries(prepared), extra_attrs=extra)
     if not no_plot:
         _draw(results.read_result(h5_path), png_path, overwrite=overwrite,
               time_shift=0.0)
@@ -109,11 +135,16 @@ def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot):
     summary = result.summary
     if as_json:
         payload = {"name": case.name, **results.summary_to_json_dict(summary, result.events),
+                   "robustness": check,
                    "files": {"hdf5": str(h5_path), "png": None if no_plot else str(png_path)},
                    "elapsed_s": round(elapsed, 3)}
         click.echo(json.dumps(payload, allow_nan=False, default=_json_default))
     else:
         click.echo(human_summary(case.name, summary))
+        if check is not None:
+            flips = [name for name, v in check["variants"].items() if v["overturned"] != summary.overturned]
+            click.echo("  verdict robust: holds at dt/2 and mu +-1 %" if check["holds"] else
+                       f"  verdict NOT robust (knife edge): flips with {', '.join(flips)}")
         written = f"{h5_path}" + ("" if no_plot else f" and {png_path}")
         click.echo(f"  wrote {written} in {elapsed:.2f} s")
 
@@ -133,6 +164,8 @@ def plot(result_file, output, time_shift):
     """
     from . import results
 
+    if not math.isfinite(time_shift):
+        raise CaseError(f"expected a finite number of seconds, got {time_shift}", source="--time-shift")
     stored = results.read_result(result_file)
     png = output if output is not None else Path(result_file).with_suffix(".png")
     _draw(stored, png, overwrite=True, time_shift=time_shift)
@@ -189,6 +222,9 @@ def table1(records_dir, configs, out):
     from . import records
     from .table1 import reproduce
 
+    if not configs.is_dir():
+        raise CaseError("folder not found; expected the folder of the Table 1 case files "
+                        "(configs/table1 in the repository)", source=str(configs), field="--configs")
     report = reproduce(configs, records.records_dir(records_dir), out)
     for gravity, s in report["summary"].items():
         click.echo(f"g = {gravity}: {s['verdicts']}/{s['rows']} verdicts match the paper, "
@@ -217,7 +253,6 @@ def criteria(height, width, vertical, ah_max, mu_max, output, overwrite):
     import numpy as np
 
     from . import criteria as crit
-    from .errors import CaseError
     from .plots import criteria_figure, save_figure
     from .units import parse_quantity
 
@@ -229,6 +264,9 @@ def criteria(height, width, vertical, ah_max, mu_max, output, overwrite):
         avs = [float(v) for v in vertical.split(",") if v.strip()]
     except ValueError:
         raise CaseError(f"expected numbers in g separated by commas, got {vertical!r}", source="--av") from None
+    for option, value in (("--ah-max", ah_max), ("--mu-max", mu_max)):
+        if not (math.isfinite(value) and value > 0):
+            raise CaseError(f"expected a positive finite number, got {value}", source=option)
     if not avs or any(not -1.0 < a for a in avs):
         raise CaseError("each vertical acceleration must be above -1 g (the block would fly)", source="--av")
     ah = np.linspace(0.0, ah_max, 301)

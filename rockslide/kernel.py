@@ -590,6 +590,7 @@ def step_without_event(st, p, mode, tau_a, tau_b, tk, a0, sa, v0, sv, y0, y1, gv
     for i in range(n):
         if gv[i] < 0.0:
             return False
+    note_peaks_inside(st, y0, y1, tau_b - tau_a, tk + tau_a)
     accept(st, y1, mode, tau_a, tau_b, tk, p)
     st[S_K1_VALID] = 1.0
     st[S_K1_THDD] = thdd
@@ -649,6 +650,7 @@ def advance(st, p, tau_a, tau_b, tk, a0, sa, v0, sv, events, y0, y1, ytmp, gv, k
         else:
             te = tau_b
             kind = kinds[first]
+        note_peaks_inside(st, y0, y1, te - tau_a, tk + tau_a)
         accept(st, y1, mode, tau_a, te, tk, p)
         if kind == K_IMPACT:
             if not located:
@@ -685,9 +687,6 @@ def accept(st, y1, mode, tau_a, tau_b, tk, p):
     """Take the integrated state ``y1`` at local time ``tau_b`` into ``st``."""
     st[S_K1_VALID] = 0.0
     theta_before = st[S_THETA]
-    rate_before = st[S_THETADOT]
-    x_before = st[S_X]
-    xdot_before = st[S_XDOT]
     st[S_THETA] = y1[0]
     st[S_THETADOT] = y1[1]
     st[S_X] = y1[2]
@@ -703,18 +702,22 @@ def accept(st, y1, mode, tau_a, tau_b, tk, p):
     elif y1[0] <= alpha:
         st[S_FALL_CANDIDATE] = math.nan
     note_extremes(st, tk + tau_b)
-    # Peaks inside the step (the rate changes sign): the parabola through the step's ends, exact
-    # to O(h^3), instead of the larger of the two ends (off by up to thetaddot h^2 / 8).
-    hh = tau_b - tau_a
-    if rate_before > 0.0 >= y1[1]:
-        s_peak = hh * rate_before / (rate_before - y1[1])
-        peak = theta_before + 0.5 * rate_before * s_peak
+
+
+@njit(cache=True, inline='always')
+def note_peaks_inside(st, y0, y1, hh, t_start):
+    """Peaks of theta and |x| inside a fixed step from ``y0`` to ``y1`` (the rate changes sign):
+    the parabola through the step's ends, exact to O(h^3), instead of the larger of the two ends
+    (off by up to thetaddot h^2 / 8). Not for the reference solver's long steps."""
+    if y0[1] > 0.0 >= y1[1]:
+        s_peak = hh * y0[1] / (y0[1] - y1[1])
+        peak = y0[0] + 0.5 * y0[1] * s_peak
         if peak > st[S_MAX_THETA]:
             st[S_MAX_THETA] = peak
-            st[S_THETA_MAX_TIME] = tk + tau_a + s_peak
-    if xdot_before * y1[3] < 0.0:
-        s_peak = hh * xdot_before / (xdot_before - y1[3])
-        peak = abs(x_before + 0.5 * xdot_before * s_peak)
+            st[S_THETA_MAX_TIME] = t_start + s_peak
+    if y0[3] * y1[3] < 0.0:
+        s_peak = hh * y0[3] / (y0[3] - y1[3])
+        peak = abs(y0[2] + 0.5 * y0[3] * s_peak)
         if peak > st[S_MAX_X]:
             st[S_MAX_X] = peak
 

@@ -430,7 +430,7 @@ def _unit_to_si(ctx: _Context, units: str | None, kind: str = "record") -> float
     """Factor [m/s^2 per file unit]; RecordError when missing or unknown."""
     if units is None:
         raise ctx.error(f"give `units:` ({_UNITS_HINT}) for a {kind} record; the file does not "
-                        "say in which unit its numbers are", "units")
+                        "say in which unit its numbers are (rockslide info: --units)", "units")
     try:
         return unit_factor(str(units), "acceleration")
     except CaseError as exc:
@@ -585,7 +585,7 @@ def _values_record(ctx: _Context, rows, options: _Options) -> _Parsed:
                         "(values text, which needs dt)", "column")
     if options.dt is None:
         raise ctx.error("give `dt:` (the sampling step in s) for a values record: the file has no "
-                        "time column", "dt")
+                        "time column (rockslide info: --dt)", "dt")
     values, lines = _values_in_order(ctx, rows)
     return _Parsed(values * _unit_to_si(ctx, options.units, "values"), options.dt, options.units,
                    lines=lines)

@@ -43,7 +43,10 @@ def unit_factor(unit: str, kind: str, *, source: str | None = None, field: str |
     for name, factor in table.items():
         if name.lower() == lowered:
             return factor
-    expected = ", ".join(u for u in table if u) or "no unit"
+    if kind == "dimensionless":
+        raise CaseError(f"unknown dimensionless unit {unit!r} (expected a plain number, without unit)",
+                        source=source, field=field)
+    expected = ", ".join(u for u in table if u)
     raise CaseError(f"unknown {kind} unit {unit!r} (expected one of: {expected})",
                     source=source, field=field)
 
@@ -70,6 +73,9 @@ def parse_quantity(value, kind: str, *, source: str | None = None, field: str | 
         number = float(value)
     elif isinstance(value, str):
         match = _QUANTITY.match(value)
+        if not match and kind == "dimensionless":
+            raise CaseError(f"cannot read {value!r} as a number (expected a plain number, like "
+                            f"{_example(kind)!r})", source=source, field=field)
         if not match:
             raise CaseError(f"cannot read {value!r} as {_article(kind)} {kind} (expected a number and a unit, "
                             f"like {_example(kind)!r})", source=source, field=field)

@@ -33,7 +33,6 @@ from rockslide import physics as P
 from rockslide.simulate import Model, Settings, simulate
 
 G0 = 9.80665
-EPS = np.finfo(float).eps
 MODES = ["located", "step-end"]
 STILL = (np.zeros(2), np.zeros(2))        # no ground motion; the tail sets the duration
 
