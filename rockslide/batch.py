@@ -20,32 +20,42 @@ Two drivers share one case routine:
 - `run_serial`: the same loop on the calling thread with the GIL released, for callers that bring
   their own parallelism (the threads of a dask worker).
 
+`compute` wraps both for plain numpy callers (the sweep, and the tasks it sends to a dask cluster).
+
 Compiled code is cached on disk. numba keys a cached function on its own source file, not on the
 files of the functions it calls, so a batch driver cached before an edit of ``kernel.py`` or
-``physics.py`` would go on running the old kernel. `SOURCE_STAMP`, a hash of those files, is
-therefore compiled into the drivers as a closure constant, which numba's cache index includes: an
-edited kernel compiles new drivers (once, a few seconds) instead of reusing stale ones.
+``physics.py`` would go on running the old kernel. `SOURCE_STAMP`, a hash of the compiled code of
+those modules (bytecode and constants of their functions, module-level numbers), is therefore
+compiled into the drivers as a closure constant, which numba's cache index includes: an edited
+kernel compiles new drivers (once, a few seconds) instead of reusing stale ones.
 """
 
 from __future__ import annotations
 
 import hashlib
-from pathlib import Path
+import marshal
 
+import numba
 import numpy as np
 from numba import njit, prange
 
 from . import kernel as K
 from . import physics
 
-__all__ = ["run_parallel", "run_serial", "run_case", "SOURCE_STAMP"]
+__all__ = ["compute", "run_parallel", "run_serial", "run_case", "SOURCE_STAMP"]
 
 
-def _source_stamp() -> int:
-    """A 60-bit hash of the source files the drivers compile in (kernel and physics)."""
+def _source_stamp(modules=(K, physics)) -> int:
+    """A 60-bit hash of what the drivers compile in: the bytecode and constants of every function
+    of ``modules`` (numba's or plain) and their module-level numbers, strings and tuples."""
     digest = hashlib.sha256()
-    for module in (K, physics):
-        digest.update(Path(module.__file__).read_bytes())
+    for module in modules:
+        for name, obj in sorted(vars(module).items()):
+            code = getattr(getattr(obj, "py_func", obj), "__code__", None)
+            if code is not None and getattr(obj, "__module__", None) == module.__name__:
+                digest.update(name.encode() + marshal.dumps(code))
+            elif isinstance(obj, (bool, int, float, str, tuple)) and not name.startswith("__"):
+                digest.update(f"{name}={obj!r}".encode())
     return int(digest.hexdigest()[:15], 16)
 
 
@@ -120,3 +130,37 @@ kh, kv : float64[n]
     Horizontal and vertical scale factors of each case.
 """
 run_serial.__doc__ = """`run_parallel` on the calling thread only, with the GIL released; same arguments."""
+
+
+def compute(params, states, base_h, base_v, kh, kv, *, parallel=True):
+    """Run a batch of cases and return their final states (the inputs are not changed).
+
+    Parameters
+    ----------
+    params : array_like, float64[n, N_PARAMS]
+    states : array_like, float64[n, N_STATE]
+        Initial states.
+    base_h, base_v : array_like, float64[m]
+    kh, kv : array_like, float64[n]
+        As for `run_parallel`.
+    parallel : bool
+        `run_parallel` on numba's threads, cases handed out one at a time; or `run_serial`.
+
+    Returns
+    -------
+    numpy.ndarray
+        float64[n, N_STATE]: the final states.
+    """
+    params = np.ascontiguousarray(params, dtype=np.float64)
+    out = np.array(states, dtype=np.float64, order="C", copy=True)
+    args = (params, out, np.ascontiguousarray(base_h, dtype=np.float64),
+            np.ascontiguousarray(base_v, dtype=np.float64),
+            np.ascontiguousarray(kh, dtype=np.float64), np.ascontiguousarray(kv, dtype=np.float64))
+    if params.shape[0] == 0:
+        return out
+    if parallel:
+        with numba.parallel_chunksize(1):
+            run_parallel(*args)
+    else:
+        run_serial(*args)
+    return out

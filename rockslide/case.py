@@ -364,7 +364,8 @@ CASE_KEYS: dict[str, dict] = {
         }),
         "tail": _key("time", "free-vibration time after the record ends", default=0.0,
                      bounds=[(">=", 0.0)]),
-        "time_shift": _key("time", "seconds added to every time (record and results), e.g. to lay a record on another's time axis", default=0.0),
+        "time_shift": _key("time", "seconds added to every time (record and results), e.g. to lay a "
+                           "record on another's time axis", default=0.0),
     }),
     "initial": _key("mapping", "initial state", keys={
         "rotation": _key("angle", "initial rotation, signed", default=0.0,
@@ -376,7 +377,9 @@ CASE_KEYS: dict[str, dict] = {
         "dt": _key("time", "time step", default=1e-4, bounds=[(">", 0.0), ("<=", 0.01)]),
         "events": _key("choice", "where state changes happen: located within the step, or at "
                        "step ends", default="located", choices=["located", "step-end"]),
-        "method": _key("choice", "integrator: kernel (compiled, fixed step) or reference (adaptive DOP853 with located events; slow, for short inputs)", default="kernel", choices=["kernel", "reference"]),
+        "method": _key("choice", "integrator: kernel (compiled, fixed step) or reference (adaptive "
+                       "DOP853 with located events; slow, for short inputs)", default="kernel",
+                       choices=["kernel", "reference"]),
     }),
     "output": _key("mapping", "results", keys={
         "dir": _key("string", "output folder", default="out"),

@@ -2,15 +2,19 @@
 
 Every `RockslideError` (bad case, record, option or output) becomes one line on stderr,
 ``rockslide: error: <file>: <field>: <what is wrong and what is expected>``, and exit code 2, here
-and nowhere else. ``--debug`` shows the traceback instead. Ctrl-C exits with 130; results are
-written atomically, so an interrupted run leaves the previous result or none.
+and nowhere else. ``--debug`` shows the traceback instead. Any other exception is a bug: one line
+``rockslide: internal error: ...`` and exit code 1. Ctrl-C exits with 130 and SIGTERM with 143;
+results are written atomically, so an interrupted run leaves the previous result or none.
 """
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
+import signal
 import sys
+import threading
 import time
 import warnings
 from pathlib import Path
@@ -23,6 +27,27 @@ from .errors import CaseError, OutputError, RockslideError
 EXIT_INTERNAL_ERROR = 1
 EXIT_USER_ERROR = 2
 EXIT_INTERRUPTED = 130
+EXIT_TERMINATED = 143
+
+
+class _Terminated(KeyboardInterrupt):
+    """SIGTERM (``kill``, ``timeout``, batch systems), raised like Ctrl-C so that temporary files go."""
+
+
+@contextlib.contextmanager
+def _sigterm_raises():
+    if threading.current_thread() is not threading.main_thread() or not hasattr(signal, "SIGTERM"):
+        yield
+        return
+
+    def terminate(signum, frame):
+        raise _Terminated()
+
+    previous = signal.signal(signal.SIGTERM, terminate)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
 
 
 class RockslideGroup(click.Group):
@@ -30,7 +55,7 @@ class RockslideGroup(click.Group):
 
     def invoke(self, ctx):
         debug = "--debug" in sys.argv[1:] or bool(ctx.params.get("debug"))
-        with warnings.catch_warnings():
+        with warnings.catch_warnings(), _sigterm_raises():
             warnings.showwarning = _show_warning
             try:
                 return super().invoke(ctx)
@@ -39,11 +64,12 @@ class RockslideGroup(click.Group):
                     raise
                 click.echo(f"rockslide: error: {exc}", err=True)
                 ctx.exit(EXIT_USER_ERROR)
-            except KeyboardInterrupt:
+            except KeyboardInterrupt as exc:
                 if debug:
                     raise
-                click.echo("rockslide: interrupted (no partial result was written)", err=True)
-                ctx.exit(EXIT_INTERRUPTED)
+                how = "terminated" if isinstance(exc, _Terminated) else "interrupted"
+                click.echo(f"rockslide: {how} (no partial result was written)", err=True)
+                ctx.exit(EXIT_TERMINATED if isinstance(exc, _Terminated) else EXIT_INTERRUPTED)
             except (click.exceptions.ClickException, click.exceptions.Exit, click.exceptions.Abort):
                 raise
             except Exception as exc:  # noqa: BLE001 - anything else is a bug or a system failure
@@ -174,10 +200,14 @@ def plot(result_file, output, time_shift):
 
 @main.command()
 @click.argument("record", type=click.Path(path_type=Path))
-@click.option("--format", "fmt", default=None, help="File format (default: detected): at2, knet, column, values, or an obspy format.")
-@click.option("--units", default=None, help="Acceleration unit of the values (g, gal, m/s^2) where the file does not say.")
-@click.option("--time-column", default=None, help="Column text: 1-based number or header name of the time column.")
-@click.option("--column", default=None, help="Column text: 1-based number or header name of the acceleration column.")
+@click.option("--format", "fmt", default=None,
+              help="File format (default: detected): at2, knet, column, values, or an obspy format.")
+@click.option("--units", default=None,
+              help="Acceleration unit of the values (g, gal, m/s^2) where the file does not say.")
+@click.option("--time-column", default=None,
+              help="Column text: 1-based number or header name of the time column.")
+@click.option("--column", default=None,
+              help="Column text: 1-based number or header name of the acceleration column.")
 @click.option("--dt", type=float, default=None, help="Sampling step [s] for the values format.")
 @click.option("--skip-lines", type=int, default=0, help="Header lines to skip (values format).")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object.")
@@ -198,8 +228,8 @@ def info(record, fmt, units, time_column, column, dt, skip_lines, as_json):
     click.echo(f"{record}")
     click.echo(f"  format    {details['format']}")
     click.echo(f"  units     {details['units']} (converted to m/s^2)")
-    click.echo(f"  samples   {details['npts']}, dt = {details['dt']:g} s, duration {details['duration']:g} s, "
-               f"starts at {details['start']:g} s")
+    click.echo(f"  samples   {details['npts']}, dt = {details['dt']:g} s, "
+               f"duration {details['duration']:g} s, starts at {details['start']:g} s")
     click.echo(f"  peak      {details['peak_gal']:.2f} gal = {details['peak_g']:.4f} g "
                f"({'+' if details['peak_signed'] > 0 else '-'}) at t = {details['peak_time']:g} s")
     click.echo(f"  mean      {details['mean'] / 0.01:.3f} gal")
@@ -263,7 +293,8 @@ def criteria(height, width, vertical, ah_max, mu_max, output, overwrite):
     try:
         avs = [float(v) for v in vertical.split(",") if v.strip()]
     except ValueError:
-        raise CaseError(f"expected numbers in g separated by commas, got {vertical!r}", source="--av") from None
+        raise CaseError(f"expected numbers in g separated by commas, got {vertical!r}",
+                        source="--av") from None
     for option, value in (("--ah-max", ah_max), ("--mu-max", mu_max)):
         if not (math.isfinite(value) and value > 0):
             raise CaseError(f"expected a positive finite number, got {value}", source=option)
@@ -275,6 +306,150 @@ def criteria(height, width, vertical, ah_max, mu_max, output, overwrite):
     figure = criteria_figure(ah, mu, maps, title=f"modes initiated from rest: {w:g} m wide, {h:g} m high")
     save_figure(figure, output, overwrite=overwrite)
     click.echo(f"wrote {output}")
+
+
+def _axis_option(name: str, kind: str, what: str, example: str):
+    """An axis option of `sweep`; the order the axes are given in is kept (dimension order)."""
+    def remember(ctx, param, value):
+        if value is not None:
+            ctx.meta.setdefault("rockslide.sweep.axes", []).append((name, value))
+        return value
+
+    units = ""
+    if kind == "acceleration":
+        units = " Values may carry units as in case files (one unit for a range)."
+    return click.option(f"--{name.replace('_', '-')}", name, default=None, metavar="SPEC", callback=remember,
+                        help=f"{what}: START:STOP:STEP or a comma list, e.g. {example}.{units}")
+
+
+@main.command()
+@click.argument("case_file", type=click.Path(path_type=Path))
+@_axis_option("mu", "dimensionless", "Static friction coefficient mu_static (mu_kinetic follows by the "
+              "case's ratio mu_kinetic/mu_static, or --mu-kinetic-ratio)", "0.30:0.70:0.01")
+@_axis_option("pga", "acceleration", "Peak horizontal ground acceleration (ground.scale.pga_horizontal; "
+              "the vertical keeps the record's V/H ratio unless the case gives pga_vertical)",
+              "100gal:1000gal:25gal")
+@_axis_option("vertical_factor", "dimensionless", "Factor on the vertical record "
+              "(ground.scale.vertical_factor)", "0,0.5,1")
+@_axis_option("restitution", "dimensionless", "Coefficient of restitution (contact.restitution)",
+              "0.6:0.9:0.1")
+@_axis_option("slenderness", "dimensionless", "Width / height of the block (the height kept)",
+              "0.3:0.6:0.05")
+@_axis_option("gravity", "acceleration", "Gravitational acceleration (gravity)", "9.8,9.80665")
+@click.option("--mu-kinetic-ratio", type=float, default=None, metavar="R",
+              help="mu_kinetic = R * mu_static for --mu (default: the case's ratio).")
+@records_dir_option
+@click.option("--out-dir", type=click.Path(file_okay=False, path_type=Path), default=None,
+              help="Output folder (default: the case's output.dir).")
+@click.option("--overwrite", is_flag=True, help="Replace an existing result of this sweep.")
+@click.option("--no-plot", is_flag=True, help="Do not draw the PNG maps.")
+@click.option("--workers", type=int, default=None, metavar="N",
+              help="numba threads for a local run (default: all cores).")
+@click.option("--scheduler", default=None, metavar="ADDRESS",
+              help="Compute the chunks on this dask.distributed scheduler (e.g. tcp://10.0.0.5:8786), "
+                   "one task per chunk.")
+@click.option("--chunk-size", type=int, default=None, metavar="N",
+              help="Cases per chunk (default: about 1/100 of the grid, 4 to 256). Part of the sweep's "
+                   "definition: a different size does not resume an interrupted run.")
+@click.option("--no-progress", is_flag=True, help="No progress bar on stderr.")
+def sweep(case_file, mu, pga, vertical_factor, restitution, slenderness, gravity, mu_kinetic_ratio,
+          records_dir, out_dir, overwrite, no_plot, workers, scheduler, chunk_size, no_progress):
+    """Grid of cases over friction, intensity, vertical factor, restitution, slenderness or gravity:
+    CASE_FILE (YAML) -> OUT/NAME.sweep.h5 and OUT/NAME.sweep.png.
+
+    Every point is the case file with the axis values replaced (and validated as a case file), run
+    with the compiled kernel on all cores (or a dask cluster), without history. Dimension i of the
+    result is the i-th axis option given. Finished chunks are kept in OUT/.NAME.sweep.chunks: after
+    Ctrl-C or a crash, the same command resumes where it stopped.
+
+    \b
+    Example:
+        rockslide sweep configs/example.yaml --mu 0.30:0.70:0.01 --pga 100gal:1000gal:25gal
+    """
+    from tqdm import tqdm
+
+    from . import records, results
+    from . import sweep as sw
+    from .case import load_case
+    from .plots import save_figure
+
+    ctx = click.get_current_context()
+    started = time.perf_counter()
+    case = load_case(case_file)
+    axes = [sw.parse_axis(name, text) for name, text in ctx.meta.get("rockslide.sweep.axes", [])]
+    if workers is not None and scheduler:
+        raise CaseError("sets the local threads; with --scheduler the cluster's workers compute",
+                        source="--workers")
+    folder = Path(out_dir) if out_dir is not None else Path(case.output.dir)
+    h5_path = folder / f"{case.name}.sweep.h5"
+    png_path = folder / f"{case.name}.sweep.png"
+    results.check_destination(h5_path, overwrite=overwrite)
+    if not no_plot and not overwrite and (png_path.exists() or png_path.is_symlink()):
+        raise OutputError(f"{png_path} exists (use --overwrite to replace it)")
+    plan = sw.plan_sweep(case, axes, records_dir=records.records_dir(records_dir),
+                         mu_kinetic_ratio=mu_kinetic_ratio, chunk_size=chunk_size)
+    store = sw.ChunkStore.beside(h5_path, plan.key)
+    for other in store.others():
+        click.echo(f"  note: {other} holds chunks of another sweep definition (not used; delete it "
+                   "to free the space)")
+    missing = sw.missing_chunks(plan, store)
+    reused = plan.n_chunks - len(missing)
+    reused_cases = plan.n_cases - sum(plan.chunk_indices(c).size for c in missing)
+    where = f"on the dask scheduler {scheduler}" if scheduler else "on this machine"
+    click.echo(f"sweep {case.name}: {plan.describe()} in {plan.n_chunks} chunks, {where}")
+    if reused:
+        click.echo(f"  reused {reused} of {plan.n_chunks} chunks ({reused_cases} cases) from {store.folder}")
+    computing = time.perf_counter()
+    try:
+        with tqdm(total=plan.n_cases, initial=reused_cases, unit="case", file=sys.stderr,
+                  disable=no_progress, dynamic_ncols=True, desc=case.name, smoothing=0.1) as bar:
+            sw.compute(plan, store, missing, workers=workers, scheduler=scheduler, progress=bar.update)
+    except KeyboardInterrupt as exc:
+        if isinstance(exc, _Terminated):
+            raise
+        kept = store.count()
+        click.echo(f"rockslide: interrupted: {kept} of {plan.n_chunks} chunks are kept in {store.folder}; "
+                   "the same command resumes from them", err=True)
+        ctx.exit(EXIT_INTERRUPTED)
+    computed = time.perf_counter() - computing
+    states = sw.collect(plan, store)
+    variables = sw.sweep_variables(plan, states)
+    results.write_sweep(h5_path, sw.coordinates(plan), variables,
+                        attrs=sw.root_attributes(plan, _command_line(ctx, case_file)), overwrite=overwrite)
+    if not no_plot:
+        save_figure(sw.figure(plan, variables), png_path, overwrite=overwrite)
+    store.remove()
+    n_new = plan.n_cases - reused_cases
+    over = int(variables["overturned"][0].sum())
+    outside = int((variables["status"][0] != 0).sum())
+    rate = f" ({n_new / computed:.0f} cases/s)" if n_new and computed > 0 else ""
+    click.echo(f"  {over} of {plan.n_cases} overturned, {outside} outside the model; computed {n_new} "
+               f"cases in {computed:.1f} s{rate}")
+    written = f"{h5_path}" + ("" if no_plot else f" and {png_path}")
+    click.echo(f"  wrote {written} in {time.perf_counter() - started:.1f} s")
+
+
+def _command_line(ctx, case_file) -> str:
+    """The sweep's command line: the axes in the order given, then the other options given."""
+    import shlex
+
+    from click.core import ParameterSource
+
+    axes = ctx.meta.get("rockslide.sweep.axes", [])
+    words = ["rockslide", "sweep", str(case_file)]
+    for name, text in axes:
+        words += [f"--{name.replace('_', '-')}", text]
+    for param in ctx.command.params:
+        if not isinstance(param, click.Option) or param.name in {n for n, _ in axes}:
+            continue
+        if ctx.get_parameter_source(param.name) is not ParameterSource.COMMANDLINE:
+            continue
+        value = ctx.params.get(param.name)
+        if param.is_flag:
+            words += [param.opts[0]] if value else []
+        elif value is not None:
+            words += [param.opts[0], str(value)]
+    return shlex.join(words)
 
 
 def _column(value):
@@ -311,9 +486,11 @@ def human_summary(name, summary) -> str:
         fall = ("" if summary.fall_start_time is None
                 else f", falling since {summary.fall_start_time:.4f} s (rotation past alpha)")
         lines.append(f"  overturned at {summary.overturn_time:.4f} s, rotation {direction}pi/2{fall}")
-    lines.append(f"  max rotation {summary.max_rotation:.5f} rad ({math.degrees(summary.max_rotation):.3f} deg)"
+    lines.append(f"  max rotation {summary.max_rotation:.5f} rad "
+                 f"({math.degrees(summary.max_rotation):.3f} deg)"
                  f" at {summary.max_rotation_time:.3f} s; impacts {summary.impacts}")
-    lines.append(f"  max slip {1000 * summary.max_slip:.2f} mm; residual slip {1000 * summary.residual_slip:.2f} mm")
+    lines.append(f"  max slip {1000 * summary.max_slip:.2f} mm; "
+                 f"residual slip {1000 * summary.residual_slip:.2f} mm")
     seen = ", ".join(f"{s} {summary.time_in_state.get(s, 0.0):.2f} s" if s != "OVERTURNED" else s
                      for s in summary.states_seen)
     lines.append(f"  states: {seen}")

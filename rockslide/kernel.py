@@ -39,7 +39,7 @@ from .physics import (
 # --- parameter vector ``p`` -------------------------------------------------------------------
 (P_R, P_ALPHA, P_TAN_ALPHA, P_G, P_MU, P_NU, P_E, P_H, P_DT_REC, P_N_SUB, P_LOCATED, P_T0,
  P_ENERGY) = range(13)
-N_PARAMS = 13
+N_PARAMS = 13   # `run` unpacks p into a 13-tuple: keep the two in step
 
 # --- state vector ``st`` ----------------------------------------------------------------------
 (S_MODE, S_LAM, S_SIGMA, S_THETA, S_THETADOT, S_X, S_XDOT,   # the mechanical state
@@ -148,14 +148,13 @@ def evaluate(mode, lam, sigma, th, thd, xd, t, a0, sa, v0, sv, p):
 
 
 @njit(cache=True, inline='always')
-def rk4(mode, lam, sigma, y, tau, hh, a0, sa, v0, sv, p, out, a1, b1, pg1, pf1):
+def rk4_step(mode, lam, sigma, th, thd, x, xd, wg, wf, tau, hh, a0, sa, v0, sv, p, a1, b1, pg1, pf1):
     """One classical fourth-order Runge-Kutta step of length ``hh`` from local time ``tau``.
 
-    ``y`` and ``out`` hold ``theta, thetadot, x, xdot, w_ground, w_friction``; the ground is
+    The state is ``theta, thetadot, x, xdot, w_ground, w_friction``; the ground is
     ``ah = a0 + sa t``, ``av = v0 + sv t`` (linear within the interval). ``a1, b1, pg1, pf1`` are
-    the derivatives at the start (the first stage, from `evaluate`).
+    the derivatives at the start (the first stage, from `evaluate`). Returns the new state.
     """
-    th, thd, x, xd = y[0], y[1], y[2], y[3]
     half = 0.5 * hh
     th2 = th + half * thd
     thd2 = thd + half * a1
@@ -170,78 +169,64 @@ def rk4(mode, lam, sigma, y, tau, hh, a0, sa, v0, sv, p, out, a1, b1, pg1, pf1):
     xd4 = xd + hh * b3
     a4, b4, pg4, pf4, _, _, _, _, _ = evaluate(mode, lam, sigma, th4, thd4, xd4, tau + hh, a0, sa, v0, sv, p)
     f = hh / 6.0
-    out[0] = th + f * (thd + 2.0 * thd2 + 2.0 * thd3 + thd4)
-    out[1] = thd + f * (a1 + 2.0 * a2 + 2.0 * a3 + a4)
-    out[2] = x + f * (xd + 2.0 * xd2 + 2.0 * xd3 + xd4)
-    out[3] = xd + f * (b1 + 2.0 * b2 + 2.0 * b3 + b4)
-    out[4] = y[4] + f * (pg1 + 2.0 * pg2 + 2.0 * pg3 + pg4)
-    out[5] = y[5] + f * (pf1 + 2.0 * pf2 + 2.0 * pf3 + pf4)
+    return (th + f * (thd + 2.0 * thd2 + 2.0 * thd3 + thd4),
+            thd + f * (a1 + 2.0 * a2 + 2.0 * a3 + a4),
+            x + f * (xd + 2.0 * xd2 + 2.0 * xd3 + xd4),
+            xd + f * (b1 + 2.0 * b2 + 2.0 * b3 + b4),
+            wg + f * (pg1 + 2.0 * pg2 + 2.0 * pg3 + pg4),
+            wf + f * (pf1 + 2.0 * pf2 + 2.0 * pf3 + pf4))
 
 
 @njit(cache=True)
 def rk4_from(mode, lam, sigma, y, tau, hh, a0, sa, v0, sv, p, out):
-    """`rk4` computing its own first stage (for the event-location paths)."""
+    """`rk4_step` on arrays (``y`` -> ``out``), computing its own first stage (event location)."""
     a1, b1, pg1, pf1, _, _, _, _, _ = evaluate(mode, lam, sigma, y[0], y[1], y[3], tau, a0, sa, v0, sv, p)
-    rk4(mode, lam, sigma, y, tau, hh, a0, sa, v0, sv, p, out, a1, b1, pg1, pf1)
+    out[0], out[1], out[2], out[3], out[4], out[5] = rk4_step(
+        mode, lam, sigma, y[0], y[1], y[2], y[3], y[4], y[5], tau, hh, a0, sa, v0, sv, p, a1, b1, pg1, pf1)
+
+
+# What each event function of a state is, in the order of model.md's table (-1: unused slot).
+EVENT_KINDS = (
+    (K_FLIGHT, K_SLIP_START, K_LIFTOFF, -1, -1),                        # REST (eqs. 11, 6)
+    (K_FLIGHT, K_SLIP_STOP, K_LIFTOFF, -1, -1),                         # SLIP (eq. 23)
+    (K_FLIGHT, K_SLIP_START, K_IMPACT, K_OVERTURN, -1),                 # ROCK (eq. 21)
+    (K_FLIGHT, K_PAINLEVE, K_SLIP_STOP, K_IMPACT, K_OVERTURN),          # ROCKSLIP
+)
+N_EVENTS = (3, 3, 4, 5)
 
 
 @njit(cache=True, inline='always')
-def event_values_sc(mode, lam, sigma, y, ah, G, s, c, thdd, D, p, gv, kinds):
-    """Fill ``gv`` with the event functions of ``mode`` at state ``y`` (``g >= 0`` while the state
-    holds) and ``kinds`` with what each one is, in the order of model.md's table; return the count.
-    ``s``, ``c``, ``thdd`` and ``D`` are `evaluate`'s at the same instant.
-    """
-    th, xd = y[0], y[3]
+def event_functions(mode, lam, sigma, th, thd, xd, ah, G, s, c, thdd, D, p):
+    """The event functions of ``mode`` (``g >= 0`` while the state holds), as a 5-tuple in the order
+    of `EVENT_KINDS` (unused slots ``inf``). ``s``, ``c``, ``thdd``, ``D`` are `evaluate`'s at the
+    same instant."""
+    inf = math.inf
     if mode == SLIP:
-        gv[0] = G
-        kinds[0] = K_FLIGHT
-        gv[1] = sigma * xd
-        kinds[1] = K_SLIP_STOP
-        gv[2] = liftoff_margin(p[P_TAN_ALPHA], G, slip_acceleration(ah, G, p[P_NU], sigma) + ah)  # eq. 23
-        kinds[2] = K_LIFTOFF
-        return 3
+        push = slip_acceleration(ah, G, p[P_NU], sigma) + ah
+        return G, sigma * xd, liftoff_margin(p[P_TAN_ALPHA], G, push), inf, inf       # eq. 23
     if mode == ROCK:
-        Rx, N = contact_forces_sc(s, c, y[1], thdd, ah, G, lam, p[P_R])
-        gv[0] = N
-        kinds[0] = K_FLIGHT
-        gv[1] = slip_margin(p[P_MU], N, Rx)                        # eq. 21
-        kinds[1] = K_SLIP_START
-        gv[2] = th
-        kinds[2] = K_IMPACT
-        gv[3] = HALF_PI - th
-        kinds[3] = K_OVERTURN
-        return 4
+        Rx, N = contact_forces_sc(s, c, thd, thdd, ah, G, lam, p[P_R])
+        return N, slip_margin(p[P_MU], N, Rx), th, HALF_PI - th, inf                   # eq. 21
     if mode == ROCKSLIP:
-        _, N = contact_forces_sc(s, c, y[1], thdd, ah, G, lam, p[P_R])
-        gv[0] = N
-        kinds[0] = K_FLIGHT
-        gv[1] = D
-        kinds[1] = K_PAINLEVE
-        gv[2] = sigma * xd
-        kinds[2] = K_SLIP_STOP
-        gv[3] = th
-        kinds[3] = K_IMPACT
-        gv[4] = HALF_PI - th
-        kinds[4] = K_OVERTURN
-        return 5
-    if mode == REST:
-        # At rest N = G and Rx = ah; both edges and both slip directions (eqs. 6 and 11).
-        gv[0] = G
-        kinds[0] = K_FLIGHT
-        gv[1] = slip_margin(p[P_MU], G, ah)
-        kinds[1] = K_SLIP_START
-        gv[2] = liftoff_margin(p[P_TAN_ALPHA], G, ah)
-        kinds[2] = K_LIFTOFF
-        return 3
-    return 0
+        _, N = contact_forces_sc(s, c, thd, thdd, ah, G, lam, p[P_R])
+        return N, D, sigma * xd, th, HALF_PI - th
+    if mode == REST:      # N = G and Rx = ah at rest; both edges, both directions (eqs. 11 and 6)
+        return G, slip_margin(p[P_MU], G, ah), liftoff_margin(p[P_TAN_ALPHA], G, ah), inf, inf
+    return inf, inf, inf, inf, inf
 
 
 @njit(cache=True)
 def event_values(mode, lam, sigma, y, ah, G, p, gv, kinds):
-    """`event_values_sc` at state ``y`` with ground ``ah``, ``G``."""
+    """`event_functions` at state ``y`` into ``gv`` and their kinds into ``kinds``; returns the
+    number of event functions of the state."""
     s, c = tilt(y[0], p[P_ALPHA])
     thdd, _, D = accelerations_sc(mode, lam, sigma, s, c, y[1], ah, G, p)
-    return event_values_sc(mode, lam, sigma, y, ah, G, s, c, thdd, D, p, gv, kinds)
+    g = event_functions(mode, lam, sigma, y[0], y[1], y[3], ah, G, s, c, thdd, D, p)
+    n = N_EVENTS[mode] if mode < 4 else 0
+    for i in range(n):
+        gv[i] = g[i]
+        kinds[i] = EVENT_KINDS[mode][i]
+    return n
 
 
 # ============================================================================================
@@ -272,22 +257,28 @@ def note_extremes(st, t):
 
 
 @njit(cache=True, inline='always')
-def write_history(st, history, every, offset, n, t):
-    """Store the state at grid point ``n`` in column ``n // every - offset`` of ``history``
-    (rows: ``HISTORY_COLUMNS``) if ``n`` is on the output grid; count the columns written."""
+def store_row(st, history, every, offset, n, t, lam, th, thd, x, xd, mode):
+    """Store a state at grid point ``n`` in column ``n // every - offset`` of ``history`` (rows:
+    ``HISTORY_COLUMNS``) if ``n`` is on the output grid; count the columns written."""
     if every <= 0 or n % every != 0:
         return
     i = n // every - offset
     if 0 <= i < history.shape[1]:
-        lam = st[S_LAM]
         history[0, i] = t
-        history[1, i] = lam * st[S_THETA]
-        history[2, i] = lam * st[S_THETADOT]
-        history[3, i] = st[S_X]
-        history[4, i] = st[S_XDOT]
-        history[5, i] = st[S_MODE]
+        history[1, i] = lam * th
+        history[2, i] = lam * thd
+        history[3, i] = x
+        history[4, i] = xd
+        history[5, i] = mode
         if i + 1 > st[S_ROWS]:
             st[S_ROWS] = i + 1
+
+
+@njit(cache=True, inline='always')
+def write_history(st, history, every, offset, n, t):
+    """`store_row` of the state in ``st``."""
+    store_row(st, history, every, offset, n, t, st[S_LAM], st[S_THETA], st[S_THETADOT], st[S_X],
+              st[S_XDOT], st[S_MODE])
 
 
 @njit(cache=True, inline='always')
@@ -562,36 +553,30 @@ def locate(i, mode, lam, sigma, y0, tau_a, tau_b, g_a, g_b, a0, sa, v0, sv, p, y
 
 
 @njit(cache=True, inline='always')
-def step_without_event(st, p, mode, tau_a, tau_b, tk, a0, sa, v0, sv, y0, y1, gv, kinds):
+def step_without_event(st, p, mode, tau_a, tau_b, tk, a0, sa, v0, sv):
     """One RK4 step of the moving state ``mode`` from ``tau_a`` to ``tau_b``; if no event function
     of the state turns negative, take it into ``st`` and return True. Otherwise leave ``st`` as it
-    was (``y0`` holds the start, ``y1`` the end of the step) and return False.
+    was and return False (`advance` then locates the event).
 
     The derivatives evaluated at the end of an accepted step (for its event functions) are kept in
-    ``st[S_K1_*]`` as the first stage of the next step, until a transition changes the state.
+    ``st[S_K1_*]`` as the first stage of the next step, until a transition changes the state. The
+    state travels in scalars: the compiler keeps them in registers.
     """
     lam = st[S_LAM]
     sigma = st[S_SIGMA]
-    y0[0] = st[S_THETA]
-    y0[1] = st[S_THETADOT]
-    y0[2] = st[S_X]
-    y0[3] = st[S_XDOT]
-    y0[4] = st[S_W_GROUND]
-    y0[5] = st[S_W_FRICTION]
+    th, thd, x, xd = st[S_THETA], st[S_THETADOT], st[S_X], st[S_XDOT]
+    wg, wf = st[S_W_GROUND], st[S_W_FRICTION]
     if st[S_K1_VALID] != 0.0:
         a1, b1, pg1, pf1 = st[S_K1_THDD], st[S_K1_XDD], st[S_K1_PG], st[S_K1_PF]
     else:
-        a1, b1, pg1, pf1, _, _, _, _, _ = evaluate(mode, lam, sigma, y0[0], y0[1], y0[3], tau_a,
-                                                   a0, sa, v0, sv, p)
-    rk4(mode, lam, sigma, y0, tau_a, tau_b - tau_a, a0, sa, v0, sv, p, y1, a1, b1, pg1, pf1)
-    thdd, xdd, pg, pf, s, c, D, ah, G = evaluate(mode, lam, sigma, y1[0], y1[1], y1[3], tau_b,
-                                                 a0, sa, v0, sv, p)
-    n = event_values_sc(mode, lam, sigma, y1, ah, G, s, c, thdd, D, p, gv, kinds)
-    for i in range(n):
-        if gv[i] < 0.0:
-            return False
-    note_peaks_inside(st, y0, y1, tau_b - tau_a, tk + tau_a)
-    accept(st, y1, mode, tau_a, tau_b, tk, p)
+        a1, b1, pg1, pf1, _, _, _, _, _ = evaluate(mode, lam, sigma, th, thd, xd, tau_a, a0, sa, v0, sv, p)
+    th1, thd1, x1, xd1, wg1, wf1 = rk4_step(mode, lam, sigma, th, thd, x, xd, wg, wf, tau_a, tau_b - tau_a,
+                                            a0, sa, v0, sv, p, a1, b1, pg1, pf1)
+    thdd, xdd, pg, pf, s, c, D, ah, G = evaluate(mode, lam, sigma, th1, thd1, xd1, tau_b, a0, sa, v0, sv, p)
+    g0, g1, g2, g3, g4 = event_functions(mode, lam, sigma, th1, thd1, xd1, ah, G, s, c, thdd, D, p)
+    if g0 < 0.0 or g1 < 0.0 or g2 < 0.0 or g3 < 0.0 or g4 < 0.0:
+        return False
+    accept(st, th1, thd1, x1, xd1, wg1, wf1, mode, tau_a, tau_b, tk, p, True)
     st[S_K1_VALID] = 1.0
     st[S_K1_THDD] = thdd
     st[S_K1_XDD] = xdd
@@ -614,10 +599,12 @@ def advance(st, p, tau_a, tau_b, tk, a0, sa, v0, sv, events, y0, y1, ytmp, gv, k
         hh = tau_b - tau_a
         if hh <= 0.0:
             return tau_b
-        if step_without_event(st, p, mode, tau_a, tau_b, tk, a0, sa, v0, sv, y0, y1, gv, kinds):
+        if step_without_event(st, p, mode, tau_a, tau_b, tk, a0, sa, v0, sv):
             return tau_b
         lam = st[S_LAM]
         sigma = st[S_SIGMA]
+        load_state(st, y0)
+        rk4_from(mode, lam, sigma, y0, tau_a, hh, a0, sa, v0, sv, p, y1)
         n = event_values(mode, lam, sigma, y1, a0 + sa * tau_b, g + v0 + sv * tau_b, p, gv, kinds)
         first = -1
         for i in range(n):
@@ -650,8 +637,7 @@ def advance(st, p, tau_a, tau_b, tk, a0, sa, v0, sv, events, y0, y1, ytmp, gv, k
         else:
             te = tau_b
             kind = kinds[first]
-        note_peaks_inside(st, y0, y1, te - tau_a, tk + tau_a)
-        accept(st, y1, mode, tau_a, te, tk, p)
+        accept(st, y1[0], y1[1], y1[2], y1[3], y1[4], y1[5], mode, tau_a, te, tk, p, True)
         if kind == K_IMPACT:
             if not located:
                 land_on_the_ground(st, p, g + v0 + sv * te)
@@ -683,43 +669,119 @@ def land_on_the_ground(st, p, G):
 
 
 @njit(cache=True, inline='always')
-def accept(st, y1, mode, tau_a, tau_b, tk, p):
-    """Take the integrated state ``y1`` at local time ``tau_b`` into ``st``."""
-    st[S_K1_VALID] = 0.0
-    theta_before = st[S_THETA]
-    st[S_THETA] = y1[0]
-    st[S_THETADOT] = y1[1]
-    st[S_X] = y1[2]
-    st[S_XDOT] = y1[3]
-    st[S_W_GROUND] = y1[4]
-    st[S_W_FRICTION] = y1[5]
-    add_time(st, mode, tau_b - tau_a)
-    alpha = p[P_ALPHA]
-    # The fall that ends in overturning starts when theta last passed alpha upwards.
-    if theta_before <= alpha < y1[0]:
-        f = (alpha - theta_before) / (y1[0] - theta_before)
-        st[S_FALL_CANDIDATE] = tk + tau_a + f * (tau_b - tau_a)
-    elif y1[0] <= alpha:
-        st[S_FALL_CANDIDATE] = math.nan
-    note_extremes(st, tk + tau_b)
+def load_state(st, y):
+    """The integrated part of the state into ``y``: theta, thetadot, x, xdot, w_ground, w_friction."""
+    y[0] = st[S_THETA]
+    y[1] = st[S_THETADOT]
+    y[2] = st[S_X]
+    y[3] = st[S_XDOT]
+    y[4] = st[S_W_GROUND]
+    y[5] = st[S_W_FRICTION]
 
 
 @njit(cache=True, inline='always')
-def note_peaks_inside(st, y0, y1, hh, t_start):
-    """Peaks of theta and |x| inside a fixed step from ``y0`` to ``y1`` (the rate changes sign):
-    the parabola through the step's ends, exact to O(h^3), instead of the larger of the two ends
-    (off by up to thetaddot h^2 / 8). Not for the reference solver's long steps."""
-    if y0[1] > 0.0 >= y1[1]:
-        s_peak = hh * y0[1] / (y0[1] - y1[1])
-        peak = y0[0] + 0.5 * y0[1] * s_peak
-        if peak > st[S_MAX_THETA]:
-            st[S_MAX_THETA] = peak
-            st[S_THETA_MAX_TIME] = t_start + s_peak
-    if y0[3] * y1[3] < 0.0:
-        s_peak = hh * y0[3] / (y0[3] - y1[3])
-        peak = abs(y0[2] + 0.5 * y0[3] * s_peak)
-        if peak > st[S_MAX_X]:
-            st[S_MAX_X] = peak
+def track(th0, thd0, x0, xd0, th1, thd1, x1, xd1, hh, t_start, alpha, max_th, max_th_time, max_x, fall,
+          peaks_inside):
+    """The bookkeeping of one step from ``(th0, thd0, x0, xd0)`` to ``(th1, thd1, x1, xd1)``,
+    pure: returns the updated ``(max theta, its time, max |x|, fall candidate)``.
+
+    Extremes are taken at the step's end and, with ``peaks_inside`` (fixed steps; not for the
+    reference solver's long steps), at a peak inside the step where the rate changes sign, from the
+    parabola through the step's ends (exact to O(h^3); the ends alone are off by up to
+    thetaddot h^2 / 8). The fall that ends in overturning starts when theta last passed alpha upwards.
+    """
+    if th1 > max_th:
+        max_th = th1
+        max_th_time = t_start + hh
+    if abs(x1) > max_x:
+        max_x = abs(x1)
+    if peaks_inside:
+        if thd0 > 0.0 >= thd1:
+            s_peak = hh * thd0 / (thd0 - thd1)
+            peak = th0 + 0.5 * thd0 * s_peak
+            if peak > max_th:
+                max_th = peak
+                max_th_time = t_start + s_peak
+        if xd0 * xd1 < 0.0:
+            peak = abs(x0 + 0.5 * xd0 * hh * xd0 / (xd0 - xd1))
+            if peak > max_x:
+                max_x = peak
+    if th0 <= alpha < th1:
+        fall = t_start + hh * (alpha - th0) / (th1 - th0)
+    elif th1 <= alpha:
+        fall = math.nan
+    return max_th, max_th_time, max_x, fall
+
+
+@njit(cache=True, inline='always')
+def load_state(st, y):
+    """The integrated part of the state into ``y``: theta, thetadot, x, xdot, w_ground, w_friction."""
+    y[0] = st[S_THETA]
+    y[1] = st[S_THETADOT]
+    y[2] = st[S_X]
+    y[3] = st[S_XDOT]
+    y[4] = st[S_W_GROUND]
+    y[5] = st[S_W_FRICTION]
+
+
+@njit(cache=True, inline='always')
+def accept(st, th, thd, x, xd, wg, wf, mode, tau_a, tau_b, tk, p, peaks_inside):
+    """Take the state integrated from local time ``tau_a`` to ``tau_b`` into ``st``."""
+    st[S_K1_VALID] = 0.0
+    (st[S_MAX_THETA], st[S_THETA_MAX_TIME], st[S_MAX_X], st[S_FALL_CANDIDATE]) = track(
+        st[S_THETA], st[S_THETADOT], st[S_X], st[S_XDOT], th, thd, x, xd, tau_b - tau_a, tk + tau_a,
+        p[P_ALPHA], st[S_MAX_THETA], st[S_THETA_MAX_TIME], st[S_MAX_X], st[S_FALL_CANDIDATE], peaks_inside)
+    st[S_THETA] = th
+    st[S_THETADOT] = thd
+    st[S_X] = x
+    st[S_XDOT] = xd
+    st[S_W_GROUND] = wg
+    st[S_W_FRICTION] = wf
+    add_time(st, mode, tau_b - tau_a)
+
+
+@njit(cache=True, inline='always')
+def glide(st, p, mode, j, n_sub, h, dt_rec, tk, a0, sa, v0, sv, history, every, offset, n_base, t0):
+    """Full steps of the moving state ``mode`` from grid point ``j - 1`` of the interval for as
+    long as no event function turns negative, with the whole state in registers; ``st`` is written
+    back once. Returns the grid point reached (``n_sub + 1``: the interval is done; otherwise the
+    step ending at grid point ``j`` holds an event, for `advance`)."""
+    lam = st[S_LAM]
+    sigma = st[S_SIGMA]
+    th, thd, x, xd = st[S_THETA], st[S_THETADOT], st[S_X], st[S_XDOT]
+    wg, wf = st[S_W_GROUND], st[S_W_FRICTION]
+    max_th, max_th_time, max_x, fall = st[S_MAX_THETA], st[S_THETA_MAX_TIME], st[S_MAX_X], st[S_FALL_CANDIDATE]
+    alpha = p[P_ALPHA]
+    tau_a = (j - 1) * h
+    if st[S_K1_VALID] != 0.0:
+        a1, b1, pg1, pf1 = st[S_K1_THDD], st[S_K1_XDD], st[S_K1_PG], st[S_K1_PF]
+    else:
+        a1, b1, pg1, pf1, _, _, _, _, _ = evaluate(mode, lam, sigma, th, thd, xd, tau_a, a0, sa, v0, sv, p)
+    elapsed = 0.0
+    while j <= n_sub:
+        tau_b = j * h if j < n_sub else dt_rec
+        hh = tau_b - tau_a
+        th1, thd1, x1, xd1, wg1, wf1 = rk4_step(mode, lam, sigma, th, thd, x, xd, wg, wf, tau_a, hh,
+                                                a0, sa, v0, sv, p, a1, b1, pg1, pf1)
+        thdd, xdd, pg, pf, s, c, D, ah, G = evaluate(mode, lam, sigma, th1, thd1, xd1, tau_b, a0, sa, v0, sv, p)
+        g0, g1, g2, g3, g4 = event_functions(mode, lam, sigma, th1, thd1, xd1, ah, G, s, c, thdd, D, p)
+        if g0 < 0.0 or g1 < 0.0 or g2 < 0.0 or g3 < 0.0 or g4 < 0.0:
+            break
+        max_th, max_th_time, max_x, fall = track(th, thd, x, xd, th1, thd1, x1, xd1, hh, tk + tau_a, alpha,
+                                                 max_th, max_th_time, max_x, fall, True)
+        th, thd, x, xd, wg, wf = th1, thd1, x1, xd1, wg1, wf1
+        a1, b1, pg1, pf1 = thdd, xdd, pg, pf
+        elapsed += hh
+        store_row(st, history, every, offset, n_base + j, t0 + (n_base + j) * h, lam, th, thd, x, xd, mode)
+        tau_a = tau_b
+        j += 1
+    st[S_THETA], st[S_THETADOT], st[S_X], st[S_XDOT] = th, thd, x, xd
+    st[S_W_GROUND], st[S_W_FRICTION] = wg, wf
+    st[S_MAX_THETA], st[S_THETA_MAX_TIME], st[S_MAX_X], st[S_FALL_CANDIDATE] = max_th, max_th_time, max_x, fall
+    add_time(st, mode, elapsed)
+    st[S_K1_VALID] = 1.0
+    st[S_K1_THDD], st[S_K1_XDD], st[S_K1_PG], st[S_K1_PF] = a1, b1, pg1, pf1
+    return j
 
 
 # ============================================================================================
@@ -748,6 +810,9 @@ def run(p, ah, av, st, history, every, offset, events, k_end):
     k_end : int
         Stop before this interval (at most ``len(ah) - 1``).
     """
+    # The constants as a tuple of scalars: unlike an array, it cannot alias the state arrays, so
+    # the compiler keeps them in registers instead of reloading them after every store.
+    p = (p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], p[12])
     n_sub = int(p[P_N_SUB])
     h = p[P_H]
     dt_rec = p[P_DT_REC]
@@ -795,12 +860,14 @@ def run(p, ah, av, st, history, every, offset, events, k_end):
                 apply_event(kind, st, p, tk + te, ah_e, p[P_G] + av_e, events)
                 settle(st, p, tk + te, ah_e, av_e, events, gv, kinds, ytmp)
                 continue
+            if tau == (j - 1) * h:         # on the grid: full steps while nothing happens
+                j = glide(st, p, int(st[S_MODE]), j, n_sub, h, dt_rec, tk, a0, sa, v0, sv,
+                          history, every, offset, n_base, t0)
+                if j > n_sub:
+                    break
+                tau = (j - 1) * h
             tau_b = j * h if j < n_sub else dt_rec
-            if step_without_event(st, p, int(st[S_MODE]), tau, tau_b, tk, a0, sa, v0, sv,
-                                  y0, y1, gv, kinds):
-                tau = tau_b
-            else:
-                tau = advance(st, p, tau, tau_b, tk, a0, sa, v0, sv, events, y0, y1, ytmp, gv, kinds)
+            tau = advance(st, p, tau, tau_b, tk, a0, sa, v0, sv, events, y0, y1, ytmp, gv, kinds)
             if tau >= tau_b:
                 write_history(st, history, every, offset, n_base + j, t0 + (n_base + j) * h)
                 j += 1

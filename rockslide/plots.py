@@ -493,6 +493,162 @@ def _envelope(t: np.ndarray, y: np.ndarray, max_points: int = MAX_LINE_POINTS):
 
 
 # --------------------------------------------------------------------------------------------------
+# Sweeps
+# --------------------------------------------------------------------------------------------------
+
+#: The categories of a sweep's overturning map, codes 0 to 5 (`sweep_category`).
+SWEEP_CATEGORIES = ("rest", "slip", "liftoff", "liftoff-slip", "overturned", "outside the model")
+SWEEP_COLOURS = ("#ffffff", "#f5c07a", "#9fd39a", "#c3a6e0", "#3a3a3a", "#d9534f")
+#: A map's third axis is shown in at most this many rows.
+SWEEP_MAX_ROWS = 4
+NO_DATA_COLOUR = "#e6e6e6"
+
+
+def sweep_category(overturned, status, modes) -> np.ndarray:
+    """The category of each point of a sweep (codes index `SWEEP_CATEGORIES`).
+
+    Precedence: outside the model (``status != 0``), overturned, then the most involved mode that
+    occurred (``modes`` bits: 4 liftoff-slip, 2 liftoff, 1 slip), else rest.
+    """
+    modes = np.asarray(modes).astype(np.int64)
+    out = np.zeros(modes.shape, dtype=np.int8)
+    out[(modes & 1) != 0] = 1
+    out[(modes & 2) != 0] = 2
+    out[(modes & 4) != 0] = 3
+    out[np.asarray(overturned).astype(bool)] = 4
+    out[np.asarray(status) != 0] = 5
+    return out
+
+
+def sweep_figure(axes, category, max_rotation, residual_slip, *, title: str = "") -> Figure:
+    """Maps of a sweep: overturning and the modes that occurred, max rotation, residual slip.
+
+    Parameters
+    ----------
+    axes : list of (label, values)
+        The sweep's axes in dimension order, values as they should be shown (e.g. in gal).
+    category : int array, shaped like the grid
+        `sweep_category` codes.
+    max_rotation : float array [rad]
+    residual_slip : float array [m]
+    title : str
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        One axis: three panels over it. Two or more axes: three maps over the first two axes (the
+        first up the page, the second across it, as ``xarray`` draws them); a third axis gives
+        one row of maps for each of up to `SWEEP_MAX_ROWS` of its values (spread evenly, ends
+        included); further axes are held at their first value. What is shown is said under the
+        title. Overturned points are outlined on every map; the rotation map is logarithmic and
+        leaves points that never lifted off grey; the residual slip map leaves overturned points
+        and points outside the model grey.
+    """
+    from matplotlib.colors import BoundaryNorm, ListedColormap, LogNorm, TwoSlopeNorm
+
+    category = np.asarray(category)
+    rotation = np.asarray(max_rotation, dtype=float)
+    slip_mm = np.asarray(residual_slip, dtype=float) * 1000.0
+    if category.ndim != len(axes) or category.ndim == 0:
+        raise ValueError(f"expected arrays with one dimension per axis ({len(axes)}), got "
+                         f"{category.shape}")
+    cmap_cat = ListedColormap(SWEEP_COLOURS)
+    norm_cat = BoundaryNorm(np.arange(len(SWEEP_CATEGORIES) + 1) - 0.5, cmap_cat.N)
+    standing = category < 4
+    positive = rotation[rotation > 0]
+    rot_norm = LogNorm(vmin=max(1e-6, min(float(positive.min()) if positive.size else 1e-3, 1.0)),
+                       vmax=0.5 * math.pi)
+    slip_shown = np.abs(slip_mm[standing]) if standing.any() else np.zeros(0)
+    limit = max(float(slip_shown.max()) if slip_shown.size else 0.0, 1e-3)
+    slip_norm = TwoSlopeNorm(vcenter=0.0, vmin=-limit, vmax=limit)
+    rot_cmap = _with_bad("viridis")
+    slip_cmap = _with_bad("RdBu_r")
+    legend = [Patch(facecolor=c, edgecolor="0.4", label=n) for n, c in zip(SWEEP_CATEGORIES, SWEEP_COLOURS,
+                                                                           strict=True)]
+
+    if category.ndim == 1:
+        label, x = axes[0]
+        x = np.asarray(x, dtype=float)
+        fig = Figure(figsize=(9.0, 7.5), dpi=DPI, layout="constrained")
+        top, mid, low = fig.subplots(3, 1, sharex=True, gridspec_kw={"height_ratios": [0.6, 2, 2]})
+        top.pcolormesh(x, [0.0, 1.0], np.vstack([category, category]), cmap=cmap_cat,
+                       norm=norm_cat, shading="nearest")
+        top.set_yticks([])
+        top.set_title("overturning and modes", loc="left", fontsize=10)
+        shown = np.where(rotation > 0, rotation, np.nan)
+        mid.semilogy(x, shown, "o-", color=ROTATION_COLOUR, ms=3)
+        mid.axhline(0.5 * math.pi, color="0.5", lw=0.8, ls="--")
+        mid.set_ylabel("max rotation [rad]")
+        low.plot(x, np.where(standing, slip_mm, np.nan), "o-", color=SLIP_COLOUR, ms=3)
+        low.axhline(0.0, color="0.5", lw=0.8)
+        low.set_ylabel("residual slip [mm] (standing)")
+        low.set_xlabel(label)
+        fig.legend(handles=legend, loc="outside lower center", ncols=6, frameon=False, fontsize=9)
+        if title:
+            fig.suptitle(title, fontsize=12)
+        return fig
+
+    rows, note = _sweep_rows(axes)
+    fig = Figure(figsize=(15.0, 3.9 * len(rows) + 1.2), dpi=DPI, layout="constrained")
+    grid = fig.subplots(len(rows), 3, squeeze=False)
+    (ylabel, yv), (xlabel, xv) = axes[0], axes[1]
+    xv = np.asarray(xv, dtype=float)
+    yv = np.asarray(yv, dtype=float)
+    for r, (index, caption) in enumerate(rows):
+        cat = category[index]
+        over = (cat == 4).astype(float)
+        panels = (
+            (cat, dict(cmap=cmap_cat, norm=norm_cat), "overturning and modes", None),
+            (np.ma.masked_where(~(rotation[index] > 0), rotation[index]),
+             dict(cmap=rot_cmap, norm=rot_norm), "max rotation", "max rotation [rad]"),
+            (np.ma.masked_where(~standing[index], slip_mm[index]), dict(cmap=slip_cmap, norm=slip_norm),
+             "residual slip (standing blocks)", "residual slip [mm]"),
+        )
+        for c, (values, style, name, bar) in enumerate(panels):
+            ax = grid[r, c]
+            mesh = ax.pcolormesh(xv, yv, values, shading="nearest", **style)
+            if over.any() and not over.all() and min(over.shape) > 1:
+                ax.contour(xv, yv, over, levels=[0.5], colors="black", linewidths=1.0)
+            if bar:
+                fig.colorbar(mesh, ax=ax, label=bar)
+            ax.set_title(f"{name}{caption}", loc="left", fontsize=10)
+            ax.set_xlabel(xlabel)
+            ax.set_ylabel(ylabel)
+    fig.legend(handles=legend, loc="outside lower center", ncols=6, frameon=False, fontsize=9)
+    if title or note:
+        fig.suptitle("\n".join(t for t in (title, note) if t), fontsize=12)
+    return fig
+
+
+def _with_bad(name: str):
+    from matplotlib import colormaps
+
+    cmap = colormaps[name].copy()
+    cmap.set_bad(NO_DATA_COLOUR)
+    return cmap
+
+
+def _sweep_rows(axes) -> tuple[list, str]:
+    """The 2-D slices drawn (index tuples and row captions) and a note on what is not shown."""
+    fixed = [f"{label} = {_short(values[0])}" for label, values in axes[3:]]
+    if len(axes) == 2:
+        return [((slice(None), slice(None)), "")], ""
+    label, values = axes[2]
+    n = len(values)
+    picks = sorted(set(np.linspace(0, n - 1, min(n, SWEEP_MAX_ROWS)).round().astype(int).tolist()))
+    rest = (0,) * (len(axes) - 3)
+    rows = [((slice(None), slice(None), k, *rest), f": {label} = {_short(values[k])}") for k in picks]
+    parts = [f"rows: {len(picks)} of the {n} values of {label}"] if len(picks) < n else []
+    if fixed:
+        parts.append("at the first value of the other axes: " + ", ".join(fixed))
+    return rows, "; ".join(parts)
+
+
+def _short(value) -> str:
+    return f"{float(value):.6g}"
+
+
+# --------------------------------------------------------------------------------------------------
 # Saving
 # --------------------------------------------------------------------------------------------------
 
@@ -547,4 +703,5 @@ def save_figure(fig: Figure, path, *, overwrite: bool = False, dpi: float = DPI)
     return path
 
 
-__all__ = ["response_figure", "save_figure", "zoom_window", "state_segments"]
+__all__ = ["response_figure", "save_figure", "zoom_window", "state_segments", "sweep_figure",
+           "sweep_category", "SWEEP_CATEGORIES"]

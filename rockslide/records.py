@@ -726,7 +726,8 @@ def _read_knet(ctx: _Context, raw: bytes) -> _Parsed:
     return _Parsed(values - values.mean(), trace.stats.delta, "gal", stats=trace.stats)
 
 
-def _read_obspy(ctx: _Context, raw: bytes, options: _Options, obspy_format: str | None) -> tuple[_Parsed, str]:
+def _read_obspy(ctx: _Context, raw: bytes, options: _Options,
+                obspy_format: str | None) -> tuple[_Parsed, str]:
     """Any obspy waveform format: the samples as they are, times the unit factor of ``units``."""
     trace = _obspy_trace(ctx, raw, obspy_format)
     kind = str(trace.stats.get("_format") or obspy_format).lower()

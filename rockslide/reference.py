@@ -153,7 +153,7 @@ def _integrate_moving(st, p, tau, tau_end, tk, a0, sa, v0, sv, events, gv, kinds
     # bookkeeping along the solver's steps (extremes, time in state, the fall past alpha)
     previous = tau
     for t_i, y_i in zip(solution.t[1:], solution.y.T[1:]):
-        K.accept(st, y_i.copy(), mode, previous, t_i, tk, p)
+        K.accept(st, y_i[0], y_i[1], y_i[2], y_i[3], y_i[4], y_i[5], mode, previous, t_i, tk, p, False)
         previous = t_i
     _exact_peaks(st, solution, tk)
     if not fired:

@@ -632,6 +632,159 @@ def _unflatten(flat: dict) -> dict:
 
 
 # --------------------------------------------------------------------------------------------------
+# Sweeps: one file per grid, netCDF-4 style
+# --------------------------------------------------------------------------------------------------
+
+SWEEP_FORMAT = "rockslide-sweep"
+SWEEP_FORMAT_VERSION = 1
+
+
+@dataclass
+class StoredSweep:
+    """A sweep file read back (`read_sweep`).
+
+    Attributes
+    ----------
+    coords : list of (str, numpy.ndarray, dict)
+        The axes in dimension order: name, values, attributes.
+    variables : dict
+        ``name -> (array shaped like the grid, attributes)``.
+    attrs : dict
+        Root attributes as plain Python values.
+    """
+
+    coords: list
+    variables: dict
+    attrs: dict
+
+
+def write_sweep(path, coords, variables, *, attrs: dict | None = None, overwrite: bool = False) -> Path:
+    """Write a sweep's results on its grid to the HDF5 file ``path``, atomically.
+
+    The layout follows the netCDF-4 data model, so that ``xarray.open_dataset(path,
+    engine="h5netcdf")`` (or netCDF tools) read a labelled dataset: each axis is a 1-D float64
+    dataset at the root made an HDF5 dimension scale (with ``units``, ``long_name`` and
+    ``_Netcdf4Dimid``), and each variable is a root dataset whose dimensions are attached to the
+    axes in order. Root attributes: ``format`` = "rockslide-sweep", ``format_version``,
+    ``created``, the `versions`, then ``attrs``.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file (``OUT/NAME.sweep.h5``); its folder is created if missing.
+    coords : sequence of (str, array_like, dict)
+        The axes in dimension order: name, values (1-D), attributes.
+    variables : mapping of str to (array_like, dict)
+        Arrays shaped like the grid, and their attributes (``units``, ``long_name``...).
+    attrs : dict, optional
+        More root attributes (scalars, strings or 1-D numeric arrays).
+    overwrite : bool
+        Replace an existing file.
+
+    Returns
+    -------
+    Path
+
+    Raises
+    ------
+    OutputError
+        The file exists (without ``overwrite``) or cannot be written.
+    ValueError
+        A variable's shape is not the grid's, or a name is used twice.
+    """
+    path = check_destination(path, overwrite=overwrite)
+    coords = [(str(name), np.asarray(values, dtype=np.float64), dict(a)) for name, values, a in coords]
+    shape = tuple(values.size for _, values, _ in coords)
+    names = [name for name, _, _ in coords] + list(variables)
+    if len(set(names)) != len(names):
+        raise ValueError(f"names must be unique, got {names}")
+    for name, (values, _) in variables.items():
+        if np.shape(values) != shape:
+            raise ValueError(f"variable {name!r} has shape {np.shape(values)}, the grid {shape}")
+    tmp = temporary_path(path)
+    try:
+        try:
+            f = h5py.File(tmp, "w", track_order=True)
+        except OSError as exc:
+            raise OutputError(f"cannot write in this folder ({_reason(exc)})",
+                              source=str(path.parent)) from None
+        with f:
+            root = f.attrs
+            root["format"] = SWEEP_FORMAT
+            root["format_version"] = SWEEP_FORMAT_VERSION
+            root["created"] = datetime.now(timezone.utc).isoformat(timespec="seconds")
+            for key, value in {**versions(), **(attrs or {})}.items():
+                root[key] = _attr_value(value)
+            scales = []
+            for i, (name, values, a) in enumerate(coords):
+                ds = f.create_dataset(name, data=values)
+                for key, value in a.items():
+                    ds.attrs[key] = _attr_value(value)
+                ds.make_scale(name)
+                ds.attrs["_Netcdf4Dimid"] = np.int32(i)
+                scales.append(ds)
+            for name, (values, a) in variables.items():
+                values = np.asarray(values)
+                options = {"chunks": True, **_COMPRESSION} if values.size > 65536 else {}
+                ds = f.create_dataset(name, data=values, **options)
+                for key, value in a.items():
+                    ds.attrs[key] = value if isinstance(value, np.ndarray) else _attr_value(value)
+                for i, scale in enumerate(scales):
+                    ds.dims[i].attach_scale(scale)
+            f.flush()
+    except OutputError:
+        _remove(tmp)
+        raise
+    except OSError as exc:
+        _remove(tmp)
+        raise OutputError(f"cannot write the sweep file ({_reason(exc)})", source=str(path)) from None
+    except BaseException:
+        _remove(tmp)
+        raise
+    publish(tmp, path, overwrite=overwrite)
+    return path
+
+
+def read_sweep(path) -> StoredSweep:
+    """Read a sweep file written by `write_sweep`.
+
+    Raises
+    ------
+    OutputError
+        The file is missing, not HDF5, or not a rockslide sweep (of a known version).
+    """
+    source = str(path)
+    path = Path(path)
+    if not path.is_file():
+        raise OutputError("sweep file not found" if not path.exists() else "is a folder, expected a "
+                          "sweep file (.sweep.h5)", source=source)
+    try:
+        f = h5py.File(path, "r")
+    except OSError as exc:
+        raise OutputError(f"cannot read as a rockslide sweep ({_reason(exc)})", source=source) from None
+    with f:
+        if _plain(f.attrs.get("format")) != SWEEP_FORMAT:
+            raise OutputError(f"not a rockslide sweep (format is not {SWEEP_FORMAT!r})", source=source)
+        if _plain(f.attrs.get("format_version")) != SWEEP_FORMAT_VERSION:
+            raise OutputError(f"sweep format version {_plain(f.attrs.get('format_version'))!r} is "
+                              f"not supported (this rockslide reads {SWEEP_FORMAT_VERSION})",
+                              source=source)
+        scales = {name: ds for name, ds in f.items()
+                  if isinstance(ds, h5py.Dataset) and ds.is_scale}
+        order = sorted(scales, key=lambda n: int(scales[n].attrs.get("_Netcdf4Dimid", 0)))
+        coords = [(name, scales[name][()], _dataset_attrs(scales[name])) for name in order]
+        variables = {name: (ds[()], _dataset_attrs(ds)) for name, ds in f.items()
+                     if isinstance(ds, h5py.Dataset) and name not in scales}
+        attrs = {key: _plain(value) for key, value in f.attrs.items()}
+    return StoredSweep(coords=coords, variables=variables, attrs=attrs)
+
+
+def _dataset_attrs(ds) -> dict:
+    skip = {"CLASS", "NAME", "REFERENCE_LIST", "DIMENSION_LIST", "_Netcdf4Dimid"}
+    return {key: _plain(value) for key, value in ds.attrs.items() if key not in skip}
+
+
+# --------------------------------------------------------------------------------------------------
 # JSON
 # --------------------------------------------------------------------------------------------------
 
@@ -731,5 +884,6 @@ def _reason(exc: BaseException) -> str:
 
 
 __all__ = ["write_result", "read_result", "ResultWriter", "StoredResult", "summary_to_json_dict",
+           "write_sweep", "read_sweep", "StoredSweep", "SWEEP_FORMAT", "SWEEP_FORMAT_VERSION",
            "check_destination", "temporary_path", "versions", "FORMAT", "FORMAT_VERSION",
            "HISTORY_UNITS", "GROUND_UNITS", "STATE_CODES"]

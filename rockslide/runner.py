@@ -7,6 +7,7 @@ builds the `Model` and `Settings` of the pure core and calls `simulate` (or the 
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -15,7 +16,7 @@ import numpy as np
 from . import records as rec
 from .case import Case
 from .errors import CaseError
-from .simulate import Model, Result, Settings, simulate
+from .simulate import Model, Result, Settings, simulate, substeps
 
 
 @dataclass(frozen=True)
@@ -84,9 +85,40 @@ def check_against_ground(case: Case, ground: rec.GroundMotion) -> None:
                 source=case.source, field="ground.scale")
 
 
+#: Sizes beyond these are mistakes (a slip of unit in ``tail`` or ``dt``), reported before the run
+#: instead of failing for want of memory or running for days.
+MAX_GROUND_SAMPLES = 10**8    # record and tail samples (0.8 GB per component)
+MAX_STEPS = 10**11            # integration steps (hours of computing)
+MAX_HISTORY_ROWS = 10**8      # output rows (4.8 GB before compression)
+
+
+def check_size(case: Case, ground: rec.GroundMotion, *, history: bool = True) -> None:
+    """Refuse a tail, step or output interval that would need absurd memory, time or disk."""
+    dt_record, tail, dt = ground.dt, case.ground.tail, case.solver.dt
+    n_tail = math.ceil(tail / dt_record - 1e-9) if tail > 0 else 0
+    samples = ground.horizontal.size + n_tail
+    if samples > MAX_GROUND_SAMPLES:
+        longest = (MAX_GROUND_SAMPLES - ground.horizontal.size) * dt_record
+        raise CaseError(f"a tail of {tail:g} s adds {n_tail:.3g} samples at the record's step "
+                        f"{dt_record:g} s; expected at most {MAX_GROUND_SAMPLES:.0e} samples in all "
+                        f"(a tail of at most {longest:.6g} s)", source=case.source, field="ground.tail")
+    steps = (samples - 1) * substeps(dt_record, dt)
+    if steps > MAX_STEPS:
+        raise CaseError(f"dt = {dt:g} s gives {steps:.3g} integration steps over "
+                        f"{(samples - 1) * dt_record:g} s of ground motion; expected at most "
+                        f"{MAX_STEPS:.0e} (hours of computing): use a larger dt",
+                        source=case.source, field="solver.dt")
+    every = settings_for(case, history=history, energy=False).history_every
+    if every > 0 and steps // every + 1 > MAX_HISTORY_ROWS:
+        raise CaseError(f"output every {every * dt:g} s gives {steps // every + 1:.3g} rows of results; "
+                        f"expected at most {MAX_HISTORY_ROWS:.0e}: set a larger output.interval "
+                        "(e.g. 0.01 s)", source=case.source, field="output.interval")
+
+
 def prepare(case: Case, records_dir: Path | None = None, *, history: bool = True) -> Prepared:
     ground = load_ground(case, records_dir)
     check_against_ground(case, ground)
+    check_size(case, ground, history=history)
     return Prepared(case, ground, model_for(case), settings_for(case, history=history))
 
 
@@ -116,13 +148,14 @@ def record_entries(prepared: Prepared) -> list[dict]:
     out = []
     for entry in prepared.ground.files:
         role = entry["role"]
-        factor = prepared.ground.horizontal_factor if role == "horizontal" else prepared.ground.vertical_factor
+        ground = prepared.ground
+        factor = ground.horizontal_factor if role == "horizontal" else ground.vertical_factor
         out.append({**entry, "path": Path(str(entry["path"])).name, "scale_factor": float(factor)})
     return out
 
 
-__all__ = ["Prepared", "load_ground", "model_for", "settings_for", "check_against_ground", "prepare",
-           "simulate_prepared", "run_case", "record_entries", "start_time", "verdict_robustness"]
+__all__ = ["Prepared", "load_ground", "model_for", "settings_for", "check_against_ground", "check_size",
+           "prepare", "simulate_prepared", "run_case", "record_entries", "start_time", "verdict_robustness"]
 
 
 ROBUSTNESS_VARIANTS = (("dt/2", 0.5, 1.0), ("mu-1%", 1.0, 0.99), ("mu+1%", 1.0, 1.01))

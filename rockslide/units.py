@@ -67,8 +67,8 @@ def parse_quantity(value, kind: str, *, source: str | None = None, field: str | 
         Naming ``source`` and ``field`` when the value is not a finite number with a known unit.
     """
     if isinstance(value, bool):
-        raise CaseError(f"expected {_article(kind)} {kind} (a number or a string like {_example(kind)!r}), got {value!r}",
-                        source=source, field=field)
+        raise CaseError(f"expected {_article(kind)} {kind} (a number or a string like "
+                        f"{_example(kind)!r}), got {value!r}", source=source, field=field)
     if isinstance(value, (int, float)):
         number = float(value)
     elif isinstance(value, str):
@@ -77,8 +77,8 @@ def parse_quantity(value, kind: str, *, source: str | None = None, field: str | 
             raise CaseError(f"cannot read {value!r} as a number (expected a plain number, like "
                             f"{_example(kind)!r})", source=source, field=field)
         if not match:
-            raise CaseError(f"cannot read {value!r} as {_article(kind)} {kind} (expected a number and a unit, "
-                            f"like {_example(kind)!r})", source=source, field=field)
+            raise CaseError(f"cannot read {value!r} as {_article(kind)} {kind} (expected a number and "
+                            f"a unit, like {_example(kind)!r})", source=source, field=field)
         number = float(match.group(1)) * unit_factor(match.group(2), kind, source=source, field=field) \
             if match.group(2) else float(match.group(1))
     else:

@@ -561,12 +561,9 @@ def test_flight_while_slipping(k, A):
     assert result.history["time"][-1] <= s.end_time
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "located events: at the flight instant G = 0 the liftoff margin of eq. 23, (tan(alpha) - nu) G, "
-    "vanishes together with the flight function G; the two roots are located independently and the "
-    "liftoff one often ends first, so the log shows a SLIP -> ROCKSLIP 'liftoff' (impossible with "
-    "nu < tan(alpha), decision 1) just before 'flight' instead of the tie going to flight"))
 def test_flight_while_slipping_logs_no_liftoff():
+    """At G = 0 the eq. 23 liftoff margin (tan(alpha) - nu) G vanishes with the flight function G;
+    the tie goes to flight (the first row), never an impossible SLIP -> ROCKSLIP liftoff first."""
     model = Model.from_block(0.2, 0.1, 0.3, 0.3, 0.8)
     logs = []
     for k in (10.0, 15.0, 20.0, 25.0, 30.0, 40.0):
@@ -598,14 +595,10 @@ def test_free_rockslip_impacts_end_located(mu, rotation, slip_rate):
     assert long.events[-1]["to"] == b"REST"
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "step-end switching: free ROCKSLIP settles into a numerical 2-step cycle (slip-reversal found "
-    "at a step end -> xdot := 0; next step theta < 0 -> impact) that never ends: ~5000 impacts per "
-    "second, the block never reaches REST (decision 3: impacts must end). The rebound (~6e-3 "
-    "rad/s) predicts a flight of ~3 steps, so the liftoff-end rule never fires, and zeroing the "
-    "overshooting xdot at the step end feeds back the energy friction takes."))
 @pytest.mark.parametrize("mu,rotation,slip_rate", ZENO_CASES)
 def test_free_rockslip_impacts_end_step_end(mu, rotation, slip_rate):
+    """Step-end switching cannot resolve flights of a few steps (they used to chatter for ever in a
+    2-step cycle); they end the liftoff too (docs/model.md, decision 3)."""
     short = _rockslip_free("step-end", mu, rotation, slip_rate, 1.0)
     long = _rockslip_free("step-end", mu, rotation, slip_rate, 2.0)
     assert short.summary.impacts == long.summary.impacts < 100

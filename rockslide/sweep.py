@@ -1,0 +1,888 @@
+"""Parameter sweeps: one case file, a grid of values, one compiled batch (``rockslide sweep``).
+
+A sweep replaces a few values of a case file by every combination of its axes (:data:`AXES`:
+``--mu``, ``--pga``, ``--vertical-factor``, ``--restitution``, ``--slenderness``, ``--gravity``)
+and computes every point with the batch kernel (`batch`), without history or event log.
+
+- **Axes.** ``start:stop:step`` (the stop is included when it falls on the grid, within 1e-9 of a
+  step) or a comma list; values take units as in case files (``100gal:1000gal:25gal``; a unit on
+  every value or on none, none meaning SI). Ranges are computed in decimal, so ``0.30:0.70:0.01``
+  gives exactly the floats of ``0.37`` and ``125 gal`` that a case file would. Dimension ``i`` of
+  the result is the ``i``-th axis given on the command line.
+- **Points.** Every point is the case with the axis values replaced through `case.case_with`
+  (validated like a case file; a bad value is a one-line `CaseError` naming the option) and its
+  ground motion checked like ``rockslide run`` checks it (`runner.check_against_ground`). ``--mu``
+  sets ``mu_static`` and ``mu_kinetic = ratio * mu_static`` with the case's ratio
+  ``mu_kinetic / mu_static`` (rounded to 12 significant digits, so that 0.494 / 0.52 is 0.95)
+  unless ``--mu-kinetic-ratio`` gives it; ``--pga`` sets ``ground.scale.pga_horizontal`` (removing
+  a ``factor``), and the vertical keeps the record's V/H ratio unless the case gives
+  ``pga_vertical``; ``--slenderness`` sets the width to ``slenderness * height``.
+- **Same arithmetic as ``rockslide run``.** The records are read once; each point's scale factors
+  come from `records.combine`, its parameters and initial state from `simulate.parameters` and
+  `simulate.initial_state`, and the batch kernel multiplies the unscaled samples by the factors as
+  `records.combine` does. A sweep point and ``rockslide run`` on the same case give identical
+  numbers.
+- **Chunks.** The grid is cut into chunks of ``chunk_size`` cases, chunk ``c`` holding the flat
+  indices ``c, c + n_chunks, c + 2 n_chunks, ...`` (a mix of cheap and costly cases in each).
+  Each finished chunk is saved at once (`ChunkStore`: ``.NAME.sweep.chunks/KEY/chunk-NNNNNN.npz``
+  beside the result, written to a temporary name and renamed), ``KEY`` being a hash of the sweep's
+  definition (:func:`definition_key`: case text, axes, ratio, chunk size, every point's kernel
+  inputs, the ground samples, the package version and the kernel's source). A rerun of the same
+  definition computes only the missing chunks; another definition never sees them. The chunk
+  folder is removed once the result file is written.
+- **Where.** Locally on numba's threads (`batch.run_parallel`, cases handed out one at a time), or
+  on a dask.distributed cluster: one task per chunk (`batch.compute` with ``parallel=False``)
+  returning plain numpy arrays. Both give identical results.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import itertools
+import json
+import math
+import os
+import re
+import shutil
+import threading
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from decimal import Decimal, InvalidOperation
+from pathlib import Path
+
+import numpy as np
+
+from . import __version__, batch
+from . import kernel as K
+from . import records as rec
+from .case import Case, case_with
+from .errors import CaseError, OutputError, RecordError
+from .physics import OVERTURNED
+from .plots import sweep_category, sweep_figure
+from .runner import check_against_ground, check_size, model_for, settings_for
+from .simulate import extend_with_tail, initial_state, parameters
+from .units import parse_quantity
+
+__all__ = ["AXES", "AxisKind", "Axis", "Plan", "ChunkStore", "parse_axis", "plan_sweep",
+           "definition_key", "compute", "collect", "sweep_variables", "MAX_POINTS"]
+
+#: Largest grid (number of cases) a sweep accepts.
+MAX_POINTS = 1_000_000
+#: Chunk sizes: about ``n / CHUNKS_WANTED`` cases, within these bounds (the default).
+CHUNKS_WANTED = 100
+MIN_CHUNK, MAX_CHUNK = 4, 256
+#: Ranges include their stop when it is within this fraction of a step of the grid.
+RANGE_TOLERANCE = 1e-9
+
+FORMAT = "rockslide-sweep"
+FORMAT_VERSION = 1
+
+
+@dataclass(frozen=True)
+class AxisKind:
+    """What a sweep axis changes.
+
+    Attributes
+    ----------
+    name : str
+        Dimension name in the result file (``mu``, ``pga``...).
+    option : str
+        The command-line option (``--mu``).
+    kind : str
+        Unit kind of its values (a key of `units.UNITS`).
+    key : str
+        The case key it sets (dotted).
+    long_name, units : str
+        The dimension's ``long_name`` and ``units`` attributes (SI; ``1`` for dimensionless).
+    label : str
+        Axis label in figures; ``display_scale`` divides the SI values for it.
+    """
+
+    name: str
+    option: str
+    kind: str
+    key: str
+    long_name: str
+    units: str
+    label: str
+    display_scale: float = 1.0
+
+
+#: The axes a sweep can vary, in the order of ``rockslide sweep --help``.
+AXES: dict[str, AxisKind] = {a.name: a for a in (
+    AxisKind("mu", "--mu", "dimensionless", "contact.mu_static", "static friction coefficient",
+             "1", "static friction coefficient μ"),
+    AxisKind("pga", "--pga", "acceleration", "ground.scale.pga_horizontal",
+             "peak horizontal ground acceleration", "m/s^2", "peak horizontal acceleration [gal]",
+             0.01),
+    AxisKind("vertical_factor", "--vertical-factor", "dimensionless", "ground.scale.vertical_factor",
+             "factor on the vertical record", "1", "vertical factor"),
+    AxisKind("restitution", "--restitution", "dimensionless", "contact.restitution",
+             "coefficient of restitution", "1", "coefficient of restitution e"),
+    AxisKind("slenderness", "--slenderness", "dimensionless", "block.width",
+             "slenderness: width / height (the height kept)", "1", "width / height (b/h)"),
+    AxisKind("gravity", "--gravity", "acceleration", "gravity", "gravitational acceleration",
+             "m/s^2", "gravity g [m/s²]"),
+)}
+
+
+@dataclass(frozen=True)
+class Axis:
+    """One axis of a sweep: its kind and its values.
+
+    Attributes
+    ----------
+    name : str
+        A key of :data:`AXES`.
+    values : tuple of float
+        SI values, in the order given.
+    texts : tuple of str
+        The values as written (``"125gal"``), for messages.
+    spec : str
+        The option's text as given.
+    """
+
+    name: str
+    values: tuple
+    texts: tuple
+    spec: str
+
+    @property
+    def kind(self) -> AxisKind:
+        return AXES[self.name]
+
+    def __len__(self) -> int:
+        return len(self.values)
+
+
+# --------------------------------------------------------------------------------------------------
+# Axes
+# --------------------------------------------------------------------------------------------------
+
+_PIECE = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([A-Za-z/^*0-9]*?)\s*$")
+
+
+def parse_axis(name: str, spec: str) -> Axis:
+    """Read an axis option: ``start:stop:step``, a comma list, or one value.
+
+    Parameters
+    ----------
+    name : str
+        A key of :data:`AXES`.
+    spec : str
+        The option's text, e.g. ``"0.30:0.70:0.01"``, ``"100gal:1000gal:25gal"``, ``"0.5,0.52,0.55"``.
+
+    Returns
+    -------
+    Axis
+
+    Raises
+    ------
+    CaseError
+        Naming the option: not a range or list of numbers, unknown unit, a unit on some values
+        only, a step that is not positive, a stop below the start, repeated values, too many values.
+    """
+    kind = AXES[name]
+    option = kind.option
+    text = str(spec).strip()
+    if not text:
+        raise CaseError("expected start:stop:step or a comma list of values, got an empty text",
+                        source=option)
+    if ":" in text:
+        pieces = text.split(":")
+        if len(pieces) != 3:
+            raise CaseError(f"expected start:stop:step (three values), got {text!r}", source=option)
+        texts = _range_texts(option, kind.kind, text, [_split(option, kind.kind, p) for p in pieces])
+    else:
+        parts = [_split(option, kind.kind, p) for p in text.split(",")]
+        units = {unit for _, unit in parts}
+        if len(units) > 1 and "" in units:
+            raise CaseError(f"give a unit on every value or on none (none means SI), got {text!r}",
+                            source=option)
+        texts = [f"{number}{unit}" for number, unit in parts]
+    values = [parse_quantity(t, kind.kind, source=option) for t in texts]
+    seen = {}
+    for t, v in zip(texts, values, strict=True):
+        if v in seen:
+            raise CaseError(f"{t} repeats {seen[v]} (each value once)", source=option)
+        seen[v] = t
+    return Axis(name, tuple(values), tuple(texts), text)
+
+
+def _split(option: str, kind: str, piece: str) -> tuple[Decimal, str]:
+    """A piece of an axis option as (number, unit text)."""
+    match = _PIECE.match(piece)
+    if not match:
+        what = "a number" if kind == "dimensionless" else "a number with an optional unit"
+        raise CaseError(f"cannot read {piece.strip()!r} as {what} (like "
+                        f"{'0.5' if kind == 'dimensionless' else '800gal'})", source=option)
+    number, unit = match.group(1), match.group(2)
+    if unit:
+        parse_quantity(f"1 {unit}", kind, source=option)     # an unknown unit fails here
+    try:
+        return Decimal(number), unit
+    except InvalidOperation:  # pragma: no cover - the pattern only lets numbers through
+        raise CaseError(f"cannot read {piece!r} as a number", source=option) from None
+
+
+def _range_texts(option: str, kind: str, text: str, pieces) -> list[str]:
+    (start, u0), (stop, u1), (step, u2) = pieces
+    if len({u0, u1, u2}) != 1:
+        raise CaseError(f"give start, stop and step in one unit, or all without unit (SI), got "
+                        f"{text!r}", source=option)
+    if step <= 0:
+        raise CaseError(f"the step must be positive, got {text!r}", source=option)
+    if stop < start:
+        raise CaseError(f"the stop is below the start in {text!r} (expected start <= stop)",
+                        source=option)
+    q = (stop - start) / step
+    n = int(q)
+    if q - n >= 1 - Decimal(RANGE_TOLERANCE):
+        n += 1
+    if n + 1 > MAX_POINTS:
+        raise CaseError(f"{text!r} has {n + 1} values; at most {MAX_POINTS} points in a sweep",
+                        source=option)
+    numbers = [start + i * step for i in range(n + 1)]
+    if abs(numbers[-1] - stop) <= Decimal(RANGE_TOLERANCE) * step:
+        numbers[-1] = stop                               # on the grid: exactly the stop
+    return [f"{_plain(x)}{u0}" for x in numbers]
+
+
+def _plain(number: Decimal) -> str:
+    """A decimal as short plain text (``0.37``, ``125``, ``1E-7``)."""
+    if number == number.to_integral_value() and abs(number) < Decimal("1e15"):
+        return str(number.quantize(Decimal(1)))
+    return str(number.normalize())
+
+
+def axis_changes(axis: str, value: float, case: Case, ratio: float | None) -> dict:
+    """The case changes (`case.case_with`) that put one axis at ``value``."""
+    if axis == "mu":
+        return {"contact.mu_static": value, "contact.mu_kinetic": ratio * value}
+    if axis == "pga":
+        changes = {"ground.scale.pga_horizontal": value}
+        if case.ground.scale.factor is not None:
+            changes["ground.scale.factor"] = None
+        return changes
+    if axis == "slenderness":
+        return {"block.width": value * case.block.height}
+    return {AXES[axis].key: value}
+
+
+def kinetic_ratio(case: Case, given: float | None) -> float:
+    """``mu_kinetic / mu_static`` for ``--mu``: ``given``, or the case's rounded to 12 digits."""
+    if given is not None:
+        if not (isinstance(given, (int, float)) and math.isfinite(given) and 0.0 <= given <= 1.0):
+            raise CaseError(f"must be within [0, 1] (mu_kinetic = ratio * mu_static), got {given!r}",
+                            source="--mu-kinetic-ratio")
+        return float(given)
+    mu, nu = case.contact.mu_static, case.contact.mu_kinetic
+    if mu == 0.0 or nu == mu:
+        return 1.0
+    return float(f"{nu / mu:.12g}")
+
+
+# --------------------------------------------------------------------------------------------------
+# The plan: every point's kernel inputs
+# --------------------------------------------------------------------------------------------------
+
+
+@dataclass
+class Plan:
+    """Everything needed to compute a sweep, and nothing computed yet.
+
+    Attributes
+    ----------
+    case : Case
+        The case file the points start from.
+    axes : list of Axis
+        In dimension order.
+    mu_kinetic_ratio : float or None
+        ``mu_kinetic / mu_static`` used with ``--mu`` (None without ``--mu``).
+    params, states : float64[n, N_PARAMS], float64[n, N_STATE]
+        Each point's kernel parameters and initial state, flat in C order of the grid.
+    factor_h, factor_v : float64[n]
+        Each point's horizontal and vertical scale factors (`records.combine`).
+    base_h, base_v : float64[m]
+        The unscaled ground accelerations [m/s^2], the case's tail of zeros included.
+    record_end : float
+        [s] time of the last ground sample (tail included): the end of a run that ends standing.
+    step : float
+        [s] integration step.
+    records : list of dict
+        The records' file names and checksums.
+    chunk_size : int
+        Cases per chunk.
+    key : str
+        `definition_key` of the sweep.
+    """
+
+    case: Case
+    axes: list
+    mu_kinetic_ratio: float | None
+    params: np.ndarray
+    states: np.ndarray
+    factor_h: np.ndarray
+    factor_v: np.ndarray
+    base_h: np.ndarray
+    base_v: np.ndarray
+    record_end: float
+    step: float
+    records: list
+    chunk_size: int
+    key: str = ""
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def shape(self) -> tuple:
+        return tuple(len(a) for a in self.axes)
+
+    @property
+    def n_cases(self) -> int:
+        return int(self.params.shape[0])
+
+    @property
+    def n_chunks(self) -> int:
+        return -(-self.n_cases // self.chunk_size)
+
+    def chunk_indices(self, chunk: int) -> np.ndarray:
+        """Flat grid indices of chunk ``chunk``: ``chunk, chunk + n_chunks, ...``."""
+        return np.arange(chunk, self.n_cases, self.n_chunks, dtype=np.int64)
+
+    def describe(self) -> str:
+        """``41 mu x 37 pga = 1517 cases``."""
+        dims = " x ".join(f"{len(a)} {a.name}" for a in self.axes)
+        return f"{dims} = {self.n_cases} case{'s' if self.n_cases != 1 else ''}"
+
+
+def default_chunk_size(n_cases: int) -> int:
+    """About ``n / CHUNKS_WANTED`` cases per chunk, within ``[MIN_CHUNK, MAX_CHUNK]``."""
+    return int(min(MAX_CHUNK, max(MIN_CHUNK, math.ceil(n_cases / CHUNKS_WANTED))))
+
+
+def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = None,
+               mu_kinetic_ratio: float | None = None, chunk_size: int | None = None) -> Plan:
+    """Validate every point of the grid and build its kernel inputs.
+
+    Parameters
+    ----------
+    case : Case
+        The case file the points start from.
+    axes : sequence of Axis
+        At least one, each name once; dimension ``i`` is ``axes[i]``.
+    records_dir : Path, optional
+        Where records are looked for (`records.records_dir`).
+    mu_kinetic_ratio : float, optional
+        ``mu_kinetic / mu_static`` for ``--mu`` (default: the case's).
+    chunk_size : int, optional
+        Cases per chunk (default `default_chunk_size`).
+
+    Returns
+    -------
+    Plan
+
+    Raises
+    ------
+    CaseError
+        No axis, an axis twice, a grid above :data:`MAX_POINTS`, a point that is not a valid case
+        or whose ground motion fails the checks of ``rockslide run`` (naming the option).
+    RecordError
+        A record cannot be read or scaled.
+    """
+    axes = list(axes)
+    if not axes:
+        raise CaseError("give at least one axis: " + ", ".join(a.option for a in AXES.values()),
+                        source="rockslide sweep")
+    names = [a.name for a in axes]
+    for name in names:
+        if names.count(name) > 1:
+            raise CaseError("given twice", source=AXES[name].option)
+    if case.solver.method != "kernel":
+        raise CaseError(f"a sweep runs the compiled kernel; got method {case.solver.method!r} "
+                        "(use 'kernel', or 'rockslide run' for the reference solver)",
+                        source=case.source, field="solver.method")
+    if mu_kinetic_ratio is not None and "mu" not in names:
+        raise CaseError("applies to --mu; give --mu too (or change mu_kinetic in the case file)",
+                        source="--mu-kinetic-ratio")
+    ratio = kinetic_ratio(case, mu_kinetic_ratio) if "mu" in names else None
+    n = math.prod(len(a) for a in axes)
+    if n > MAX_POINTS:
+        raise CaseError(f"the grid has {n} points ({' x '.join(str(len(a)) for a in axes)}); at most "
+                        f"{MAX_POINTS}", source="/".join(a.kind.option for a in axes))
+    if chunk_size is not None and (isinstance(chunk_size, bool) or int(chunk_size) < 1):
+        raise CaseError(f"must be a whole number >= 1, got {chunk_size!r}", source="--chunk-size")
+    chunk_size = default_chunk_size(n) if chunk_size is None else int(chunk_size)
+
+    traces, entries = _read_traces(case, records_dir)
+    unscaled = rec.combine(traces["horizontal"], traces["vertical"], source=case.source)
+    check_size(case, unscaled, history=False)
+
+    points = []                                   # (case, scale key) per point, flat C order
+    for combo in itertools.product(*(range(len(a)) for a in axes)):
+        changes = {}
+        for axis, i in zip(axes, combo, strict=True):
+            changes.update(axis_changes(axis.name, axis.values[i], case, ratio))
+        try:
+            point = case_with(case, changes)
+        except CaseError as exc:
+            raise _point_error(exc, axes, combo) from None
+        s = point.ground.scale
+        points.append((point, (s.pga_horizontal, s.factor, s.pga_vertical, s.vertical_factor)))
+
+    settings = settings_for(case, history=False, energy=False)
+    base_h, base_v = extend_with_tail(unscaled.horizontal, unscaled.vertical, unscaled.dt,
+                                      settings.tail)
+    start = unscaled.start + case.ground.time_shift
+    record_end = start + (max(base_h.size, 2) - 1) * unscaled.dt
+
+    params = np.empty((n, K.N_PARAMS))
+    states = np.empty((n, K.N_STATE))
+    factor_h = np.empty(n)
+    factor_v = np.empty(n)
+    by_scale: dict[tuple, list[int]] = {}
+    for i, (_, scale) in enumerate(points):
+        by_scale.setdefault(scale, []).append(i)
+    for scale, members in by_scale.items():
+        ground = rec.combine(traces["horizontal"], traces["vertical"], pga_horizontal=scale[0],
+                             factor=scale[1], pga_vertical=scale[2], vertical_factor=scale[3],
+                             source=case.source)
+        checked = set()
+        for i in members:
+            point = points[i][0]
+            if point.gravity not in checked:
+                try:
+                    check_against_ground(point, ground)
+                except CaseError as exc:
+                    combo = np.unravel_index(i, tuple(len(a) for a in axes))
+                    raise _point_error(exc, axes, combo) from None
+                checked.add(point.gravity)
+            point_settings = settings_for(point, history=False, energy=False)
+            params[i] = parameters(model_for(point), unscaled.dt, point_settings, start)
+            states[i] = initial_state(point_settings)
+            factor_h[i] = ground.horizontal_factor
+            factor_v[i] = ground.vertical_factor
+    plan = Plan(case=case, axes=axes, mu_kinetic_ratio=ratio, params=params, states=states,
+                factor_h=factor_h, factor_v=factor_v, base_h=np.ascontiguousarray(base_h),
+                base_v=np.ascontiguousarray(base_v), record_end=float(record_end),
+                step=float(params[0, K.P_H]), records=entries, chunk_size=chunk_size)
+    plan.key = definition_key(plan)
+    return plan
+
+
+def _read_traces(case: Case, records_dir: Path | None):
+    """The case's records, read once (as `runner.load_ground` reads them)."""
+    folder = records_dir if records_dir is not None else rec.records_dir()
+    traces, entries = {}, []
+    for role in ("horizontal", "vertical"):
+        spec = getattr(case.ground, role)
+        if spec is None:
+            traces[role] = None
+            continue
+        path = rec.resolve_record_path(spec.file, case_dir=case.base_dir, records_dir=folder,
+                                       source=case.source, field=f"ground.{role}.file")
+        trace = rec.read_record(path, format=spec.format, units=spec.units,
+                                time_column=spec.time_column, column=spec.column, dt=spec.dt,
+                                skip_lines=spec.skip_lines)
+        traces[role] = trace
+        meta = dict(trace.stats.get("rockslide", {}))
+        entries.append({"role": role, "path": Path(str(meta.get("path", spec.file))).name,
+                        "sha256": str(meta.get("sha256", ""))})
+    if traces["horizontal"] is None and traces["vertical"] is None:   # pragma: no cover - case.py
+        raise RecordError("no record", source=case.source)
+    return traces, entries
+
+
+def _point_error(exc: CaseError, axes, combo) -> CaseError:
+    """A point's CaseError, naming the option(s) responsible and the point."""
+    field_name = exc.field or ""
+    options = [a.kind.option for a in axes
+               if field_name and (field_name.startswith(_key_root(a.name))
+                                  or _key_root(a.name).startswith(field_name))]
+    if not options:
+        options = [a.kind.option for a in axes]
+    point = ", ".join(f"{a.kind.option} {a.texts[i]}" for a, i in zip(axes, combo, strict=True))
+    return CaseError(f"{exc.message} [at {point}]", source="/".join(options), field=exc.field)
+
+
+def _key_root(axis: str) -> str:
+    return {"mu": "contact.mu", "pga": "ground.scale", "vertical_factor": "ground.scale",
+            "slenderness": "block"}.get(axis, AXES[axis].key)
+
+
+def definition_key(plan: Plan) -> str:
+    """A hash of everything that defines a sweep's results (chunks are reused only under it).
+
+    The case text, the axes (values as given and in SI), the kinetic friction ratio, the chunk size,
+    every point's kernel parameters, initial state and scale factors, the unscaled ground samples,
+    the package version and the compiled kernel's source (`batch.SOURCE_STAMP`).
+    """
+    digest = hashlib.sha256()
+    header = {
+        "format": FORMAT, "format_version": FORMAT_VERSION, "rockslide": __version__,
+        "case_text": plan.case.text,
+        "axes": [[a.name, list(a.texts), [repr(v) for v in a.values]] for a in plan.axes],
+        "mu_kinetic_ratio": repr(plan.mu_kinetic_ratio), "chunk_size": plan.chunk_size,
+        "kernel_source": batch.SOURCE_STAMP,
+    }
+    digest.update(json.dumps(header, sort_keys=True).encode())
+    for array in (plan.params, plan.states, plan.factor_h, plan.factor_v, plan.base_h, plan.base_v):
+        digest.update(np.ascontiguousarray(array, dtype=np.float64).tobytes())
+    return digest.hexdigest()
+
+
+# --------------------------------------------------------------------------------------------------
+# Chunks on disk
+# --------------------------------------------------------------------------------------------------
+
+
+class ChunkStore:
+    """Finished chunks of one sweep definition: ``FOLDER/KEY16/chunk-NNNNNN.npz``.
+
+    ``FOLDER`` is ``.NAME.sweep.chunks`` beside the result file. Each file holds the chunk's flat
+    indices and final kernel states, and is written to a temporary name then renamed, so a file
+    with the chunk's name is always complete. A file that does not match the plan (another key,
+    other indices, damaged) is ignored and recomputed.
+    """
+
+    def __init__(self, folder: Path, key: str):
+        self.root = Path(folder)
+        self.key = key
+        self.folder = self.root / key[:16]
+
+    @classmethod
+    def beside(cls, result_path: Path, key: str) -> ChunkStore:
+        """The store for the result file ``OUT/NAME.sweep.h5``: ``OUT/.NAME.sweep.chunks``."""
+        result_path = Path(result_path)
+        name = result_path.name[:-len(".h5")] if result_path.name.endswith(".h5") else result_path.name
+        return cls(result_path.with_name(f".{name}.chunks"), key)
+
+    def path(self, chunk: int) -> Path:
+        return self.folder / f"chunk-{chunk:06d}.npz"
+
+    def load(self, chunk: int, indices: np.ndarray) -> np.ndarray | None:
+        """The final states of ``chunk`` if a matching file is stored, else None."""
+        path = self.path(chunk)
+        try:
+            with np.load(path, allow_pickle=False) as data:
+                if str(data["key"]) != self.key or not np.array_equal(data["indices"], indices):
+                    return None
+                states = np.array(data["states"], dtype=np.float64)
+        except (OSError, KeyError, ValueError, EOFError):
+            return None
+        if states.shape != (indices.size, K.N_STATE):
+            return None
+        return states
+
+    def save(self, chunk: int, indices: np.ndarray, states: np.ndarray) -> None:
+        """Store a finished chunk (atomically: a temporary file renamed)."""
+        try:
+            self.folder.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise OutputError(f"cannot create the chunk folder: {exc.strerror or exc}",
+                              source=str(self.folder)) from None
+        final = self.path(chunk)
+        tmp = final.with_name(f".{final.name}.{os.getpid()}.{threading.get_ident()}.tmp")
+        try:
+            with open(tmp, "wb") as handle:
+                np.savez(handle, key=np.array(self.key), indices=indices, states=states)
+            os.replace(tmp, final)
+        except OSError as exc:
+            _unlink(tmp)
+            raise OutputError(f"cannot write a chunk: {exc.strerror or exc}",
+                              source=str(self.folder)) from None
+        except BaseException:
+            _unlink(tmp)
+            raise
+
+    def count(self) -> int:
+        """Chunk files stored for this definition."""
+        try:
+            return sum(1 for p in self.folder.glob("chunk-*.npz"))
+        except OSError:  # pragma: no cover
+            return 0
+
+    def others(self) -> list[Path]:
+        """Chunk folders of other sweep definitions (never used by this one)."""
+        try:
+            return sorted(p for p in self.root.iterdir() if p.is_dir() and p != self.folder)
+        except OSError:
+            return []
+
+    def remove(self) -> None:
+        """Delete this definition's chunks, and the chunk folder if nothing else is in it."""
+        shutil.rmtree(self.folder, ignore_errors=True)
+        try:
+            self.root.rmdir()
+        except OSError:
+            pass
+
+
+def _unlink(path: Path) -> None:
+    try:
+        os.unlink(path)
+    except OSError:
+        pass
+
+
+# --------------------------------------------------------------------------------------------------
+# Computing
+# --------------------------------------------------------------------------------------------------
+
+
+def compute(plan: Plan, store: ChunkStore, chunks: Sequence[int], *, workers: int | None = None,
+            scheduler: str | None = None, progress: Callable[[int], None] | None = None) -> None:
+    """Compute ``chunks`` of ``plan`` and store each as soon as it is done.
+
+    Parameters
+    ----------
+    plan : Plan
+    store : ChunkStore
+        Where finished chunks go.
+    chunks : sequence of int
+        The chunks to compute (the missing ones).
+    workers : int, optional
+        numba threads for the local run (default: all cores).
+    scheduler : str, optional
+        Address of a dask.distributed scheduler: the chunks are computed there, one task each.
+    progress : callable, optional
+        Called with the number of cases of each finished chunk.
+
+    Raises
+    ------
+    CaseError
+        ``workers`` out of range, or the scheduler cannot be reached or a task fails there.
+    KeyboardInterrupt
+        Propagated; the chunks finished before it are stored.
+    """
+    if scheduler:
+        _compute_dask(plan, store, chunks, scheduler, progress)
+    else:
+        _compute_local(plan, store, chunks, workers, progress)
+
+
+def _compute_local(plan, store, chunks, workers, progress):
+    import numba
+
+    if workers is not None:
+        limit = numba.config.NUMBA_NUM_THREADS
+        if isinstance(workers, bool) or not 1 <= int(workers) <= limit:
+            raise CaseError(f"must be within 1 ... {limit} (the cores numba may use here), "
+                            f"got {workers!r}", source="--workers")
+    previous = numba.get_num_threads()
+    try:
+        if workers is not None:
+            numba.set_num_threads(int(workers))
+        for chunk in chunks:
+            indices = plan.chunk_indices(chunk)
+            states = batch.compute(*_chunk_inputs(plan, indices), parallel=True)
+            store.save(chunk, indices, states)
+            if progress is not None:
+                progress(indices.size)
+    finally:
+        numba.set_num_threads(previous)
+
+
+def _chunk_inputs(plan: Plan, indices: np.ndarray):
+    return (plan.params[indices], plan.states[indices], plan.base_h, plan.base_v,
+            plan.factor_h[indices], plan.factor_v[indices])
+
+
+def _compute_dask(plan, store, chunks, address, progress):
+    try:
+        import distributed
+    except ImportError:  # pragma: no cover - a declared dependency
+        raise CaseError("needs dask.distributed (pip install 'dask[distributed]')",
+                        source="--scheduler") from None
+    try:
+        client = distributed.Client(address, timeout="20s", set_as_default=False)
+    except (OSError, TimeoutError, ValueError) as exc:
+        raise CaseError(f"cannot connect to the dask scheduler at {address!r}: "
+                        f"{_one_line(exc)}", source="--scheduler") from None
+    futures = {}
+    try:
+        base = client.scatter([plan.base_h, plan.base_v], broadcast=True)
+        for chunk in chunks:
+            indices = plan.chunk_indices(chunk)
+            p, s, _, _, kh, kv = _chunk_inputs(plan, indices)
+            future = client.submit(batch.compute, p, s, base[0], base[1], kh, kv, parallel=False,
+                                   pure=False)
+            futures[future] = (chunk, indices)
+        for future in distributed.as_completed(list(futures)):
+            chunk, indices = futures.pop(future)
+            try:
+                states = future.result()
+            except Exception as exc:  # noqa: BLE001 - a task's error, reported in one line
+                raise CaseError(f"a task failed on the cluster: {type(exc).__name__}: "
+                                f"{_one_line(exc)} (are rockslide and its dependencies installed "
+                                "on the workers?)", source="--scheduler") from None
+            store.save(chunk, indices, np.asarray(states, dtype=np.float64))
+            if progress is not None:
+                progress(indices.size)
+    finally:
+        try:
+            if futures:
+                client.cancel(list(futures))
+        finally:
+            client.close()
+
+
+def _one_line(exc: BaseException) -> str:
+    return " ".join(str(exc).split()) or type(exc).__name__
+
+
+def missing_chunks(plan: Plan, store: ChunkStore) -> list[int]:
+    """The chunks of ``plan`` that ``store`` does not hold (a damaged file counts as missing)."""
+    return [c for c in range(plan.n_chunks) if store.load(c, plan.chunk_indices(c)) is None]
+
+
+def collect(plan: Plan, store: ChunkStore) -> np.ndarray:
+    """The final states of every case, ``float64[n, N_STATE]`` (flat C order), from the store.
+
+    Raises
+    ------
+    OutputError
+        A chunk is missing or damaged (it was deleted meanwhile): rerun to compute it.
+    """
+    out = np.empty((plan.n_cases, K.N_STATE))
+    for chunk in range(plan.n_chunks):
+        indices = plan.chunk_indices(chunk)
+        states = store.load(chunk, indices)
+        if states is None:
+            raise OutputError(f"chunk {chunk} is missing or damaged; rerun the same command to "
+                              "compute it", source=str(store.folder))
+        out[indices] = states
+    return out
+
+
+# --------------------------------------------------------------------------------------------------
+# Results
+# --------------------------------------------------------------------------------------------------
+
+#: Bits of the ``modes`` variable.
+MODE_BITS = {"slip": 1, "liftoff": 2, "liftoff_slip": 4}
+
+STATUS_FLAGS = {"flag_values": np.array([0, 1, 2], dtype=np.int8),
+                "flag_meanings": " ".join(K.STATUS_NAMES)}
+
+
+def sweep_variables(plan: Plan, states: np.ndarray) -> dict:
+    """The result variables on the grid, from the final kernel states.
+
+    Returns
+    -------
+    dict
+        ``name -> (array shaped like the grid, attributes)``; attributes ``units`` and
+        ``long_name`` (and CF ``flag_*`` for the coded ones). Same values as the summary of
+        ``rockslide run`` (`simulate.summarise`).
+    """
+    shape = plan.shape
+    st = states
+    overturned = st[:, K.S_MODE] == OVERTURNED
+    status = st[:, K.S_STATUS].astype(np.int8)
+    t_slip, t_rock, t_rockslip = st[:, K.S_T_SLIP], st[:, K.S_T_ROCK], st[:, K.S_T_ROCKSLIP]
+    modes = ((t_slip > 0) * MODE_BITS["slip"] + (t_rock > 0) * MODE_BITS["liftoff"]
+             + (t_rockslip > 0) * MODE_BITS["liftoff_slip"]).astype(np.int8)
+    end = np.where(np.isnan(st[:, K.S_END_TIME]), plan.record_end, st[:, K.S_END_TIME])
+
+    def grid(values, dtype):
+        return np.asarray(values, dtype=dtype).reshape(shape)
+
+    nan = np.nan
+    out = {
+        "overturned": (grid(overturned, np.int8),
+                       {"units": "1", "long_name": "overturned (1) or standing (0)",
+                        "flag_values": np.array([0, 1], dtype=np.int8),
+                        "flag_meanings": "standing overturned"}),
+        "overturn_time": (grid(np.where(overturned, st[:, K.S_OVERTURN_TIME], nan), np.float64),
+                          {"units": "s", "long_name": "time the rotation reached pi/2 (NaN: standing)"}),
+        "direction": (grid(np.where(overturned, st[:, K.S_DIRECTION], 0.0), np.int8),
+                      {"units": "1", "long_name": "sign of the rotation at overturning (0: standing)",
+                       "flag_values": np.array([-1, 0, 1], dtype=np.int8),
+                       "flag_meanings": "negative standing positive"}),
+        "fall_start_time": (grid(np.where(overturned, st[:, K.S_FALL_START], nan), np.float64),
+                            {"units": "s", "long_name": "time the rotation last passed alpha before "
+                             "overturning (NaN: standing)"}),
+        "max_rotation": (grid(st[:, K.S_MAX_THETA], np.float64),
+                         {"units": "rad", "long_name": "largest rotation |phi|"}),
+        "max_slip": (grid(st[:, K.S_MAX_X], np.float64),
+                     {"units": "m", "long_name": "largest slip displacement |x|"}),
+        "residual_slip": (grid(st[:, K.S_X], np.float64),
+                          {"units": "m", "long_name": "slip displacement x at the end"}),
+        "impacts": (grid(st[:, K.S_IMPACTS], np.int32),
+                    {"units": "1", "long_name": "number of rocking impacts"}),
+        "status": (grid(status, np.int8),
+                   {"units": "1", "long_name": "ok, or where the computation left the model",
+                    **STATUS_FLAGS}),
+        "modes": (grid(modes, np.int8),
+                  {"units": "1", "long_name": "modes that occurred (bit mask)",
+                   "flag_masks": np.array(list(MODE_BITS.values()), dtype=np.int8),
+                   "flag_meanings": " ".join(MODE_BITS)}),
+        "end_time": (grid(end, np.float64),
+                     {"units": "s", "long_name": "time the computation ended (overturning, leaving "
+                      "the model, or the end of the record and tail)"}),
+        "time_slip": (grid(t_slip, np.float64),
+                      {"units": "s", "long_name": "time spent slipping (SLIP)"}),
+        "time_liftoff": (grid(t_rock, np.float64),
+                         {"units": "s", "long_name": "time spent lifted off without slip (ROCK)"}),
+        "time_liftoff_slip": (grid(t_rockslip, np.float64),
+                              {"units": "s", "long_name": "time spent lifted off and slipping "
+                               "(ROCKSLIP)"}),
+    }
+    return out
+
+
+def coordinates(plan: Plan) -> list:
+    """``[(name, SI values, attributes)]`` of the axes, in dimension order."""
+    out = []
+    for axis in plan.axes:
+        kind = axis.kind
+        attrs = {"units": kind.units, "long_name": kind.long_name, "option": kind.option,
+                 "given_as": axis.spec}
+        if axis.name == "slenderness":
+            attrs["height"] = float(plan.case.block.height)
+        out.append((axis.name, np.asarray(axis.values, dtype=np.float64), attrs))
+    return out
+
+
+def root_attributes(plan: Plan, command_line: str) -> dict:
+    """Root attributes of the result file: provenance of the sweep."""
+    attrs = {
+        "title": f"rockslide sweep of {plan.case.name}: {plan.describe()}",
+        "name": plan.case.name,
+        "case_text": plan.case.text,
+        "case_file": Path(plan.case.source).name,
+        "command_line": command_line,
+        "axes": " ".join(a.name for a in plan.axes),
+        "sweep_key": plan.key,
+        "integration_step": plan.step,
+        "events": plan.case.solver.events,
+        "mu_kinetic_ratio": math.nan if plan.mu_kinetic_ratio is None else plan.mu_kinetic_ratio,
+        "chunk_size": plan.chunk_size,
+    }
+    for entry in plan.records:
+        attrs[f"record_{entry['role']}"] = entry["path"]
+        attrs[f"record_{entry['role']}_sha256"] = entry["sha256"]
+    return attrs
+
+
+def categories(variables: dict) -> np.ndarray:
+    """The map's category of each point (`plots.sweep_category`) from the result variables."""
+    return sweep_category(variables["overturned"][0], variables["status"][0], variables["modes"][0])
+
+
+def figure(plan: Plan, variables: dict):
+    """The PNG maps of a sweep (`plots.sweep_figure`): axes in their display units (gal for
+    accelerations given as PGA), categories from `categories`."""
+    over = int(variables["overturned"][0].sum())
+    axes = [(a.kind.label, np.asarray(a.values) / a.kind.display_scale) for a in plan.axes]
+    return sweep_figure(axes, categories(variables), variables["max_rotation"][0],
+                        variables["residual_slip"][0],
+                        title=f"{plan.case.name}: {plan.describe()}, {over} overturned")
+
+
+def time_shares(states: np.ndarray) -> dict:
+    """Total time in each moving state over the grid [s] (where a sweep's work goes)."""
+    return {"SLIP": float(states[:, K.S_T_SLIP].sum()), "ROCK": float(states[:, K.S_T_ROCK].sum()),
+            "ROCKSLIP": float(states[:, K.S_T_ROCKSLIP].sum()),
+            "REST": float(states[:, K.S_T_REST].sum())}
+
