@@ -42,7 +42,7 @@ from numba import njit, prange
 from . import kernel as K
 from . import physics
 
-__all__ = ["compute", "run_parallel", "run_serial", "run_case", "SOURCE_STAMP"]
+__all__ = ["compute", "warm_up", "run_parallel", "run_serial", "run_case", "SOURCE_STAMP"]
 
 
 def _source_stamp(modules=(K, physics)) -> int:
@@ -164,3 +164,15 @@ def compute(params, states, base_h, base_v, kh, kv, *, parallel=True):
     else:
         run_serial(*args)
     return out
+
+
+def warm_up(parallel=True):
+    """Compile a driver, or load it from numba's cache, on a trivial case (a block at rest on
+    still ground), so that the first real batch is not charged with it."""
+    p = np.zeros((1, K.N_PARAMS))
+    p[0, K.P_R], p[0, K.P_ALPHA], p[0, K.P_TAN_ALPHA] = 0.1, 0.5, np.tan(0.5)
+    p[0, K.P_G], p[0, K.P_MU], p[0, K.P_NU], p[0, K.P_E] = 9.80665, 0.5, 0.5, 0.8
+    p[0, K.P_H], p[0, K.P_DT_REC], p[0, K.P_N_SUB], p[0, K.P_LOCATED] = 0.01, 0.01, 1.0, 1.0
+    states = K.new_state()[None, :]
+    ground = np.zeros(2)
+    compute(p, states, ground, ground, np.ones(1), np.ones(1), parallel=parallel)

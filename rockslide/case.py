@@ -674,9 +674,12 @@ def _suggest(name: str, keys: Mapping[str, dict]) -> str:
     if close:
         return f"did you mean {close[0]!r}?"
     elsewhere = [p for p, _ in iter_case_keys() if p.rsplit(".", 1)[-1] == name]
-    if elsewhere:
+    if len(elsewhere) == 1:
         parent = elsewhere[0].rsplit(".", 1)[0]
         return f"did you mean {elsewhere[0]!r}? it belongs under {parent!r}"
+    if elsewhere:
+        *first, last = (repr(p) for p in elsewhere)
+        return f"did you mean {', '.join(first)} or {last}? it belongs in a section"
     return f"expected one of: {', '.join(keys)}"
 
 

@@ -85,6 +85,9 @@ def _unexpected(exc: Exception) -> str:
     if isinstance(exc, OSError) and exc.strerror:
         where = f"{exc.filename}: " if exc.filename else ""
         return f"error: {where}{exc.strerror}"
+    if isinstance(exc, MemoryError):
+        return ("error: out of memory (a larger solver.dt or output.interval, or a shorter ground.tail, "
+                "needs less)")
     text = " ".join(str(exc).split())
     if len(text) > 200:
         text = text[:197] + "..."
@@ -142,7 +145,8 @@ def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, robustness
     folder = Path(out_dir) if out_dir is not None else Path(case.output.dir)
     h5_path = folder / f"{case.name}.h5"
     png_path = folder / f"{case.name}.png"
-    prepared = runner.prepare(case, records.records_dir(records_dir))   # input errors first
+    prepared = runner.prepare(case, records.records_dir(records_dir))
+    _note_first_compile()   # input errors first
     for path in (h5_path, png_path if not no_plot else None):
         if path is not None and path.exists() and not overwrite:
             raise OutputError(f"{path} exists (use --overwrite to replace it)")
@@ -300,6 +304,8 @@ def criteria(height, width, vertical, ah_max, mu_max, output, overwrite):
             raise CaseError(f"expected a positive finite number, got {value}", source=option)
     if not avs or any(not -1.0 < a for a in avs):
         raise CaseError("each vertical acceleration must be above -1 g (the block would fly)", source="--av")
+    if not overwrite and (output.exists() or output.is_symlink()):
+        raise OutputError(f"{output} exists (use --overwrite to replace it)")
     ah = np.linspace(0.0, ah_max, 301)
     mu = np.linspace(0.0, mu_max, 241)
     maps = [(f"A_v = {a:+.2f} g", crit.mode_map(ah, mu, a, w / 2, h / 2)) for a in avs]
@@ -368,7 +374,7 @@ def sweep(case_file, mu, pga, vertical_factor, restitution, slenderness, gravity
     """
     from tqdm import tqdm
 
-    from . import records, results
+    from . import batch, records, results
     from . import sweep as sw
     from .case import load_case
     from .plots import save_figure
@@ -399,6 +405,12 @@ def sweep(case_file, mu, pga, vertical_factor, restitution, slenderness, gravity
     click.echo(f"sweep {case.name}: {plan.describe()} in {plan.n_chunks} chunks, {where}")
     if reused:
         click.echo(f"  reused {reused} of {plan.n_chunks} chunks ({reused_cases} cases) from {store.folder}")
+    if not scheduler and missing:
+        compiling = time.perf_counter()
+        batch.warm_up(parallel=True)
+        if time.perf_counter() - compiling > 3.0:
+            click.echo(f"  compiled the batch kernel in {time.perf_counter() - compiling:.0f} s (once after "
+                       "each change of the kernel)")
     computing = time.perf_counter()
     try:
         with tqdm(total=plan.n_cases, initial=reused_cases, unit="case", file=sys.stderr,
@@ -450,6 +462,20 @@ def _command_line(ctx, case_file) -> str:
         elif value is not None:
             words += [param.opts[0], str(value)]
     return shlex.join(words)
+
+
+def _note_first_compile():
+    """Say so when the compiled kernel is not in numba's cache yet (the first run on a machine
+    compiles it, which takes a minute; later runs load it in a second or two)."""
+    import os
+
+    from . import kernel
+    folders = [Path(kernel.__file__).parent / "__pycache__"]
+    if os.environ.get("NUMBA_CACHE_DIR"):
+        folders.append(Path(os.environ["NUMBA_CACHE_DIR"]))
+    if not any(any(folder.rglob("kernel.run-*.nbi")) for folder in folders if folder.is_dir()):
+        click.echo("rockslide: compiling the numerical kernel (first run on this machine only, "
+                   "about a minute; cached afterwards)", err=True)
 
 
 def _column(value):

@@ -246,7 +246,7 @@ def log_event(st, events, t, mode_from, mode_to, cause):
     st[S_N_EVENTS] = n + 1
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def note_extremes(st, t):
     if st[S_THETA] > st[S_MAX_THETA]:
         st[S_MAX_THETA] = st[S_THETA]
@@ -274,7 +274,7 @@ def store_row(st, history, every, offset, n, t, lam, th, thd, x, xd, mode):
             st[S_ROWS] = i + 1
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def write_history(st, history, every, offset, n, t):
     """`store_row` of the state in ``st``."""
     store_row(st, history, every, offset, n, t, st[S_LAM], st[S_THETA], st[S_THETADOT], st[S_X],
@@ -298,7 +298,7 @@ def stop(st, t):
     st[S_END_TIME] = t
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def finished(st):
     return st[S_MODE] == OVERTURNED or st[S_STATUS] != STATUS_OK
 
@@ -552,7 +552,7 @@ def locate(i, mode, lam, sigma, y0, tau_a, tau_b, g_a, g_b, a0, sa, v0, sv, p, y
     return tau_a + hi
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def step_without_event(st, p, mode, tau_a, tau_b, tk, a0, sa, v0, sv):
     """One RK4 step of the moving state ``mode`` from ``tau_a`` to ``tau_b``; if no event function
     of the state turns negative, take it into ``st`` and return True. Otherwise leave ``st`` as it
@@ -668,7 +668,7 @@ def land_on_the_ground(st, p, G):
     st[S_THETADOT] = -math.sqrt(w2) if w2 > 0.0 else 0.0
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def load_state(st, y):
     """The integrated part of the state into ``y``: theta, thetadot, x, xdot, w_ground, w_friction."""
     y[0] = st[S_THETA]
@@ -713,18 +713,7 @@ def track(th0, thd0, x0, xd0, th1, thd1, x1, xd1, hh, t_start, alpha, max_th, ma
     return max_th, max_th_time, max_x, fall
 
 
-@njit(cache=True, inline='always')
-def load_state(st, y):
-    """The integrated part of the state into ``y``: theta, thetadot, x, xdot, w_ground, w_friction."""
-    y[0] = st[S_THETA]
-    y[1] = st[S_THETADOT]
-    y[2] = st[S_X]
-    y[3] = st[S_XDOT]
-    y[4] = st[S_W_GROUND]
-    y[5] = st[S_W_FRICTION]
-
-
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def accept(st, th, thd, x, xd, wg, wf, mode, tau_a, tau_b, tk, p, peaks_inside):
     """Take the state integrated from local time ``tau_a`` to ``tau_b`` into ``st``."""
     st[S_K1_VALID] = 0.0

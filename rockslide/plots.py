@@ -592,23 +592,28 @@ def sweep_figure(axes, category, max_rotation, residual_slip, *, title: str = ""
     fig = Figure(figsize=(15.0, 3.9 * len(rows) + 1.2), dpi=DPI, layout="constrained")
     grid = fig.subplots(len(rows), 3, squeeze=False)
     (ylabel, yv), (xlabel, xv) = axes[0], axes[1]
-    xv = np.asarray(xv, dtype=float)
-    yv = np.asarray(yv, dtype=float)
+    y_order, x_order = np.argsort(np.asarray(yv, dtype=float)), np.argsort(np.asarray(xv, dtype=float))
+    y_edges = _cell_edges(np.asarray(yv, dtype=float)[y_order])
+    x_edges = _cell_edges(np.asarray(xv, dtype=float)[x_order])
+
+    def sorted_2d(values, index):
+        return values[index][np.ix_(y_order, x_order)]
+
     for r, (index, caption) in enumerate(rows):
-        cat = category[index]
-        over = (cat == 4).astype(float)
+        cat = sorted_2d(category, index)
+        rot = sorted_2d(rotation, index)
         panels = (
             (cat, dict(cmap=cmap_cat, norm=norm_cat), "overturning and modes", None),
-            (np.ma.masked_where(~(rotation[index] > 0), rotation[index]),
-             dict(cmap=rot_cmap, norm=rot_norm), "max rotation", "max rotation [rad]"),
-            (np.ma.masked_where(~standing[index], slip_mm[index]), dict(cmap=slip_cmap, norm=slip_norm),
-             "residual slip (standing blocks)", "residual slip [mm]"),
+            (np.ma.masked_where(~(rot > 0), rot), dict(cmap=rot_cmap, norm=rot_norm), "max rotation",
+             "max rotation [rad]"),
+            (np.ma.masked_where(~sorted_2d(standing, index), sorted_2d(slip_mm, index)),
+             dict(cmap=slip_cmap, norm=slip_norm), "residual slip (standing blocks)",
+             "residual slip [mm]"),
         )
         for c, (values, style, name, bar) in enumerate(panels):
             ax = grid[r, c]
-            mesh = ax.pcolormesh(xv, yv, values, shading="nearest", **style)
-            if over.any() and not over.all() and min(over.shape) > 1:
-                ax.contour(xv, yv, over, levels=[0.5], colors="black", linewidths=1.0)
+            mesh = ax.pcolormesh(x_edges, y_edges, values, shading="flat", **style)
+            _outline(ax, x_edges, y_edges, cat == 4)
             if bar:
                 fig.colorbar(mesh, ax=ax, label=bar)
             ax.set_title(f"{name}{caption}", loc="left", fontsize=10)
@@ -620,12 +625,36 @@ def sweep_figure(axes, category, max_rotation, residual_slip, *, title: str = ""
     return fig
 
 
+def _cell_edges(centres: np.ndarray) -> np.ndarray:
+    """Edges of cells around sorted centres: midway between them, half a spacing beyond the ends."""
+    if centres.size == 1:
+        half = 0.05 * max(abs(float(centres[0])), 1.0)
+        return np.array([centres[0] - half, centres[0] + half])
+    mid = 0.5 * (centres[1:] + centres[:-1])
+    return np.concatenate([[2 * centres[0] - mid[0]], mid, [2 * centres[-1] - mid[-1]]])
+
+
+def _outline(ax, x_edges, y_edges, mask) -> None:
+    """Draw the border of the region ``mask`` (rows y, columns x) along cell edges."""
+    from matplotlib.collections import LineCollection
+
+    mask = np.asarray(mask, dtype=bool)
+    padded = np.pad(mask, 1, constant_values=False)
+    segments = []
+    rows, cols = np.nonzero(padded[1:-1, 1:] != padded[1:-1, :-1])       # vertical edges
+    segments += [((x_edges[i], y_edges[j]), (x_edges[i], y_edges[j + 1])) for j, i in zip(rows, cols,
+                                                                                           strict=True)]
+    rows, cols = np.nonzero(padded[1:, 1:-1] != padded[:-1, 1:-1])       # horizontal edges
+    segments += [((x_edges[i], y_edges[j]), (x_edges[i + 1], y_edges[j])) for j, i in zip(rows, cols,
+                                                                                           strict=True)]
+    if segments:
+        ax.add_collection(LineCollection(segments, colors="black", linewidths=1.2))
+
+
 def _with_bad(name: str):
     from matplotlib import colormaps
 
-    cmap = colormaps[name].copy()
-    cmap.set_bad(NO_DATA_COLOUR)
-    return cmap
+    return colormaps[name].with_extremes(bad=NO_DATA_COLOUR)
 
 
 def _sweep_rows(axes) -> tuple[list, str]:

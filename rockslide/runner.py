@@ -15,7 +15,7 @@ import numpy as np
 
 from . import records as rec
 from .case import Case
-from .errors import CaseError
+from .errors import CaseError, RecordError
 from .simulate import Model, Result, Settings, simulate, substeps
 
 
@@ -45,9 +45,15 @@ def load_ground(case: Case, records_dir: Path | None = None) -> rec.GroundMotion
                                        time_column=spec.time_column, column=spec.column, dt=spec.dt,
                                        skip_lines=spec.skip_lines)
     scale = case.ground.scale
-    return rec.combine(traces["horizontal"], traces["vertical"], pga_horizontal=scale.pga_horizontal,
-                       factor=scale.factor, pga_vertical=scale.pga_vertical,
-                       vertical_factor=scale.vertical_factor, source=case.source)
+    try:
+        return rec.combine(traces["horizontal"], traces["vertical"], pga_horizontal=scale.pga_horizontal,
+                           factor=scale.factor, pga_vertical=scale.pga_vertical,
+                           vertical_factor=scale.vertical_factor, source=case.source)
+    except RecordError as exc:
+        if exc.field is None:
+            raise
+        # combine names its scale options; in the case file they are keys of ground.scale
+        raise RecordError(exc.message, source=exc.source, field=f"ground.scale.{exc.field}") from None
 
 
 def model_for(case: Case) -> Model:

@@ -693,6 +693,7 @@ def _compute_dask(plan, store, chunks, address, progress):
     except ImportError:  # pragma: no cover - a declared dependency
         raise CaseError("needs dask.distributed (pip install 'dask[distributed]')",
                         source="--scheduler") from None
+    _probe(address)
     try:
         client = distributed.Client(address, timeout="20s", set_as_default=False)
     except (OSError, TimeoutError, ValueError) as exc:
@@ -707,7 +708,7 @@ def _compute_dask(plan, store, chunks, address, progress):
             future = client.submit(batch.compute, p, s, base[0], base[1], kh, kv, parallel=False,
                                    pure=False)
             futures[future] = (chunk, indices)
-        for future in distributed.as_completed(list(futures)):
+        for future in distributed.as_completed(list(futures), loop=client.loop):
             chunk, indices = futures.pop(future)
             try:
                 states = future.result()
@@ -724,6 +725,31 @@ def _compute_dask(plan, store, chunks, address, progress):
                 client.cancel(list(futures))
         finally:
             client.close()
+
+
+def _probe(address: str) -> None:
+    """Fail fast, in one line, when nothing listens at a ``tcp://host:port`` address (dask itself
+    retries until its timeout)."""
+    import socket
+    from urllib.parse import urlsplit
+
+    if "://" not in address:
+        address = f"tcp://{address}"
+    parts = urlsplit(address)
+    if parts.scheme != "tcp":
+        return
+    try:
+        host, port = parts.hostname, parts.port
+    except ValueError:
+        host = port = None
+    if not host or not port:
+        raise CaseError(f"expected an address like tcp://HOST:PORT, got {address!r}",
+                        source="--scheduler")
+    try:
+        socket.create_connection((host, port), timeout=10).close()
+    except OSError as exc:
+        raise CaseError(f"cannot connect to the dask scheduler at {address}: "
+                        f"{exc.strerror or _one_line(exc)}", source="--scheduler") from None
 
 
 def _one_line(exc: BaseException) -> str:

@@ -60,11 +60,17 @@ def case_text(changes: dict | None = None) -> str:
         *parents, leaf = dotted.split(".")
         node = data
         for part in parents:
-            node = node.setdefault(part, {})
-        if value is DROP:
-            node.pop(leaf, None)
+            child = node.get(part)
+            if not isinstance(child, dict):
+                if value is DROP:
+                    break                       # nothing to remove
+                child = node[part] = {}
+            node = child
         else:
-            node[leaf] = value
+            if value is DROP:
+                node.pop(leaf, None)
+            else:
+                node[leaf] = value
     return yaml.safe_dump(data, sort_keys=False, allow_unicode=True)
 
 
@@ -166,6 +172,7 @@ def write_files(folder: Path, files: dict) -> None:
 # ------------------------------------------------------------------------------------------------
 
 RUN = ("run", "case.yaml")
+QUICK = {"solver.dt": "1 ms", "ground.tail": "0 s"}   # a valid case that runs in a fraction of a second
 
 
 def bad_case(id_, text, expected, args=RUN, files=None):
@@ -184,7 +191,7 @@ T_JUMP = T.copy()
 T_JUMP[100] += 0.005          # one late sample: line 102 (after the header)
 
 BAD_INPUTS = [
-    # -- the case file: YAML itself ----------------------------------------------------------------
+    # -- the case file: YAML itself ----------------------------------------------------------------------
     bad_case("yaml-unclosed-brace", "name: x\nblock: {height: 0.2\n",
              ["case.yaml: line 3, column 1", "invalid YAML", "expected ',' or '}'"]),
     bad_case("yaml-tab-indent", "name: x\nblock:\n\theight: 1\n",
@@ -205,11 +212,12 @@ BAD_INPUTS = [
                  id="case-file-missing"),
     pytest.param({"folder.yaml": None}, ("run", "folder.yaml"),
                  ["folder.yaml", "is a folder, expected a case file"], id="case-file-is-a-folder"),
-    # -- keys ----------------------------------------------------------------------------------------
+    # -- keys --------------------------------------------------------------------------------------------
     bad_case("unknown-key-typo", case_text({"contact.mu_statik": 0.5}),
              ["case.yaml: contact.mu_statik: unknown key", "did you mean 'mu_static'?"]),
     bad_case("unknown-key-misplaced", case_text({"dt": "1 ms"}),
-             ["case.yaml: dt: unknown key", "did you mean 'solver.dt'? it belongs under 'solver'"]),
+             ["case.yaml: dt: unknown key",
+              "did you mean 'ground.horizontal.dt', 'ground.vertical.dt' or 'solver.dt'?"]),
     bad_case("unknown-key-record", case_text({"ground.horizontal.fiel": "x.at2"}),
              ["ground.horizontal.fiel: unknown key", "did you mean 'file'?"]),
     bad_case("missing-name", case_text({"name": DROP}), ["case.yaml: name: missing required key"]),
@@ -219,7 +227,7 @@ BAD_INPUTS = [
              ["contact.restitution: missing required key", "coefficient of restitution"]),
     bad_case("missing-records", case_text({"ground.horizontal": DROP, "ground.vertical": DROP}),
              ["case.yaml: ground: needs at least one record", "ground.horizontal or ground.vertical"]),
-    # -- types -----------------------------------------------------------------------------------------
+    # -- types -------------------------------------------------------------------------------------------
     bad_case("type-block-list", case_text({"block": [0.2, 0.1, 10]}),
              ["case.yaml: block: expected a mapping (keys: height, width, mass)", "got a list"]),
     bad_case("type-mass-bool", case_text({"block.mass": True}),
@@ -230,7 +238,7 @@ BAD_INPUTS = [
              ["case.yaml: name: expected a name made of letters, digits", "'../escape'"]),
     bad_case("type-method-typo", case_text({"solver.method": "kernal"}),
              ["solver.method: expected one of 'kernel', 'reference'", "did you mean 'kernel'?"]),
-    # -- units -----------------------------------------------------------------------------------------
+    # -- units -------------------------------------------------------------------------------------------
     bad_case("unit-unknown", case_text({"block.height": "0.2 meters"}),
              ["block.height: unknown length unit 'meters'", "expected one of: m, cm, mm"]),
     bad_case("unit-wrong-kind", case_text({"ground.tail": "2 m"}),
@@ -241,7 +249,8 @@ BAD_INPUTS = [
              ["block.width: cannot read 'mm' as a length", "a number and a unit"]),
     bad_case("unit-record-unknown", horizontal_only({"file": "synthetic_kt_h.at2", "units": "furlong"}),
              ["ground.horizontal.units: unknown acceleration unit 'furlong'", "gal"]),
-    bad_case("value-nan", case_text({"gravity": float("nan")}), ["case.yaml: gravity:", "not a finite number"]),
+    bad_case("value-nan", case_text({"gravity": float("nan")}),
+             ["case.yaml: gravity:", "not a finite number"]),
     # -- physical bounds ---------------------------------------------------------------------------------
     bad_case("height-zero", case_text({"block.height": 0}),
              ["block.height: must be greater than 0 m, got 0 m"]),
@@ -266,7 +275,7 @@ BAD_INPUTS = [
              ["output.interval: must be a whole multiple of solver.dt", "1.5 steps"]),
     bad_case("scale-pga-and-factor", case_text({"ground.scale.factor": 2}),
              ["case.yaml: ground.scale: pga_horizontal", "and factor (2) are exclusive"]),
-    # -- checks that need the records -------------------------------------------------------------------
+    # -- checks that need the records --------------------------------------------------------------------
     bad_record("dt-above-record-step", "fine.csv", column_text(T_FINE, A_FINE),
                ["case.yaml: solver.dt: dt = 0.005 s is larger than the record's sampling step 0.002 s",
                 "expected dt <= 0.002 s"], spec={"file": "fine.csv", "units": "g"},
@@ -306,12 +315,14 @@ BAD_INPUTS = [
     bad_record("record-at2-velocity", "vel.at2",
                at2_text([0.1, 0.2], units_line="VELOCITY TIME SERIES IN UNITS OF CM/S"),
                ["vel.at2", "line 3", "not an acceleration unit"]),
-    bad_record("record-units-contradict-file", "synthetic_kt_h.at2", truncated_shipped("synthetic_kt_h.at2", 405),
-               ["synthetic_kt_h.at2", "units 'gal' were given but the file is in 'g'"],
-               spec={"file": "synthetic_kt_h.at2", "units": "gal"}),
+    bad_case("record-units-contradict-file",
+             horizontal_only({"file": "synthetic_kt_h.at2", "units": "gal"}),
+             ["synthetic_kt_h.at2: units: units 'gal' were given but the file is in 'g'",
+              "remove units or fix them"]),
     bad_record("record-units-missing", "rec.csv", column_text(T, A),
                ["rec.csv", "units", "give `units:` (g, gal, m/s^2) for a column text record"]),
-    bad_record("record-nan-sample", "nan.at2", shipped_with_line("synthetic_kt_h.at2", 10, "NaN 0.0 0.0 0.0 0.0"),
+    bad_record("record-nan-sample", "nan.at2",
+               shipped_with_line("synthetic_kt_h.at2", 10, "NaN 0.0 0.0 0.0 0.0"),
                ["nan.at2", "line 10", "sample 26 of 2001 is nan", "expected finite numbers"]),
     bad_record("record-infinite-sample", "inf.csv",
                column_text(T, A).replace(f"{T[50]:.6f},{A[50]:.6e}", f"{T[50]:.6f},inf"),
@@ -326,7 +337,8 @@ BAD_INPUTS = [
                spec={"file": "jump.csv", "units": "g"}),
     bad_record("record-time-backwards", "back.csv", column_text(T[::-1], A),
                ["back.csv", "time_column", "does not increase"], spec={"file": "back.csv", "units": "g"}),
-    bad_record("record-ragged-columns", "ragged.csv", column_text(T, A).replace("\n0.030000,", "\n0.030000,1,"),
+    bad_record("record-ragged-columns", "ragged.csv",
+               column_text(T, A).replace("\n0.030000,", "\n0.030000,1,"),
                ["ragged.csv", "line 5", "3 values where line 2 has 2"],
                spec={"file": "ragged.csv", "units": "g"}),
     bad_record("record-header-only", "head.csv", "time,acc\n", ["head.csv", "a header row and no data lines"],
@@ -334,7 +346,8 @@ BAD_INPUTS = [
     bad_record("record-one-sample", "one.csv", "0.0,0.1\n", ["one.csv", "expected at least 2"],
                spec={"file": "one.csv", "units": "g"}),
     bad_record("record-three-columns", "three.csv", "t,ns,ew\n0,1,2\n0.01,1,2\n",
-               ["three.csv", "column", "the file has 3 columns (t, ns, ew)", "give `time_column:` and `column:`"],
+               ["three.csv", "column", "the file has 3 columns (t, ns, ew)",
+                "give `time_column:` and `column:`"],
                spec={"file": "three.csv", "units": "g"}),
     bad_record("record-column-out-of-range", "rec.csv", column_text(T, A),
                ["rec.csv", "column = 5 is out of range: the file has 2 columns"],
@@ -343,9 +356,10 @@ BAD_INPUTS = [
                ["vals.txt", "give `dt:`", "values record"],
                spec={"file": "vals.txt", "units": "g", "format": "values"}),
     bad_record("record-all-zeros-scaled-to-pga", "zeros.csv", column_text(T, 0 * A),
-               ["case.yaml: pga_horizontal: the record", "zeros.csv is all zeros", "cannot be scaled"],
+               ["case.yaml: ground.scale.pga_horizontal: the record", "zeros.csv is all zeros",
+                "cannot be scaled"],
                spec={"file": "zeros.csv", "units": "g"}),
-    # -- two records that do not share one time grid --------------------------------------------------------
+    # -- two records that do not share one time grid -----------------------------------------------------
     bad_case("records-different-step", case_text({"ground.vertical": {"file": "v.csv", "units": "g"}}),
              ["case.yaml: horizontal", "synthetic_kt_h.at2 and vertical", "v.csv have different dt "
               "(0.01 s and 0.02 s)", "rockslide does not resample"],
@@ -357,14 +371,15 @@ BAD_INPUTS = [
     bad_case("records-different-start", case_text({"ground.vertical": {"file": "v.csv", "units": "g"}}),
              ["case.yaml: horizontal", "start at different times (0.0 s and 1.0 s)"],
              files={"v.csv": column_text(sine(n=2001)[0] + 1.0, sine(n=2001)[1])}),
-    # -- options and outputs ------------------------------------------------------------------------------
+    # -- options and outputs -----------------------------------------------------------------------------
     pytest.param({"case.yaml": case_text(), "out/example.h5": "previous result"}, RUN,
                  ["out/example.h5 exists (use --overwrite to replace it)"], id="output-exists"),
-    pytest.param({"case.yaml": case_text(), "blocked": "a file, not a folder"},
-                 ("run", "case.yaml", "--out-dir", "blocked"),
-                 ["blocked: cannot create the output folder"], id="output-folder-is-a-file"),
-    # -- rockslide info ------------------------------------------------------------------------------------
+    pytest.param({"case.yaml": case_text({"output.dir": "blocked"}), "blocked": "a file, not a folder"},
+                 RUN, ["blocked: cannot create the output folder"], id="output-folder-is-a-file"),
+    # -- rockslide info ----------------------------------------------------------------------------------
     pytest.param({}, ("info", "nosuch.at2"), ["nosuch.at2: record file not found"], id="info-missing"),
+    pytest.param({"folder.at2": None}, ("info", "folder.at2"),
+                 ["folder.at2: is not a file (expected an accelerogram file)"], id="info-folder"),
     pytest.param({"rec.csv": column_text(T, A)}, ("info", "rec.csv"),
                  ["rec.csv: units: give `units:`", "rockslide info: --units"], id="info-no-units"),
     pytest.param({"rec.csv": column_text(T, A)}, ("info", "rec.csv", "--units", "g", "--dt", "-1"),
@@ -372,19 +387,23 @@ BAD_INPUTS = [
     pytest.param({"rec.csv": column_text(T, A)}, ("info", "rec.csv", "--units", "g", "--column", "accel"),
                  ["rec.csv: column: column 'accel' is not a column name; the 2 columns are time, acc"],
                  id="info-column-name"),
-    # -- rockslide plot -------------------------------------------------------------------------------------
+    # -- rockslide plot ----------------------------------------------------------------------------------
     pytest.param({}, ("plot", "out/nosuch.h5"), ["out/nosuch.h5: result file not found"], id="plot-missing"),
     pytest.param({"case.yaml": case_text()}, ("plot", "case.yaml", "-o", "out/x.png"),
                  ["case.yaml: cannot read as a rockslide result (not an HDF5 file)"], id="plot-not-hdf5"),
-    pytest.param({"other.h5": lambda ws: _plain_hdf5(ws / "other.h5")}, ("plot", "other.h5", "-o", "out/x.png"),
+    pytest.param({"other.h5": lambda ws: _plain_hdf5(ws / "other.h5")},
+                 ("plot", "other.h5", "-o", "out/x.png"),
                  ["other.h5: not a rockslide result"], id="plot-foreign-hdf5"),
+    pytest.param({"half.h5": lambda ws: _truncated_result(ws)}, ("plot", "half.h5", "-o", "out/x.png"),
+                 ["half.h5: cannot read as a rockslide result"], id="plot-truncated-result"),
     pytest.param({}, ("plot", "out/nosuch.h5", "--time-shift", "nan"),
                  ["--time-shift: expected a finite number of seconds"], id="plot-time-shift-nan"),
-    # -- rockslide criteria ------------------------------------------------------------------------------------
+    # -- rockslide criteria ------------------------------------------------------------------------------
     pytest.param({}, ("criteria", "--height", "tall", "-o", "out/c.png"),
                  ["--height: cannot read 'tall' as a length", "'200 mm'"], id="criteria-height-word"),
     pytest.param({}, ("criteria", "--width", "-5 cm", "-o", "out/c.png"),
-                 ["--height/--width: height and width must be positive lengths"], id="criteria-width-negative"),
+                 ["--height/--width: height and width must be positive lengths"],
+                 id="criteria-width-negative"),
     pytest.param({}, ("criteria", "--av=-1.5", "-o", "out/c.png"),
                  ["--av: each vertical acceleration must be above -1 g"], id="criteria-av-flies"),
     pytest.param({}, ("criteria", "--av", "0,half", "-o", "out/c.png"),
@@ -397,13 +416,23 @@ BAD_INPUTS = [
                  ["out/c.txt: unknown figure format '.txt'", ".png"], id="criteria-output-format"),
     pytest.param({"out/c.png": b"previous figure"}, ("criteria", "-o", "out/c.png"),
                  ["out/c.png exists (use --overwrite to replace it)"], id="criteria-output-exists"),
-    # -- rockslide table1 -----------------------------------------------------------------------------------------
+    # -- rockslide table1 --------------------------------------------------------------------------------
     pytest.param({}, ("table1", "--configs", "nosuch", "--out", "out"),
                  ["nosuch: --configs: folder not found", "Table 1 case files"], id="table1-configs-missing"),
     pytest.param({"configs/fig06a-mu050.yaml": case_text({"contact.mu_static": "slippery"})},
                  ("table1", "--configs", "configs", "--out", "out", "--records-dir", "."),
                  ["fig06a-mu050.yaml: contact.mu_static: cannot read 'slippery'"], id="table1-bad-case"),
 ]
+
+
+def _truncated_result(ws: Path) -> bytes:
+    """The first half of a real result file (as a copy interrupted midway leaves it)."""
+    (ws / "made.yaml").write_text(case_text(QUICK))
+    assert invoke(["run", "made.yaml", "--no-plot", "--out-dir", "made"]).exit_code == 0
+    data = (ws / "made" / "example.h5").read_bytes()
+    shutil.rmtree(ws / "made")
+    (ws / "made.yaml").unlink()
+    return data[:len(data) // 2]
 
 
 def _plain_hdf5(path: Path) -> bytes:
@@ -456,8 +485,6 @@ def test_absurd_peak_is_a_warning_and_the_run_continues(ws):
 # ------------------------------------------------------------------------------------------------
 # Existing results: refused unless --overwrite, and input errors come first
 # ------------------------------------------------------------------------------------------------
-
-QUICK = {"solver.dt": "1 ms", "ground.tail": "0 s"}
 
 
 def sha256(path: Path) -> str:
@@ -575,10 +602,14 @@ def wait_for_temporary_file(proc, folder: Path, name: str, timeout: float = 120.
     pytest.fail(f"no temporary file .{name}.<pid>.tmp appeared within {timeout} s")
 
 
+posix_signals = pytest.mark.skipif(os.name != "posix", reason="POSIX signals (SIGKILL, SIGTERM, SIGINT)")
+
+
 def _default_sigint():
     signal.signal(signal.SIGINT, signal.SIG_DFL)   # a background job may have inherited SIG_IGN
 
 
+@posix_signals
 @pytest.mark.parametrize("previous", [False, True], ids=["no-previous-result", "previous-result"])
 def test_sigkill_midway_leaves_the_previous_result_or_none(ws, previous):
     write_long_case(ws)
@@ -611,6 +642,7 @@ def test_sigkill_midway_leaves_the_previous_result_or_none(ws, previous):
         assert not (out / "slow.h5").exists()
 
 
+@posix_signals
 @pytest.mark.parametrize("signum, code, word", [(signal.SIGINT, 130, "interrupted"),
                                                 (signal.SIGTERM, 143, "terminated")],
                          ids=["ctrl-c", "sigterm"])
