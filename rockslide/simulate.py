@@ -78,8 +78,9 @@ class Settings:
         Keep every n-th step in the history (0: no history).
     energy : bool
         Integrate the energy ledger (work of the ground and of friction).
-    chunk_intervals : int
-        Record intervals per kernel call (bounds the memory of a streamed history).
+    chunk_steps : int
+        Integration steps per kernel call at most (bounds the memory of a streamed history and the
+        time before Ctrl-C is noticed: the kernel returns to Python between chunks).
     """
 
     dt: float = 1e-4
@@ -90,7 +91,7 @@ class Settings:
     slip_rate: float = 0.0
     history_every: int = 1
     energy: bool = True
-    chunk_intervals: int = 50_000
+    chunk_steps: int = 2_000_000
 
 
 @dataclass
@@ -229,7 +230,7 @@ def simulate(model: Model, dt_record: float, horizontal, vertical, settings: Set
     events = np.zeros((1024, len(K.EVENT_COLUMNS)))
     k = 0
     while k < n_intervals and not K.finished(st):
-        k_end = min(n_intervals, k + settings.chunk_intervals)
+        k_end = min(n_intervals, k + max(1, settings.chunk_steps // n_sub))
         # history columns on the output grid between steps k*n_sub (exclusive, except at the
         # start) and k_end*n_sub (inclusive)
         if every > 0:

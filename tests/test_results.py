@@ -290,7 +290,7 @@ def test_streaming_gives_the_same_file(tmp_path, result):
         t = np.arange(0, 10, 0.01)
         ah = 6.0 * np.sin(2 * np.pi * 1.5 * t) * np.exp(-((t - 4) / 2) ** 2)
         streamed_result = simulate(Model.from_block(0.2, 0.1, 0.52, 0.494, 0.8), 0.01, ah, 0.3 * ah,
-                                   Settings(tail=2.0, chunk_intervals=97),
+                                   Settings(tail=2.0, chunk_steps=97 * 100),
                                    on_chunk=writer.append_history)
         assert streamed_result.history["time"].size == 0          # streamed, not kept
         assert writer.rows_written == result.history["time"].size
