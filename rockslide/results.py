@@ -57,6 +57,12 @@ level 4 with shuffle). Root attributes:
 - any ``extra_attrs`` given to the writer.
 
 Records keep their file name only, never a folder; the case is stored as written.
+
+Sweep files (`write_sweep`, `read_sweep`; format ``rockslide-sweep``, version 1) hold a grid of
+summaries instead, in the netCDF-4 data model so that ``xarray.open_dataset(path,
+engine="h5netcdf")`` gives a labelled dataset: one 1-D dataset per axis made an HDF5 dimension scale
+(``units``, ``long_name``, ``_Netcdf4Dimid``), one dataset per variable attached to the axes in
+order, and the provenance as root attributes. They are written atomically in the same way.
 """
 
 from __future__ import annotations

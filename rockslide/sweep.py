@@ -46,7 +46,7 @@ import re
 import shutil
 import threading
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from decimal import Decimal, InvalidOperation
 from pathlib import Path
 
@@ -71,6 +71,8 @@ MAX_POINTS = 1_000_000
 #: Chunk sizes: about ``n / CHUNKS_WANTED`` cases, within these bounds (the default).
 CHUNKS_WANTED = 100
 MIN_CHUNK, MAX_CHUNK = 4, 256
+#: A local parallel call gets at least this many cases per thread (whole chunks).
+CASES_PER_THREAD = 32
 #: Ranges include their stop when it is within this fraction of a step of the grid.
 RANGE_TOLERANCE = 1e-9
 
@@ -149,6 +151,7 @@ class Axis:
 
     @property
     def kind(self) -> AxisKind:
+        """What the axis changes (:data:`AXES`)."""
         return AXES[self.name]
 
     def __len__(self) -> int:
@@ -226,6 +229,7 @@ def _split(option: str, kind: str, piece: str) -> tuple[Decimal, str]:
 
 
 def _range_texts(option: str, kind: str, text: str, pieces) -> list[str]:
+    """The values of ``start:stop:step`` as texts with their unit, computed in decimal."""
     (start, u0), (stop, u1), (step, u2) = pieces
     if len({u0, u1, u2}) != 1:
         raise CaseError(f"give start, stop and step in one unit, or all without unit (SI), got "
@@ -331,18 +335,20 @@ class Plan:
     records: list
     chunk_size: int
     key: str = ""
-    extra: dict = field(default_factory=dict)
 
     @property
     def shape(self) -> tuple:
+        """The grid's shape, one dimension per axis."""
         return tuple(len(a) for a in self.axes)
 
     @property
     def n_cases(self) -> int:
+        """Number of points of the grid."""
         return int(self.params.shape[0])
 
     @property
     def n_chunks(self) -> int:
+        """Number of chunks (the last ones may hold one case less)."""
         return -(-self.n_cases // self.chunk_size)
 
     def chunk_indices(self, chunk: int) -> np.ndarray:
@@ -417,18 +423,6 @@ def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = N
     unscaled = rec.combine(traces["horizontal"], traces["vertical"], source=case.source)
     check_size(case, unscaled, history=False)
 
-    points = []                                   # (case, scale key) per point, flat C order
-    for combo in itertools.product(*(range(len(a)) for a in axes)):
-        changes = {}
-        for axis, i in zip(axes, combo, strict=True):
-            changes.update(axis_changes(axis.name, axis.values[i], case, ratio))
-        try:
-            point = case_with(case, changes)
-        except CaseError as exc:
-            raise _point_error(exc, axes, combo) from None
-        s = point.ground.scale
-        points.append((point, (s.pga_horizontal, s.factor, s.pga_vertical, s.vertical_factor)))
-
     settings = settings_for(case, history=False, energy=False)
     base_h, base_v = extend_with_tail(unscaled.horizontal, unscaled.vertical, unscaled.dt,
                                       settings.tail)
@@ -439,28 +433,38 @@ def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = N
     states = np.empty((n, K.N_STATE))
     factor_h = np.empty(n)
     factor_v = np.empty(n)
-    by_scale: dict[tuple, list[int]] = {}
-    for i, (_, scale) in enumerate(points):
-        by_scale.setdefault(scale, []).append(i)
-    for scale, members in by_scale.items():
-        ground = rec.combine(traces["horizontal"], traces["vertical"], pga_horizontal=scale[0],
-                             factor=scale[1], pga_vertical=scale[2], vertical_factor=scale[3],
-                             source=case.source)
-        checked = set()
-        for i in members:
-            point = points[i][0]
-            if point.gravity not in checked:
-                try:
-                    check_against_ground(point, ground)
-                except CaseError as exc:
-                    combo = np.unravel_index(i, tuple(len(a) for a in axes))
-                    raise _point_error(exc, axes, combo) from None
-                checked.add(point.gravity)
-            point_settings = settings_for(point, history=False, energy=False)
-            params[i] = parameters(model_for(point), unscaled.dt, point_settings, start)
-            states[i] = initial_state(point_settings)
-            factor_h[i] = ground.horizontal_factor
-            factor_v[i] = ground.vertical_factor
+    factors: dict[tuple, tuple[float, float]] = {}     # scale section -> (kh, kv)
+    checked: set[tuple] = set()                         # (scale section, gravity) checked
+    grounds: dict[tuple, rec.GroundMotion] = {}         # a few scaled records, for the checks
+    for i, combo in enumerate(itertools.product(*(range(len(a)) for a in axes))):
+        changes = {}
+        for axis, j in zip(axes, combo, strict=True):
+            changes.update(axis_changes(axis.name, axis.values[j], case, ratio))
+        try:
+            point = case_with(case, changes)
+        except CaseError as exc:
+            raise _point_error(exc, axes, combo) from None
+        s = point.ground.scale
+        scale = (s.pga_horizontal, s.factor, s.pga_vertical, s.vertical_factor)
+        if (scale, point.gravity) not in checked:
+            if scale not in grounds:
+                if len(grounds) >= 16:
+                    grounds.clear()
+                grounds[scale] = rec.combine(traces["horizontal"], traces["vertical"],
+                                             pga_horizontal=scale[0], factor=scale[1],
+                                             pga_vertical=scale[2], vertical_factor=scale[3],
+                                             source=case.source)
+            ground = grounds[scale]
+            try:
+                check_against_ground(point, ground)
+            except CaseError as exc:
+                raise _point_error(exc, axes, combo) from None
+            checked.add((scale, point.gravity))
+            factors[scale] = (ground.horizontal_factor, ground.vertical_factor)
+        point_settings = settings_for(point, history=False, energy=False)
+        params[i] = parameters(model_for(point), unscaled.dt, point_settings, start)
+        states[i] = initial_state(point_settings)
+        factor_h[i], factor_v[i] = factors[scale]
     plan = Plan(case=case, axes=axes, mu_kinetic_ratio=ratio, params=params, states=states,
                 factor_h=factor_h, factor_v=factor_v, base_h=np.ascontiguousarray(base_h),
                 base_v=np.ascontiguousarray(base_v), record_end=float(record_end),
@@ -557,6 +561,7 @@ class ChunkStore:
         return cls(result_path.with_name(f".{name}.chunks"), key)
 
     def path(self, chunk: int) -> Path:
+        """The file of chunk ``chunk``."""
         return self.folder / f"chunk-{chunk:06d}.npz"
 
     def load(self, chunk: int, indices: np.ndarray) -> np.ndarray | None:
@@ -661,6 +666,9 @@ def compute(plan: Plan, store: ChunkStore, chunks: Sequence[int], *, workers: in
 
 
 def _compute_local(plan, store, chunks, workers, progress):
+    """The chunks on numba's threads, a few at a time (at least `CASES_PER_THREAD` cases per
+    thread in each parallel call, so that the threads rarely wait for each other's last case),
+    each chunk stored as soon as its call returns."""
     import numba
 
     if workers is not None:
@@ -672,10 +680,17 @@ def _compute_local(plan, store, chunks, workers, progress):
     try:
         if workers is not None:
             numba.set_num_threads(int(workers))
-        for chunk in chunks:
-            indices = plan.chunk_indices(chunk)
+        threads = numba.get_num_threads()
+        group = max(1, round(CASES_PER_THREAD * threads / plan.chunk_size)) if threads > 1 else 1
+        chunks = list(chunks)
+        for start in range(0, len(chunks), group):
+            members = [(c, plan.chunk_indices(c)) for c in chunks[start:start + group]]
+            indices = np.concatenate([i for _, i in members])
             states = batch.compute(*_chunk_inputs(plan, indices), parallel=True)
-            store.save(chunk, indices, states)
+            offset = 0
+            for chunk, chunk_indices in members:
+                store.save(chunk, chunk_indices, states[offset:offset + chunk_indices.size])
+                offset += chunk_indices.size
             if progress is not None:
                 progress(indices.size)
     finally:
@@ -688,6 +703,8 @@ def _chunk_inputs(plan: Plan, indices: np.ndarray):
 
 
 def _compute_dask(plan, store, chunks, address, progress):
+    """One task per chunk on the cluster (`batch.compute`, serial in the task); each chunk is
+    stored as its result arrives."""
     try:
         import distributed
     except ImportError:  # pragma: no cover - a declared dependency

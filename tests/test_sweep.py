@@ -170,6 +170,20 @@ def test_mu_kinetic_follows_the_case_ratio(example):
     assert plan.params[:, K.P_NU].tolist() == [0.4, 0.6]
 
 
+def test_pga_replaces_a_factor_and_keeps_a_given_vertical_peak(tmp_path):
+    with_factor = tmp_path / "f.yaml"
+    with_factor.write_text(EXAMPLE.read_text().replace("pga_horizontal: 700 gal", "factor: 1.5"))
+    plan = sw.plan_sweep(load_case(with_factor), [sw.parse_axis("pga", "500gal,700gal")],
+                         records_dir=RECORDS)
+    ratio = plan.factor_v / plan.factor_h                    # the record's V/H ratio kept
+    assert plan.factor_h[1] / plan.factor_h[0] == pytest.approx(7 / 5) and ratio[0] == ratio[1]
+    with_vertical = tmp_path / "v.yaml"
+    with_vertical.write_text(EXAMPLE.read_text().replace("vertical_factor: 1.0", "pga_vertical: 300 gal"))
+    plan = sw.plan_sweep(load_case(with_vertical), [sw.parse_axis("pga", "500gal,700gal")],
+                         records_dir=RECORDS)
+    assert plan.factor_v[0] == plan.factor_v[1] and plan.factor_h[0] < plan.factor_h[1]
+
+
 # --------------------------------------------------------------------------------------------------
 # The grid equals single runs
 # --------------------------------------------------------------------------------------------------
