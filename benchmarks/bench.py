@@ -220,7 +220,7 @@ def work_precision(quick: bool):
     for title, run, exact in cases:
         for mode in MODES:
             for dt in dts:
-                seconds, values = cpu(lambda: run(dt, mode), repeat=1 if dt < 5e-5 else 2)
+                seconds, values = cpu(lambda run=run, dt=dt, mode=mode: run(dt, mode), repeat=1 if dt < 5e-5 else 2)
                 errors = {k: abs(values[k] - exact[k]) if not (math.isnan(values[k]) and math.isnan(exact[k]))
                           else 0.0 for k in exact}
                 table.append({"case": title, "mode": mode, "dt": dt, "cpu": seconds, "values": values,
@@ -233,7 +233,7 @@ def figure(table) -> Figure:
     fig = Figure(figsize=(12, 9), dpi=110, layout="constrained")
     axes = fig.subplots(2, 2).ravel()
     markers = {"located": "o-", "step-end": "s--"}
-    for ax, case in zip(axes, cases):
+    for ax, case in zip(axes, cases, strict=False):
         rows = [r for r in table if r["case"] == case]
         quantities = list(rows[0]["errors"])
         for q in quantities:
@@ -272,7 +272,8 @@ def markdown(speeds, full, table) -> str:
     for case in cases:
         rows = [r for r in table if r["case"] == case]
         quantities = list(rows[0]["errors"])
-        lines += [f"### {case}", "", "| events | dt [ms] | CPU [s] | " + " | ".join(f"error: {q}" for q in quantities) + " |",
+        header = "| events | dt [ms] | CPU [s] | " + " | ".join(f"error: {q}" for q in quantities) + " |"
+        lines += [f"### {case}", "", header,
                   "|---|---|---|" + "---|" * len(quantities)]
         for r in rows:
             lines.append(f"| {r['mode']} | {r['dt'] * 1e3:g} | {r['cpu']:.4f} | "
@@ -291,7 +292,7 @@ def sensitivity_note(table) -> list[str]:
         rows = [r for r in table if r["case"] == case and r["mode"] == "located"]
         for q in rows[0]["errors"]:
             errs = [r["errors"][q] for r in rows]
-            converging = all(b <= a * 1.5 + 1e-14 for a, b in zip(errs, errs[1:]))
+            converging = all(b <= a * 1.5 + 1e-14 for a, b in zip(errs, errs[1:], strict=False))
             if not converging:
                 out.append(f"- {case}, {q}: the located-event error does not decrease steadily with dt "
                            f"({', '.join(f'{e:.1e}' for e in errs)}): the response is sensitive (a small change "

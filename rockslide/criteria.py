@@ -12,8 +12,17 @@ from __future__ import annotations
 
 import numpy as np
 
-from .physics import (REST, ROCK, ROCKSLIP, SLIP, block_constants, contact_forces, liftoff_margin,
-                      rock_acceleration, slip_margin)
+from .physics import (
+    REST,
+    ROCK,
+    ROCKSLIP,
+    SLIP,
+    block_constants,
+    contact_forces,
+    liftoff_margin,
+    rock_acceleration,
+    slip_margin,
+)
 
 MODE_NAMES = {REST: "rest", SLIP: "slip", ROCK: "liftoff", ROCKSLIP: "liftoff-slip"}
 

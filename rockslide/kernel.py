@@ -30,10 +30,23 @@ import numpy as np
 from numba import njit
 
 from .physics import (
-    OVERTURNED, REST, ROCK, ROCKSLIP, SLIP,
-    contact_forces, contact_forces_sc, kinetic_energy, liftoff_margin, potential_energy, rebound,
-    rock_acceleration, rock_acceleration_sc, rockslip_accelerations_sc, slip_acceleration,
-    slip_margin, tilt,
+    OVERTURNED,
+    REST,
+    ROCK,
+    ROCKSLIP,
+    SLIP,
+    contact_forces,
+    contact_forces_sc,
+    kinetic_energy,
+    liftoff_margin,
+    potential_energy,
+    rebound,
+    rock_acceleration,
+    rock_acceleration_sc,
+    rockslip_accelerations_sc,
+    slip_acceleration,
+    slip_margin,
+    tilt,
 )
 
 # --- parameter vector ``p`` -------------------------------------------------------------------
@@ -338,7 +351,9 @@ def apply_event(kind, st, p, t, ah, G, events):
         st[S_OVERTURN_TIME] = t
         st[S_DIRECTION] = lam
         st[S_FALL_START] = st[S_FALL_CANDIDATE]
-        note_extremes(st, t)
+        # step-end switching finds theta a little past pi/2 at the step's end: the block lies there
+        st[S_MAX_THETA] = HALF_PI
+        st[S_THETA_MAX_TIME] = t
         log_event(st, events, t, mode, OVERTURNED, C_OVERTURN)
         stop(st, t)
     elif kind == K_SLIP_START:
@@ -368,22 +383,20 @@ def apply_event(kind, st, p, t, ah, G, events):
             log_event(st, events, t, SLIP, ROCKSLIP, C_LIFTOFF)
     elif kind == K_SLIP_STOP:
         st[S_XDOT] = 0.0
+        # The pivot sticks if static friction holds the contact forces of the state without slip:
+        # N = G, Rx = ah upright (SLIP -> REST), ROCK's Rx and N lifted off (ROCKSLIP -> ROCK).
         if mode == SLIP:
-            if slip_margin(mu, G, ah) >= 0.0:
-                st[S_MODE] = REST
-                log_event(st, events, t, SLIP, REST, C_SLIP_STOP)
-            else:
-                st[S_SIGMA] = -1.0 if ah > 0.0 else 1.0
-                log_event(st, events, t, SLIP, SLIP, C_SLIP_REVERSAL)
-        else:                                              # ROCKSLIP, with ROCK's Rx and N
+            Rx, N, stuck = ah, G, REST
+        else:
             thdd = rock_acceleration(st[S_THETA], ah, G, lam, R, alpha)
             Rx, N = contact_forces(st[S_THETA], st[S_THETADOT], thdd, ah, G, lam, R, alpha)
-            if slip_margin(mu, N, Rx) >= 0.0:
-                st[S_MODE] = ROCK
-                log_event(st, events, t, ROCKSLIP, ROCK, C_SLIP_STOP)
-            else:
-                st[S_SIGMA] = -1.0 if Rx > 0.0 else 1.0
-                log_event(st, events, t, ROCKSLIP, ROCKSLIP, C_SLIP_REVERSAL)
+            stuck = ROCK
+        if slip_margin(mu, N, Rx) >= 0.0:
+            st[S_MODE] = stuck
+            log_event(st, events, t, mode, stuck, C_SLIP_STOP)
+        else:                                              # reversed: sigma = -sign(Rx)
+            st[S_SIGMA] = -1.0 if Rx > 0.0 else 1.0
+            log_event(st, events, t, mode, mode, C_SLIP_REVERSAL)
     elif kind == K_IMPACT:
         st[S_IMPACTS] += 1.0
         energy_before = mechanical_energy(st, p)

@@ -18,7 +18,6 @@ GUI backend and nothing to close; figures are freed with their last reference.
 from __future__ import annotations
 
 import math
-import os
 from pathlib import Path
 
 import numpy as np
@@ -28,6 +27,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
 from .errors import OutputError
+from .files import atomic_write, check_destination
 from .physics import OVERTURNED, REST, ROCK, ROCKSLIP, SLIP, STATE_NAMES
 
 GAL = 0.01          # [m/s^2]
@@ -293,7 +293,7 @@ def criteria_figure(ah_over_g, mu_values, maps, *, title: str = "") -> Figure:
     order = [REST, SLIP, ROCK, ROCKSLIP]
     cmap = ListedColormap([CRITERIA_COLOURS[c] for c in order])
     norm = BoundaryNorm(np.arange(len(order) + 1) - 0.5, cmap.N)
-    for ax, (caption, codes) in zip(axes, maps):
+    for ax, (caption, codes) in zip(axes, maps, strict=True):
         index = np.vectorize(order.index)(codes)
         ax.pcolormesh(ah_over_g, mu_values, index, cmap=cmap, norm=norm, shading="nearest")
         ax.contour(ah_over_g, mu_values, index, levels=np.arange(len(order)) + 0.5, colors="0.3",
@@ -699,36 +699,9 @@ def save_figure(fig: Figure, path, *, overwrite: bool = False, dpi: float = DPI)
     if fmt not in supported:
         raise OutputError(f"unknown figure format {path.suffix or '(none)'!r}; expected one of "
                           + ", ".join(f".{k}" for k in sorted(supported)), source=str(path))
-    if path.is_dir():
-        raise OutputError("is a folder; expected a figure file name such as out/case.png",
-                          source=str(path))
-    if not overwrite and (path.exists() or path.is_symlink()):
-        raise OutputError(f"{path} exists (use --overwrite to replace it)")
-    folder = path.parent
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise OutputError(f"cannot create the output folder: {exc.strerror or exc}",
-                          source=str(folder)) from None
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    try:
-        try:
-            with open(tmp, "wb") as handle:
-                fig.savefig(handle, format=fmt, dpi=dpi)
-                handle.flush()
-                os.fsync(handle.fileno())
-        except OSError as exc:
-            raise OutputError(f"cannot write the figure: {exc.strerror or exc}",
-                              source=str(path)) from None
-        if not overwrite and (path.exists() or path.is_symlink()):
-            raise OutputError(f"{path} exists (use --overwrite to replace it)")
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise
+    check_destination(path, overwrite=overwrite, example="out/case.png")
+    with atomic_write(path, overwrite=overwrite, what="figure") as handle:
+        fig.savefig(handle, format=fmt, dpi=dpi)
     return path
 
 

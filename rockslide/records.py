@@ -43,6 +43,7 @@ from obspy.core import AttribDict
 from obspy.core.util.base import ENTRY_POINTS, buffered_load_entry_point
 
 from .errors import CaseError, RecordError
+from .files import atomic_write
 from .units import STANDARD_GRAVITY, unit_factor
 
 RECORDS_ENV = "ROCKSLIDE_RECORDS"
@@ -938,7 +939,6 @@ def write_at2(path, values_g, dt: float, *, title: str, component: str) -> Path:
              "ACCELERATION TIME SERIES IN UNITS OF G", f"NPTS= {values.size:7d}, DT= {dt:9.4f} SEC,"]
     for i in range(0, values.size, 5):
         lines.append("".join(f"{v:15.7E}" for v in values[i:i + 5]))
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    tmp.write_text("\n".join(lines) + "\n")
-    os.replace(tmp, path)
+    with atomic_write(path, overwrite=True, mode="w", what="record") as handle:
+        handle.write("\n".join(lines) + "\n")
     return path

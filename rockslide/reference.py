@@ -17,8 +17,17 @@ from scipy.optimize import brentq
 
 from . import kernel as K
 from .physics import REST
-from .simulate import (Model, Result, Settings, event_table, extend_with_tail, history_dict,
-                       initial_state, parameters, summarise)
+from .simulate import (
+    Model,
+    Result,
+    Settings,
+    event_table,
+    extend_with_tail,
+    history_dict,
+    initial_state,
+    parameters,
+    summarise,
+)
 
 RTOL = 1e-12
 ATOL = 1e-14
@@ -152,7 +161,7 @@ def _integrate_moving(st, p, tau, tau_end, tk, a0, sa, v0, sv, events, gv, kinds
             rows.append([start + (n_first + j) * h, lam * y[0], lam * y[1], y[2], y[3], mode])
     # bookkeeping along the solver's steps (extremes, time in state, the fall past alpha)
     previous = tau
-    for t_i, y_i in zip(solution.t[1:], solution.y.T[1:]):
+    for t_i, y_i in zip(solution.t[1:], solution.y.T[1:], strict=True):
         K.accept(st, y_i[0], y_i[1], y_i[2], y_i[3], y_i[4], y_i[5], mode, previous, t_i, tk, p, False)
         previous = t_i
     _exact_peaks(st, solution, tk)
@@ -181,7 +190,7 @@ def _exact_peaks(st, solution, tk):
         for component, rate, slot in ((0, 1, K.S_MAX_THETA), (2, 3, K.S_MAX_X)):
             r0, r1 = y[rate, i], y[rate, i + 1]
             if r0 * r1 < 0.0 and (component == 2 or r0 > 0.0):
-                t_peak = brentq(lambda s: solution.sol(s)[rate], t[i], t[i + 1], xtol=1e-15)
+                t_peak = brentq(lambda s, r=rate: solution.sol(s)[r], t[i], t[i + 1], xtol=1e-15)
                 value = abs(solution.sol(t_peak)[component])
                 if value > st[slot]:
                     st[slot] = value

@@ -71,7 +71,6 @@ import contextlib
 import dataclasses
 import importlib.metadata
 import math
-import os
 import platform
 import signal
 import threading
@@ -84,6 +83,7 @@ import numpy as np
 
 from . import __version__
 from .errors import OutputError
+from .files import check_destination, publish, remove_quietly, temporary_path
 from .kernel import HISTORY_COLUMNS
 from .physics import STATE_NAMES
 from .simulate import EVENT_DTYPE, Result, Summary
@@ -142,61 +142,6 @@ class StoredResult:
 # --------------------------------------------------------------------------------------------------
 
 
-def check_destination(path, *, overwrite: bool = False) -> Path:
-    """Refuse an existing ``path`` unless ``overwrite``; create its folder if missing.
-
-    Call it before any long computation, so that a run is not wasted on a result it may not write.
-
-    Returns
-    -------
-    Path
-        ``path`` as a `Path`.
-
-    Raises
-    ------
-    OutputError
-        ``path`` exists and ``overwrite`` is false, ``path`` is a folder, or its folder cannot be
-        created.
-    """
-    path = Path(path)
-    if path.is_dir():
-        raise OutputError("is a folder; expected a result file name such as out/case.h5", source=str(path))
-    if not overwrite and (path.exists() or path.is_symlink()):
-        raise OutputError(f"{path} exists (use --overwrite to replace it)")
-    folder = path.parent
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise OutputError(f"cannot create the output folder: {exc.strerror or exc}",
-                          source=str(folder)) from None
-    if not folder.is_dir():
-        raise OutputError("cannot create the output folder: a file of that name exists",
-                          source=str(folder))
-    return path
-
-
-def temporary_path(path) -> Path:
-    """The temporary file a result (or figure) is written to before it is renamed onto ``path``."""
-    path = Path(path)
-    return path.with_name(f".{path.name}.{os.getpid()}.tmp")
-
-
-def publish(tmp: Path, path: Path, *, overwrite: bool) -> None:
-    """Sync ``tmp`` to disk and rename it onto ``path`` (atomic on POSIX and Windows).
-
-    Raises OutputError (and deletes ``tmp``) if ``path`` appeared meanwhile and ``overwrite`` is false.
-    """
-    try:
-        if not overwrite and (path.exists() or path.is_symlink()):
-            raise OutputError(f"{path} exists (use --overwrite to replace it)")
-        _fsync(tmp)
-        os.replace(tmp, path)
-    except BaseException:
-        _remove(tmp)
-        raise
-    _fsync_folder(path.parent)
-
-
 class ResultWriter:
     """Write one result file, streaming the time history (bounded memory).
 
@@ -232,7 +177,7 @@ class ResultWriter:
                 pass
             self._file = h5py.File(self.tmp, "w", track_order=True)
         except OSError as exc:
-            _remove(self.tmp)
+            remove_quietly(self.tmp)
             raise OutputError(f"cannot write in this folder ({_reason(exc)})",
                               source=str(self.path.parent)) from None
         try:
@@ -319,13 +264,13 @@ class ResultWriter:
         with _sigint_held():
             self._done = True
             self._datasets = {}
-            _remove(self.tmp)          # POSIX: unlink first, so that nothing is left even if closing fails
+            remove_quietly(self.tmp)          # POSIX: unlink first, so that nothing is left even if closing fails
             try:
                 if self._file.id.valid:
                     self._file.close()
             except Exception:  # noqa: BLE001 - closing a broken file must not hide the first error
                 pass
-            _remove(self.tmp)          # Windows cannot unlink an open file
+            remove_quietly(self.tmp)          # Windows cannot unlink an open file
 
     # -- internals ---------------------------------------------------------------------------------
     def _check_open(self) -> None:
@@ -739,13 +684,13 @@ def write_sweep(path, coords, variables, *, attrs: dict | None = None, overwrite
                     ds.dims[i].attach_scale(scale)
             f.flush()
     except OutputError:
-        _remove(tmp)
+        remove_quietly(tmp)
         raise
     except OSError as exc:
-        _remove(tmp)
+        remove_quietly(tmp)
         raise OutputError(f"cannot write the sweep file ({_reason(exc)})", source=str(path)) from None
     except BaseException:
-        _remove(tmp)
+        remove_quietly(tmp)
         raise
     publish(tmp, path, overwrite=overwrite)
     return path
@@ -851,37 +796,6 @@ def _sigint_held():
     finally:
         if held:
             signal.pthread_sigmask(signal.SIG_SETMASK, old)
-
-
-def _remove(path: Path) -> None:
-    try:
-        os.unlink(path)
-    except FileNotFoundError:
-        pass
-    except OSError:  # pragma: no cover - best effort; the name marks it as a leftover
-        pass
-
-
-def _fsync(path: Path) -> None:
-    fd = os.open(path, os.O_RDONLY)
-    try:
-        os.fsync(fd)
-    finally:
-        os.close(fd)
-
-
-def _fsync_folder(folder: Path) -> None:
-    """Make the rename durable (POSIX); a no-op where folders cannot be opened."""
-    try:
-        fd = os.open(folder, os.O_RDONLY)
-    except OSError:
-        return
-    try:
-        os.fsync(fd)
-    except OSError:  # pragma: no cover
-        pass
-    finally:
-        os.close(fd)
 
 
 def _reason(exc: BaseException) -> str:

@@ -14,8 +14,17 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import kernel as K
-from .physics import (OVERTURNED, REST, ROCK, ROCKSLIP, SLIP, STATE_NAMES, block_constants,
-                      kinetic_energy, potential_energy)
+from .physics import (
+    OVERTURNED,
+    REST,
+    ROCK,
+    ROCKSLIP,
+    SLIP,
+    STATE_NAMES,
+    block_constants,
+    kinetic_energy,
+    potential_energy,
+)
 
 EVENT_DTYPE = np.dtype([("time", "f8"), ("from", "S10"), ("to", "S10"), ("cause", "S14"),
                         ("edge", "i1"), ("slip_direction", "i1")])

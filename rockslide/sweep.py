@@ -41,10 +41,8 @@ import hashlib
 import itertools
 import json
 import math
-import os
 import re
 import shutil
-import threading
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from decimal import Decimal, InvalidOperation
@@ -57,6 +55,7 @@ from . import kernel as K
 from . import records as rec
 from .case import Case, case_with
 from .errors import CaseError, OutputError, RecordError
+from .files import atomic_write
 from .physics import OVERTURNED
 from .plots import sweep_category, sweep_figure
 from .runner import check_against_ground, check_size, model_for, settings_for
@@ -585,19 +584,8 @@ class ChunkStore:
         except OSError as exc:
             raise OutputError(f"cannot create the chunk folder: {exc.strerror or exc}",
                               source=str(self.folder)) from None
-        final = self.path(chunk)
-        tmp = final.with_name(f".{final.name}.{os.getpid()}.{threading.get_ident()}.tmp")
-        try:
-            with open(tmp, "wb") as handle:
-                np.savez(handle, key=np.array(self.key), indices=indices, states=states)
-            os.replace(tmp, final)
-        except OSError as exc:
-            _unlink(tmp)
-            raise OutputError(f"cannot write a chunk: {exc.strerror or exc}",
-                              source=str(self.folder)) from None
-        except BaseException:
-            _unlink(tmp)
-            raise
+        with atomic_write(self.path(chunk), overwrite=True, per_thread=True, what="chunk") as handle:
+            np.savez(handle, key=np.array(self.key), indices=indices, states=states)
 
     def count(self) -> int:
         """Chunk files stored for this definition."""
@@ -620,13 +608,6 @@ class ChunkStore:
             self.root.rmdir()
         except OSError:
             pass
-
-
-def _unlink(path: Path) -> None:
-    try:
-        os.unlink(path)
-    except OSError:
-        pass
 
 
 # --------------------------------------------------------------------------------------------------

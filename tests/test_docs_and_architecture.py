@@ -7,8 +7,8 @@ import sys
 
 import pytest
 from click.testing import CliRunner
-
 from conftest import REPO
+
 from rockslide.case import iter_case_keys
 from rockslide.cli import main
 

@@ -32,13 +32,13 @@ import sys
 import textwrap
 from collections import Counter
 from dataclasses import replace
-from functools import lru_cache
+from functools import cache
 
 import numpy as np
 import pytest
+from conftest import REPO, real_record
 from rocking_reference import landing_rate, quarter_period
 
-from conftest import REPO, real_record
 from rockslide import physics as P
 from rockslide.kernel import STEP_END_FLIGHT_STEPS, THETA_END
 from rockslide.records import read_record
@@ -101,7 +101,7 @@ def _assert_same_events(kernel, reference, tolerance):
     assert len(ek) == len(er), (len(ek), len(er))
 
 
-@lru_cache(maxsize=None)
+@cache
 def _synthetic():
     """The shipped synthetic records (20 s at 0.01 s, peaks 0.6 g and 0.3 g), in m/s^2."""
     h = read_record(REPO / "records" / "synthetic_kt_h.at2")

@@ -10,8 +10,8 @@ import csv
 from pathlib import Path
 
 import pytest
-
 from conftest import REPO, real_record
+
 from rockslide import table1
 from rockslide.errors import RecordError
 

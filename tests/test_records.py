@@ -209,7 +209,8 @@ class TestAt2:
         assert read_record(path).stats.rockslide.format == "at2"
 
     def test_sniffed_by_extension_any_case(self, tmp_path):
-        text = at2_text(AT2_LINE4["old_peer"], first="PEER STRONG MOTION DATABASE RECORD. PROCESSING BY PACIFIC ENGINEERING.")
+        first = "PEER STRONG MOTION DATABASE RECORD. PROCESSING BY PACIFIC ENGINEERING."
+        text = at2_text(AT2_LINE4["old_peer"], first=first)
         path = write(tmp_path, "OLD.AT2", text)
         np.testing.assert_allclose(read_record(path).data, np.array([float(v) for v in AT2_VALUES]) * G,
                                    rtol=1e-15)
