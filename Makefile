@@ -35,10 +35,10 @@ bench:
 	$(PYTHON) benchmarks/bench.py --out results
 
 table1:
-	rockslide table1 --records-dir "$(RECORDS)" --out results
+	$(PYTHON) -m rockslide.cli table1 --records-dir "$(RECORDS)" --out results
 
 example:
-	rockslide run configs/example.yaml --overwrite
+	$(PYTHON) -m rockslide.cli run configs/example.yaml --overwrite
 
 records:
 	$(PYTHON) records/make_example_records.py
