@@ -271,8 +271,8 @@ def markdown(speeds, full, table) -> str:
     for k, (value, unit) in speeds.items():
         shown = f"{value / 1e6:.2f} M {unit}" if unit == "steps/s" else f"{value:.2f} {unit}"
         lines.append(f"| {k} | {shown} |")
-    lines += ["", f"A full `rockslide run` of a 60 s record (synthetic, 700 gal, mu = 0.52, 0.1 ms, history every step, "
-              f"HDF5 and PNG written): **{full['wall']:.2f} s wall time including start-up**, of which "
+    lines += ["", "A full `rockslide run` of a 60 s record (synthetic, 700 gal, mu = 0.52, 0.1 ms, history every "
+              f"step, HDF5 and PNG written): **{full['wall']:.2f} s wall time including start-up**, of which "
               f"{full['inside']:.2f} s inside the command (reading, computing, writing, plotting). The block was "
               f"{full['verdict']}; time in states: "
               + ", ".join(f"{k} {v:.1f} s" for k, v in full["states"].items()) + ".", "",
