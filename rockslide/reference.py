@@ -16,7 +16,7 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
 from . import kernel as K
-from .physics import REST
+from .physics import REST, STATE_NAMES
 from .simulate import (
     Model,
     Result,
@@ -130,6 +130,12 @@ def _integrate_moving(st, p, tau, tau_end, tk, a0, sa, v0, sv, events, gv, kinds
 
     starts_at_zero = gv[:n_events] == 0.0
 
+    def make_values(y, t):
+        g = np.zeros(K.MAX_EVENTS_PER_MODE)
+        kk = np.zeros(K.MAX_EVENTS_PER_MODE, dtype=np.int64)
+        K.event_values(mode, lam, sigma, np.asarray(y), a0 + sa * t, p[K.P_G] + v0 + sv * t, p, g, kk)
+        return g
+
     def make_event(i):
         g = np.zeros(K.MAX_EVENTS_PER_MODE)
         kk = np.zeros(K.MAX_EVENTS_PER_MODE, dtype=np.int64)
@@ -165,11 +171,29 @@ def _integrate_moving(st, p, tau, tau_end, tk, a0, sa, v0, sv, events, gv, kinds
         K.accept(st, y_i[0], y_i[1], y_i[2], y_i[3], y_i[4], y_i[5], mode, previous, t_i, tk, p, False)
         previous = t_i
     _exact_peaks(st, solution, tk)
+    if solution.status == -1:
+        # The solver could not go on: in this model only the Painleve point (accelerations ~ 1/D as
+        # D -> 0 in ROCKSLIP) makes the equations singular. Anything else is a failure to report.
+        _set_state(st, solution.y[:, -1].copy())
+        if mode == K.ROCKSLIP:
+            st[K.S_STATUS] = K.STATUS_PAINLEVE
+            K.log_event(st, events, tk + t_stop, mode, mode, K.C_PAINLEVE)
+            K.stop(st, tk + t_stop)
+            return t_stop
+        raise RuntimeError(f"the reference solver failed at t = {tk + t_stop:.9g} s in state "
+                           f"{STATE_NAMES[mode]}: {solution.message}")
     if not fired:
         return tau_end
-    # earliest event; ties go to the first row of the table (lowest index)
+    # The earliest event wins; an event of an earlier row of the table whose function has fallen to
+    # zero at the same instant (to 1e-9 of its value at the start) is a tie and goes first, as in
+    # the kernel (e.g. flight and the eq. 23 liftoff margin (tan(alpha) - nu) G at G = 0).
     te, index = min(fired)
-    y_e = solution.y_events[index][0].copy()
+    g_start = make_values(y0, tau)
+    g_event = make_values(solution.y_events[index][0], te)
+    tied = [i for i in range(index) if g_event[i] <= 1e-9 * abs(g_start[i])]
+    if tied and event_kinds[index] != K.K_PAINLEVE:    # at D = 0 the other functions mean nothing
+        index = tied[0]
+    y_e = solution.y_events[index][0].copy() if len(solution.t_events[index]) else solution.y[:, -1].copy()
     _set_state(st, y_e)
     kind = event_kinds[index]
     if kind == K.K_IMPACT:

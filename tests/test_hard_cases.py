@@ -660,11 +660,6 @@ def test_vertical_acceleration_past_minus_g_is_flight(start_state, mode):
     _assert_all_finite(result)
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "reference.py picks the earliest of the located events without the kernel's tie tolerance: "
-    "at G = 0 during SLIP the eq. 23 margin G (tan(alpha) - nu) vanishes with G and scipy puts its "
-    "root a few ulps earlier, so the reference logs a spurious SLIP -> ROCKSLIP liftoff at the "
-    "flight instant (decision 1 says flight)"))
 def test_reference_reports_flight_from_slip_without_a_spurious_liftoff():
     model, dt, ah, av, settings = _flight_run("SLIP", "located")
     reference = simulate_reference(model, dt, ah, av, replace(settings, history_every=0))
@@ -757,14 +752,6 @@ def test_painleve_is_reported_with_its_time():
     assert s.end_time <= step_end.summary.end_time <= s.end_time + result.step + 1e-12
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "reference.py ignores a failed solve_ivp: approaching D = 0 (0.2 m x 0.25 m, mu = nu = 1.8, "
-    "4 m/s) the accelerations grow like 1/D and DOP853 stops with status -1 ('Required step size "
-    "is less than spacing between numbers') at t = 0.0159210 s; _integrate_moving then returns the "
-    "end of the record interval as if it had been integrated. On a record ending at 0.016 s the "
-    "reference reports status 'ok'; with a longer record 'painleve' at 0.016 s, the next "
-    "interval's start (in other cases only after minutes of solver work); the kernel: 'painleve' "
-    "at 0.0159210 s"))
 def test_reference_does_not_skip_a_failed_integration():
     model, dt, ah, av, settings = _painleve_case(0.25, 1.8, tail=0.015)
     kernel = simulate(model, dt, ah, av, replace(settings, dt=1e-5, history_every=0))
