@@ -146,10 +146,11 @@ def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, robustness
     h5_path = folder / f"{case.name}.h5"
     png_path = folder / f"{case.name}.png"
     prepared = runner.prepare(case, records.records_dir(records_dir))
-    _note_first_compile()   # input errors first
-    for path in (h5_path, png_path if not no_plot else None):
+    for path in (h5_path, png_path if not no_plot else None):   # input errors first, then outputs
         if path is not None and path.exists() and not overwrite:
             raise OutputError(f"{path} exists (use --overwrite to replace it)")
+    results.check_destination(h5_path, overwrite=overwrite)
+    _note_first_compile()
     with results.ResultWriter(h5_path, overwrite=overwrite) as writer:
         streamed = prepared.case.solver.method == "kernel"
         result = runner.simulate_prepared(prepared, on_chunk=writer.append_history if streamed else None)

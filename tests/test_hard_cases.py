@@ -795,12 +795,15 @@ HOUR_SCRIPT = textwrap.dedent("""
     av = 0.5 * g * envelope * np.sin(2 * np.pi * 9.2 * t)
     del t, envelope
     model = Model.from_block(1.0, 0.5, 0.51, 0.505, 0.8)
+    simulate(model, dt, ah[:3000], av[:3000], Settings())      # compile or load the kernel first
+    baseline_kb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
     with ResultWriter(sys.argv[1]) as writer:
         result = simulate(model, dt, ah, av, Settings(), on_chunk=writer.append_history)
         rows = writer.rows_written
         writer.finish(result, name="hour")
     s = result.summary
     print(json.dumps({"peak_rss_kb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss,
+                      "baseline_rss_kb": baseline_kb,
                       "rows": rows, "step": result.step, "status": s.status, "end_time": s.end_time,
                       "time_in_state": s.time_in_state, "impacts": s.impacts,
                       "history_kept": len(result.history["time"])}))
@@ -813,10 +816,9 @@ def test_hour_long_record_streams_with_bounded_memory(tmp_path):
     """3600 s at 0.1 ms = 36 M steps. A block (1 m x 0.5 m, mu = 0.51 just above tan(alpha),
     nu = 0.505) under 30 s beats of a 4 Hz input with vertical motion rocks about 60 % of the time
     and rocks while slipping about 10 % (it never overturns). The history is streamed with
-    on_chunk into a ResultWriter in a subprocess, whose peak RSS must stay below 600 MB, far below
-    what the full in-memory history takes (36 M x 48 bytes = 1.7 GB; measured ~430 MB: the
-    interpreter and libraries ~130 MB plus the history chunks of at most 2 M steps, 96 MB each,
-    and the writer's buffers). The file then holds
+    on_chunk into a ResultWriter in a subprocess, whose memory must grow during the run by far less
+    than the full in-memory history would take (36 M x 48 bytes = 1.7 GB; bound 30 %; it holds
+    history chunks of at most 2 M steps, 96 MB each, and the writer's buffers). The file then holds
     the whole time axis, every step, and reads back (in slices, to keep this process small)."""
     import h5py
 
@@ -831,8 +833,10 @@ def test_hour_long_record_streams_with_bounded_memory(tmp_path):
     assert out["status"] == "ok" and out["end_time"] == pytest.approx(3600.0)
     assert out["rows"] == n and out["history_kept"] == 0
     full_history_mb = n * 48 / 2**20
-    peak_mb = out["peak_rss_kb"] / 1024                          # Linux: ru_maxrss in kB
-    assert peak_mb < 600 < 0.4 * full_history_mb, f"peak RSS {peak_mb:.0f} MB"
+    # Linux: ru_maxrss in kB. What the run adds to the process (after imports and compilation,
+    # which vary between machines) is what streaming bounds: the chunks of at most 2 M steps.
+    growth_mb = (out["peak_rss_kb"] - out["baseline_rss_kb"]) / 1024
+    assert growth_mb < 0.3 * full_history_mb, f"the run grew the process by {growth_mb:.0f} MB"
     moving = out["time_in_state"]["ROCK"] + out["time_in_state"]["ROCKSLIP"] + out["time_in_state"]["SLIP"]
     assert moving > 0.5 * 3600 and out["time_in_state"]["ROCKSLIP"] > 0.05 * 3600
     with h5py.File(path, "r") as f:
