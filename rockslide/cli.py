@@ -187,19 +187,24 @@ def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, robustness
 @click.option("--time-shift", type=float, default=0.0, show_default=True,
               help="Seconds added to the time axis (to lay the figure beside another's).")
 def plot(result_file, output, time_shift):
-    """Redraw the figure of a result file (replaces its PNG).
+    """Redraw the figure of a result file or a sweep file (replaces its PNG).
 
     \b
     Example:
         rockslide plot out/example.h5
+        rockslide plot out/example.sweep.h5
     """
     from . import results
 
     if not math.isfinite(time_shift):
         raise CaseError(f"expected a finite number of seconds, got {time_shift}", source="--time-shift")
-    stored = results.read_result(result_file)
     png = output if output is not None else Path(result_file).with_suffix(".png")
-    _draw(stored, png, overwrite=True, time_shift=time_shift)
+    if results.file_format(result_file) == results.SWEEP_FORMAT:
+        from .plots import save_figure
+        from .sweep import stored_figure
+        save_figure(stored_figure(results.read_sweep(result_file)), png, overwrite=True)
+    else:
+        _draw(results.read_result(result_file), png, overwrite=True, time_shift=time_shift)
     click.echo(f"redrew {png}")
 
 

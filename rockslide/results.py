@@ -696,6 +696,17 @@ def write_sweep(path, coords, variables, *, attrs: dict | None = None, overwrite
     return path
 
 
+def file_format(path) -> str | None:
+    """The ``format`` attribute of a rockslide HDF5 file (``"rockslide-result"`` or
+    ``"rockslide-sweep"``), or None if the file cannot be read as one."""
+    try:
+        with h5py.File(path, "r") as f:
+            value = _plain(f.attrs.get("format"))
+    except OSError:
+        return None
+    return value if value in (FORMAT, SWEEP_FORMAT) else None
+
+
 def read_sweep(path) -> StoredSweep:
     """Read a sweep file written by `write_sweep`.
 

@@ -897,11 +897,23 @@ def categories(variables: dict) -> np.ndarray:
 def figure(plan: Plan, variables: dict):
     """The PNG maps of a sweep (`plots.sweep_figure`): axes in their display units (gal for
     accelerations given as PGA), categories from `categories`."""
-    over = int(variables["overturned"][0].sum())
-    axes = [(a.kind.label, np.asarray(a.values) / a.kind.display_scale) for a in plan.axes]
-    return sweep_figure(axes, categories(variables), variables["max_rotation"][0],
-                        variables["residual_slip"][0],
-                        title=f"{plan.case.name}: {plan.describe()}, {over} overturned")
+    return _maps([(a.kind.name, a.values) for a in plan.axes], variables,
+                 f"{plan.case.name}: {plan.describe()}")
+
+
+def stored_figure(stored) -> object:
+    """The same maps from a sweep file read back (`results.read_sweep`), for ``rockslide plot``."""
+    shape = " x ".join(f"{len(values)} {name}" for name, values, _ in stored.coords)
+    return _maps([(name, values) for name, values, _ in stored.coords], stored.variables,
+                 f"{stored.attrs.get('name', 'sweep')}: {shape} = "
+                 f"{int(np.prod([len(v) for _, v, _ in stored.coords]))} cases")
+
+
+def _maps(axes, variables: dict, title: str):
+    over = int(np.asarray(variables["overturned"][0]).sum())
+    shown = [(AXES[name].label, np.asarray(values) / AXES[name].display_scale) for name, values in axes]
+    return sweep_figure(shown, categories(variables), variables["max_rotation"][0],
+                        variables["residual_slip"][0], title=f"{title}, {over} overturned")
 
 
 def time_shares(states: np.ndarray) -> dict:

@@ -516,3 +516,13 @@ def test_unreachable_scheduler_is_a_one_line_error(tmp_path):
     result = invoke(*sweep_args(tmp_path, "--mu", "0.5", extra=["--scheduler", "tcp://127.0.0.1:9"]))
     one_line_error(result, "--scheduler", "cannot connect")
     assert not (tmp_path / "example.sweep.h5").exists()
+
+
+def test_rockslide_plot_redraws_a_sweep_file(swept, tmp_path):
+    """`rockslide plot` recognises a sweep file by its format and redraws its maps."""
+    out, _ = swept
+    source = out / "example.sweep.h5"
+    png = tmp_path / "again.png"
+    result = invoke("plot", source, "-o", png)
+    assert result.exit_code == 0, result.output
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 20_000
