@@ -146,15 +146,13 @@ def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, robustness
     h5_path = folder / f"{case.name}.h5"
     png_path = folder / f"{case.name}.png"
     prepared = runner.prepare(case, records.records_dir(records_dir))
-    for path in (h5_path, png_path if not no_plot else None):   # input errors first, then outputs
-        if path is not None and path.exists() and not overwrite:
-            raise OutputError(f"{path} exists (use --overwrite to replace it)")
-    results.check_destination(h5_path, overwrite=overwrite)
+    for path in (h5_path,) if no_plot else (h5_path, png_path):   # input errors first, then outputs
+        results.check_destination(path, overwrite=overwrite)
     _note_first_compile()
     with results.ResultWriter(h5_path, overwrite=overwrite) as writer:
         streamed = prepared.case.solver.method == "kernel"
         result = runner.simulate_prepared(prepared, on_chunk=writer.append_history if streamed else None)
-        check = runner.verdict_robustness(prepared) if robustness else None
+        check = runner.verdict_robustness(prepared, result.summary.overturned) if robustness else None
         extra = {} if check is None else {"verdict_robust": check["holds"],
                                           "robustness": json.dumps(check["variants"], default=_json_default)}
         writer.finish(result, name=case.name, case_text=case.text, case=_case_dict(case),

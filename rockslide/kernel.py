@@ -566,39 +566,6 @@ def locate(i, mode, lam, sigma, y0, tau_a, tau_b, g_a, g_b, a0, sa, v0, sv, p, y
 
 
 @njit(cache=True)
-def step_without_event(st, p, mode, tau_a, tau_b, tk, a0, sa, v0, sv):
-    """One RK4 step of the moving state ``mode`` from ``tau_a`` to ``tau_b``; if no event function
-    of the state turns negative, take it into ``st`` and return True. Otherwise leave ``st`` as it
-    was and return False (`advance` then locates the event).
-
-    The derivatives evaluated at the end of an accepted step (for its event functions) are kept in
-    ``st[S_K1_*]`` as the first stage of the next step, until a transition changes the state. The
-    state travels in scalars: the compiler keeps them in registers.
-    """
-    lam = st[S_LAM]
-    sigma = st[S_SIGMA]
-    th, thd, x, xd = st[S_THETA], st[S_THETADOT], st[S_X], st[S_XDOT]
-    wg, wf = st[S_W_GROUND], st[S_W_FRICTION]
-    if st[S_K1_VALID] != 0.0:
-        a1, b1, pg1, pf1 = st[S_K1_THDD], st[S_K1_XDD], st[S_K1_PG], st[S_K1_PF]
-    else:
-        a1, b1, pg1, pf1, _, _, _, _, _ = evaluate(mode, lam, sigma, th, thd, xd, tau_a, a0, sa, v0, sv, p)
-    th1, thd1, x1, xd1, wg1, wf1 = rk4_step(mode, lam, sigma, th, thd, x, xd, wg, wf, tau_a, tau_b - tau_a,
-                                            a0, sa, v0, sv, p, a1, b1, pg1, pf1)
-    thdd, xdd, pg, pf, s, c, D, ah, G = evaluate(mode, lam, sigma, th1, thd1, xd1, tau_b, a0, sa, v0, sv, p)
-    g0, g1, g2, g3, g4 = event_functions(mode, lam, sigma, th1, thd1, xd1, ah, G, s, c, thdd, D, p)
-    if g0 < 0.0 or g1 < 0.0 or g2 < 0.0 or g3 < 0.0 or g4 < 0.0:
-        return False
-    accept(st, th1, thd1, x1, xd1, wg1, wf1, mode, tau_a, tau_b, tk, p, True)
-    st[S_K1_VALID] = 1.0
-    st[S_K1_THDD] = thdd
-    st[S_K1_XDD] = xdd
-    st[S_K1_PG] = pg
-    st[S_K1_PF] = pf
-    return True
-
-
-@njit(cache=True)
 def advance(st, p, tau_a, tau_b, tk, a0, sa, v0, sv, events, y0, y1, ytmp, gv, kinds):
     """Integrate the moving state from local time ``tau_a`` to ``tau_b`` (one step), handling
     every transition inside it. Returns the local time reached: ``tau_b``, or earlier if the block
@@ -612,8 +579,6 @@ def advance(st, p, tau_a, tau_b, tk, a0, sa, v0, sv, events, y0, y1, ytmp, gv, k
         hh = tau_b - tau_a
         if hh <= 0.0:
             return tau_b
-        if step_without_event(st, p, mode, tau_a, tau_b, tk, a0, sa, v0, sv):
-            return tau_b
         lam = st[S_LAM]
         sigma = st[S_SIGMA]
         load_state(st, y0)
@@ -624,6 +589,9 @@ def advance(st, p, tau_a, tau_b, tk, a0, sa, v0, sv, events, y0, y1, ytmp, gv, k
             if gv[i] < 0.0:
                 first = i
                 break
+        if first < 0:              # the rest of the step holds no event
+            accept(st, y1[0], y1[1], y1[2], y1[3], y1[4], y1[5], mode, tau_a, tau_b, tk, p, True)
+            return tau_b
         # an event inside this step
         if located:
             g_end = gv.copy()

@@ -131,26 +131,20 @@ def _integrate_moving(st, p, tau, tau_end, tk, a0, sa, v0, sv, events, gv, kinds
     starts_at_zero = gv[:n_events] == 0.0
 
     def make_values(y, t):
+        """The state's event functions at state ``y`` and local time ``t``."""
         g = np.zeros(K.MAX_EVENTS_PER_MODE)
         kk = np.zeros(K.MAX_EVENTS_PER_MODE, dtype=np.int64)
         K.event_values(mode, lam, sigma, np.asarray(y), a0 + sa * t, p[K.P_G] + v0 + sv * t, p, g, kk)
         return g
 
     def make_event(i):
-        g = np.zeros(K.MAX_EVENTS_PER_MODE)
-        kk = np.zeros(K.MAX_EVENTS_PER_MODE, dtype=np.int64)
-
         def event(t, y):
             # An event function that starts at exactly zero (theta after an impact or a liftoff,
             # the slip rate after a slip start) must first leave zero upwards; divided by the time
             # since the start, its root at the start disappears and the next root stays.
             if starts_at_zero[i]:
-                if t <= tau:
-                    return 1.0
-                K.event_values(mode, lam, sigma, np.asarray(y), a0 + sa * t, p[K.P_G] + v0 + sv * t, p, g, kk)
-                return g[i] / (t - tau)
-            K.event_values(mode, lam, sigma, np.asarray(y), a0 + sa * t, p[K.P_G] + v0 + sv * t, p, g, kk)
-            return g[i]
+                return 1.0 if t <= tau else make_values(y, t)[i] / (t - tau)
+            return make_values(y, t)[i]
         event.terminal = True
         event.direction = -1
         return event

@@ -143,7 +143,7 @@ def run_table(configs: Path, records_dir: Path, gravities=(None, PAPER_G)) -> tu
             case = base_case if gravity is None else case_with(base_case, {"gravity": gravity})
             prepared = runner.prepare(case, records_dir, history=gravity is None)
             result = runner.simulate_prepared(prepared)
-            robustness = runner.verdict_robustness(prepared)
+            robustness = runner.verdict_robustness(prepared, result.summary.overturned)
             key = case.gravity
             m = motion(result)
             s = result.summary
