@@ -25,8 +25,8 @@ from numba import njit
 from scipy.integrate import quad
 
 from rockslide import records as rec
-from rockslide.reference import simulate_reference
-from rockslide.simulate import Model, Settings, simulate
+from rockslide.core.reference import simulate_reference
+from rockslide.core.simulate import Model, Settings, simulate
 from rockslide.synthetic import kanai_tajimi
 
 REPO = Path(__file__).resolve().parents[1]

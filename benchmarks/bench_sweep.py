@@ -85,10 +85,11 @@ def main() -> None:
         import numba
         import numpy as np
 
-        from rockslide import batch, results
-        from rockslide import kernel as K
+        from rockslide import results
         from rockslide import sweep as sw
         from rockslide.case import parse_case
+        from rockslide.core import batch
+        from rockslide.core import kernel as K
         from rockslide.plots import SWEEP_CATEGORIES, save_figure
 
     folder, names, what = find_records()

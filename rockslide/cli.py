@@ -290,7 +290,7 @@ def criteria(height, width, vertical, ah_max, mu_max, output, overwrite):
     """
     import numpy as np
 
-    from . import criteria as crit
+    from .core import criteria as crit
     from .plots import criteria_figure, save_figure
     from .units import parse_quantity
 
@@ -378,9 +378,10 @@ def sweep(case_file, mu, pga, vertical_factor, restitution, slenderness, gravity
     """
     from tqdm import tqdm
 
-    from . import batch, records, results
+    from . import records, results
     from . import sweep as sw
     from .case import load_case
+    from .core import batch
     from .plots import save_figure
 
     ctx = click.get_current_context()
@@ -473,7 +474,7 @@ def _note_first_compile():
     compiles it, which takes a minute; later runs load it in a second or two)."""
     import os
 
-    from . import kernel
+    from .core import kernel
     folders = [Path(kernel.__file__).parent / "__pycache__"]
     if os.environ.get("NUMBA_CACHE_DIR"):
         folders.append(Path(os.environ["NUMBA_CACHE_DIR"]))

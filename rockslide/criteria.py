@@ -1,71 +1,7 @@
-"""Mode-initiation criteria (the paper's Figure 5): which motion a block at rest starts under a
-ground acceleration held constant.
+"""Moved to `rockslide.core.criteria`; this name is kept so that existing imports keep working."""
 
-From eq. 11 (slip), eq. 6 (liftoff) and, once liftoff starts, eq. 26 (is friction sufficient to
-hold the pivot: ``|Rx/N| <= mu`` at ``theta = thetadot = 0``), evaluated with the same functions the
-solvers use (`physics.slip_margin`, `physics.liftoff_margin`, `physics.rock_acceleration`,
-`physics.contact_forces`). The tie between slip and liftoff goes to slip (model.md decision 1), and
-from slip, liftoff needs ``nu > tan(alpha)`` (eq. 23), which ``nu <= mu < tan(alpha)`` excludes.
-"""
+import sys
 
-from __future__ import annotations
+from .core import criteria as _moved
 
-import numpy as np
-
-from .physics import (
-    REST,
-    ROCK,
-    ROCKSLIP,
-    SLIP,
-    block_constants,
-    contact_forces,
-    liftoff_margin,
-    rock_acceleration,
-    slip_margin,
-)
-
-MODE_NAMES = {REST: "rest", SLIP: "slip", ROCK: "liftoff", ROCKSLIP: "liftoff-slip"}
-
-
-def initial_mode(ah: float, av: float, mu: float, half_width: float, half_height: float,
-                 gravity: float = 9.80665) -> int:
-    """The state a resting block enters under constant ``ah``, ``av`` [m/s^2] with friction ``mu``.
-
-    Returns a state code: REST, SLIP, ROCK (liftoff) or ROCKSLIP (liftoff-slip, eq. 26 violated).
-    """
-    R, alpha, _ = block_constants(half_width, half_height, gravity)
-    G = gravity + av
-    slips = slip_margin(mu, G, ah) < 0.0
-    lifts = liftoff_margin(half_width / half_height, G, ah) < 0.0
-    if slips and (not lifts or mu <= half_width / half_height):
-        return SLIP          # slip first, or tie (decision 1); liftoff from slip needs nu > tan(alpha)
-    if not lifts:
-        return REST
-    lam = 1.0 if ah > 0.0 else -1.0
-    thetaddot = rock_acceleration(0.0, ah, G, lam, R, alpha)
-    Rx, N = contact_forces(0.0, 0.0, thetaddot, ah, G, lam, R, alpha)
-    return ROCKSLIP if slip_margin(mu, N, Rx) < 0.0 else ROCK
-
-
-def sufficient_friction(ah: float, av: float, half_width: float, half_height: float,
-                        gravity: float = 9.80665) -> float:
-    """``|Rx/N|`` at the start of liftoff (eq. 26): the friction needed to hold the pivot [-]."""
-    R, alpha, _ = block_constants(half_width, half_height, gravity)
-    G = gravity + av
-    lam = 1.0 if ah >= 0.0 else -1.0
-    thetaddot = rock_acceleration(0.0, ah, G, lam, R, alpha)
-    Rx, N = contact_forces(0.0, 0.0, thetaddot, ah, G, lam, R, alpha)
-    return abs(Rx / N)
-
-
-def mode_map(ah_over_g, mu_values, av_over_g: float, half_width: float, half_height: float,
-             gravity: float = 9.80665) -> np.ndarray:
-    """State codes over a grid: rows ``mu_values``, columns ``ah_over_g`` (both 1-D) at one
-    vertical acceleration ``av_over_g`` (in g)."""
-    ah_over_g = np.asarray(ah_over_g, float)
-    mu_values = np.asarray(mu_values, float)
-    out = np.empty((mu_values.size, ah_over_g.size), dtype=np.int8)
-    for i, mu in enumerate(mu_values):
-        for j, a in enumerate(ah_over_g):
-            out[i, j] = initial_mode(a * gravity, av_over_g * gravity, mu, half_width, half_height, gravity)
-    return out
+sys.modules[__name__] = _moved

@@ -26,9 +26,9 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
+from .core.physics import OVERTURNED, REST, ROCK, ROCKSLIP, SLIP, STATE_NAMES
 from .errors import OutputError
 from .files import atomic_write, check_destination
-from .physics import OVERTURNED, REST, ROCK, ROCKSLIP, SLIP, STATE_NAMES
 
 GAL = 0.01          # [m/s^2]
 FIGSIZE = (11.0, 8.0)   # [in]

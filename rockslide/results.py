@@ -82,11 +82,11 @@ import h5py
 import numpy as np
 
 from . import __version__
+from .core.kernel import HISTORY_COLUMNS
+from .core.physics import STATE_NAMES
+from .core.simulate import EVENT_DTYPE, Result, Summary
 from .errors import OutputError
 from .files import check_destination, publish, remove_quietly, temporary_path
-from .kernel import HISTORY_COLUMNS
-from .physics import STATE_NAMES
-from .simulate import EVENT_DTYPE, Result, Summary
 
 FORMAT = "rockslide-result"
 FORMAT_VERSION = 1

@@ -15,8 +15,8 @@ import numpy as np
 
 from . import records as rec
 from .case import Case
+from .core.simulate import Model, Result, Settings, simulate, substeps
 from .errors import CaseError, RecordError
-from .simulate import Model, Result, Settings, simulate, substeps
 
 
 @dataclass(frozen=True)
@@ -137,7 +137,7 @@ def simulate_prepared(prepared: Prepared, on_chunk=None) -> Result:
     """Run the prepared case with the method its solver section asks for."""
     g = prepared.ground
     if prepared.case.solver.method == "reference":
-        from .reference import simulate_reference
+        from .core.reference import simulate_reference
         return simulate_reference(prepared.model, g.dt, g.horizontal, g.vertical, prepared.settings,
                                   start=start_time(prepared))
     return simulate(prepared.model, g.dt, g.horizontal, g.vertical, prepared.settings,

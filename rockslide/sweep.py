@@ -50,16 +50,17 @@ from pathlib import Path
 
 import numpy as np
 
-from . import __version__, batch
-from . import kernel as K
+from . import __version__
 from . import records as rec
 from .case import Case, case_with
+from .core import batch
+from .core import kernel as K
+from .core.physics import OVERTURNED
+from .core.simulate import extend_with_tail, initial_state, parameters
 from .errors import CaseError, OutputError, RecordError
 from .files import atomic_write
-from .physics import OVERTURNED
 from .plots import sweep_category, sweep_figure
 from .runner import check_against_ground, check_size, model_for, settings_for
-from .simulate import extend_with_tail, initial_state, parameters
 from .units import parse_quantity
 
 __all__ = ["AXES", "AxisKind", "Axis", "Plan", "ChunkStore", "parse_axis", "plan_sweep",

@@ -19,8 +19,9 @@ from pathlib import Path
 
 import numpy as np
 
-from . import criteria, plots, runner
+from . import plots, runner
 from .case import case_with, load_case
+from .core import criteria
 from .errors import RecordError
 
 PAPER_G = 9.8

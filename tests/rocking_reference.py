@@ -12,7 +12,7 @@ import numpy as np
 from scipy.integrate import quad
 from scipy.optimize import brentq
 
-from rockslide import physics as P
+from rockslide.core import physics as P
 
 
 def quarter_period(theta0, alpha, p2):
@@ -87,7 +87,7 @@ def time_to_angle_under_constant_push(theta1, a, alpha, p2):
 
 
 def mechanical_energy(model, history):
-    """Mechanical energy per unit mass [J/kg] along a history, with rockslide.physics' functions:
+    """Mechanical energy per unit mass [J/kg] along a history, with rockslide.core.physics' functions:
     ``theta = |phi|``, ``lam = sign(phi)``, ``thetadot = lam * phidot``."""
     R, alpha, _ = model.constants
     phi = history["rotation"]

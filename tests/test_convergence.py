@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 from rocking_reference import quarter_period
 
-from rockslide.simulate import Model, Settings, simulate
+from rockslide.core.simulate import Model, Settings, simulate
 
 G0 = 9.80665
 MODES = ["located", "step-end"]

@@ -26,7 +26,8 @@ def test_import_contracts_hold():
 def test_the_core_imports_without_io_libraries():
     """At run time too (numba itself loads yaml for its configuration: the baseline)."""
     code = ("import sys; import numba, numpy, scipy.integrate, scipy.optimize; "
-            "before = set(sys.modules); import rockslide.simulate, rockslide.reference, rockslide.criteria; "
+            "before = set(sys.modules); "
+            "import rockslide.core.simulate, rockslide.core.reference, rockslide.core.criteria, rockslide.core.batch; "
             "new = set(sys.modules) - before; "
             "bad = [m for m in ('yaml', 'h5py', 'obspy', 'matplotlib', 'click', 'dask') if m in new]; "
             "print(','.join(bad))")

@@ -1,4 +1,4 @@
-"""The paper's closed forms against the implemented equations (rockslide.physics).
+"""The paper's closed forms against the implemented equations (rockslide.core.physics).
 
 Taniguchi's section 'COMMENTS ON VERTICAL GROUND MOTION EFFECTS' (eqs. 25-30) restates the
 equations of motion and the contact forces in closed form for special cases. Each test here
@@ -21,7 +21,7 @@ import math
 import numpy as np
 import pytest
 
-from rockslide import physics as P
+from rockslide.core import physics as P
 
 EPS = np.finfo(float).eps
 ROUNDING = 64 * EPS          # ~30 roundings per side, x2 margin (see module docstring)

@@ -1,4 +1,4 @@
-"""Exact solutions of the whole simulation (rockslide.simulate as a black box).
+"""Exact solutions of the whole simulation (rockslide.core.simulate as a black box).
 
 docs/model.md, 'Reference solutions for tests': free rocking (quadrature), thresholds under ramps,
 pure slip under piecewise-linear ground acceleration (polynomials in time), Newmark's rectangular
@@ -29,8 +29,8 @@ from rocking_reference import (
     time_to_angle_under_constant_push,
 )
 
-from rockslide import physics as P
-from rockslide.simulate import Model, Settings, simulate
+from rockslide.core import physics as P
+from rockslide.core.simulate import Model, Settings, simulate
 
 G0 = 9.80665
 MODES = ["located", "step-end"]

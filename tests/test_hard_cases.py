@@ -39,11 +39,11 @@ import pytest
 from conftest import REPO, real_record
 from rocking_reference import landing_rate, quarter_period
 
-from rockslide import physics as P
-from rockslide.kernel import STEP_END_FLIGHT_STEPS, THETA_END
+from rockslide.core import physics as P
+from rockslide.core.kernel import STEP_END_FLIGHT_STEPS, THETA_END
+from rockslide.core.reference import simulate_reference
+from rockslide.core.simulate import Model, Settings, simulate
 from rockslide.records import read_record
-from rockslide.reference import simulate_reference
-from rockslide.simulate import Model, Settings, simulate
 
 G0 = 9.80665
 MODES = ["located", "step-end"]
@@ -785,7 +785,7 @@ HOUR_SCRIPT = textwrap.dedent("""
     import json, resource, sys
     import numpy as np
     from rockslide.results import ResultWriter
-    from rockslide.simulate import Model, Settings, simulate
+    from rockslide.core.simulate import Model, Settings, simulate
 
     g = 9.80665
     dt = 0.01

@@ -16,10 +16,10 @@ from matplotlib.collections import PolyCollection
 from matplotlib.figure import Figure
 
 from rockslide import plots
+from rockslide.core.simulate import EVENT_DTYPE, Model, Result, Settings, Summary, simulate
 from rockslide.errors import OutputError
 from rockslide.plots import response_figure, save_figure, state_segments, zoom_window
 from rockslide.results import read_result, write_result
-from rockslide.simulate import EVENT_DTYPE, Model, Result, Settings, Summary, simulate
 
 REPO = Path(__file__).resolve().parents[1]
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
@@ -333,7 +333,7 @@ def test_rendering_does_not_load_pyplot(tmp_path):
         import sys
         import numpy as np
         from rockslide.plots import response_figure, save_figure
-        from rockslide.simulate import Model, Settings, simulate
+        from rockslide.core.simulate import Model, Settings, simulate
         t = np.arange(0, 10, 0.01)
         ah = 6.0 * np.sin(2 * np.pi * 1.5 * t) * np.exp(-((t - 4) / 2) ** 2)
         r = simulate(Model.from_block(0.2, 0.1, 0.52, 0.494, 0.8), 0.01, ah, 0.3 * ah, Settings(tail=2.0))

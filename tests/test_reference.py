@@ -11,8 +11,8 @@ transition is decided by a margin that small (then the sequences differ and the 
 import numpy as np
 import pytest
 
-from rockslide.reference import simulate_reference
-from rockslide.simulate import Model, Settings, simulate
+from rockslide.core.reference import simulate_reference
+from rockslide.core.simulate import Model, Settings, simulate
 
 EVENT_TIME_TOLERANCE = 1e-9     # [s] see the module docstring
 RELATIVE = 1e-7                 # summary values (max rotation is taken at step ends: h^2 effects)

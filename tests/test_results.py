@@ -19,10 +19,10 @@ import numpy as np
 import pytest
 
 from rockslide import results
+from rockslide.core.kernel import HISTORY_COLUMNS
+from rockslide.core.simulate import EVENT_DTYPE, Model, Settings, Summary, simulate
 from rockslide.errors import OutputError
-from rockslide.kernel import HISTORY_COLUMNS
 from rockslide.results import ResultWriter, StoredResult, read_result, summary_to_json_dict, write_result
-from rockslide.simulate import EVENT_DTYPE, Model, Settings, Summary, simulate
 
 REPO = Path(__file__).resolve().parents[1]
 TEMP_NAME = re.compile(r"^\..+\.\d+\.tmp$")

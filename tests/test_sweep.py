@@ -19,11 +19,12 @@ import pytest
 import yaml
 from click.testing import CliRunner
 
-from rockslide import batch, results, runner
-from rockslide import kernel as K
+from rockslide import results, runner
 from rockslide import sweep as sw
 from rockslide.case import case_to_dict, case_with, load_case
 from rockslide.cli import main
+from rockslide.core import batch
+from rockslide.core import kernel as K
 from rockslide.errors import CaseError
 from rockslide.plots import SWEEP_CATEGORIES, sweep_category, sweep_figure
 from rockslide.units import parse_quantity

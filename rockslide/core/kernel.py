@@ -1,0 +1,846 @@
+"""The compiled fixed-step state machine (docs/model.md, 'Transitions' and 'Integration').
+
+Plain floats and arrays only, no I/O. `simulate.py` builds the inputs and reads the outputs; the
+sweep runs `run` over many cases. Everything is resumable: the integration state lives in the
+array ``st`` (indices ``S_*``), so a long record can be computed in chunks with bounded memory.
+
+Time is organised by ground-motion samples. The record (with its tail of zeros) is linear between
+samples ``k`` and ``k+1`` (interval ``k``); each interval is cut into ``n_sub`` steps of length
+``h = dt_record / n_sub <= dt``, so that the kinks of the input fall on step boundaries. Within an
+interval, local time ``tau`` runs from 0 to ``dt_record``.
+
+- REST costs no integration: the exit conditions (eqs. 6 and 11, and flight) are linear in
+  ``tau`` within an interval, so their first crossing is computed exactly, per interval.
+- SLIP, ROCK and ROCKSLIP are integrated with the classical fourth-order Runge-Kutta method. After
+  each step the event functions of the state (``g >= 0`` while the state holds, in the order of
+  model.md's table) are evaluated. With located events (``P_LOCATED = 1``) the earliest crossing
+  inside the step is found by Illinois regula falsi on RK4 sub-steps from the step's start, the
+  transition is applied there and the rest of the step is integrated in the new state. With
+  step-end switching (``P_LOCATED = 0``, the paper's ACSL-like scheme) the first event in table
+  order is applied at the end of the step with the state found there.
+- After any transition, the tests of the new state apply at once (model.md: 'REST (then REST's
+  tests apply at once)').
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from .physics import (
+    OVERTURNED,
+    REST,
+    ROCK,
+    ROCKSLIP,
+    SLIP,
+    contact_forces,
+    contact_forces_sc,
+    kinetic_energy,
+    liftoff_margin,
+    potential_energy,
+    rebound,
+    rock_acceleration,
+    rock_acceleration_sc,
+    rockslip_accelerations_sc,
+    slip_acceleration,
+    slip_margin,
+    tilt,
+)
+
+# --- parameter vector ``p`` -------------------------------------------------------------------
+(P_R, P_ALPHA, P_TAN_ALPHA, P_G, P_MU, P_NU, P_E, P_H, P_DT_REC, P_N_SUB, P_LOCATED, P_T0,
+ P_ENERGY) = range(13)
+N_PARAMS = 13   # `run` unpacks p into a 13-tuple: keep the two in step
+
+# --- state vector ``st`` ----------------------------------------------------------------------
+(S_MODE, S_LAM, S_SIGMA, S_THETA, S_THETADOT, S_X, S_XDOT,   # the mechanical state
+ S_STATUS, S_K, S_STARTED, S_END_TIME,                      # bookkeeping
+ S_MAX_THETA, S_MAX_X, S_IMPACTS, S_FALL_START, S_OVERTURN_TIME, S_DIRECTION,
+ S_T_REST, S_T_SLIP, S_T_ROCK, S_T_ROCKSLIP,                # time spent in each state [s]
+ S_N_EVENTS,
+ S_W_GROUND, S_W_FRICTION, S_W_IMPACT,                      # energy ledger [J/kg]
+ S_FALL_CANDIDATE, S_THETA_MAX_TIME, S_E_INITIAL,
+ S_K1_VALID, S_K1_THDD, S_K1_XDD, S_K1_PG, S_K1_PF,  # first RK4 stage of the next step
+ S_ROWS) = range(34)                                 # history columns written by the last call
+N_STATE = 34
+
+# --- outcomes ---------------------------------------------------------------------------------
+STATUS_OK, STATUS_FLIGHT, STATUS_PAINLEVE = 0, 1, 2
+STATUS_NAMES = ("ok", "flight", "painleve")
+
+# --- event causes (the event log's ``cause`` column) -------------------------------------------
+(C_SLIP_START, C_LIFTOFF, C_SLIP_STOP, C_SLIP_REVERSAL, C_IMPACT, C_LIFTOFF_END,
+ C_OVERTURN, C_FLIGHT, C_PAINLEVE) = range(9)
+CAUSE_NAMES = ("slip-start", "liftoff", "slip-stop", "slip-reversal", "impact",
+               "liftoff-end", "overturn", "flight", "painleve")
+
+# --- event kinds: which condition of model.md's table a crossing is ----------------------------
+K_FLIGHT, K_PAINLEVE, K_SLIP_START, K_LIFTOFF, K_SLIP_STOP, K_IMPACT, K_OVERTURN = range(7)
+MAX_EVENTS_PER_MODE = 5
+
+# history columns: time, rotation phi = lam theta, rotation rate, slip, slip rate, state
+HISTORY_COLUMNS = ("time", "rotation", "rotation_rate", "slip", "slip_rate", "state")
+# event log columns
+EVENT_COLUMNS = ("time", "from", "to", "cause", "edge", "slip_direction")
+
+HALF_PI = 0.5 * math.pi
+THETA_END = 1e-7   # [rad] a rebound predicted to rise less than this ends the liftoff (decision 3)
+STEP_END_FLIGHT_STEPS = 4.0   # step-end switching also ends liftoff for flights shorter than this
+LOCATE_TOLERANCE = 1e-13      # event location: bracket width relative to the step
+TIE_TOLERANCE = 1e-12         # located crossings closer than this (relative to the step) are ties
+MAX_TRANSITIONS_PER_STEP = 200
+
+
+def new_state():
+    """A state vector at rest, before the first call of `run`."""
+    st = np.zeros(N_STATE)
+    st[S_LAM] = 1.0
+    st[S_SIGMA] = 1.0
+    st[S_FALL_START] = math.nan
+    st[S_OVERTURN_TIME] = math.nan
+    st[S_END_TIME] = math.nan
+    st[S_FALL_CANDIDATE] = math.nan
+    return st
+
+
+# ============================================================================================
+# The equations of motion of each state and its event functions
+# ============================================================================================
+
+@njit(cache=True, inline='always')
+def accelerations_sc(mode, lam, sigma, s, c, thetadot, ah, G, p):
+    """``(thetaddot, xddot, D)`` of a state (eqs. 3, 9, 15-16 with 22); ``D = 1`` unless ROCKSLIP."""
+    if mode == ROCK:
+        return rock_acceleration_sc(s, c, ah, G, lam, p[P_R]), 0.0, 1.0
+    if mode == SLIP:
+        return 0.0, slip_acceleration(ah, G, p[P_NU], sigma), 1.0
+    if mode == ROCKSLIP:
+        return rockslip_accelerations_sc(s, c, thetadot, ah, G, lam, sigma, p[P_NU], p[P_R])
+    return 0.0, 0.0, 1.0
+
+
+@njit(cache=True)
+def accelerations(mode, lam, sigma, theta, thetadot, ah, G, p):
+    """``(thetaddot, xddot)`` of a state at angle ``theta``."""
+    s, c = tilt(theta, p[P_ALPHA])
+    thdd, xdd, _ = accelerations_sc(mode, lam, sigma, s, c, thetadot, ah, G, p)
+    return thdd, xdd
+
+
+@njit(cache=True, inline='always')
+def evaluate(mode, lam, sigma, th, thd, xd, t, a0, sa, v0, sv, p):
+    """Everything the integrator needs at one instant (local time ``t``, ground linear in it).
+
+    Returns ``(thetaddot, xddot, ground power, friction power, s, c, D, ah, G)``. The powers
+    [W/kg] are those of the ground's inertia forces ``-ah``, ``-av`` on the centre of gravity, whose
+    velocity relative to the foundation is ``(xdot - lam R c thetadot, R s thetadot)`` (the virtual
+    displacements of eq. 14), and of kinetic friction, ``-nu N |xdot|`` (eqs. 9 and 22); they are
+    computed only when the energy ledger is on.
+    """
+    ah = a0 + sa * t
+    av = v0 + sv * t
+    G = p[P_G] + av
+    if mode == SLIP:            # upright: theta = 0, no trigonometry needed
+        xdd = slip_acceleration(ah, G, p[P_NU], sigma)
+        if p[P_ENERGY] != 0.0:
+            return 0.0, xdd, -ah * xd, -p[P_NU] * G * abs(xd), 0.0, 0.0, 1.0, ah, G
+        return 0.0, xdd, 0.0, 0.0, 0.0, 0.0, 1.0, ah, G
+    s, c = tilt(th, p[P_ALPHA])
+    thdd, xdd, D = accelerations_sc(mode, lam, sigma, s, c, thd, ah, G, p)
+    pg = 0.0
+    pf = 0.0
+    if p[P_ENERGY] != 0.0 and mode != REST:
+        R = p[P_R]
+        pg = -ah * (xd - lam * R * c * thd) - av * R * s * thd
+        if mode == ROCKSLIP:
+            _, N = contact_forces_sc(s, c, thd, thdd, ah, G, lam, R)
+            pf = -p[P_NU] * N * abs(xd)
+    return thdd, xdd, pg, pf, s, c, D, ah, G
+
+
+@njit(cache=True, inline='always')
+def rk4_step(mode, lam, sigma, th, thd, x, xd, wg, wf, tau, hh, a0, sa, v0, sv, p, a1, b1, pg1, pf1):
+    """One classical fourth-order Runge-Kutta step of length ``hh`` from local time ``tau``.
+
+    The state is ``theta, thetadot, x, xdot, w_ground, w_friction``; the ground is
+    ``ah = a0 + sa t``, ``av = v0 + sv t`` (linear within the interval). ``a1, b1, pg1, pf1`` are
+    the derivatives at the start (the first stage, from `evaluate`). Returns the new state.
+    """
+    half = 0.5 * hh
+    th2 = th + half * thd
+    thd2 = thd + half * a1
+    xd2 = xd + half * b1
+    a2, b2, pg2, pf2, _, _, _, _, _ = evaluate(mode, lam, sigma, th2, thd2, xd2, tau + half, a0, sa, v0, sv, p)
+    th3 = th + half * thd2
+    thd3 = thd + half * a2
+    xd3 = xd + half * b2
+    a3, b3, pg3, pf3, _, _, _, _, _ = evaluate(mode, lam, sigma, th3, thd3, xd3, tau + half, a0, sa, v0, sv, p)
+    th4 = th + hh * thd3
+    thd4 = thd + hh * a3
+    xd4 = xd + hh * b3
+    a4, b4, pg4, pf4, _, _, _, _, _ = evaluate(mode, lam, sigma, th4, thd4, xd4, tau + hh, a0, sa, v0, sv, p)
+    f = hh / 6.0
+    return (th + f * (thd + 2.0 * thd2 + 2.0 * thd3 + thd4),
+            thd + f * (a1 + 2.0 * a2 + 2.0 * a3 + a4),
+            x + f * (xd + 2.0 * xd2 + 2.0 * xd3 + xd4),
+            xd + f * (b1 + 2.0 * b2 + 2.0 * b3 + b4),
+            wg + f * (pg1 + 2.0 * pg2 + 2.0 * pg3 + pg4),
+            wf + f * (pf1 + 2.0 * pf2 + 2.0 * pf3 + pf4))
+
+
+@njit(cache=True)
+def rk4_from(mode, lam, sigma, y, tau, hh, a0, sa, v0, sv, p, out):
+    """`rk4_step` on arrays (``y`` -> ``out``), computing its own first stage (event location)."""
+    a1, b1, pg1, pf1, _, _, _, _, _ = evaluate(mode, lam, sigma, y[0], y[1], y[3], tau, a0, sa, v0, sv, p)
+    out[0], out[1], out[2], out[3], out[4], out[5] = rk4_step(
+        mode, lam, sigma, y[0], y[1], y[2], y[3], y[4], y[5], tau, hh, a0, sa, v0, sv, p, a1, b1, pg1, pf1)
+
+
+# What each event function of a state is, in the order of model.md's table (-1: unused slot).
+EVENT_KINDS = (
+    (K_FLIGHT, K_SLIP_START, K_LIFTOFF, -1, -1),                        # REST (eqs. 11, 6)
+    (K_FLIGHT, K_SLIP_STOP, K_LIFTOFF, -1, -1),                         # SLIP (eq. 23)
+    (K_FLIGHT, K_SLIP_START, K_IMPACT, K_OVERTURN, -1),                 # ROCK (eq. 21)
+    (K_FLIGHT, K_PAINLEVE, K_SLIP_STOP, K_IMPACT, K_OVERTURN),          # ROCKSLIP
+)
+N_EVENTS = (3, 3, 4, 5)
+
+
+@njit(cache=True, inline='always')
+def event_functions(mode, lam, sigma, th, thd, xd, ah, G, s, c, thdd, D, p):
+    """The event functions of ``mode`` (``g >= 0`` while the state holds), as a 5-tuple in the order
+    of `EVENT_KINDS` (unused slots ``inf``). ``s``, ``c``, ``thdd``, ``D`` are `evaluate`'s at the
+    same instant."""
+    inf = math.inf
+    if mode == SLIP:
+        push = slip_acceleration(ah, G, p[P_NU], sigma) + ah
+        return G, sigma * xd, liftoff_margin(p[P_TAN_ALPHA], G, push), inf, inf       # eq. 23
+    if mode == ROCK:
+        Rx, N = contact_forces_sc(s, c, thd, thdd, ah, G, lam, p[P_R])
+        return N, slip_margin(p[P_MU], N, Rx), th, HALF_PI - th, inf                   # eq. 21
+    if mode == ROCKSLIP:
+        _, N = contact_forces_sc(s, c, thd, thdd, ah, G, lam, p[P_R])
+        return N, D, sigma * xd, th, HALF_PI - th
+    if mode == REST:      # N = G and Rx = ah at rest; both edges, both directions (eqs. 11 and 6)
+        return G, slip_margin(p[P_MU], G, ah), liftoff_margin(p[P_TAN_ALPHA], G, ah), inf, inf
+    return inf, inf, inf, inf, inf
+
+
+@njit(cache=True)
+def event_values(mode, lam, sigma, y, ah, G, p, gv, kinds):
+    """`event_functions` at state ``y`` into ``gv`` and their kinds into ``kinds``; returns the
+    number of event functions of the state."""
+    s, c = tilt(y[0], p[P_ALPHA])
+    thdd, _, D = accelerations_sc(mode, lam, sigma, s, c, y[1], ah, G, p)
+    g = event_functions(mode, lam, sigma, y[0], y[1], y[3], ah, G, s, c, thdd, D, p)
+    n = N_EVENTS[mode] if mode < 4 else 0
+    for i in range(n):
+        gv[i] = g[i]
+        kinds[i] = EVENT_KINDS[mode][i]
+    return n
+
+
+# ============================================================================================
+# Bookkeeping: events, outputs, summary
+# ============================================================================================
+
+@njit(cache=True)
+def log_event(st, events, t, mode_from, mode_to, cause):
+    n = int(st[S_N_EVENTS])
+    if n < events.shape[0]:
+        events[n, 0] = t
+        events[n, 1] = mode_from
+        events[n, 2] = mode_to
+        events[n, 3] = cause
+        events[n, 4] = st[S_LAM]
+        events[n, 5] = st[S_SIGMA]
+    st[S_N_EVENTS] = n + 1
+
+
+@njit(cache=True)
+def note_extremes(st, t):
+    if st[S_THETA] > st[S_MAX_THETA]:
+        st[S_MAX_THETA] = st[S_THETA]
+        st[S_THETA_MAX_TIME] = t
+    ax = abs(st[S_X])
+    if ax > st[S_MAX_X]:
+        st[S_MAX_X] = ax
+
+
+@njit(cache=True, inline='always')
+def store_row(st, history, every, offset, n, t, lam, th, thd, x, xd, mode):
+    """Store a state at grid point ``n`` in column ``n // every - offset`` of ``history`` (rows:
+    ``HISTORY_COLUMNS``) if ``n`` is on the output grid; count the columns written."""
+    if every <= 0 or n % every != 0:
+        return
+    i = n // every - offset
+    if 0 <= i < history.shape[1]:
+        history[0, i] = t
+        history[1, i] = lam * th
+        history[2, i] = lam * thd
+        history[3, i] = x
+        history[4, i] = xd
+        history[5, i] = mode
+        if i + 1 > st[S_ROWS]:
+            st[S_ROWS] = i + 1
+
+
+@njit(cache=True)
+def write_history(st, history, every, offset, n, t):
+    """`store_row` of the state in ``st``."""
+    store_row(st, history, every, offset, n, t, st[S_LAM], st[S_THETA], st[S_THETADOT], st[S_X],
+              st[S_XDOT], st[S_MODE])
+
+
+@njit(cache=True, inline='always')
+def add_time(st, mode, duration):
+    if mode == REST:
+        st[S_T_REST] += duration
+    elif mode == SLIP:
+        st[S_T_SLIP] += duration
+    elif mode == ROCK:
+        st[S_T_ROCK] += duration
+    elif mode == ROCKSLIP:
+        st[S_T_ROCKSLIP] += duration
+
+
+@njit(cache=True)
+def stop(st, t):
+    st[S_END_TIME] = t
+
+
+@njit(cache=True)
+def finished(st):
+    return st[S_MODE] == OVERTURNED or st[S_STATUS] != STATUS_OK
+
+
+# ============================================================================================
+# Transitions (model.md's table)
+# ============================================================================================
+
+@njit(cache=True)
+def mechanical_energy(st, p):
+    return (kinetic_energy(st[S_THETA], st[S_THETADOT], st[S_XDOT], st[S_LAM], p[P_R], p[P_ALPHA])
+            + potential_energy(st[S_THETA], p[P_G], p[P_R], p[P_ALPHA]))
+
+
+@njit(cache=True)
+def apply_event(kind, st, p, t, ah, G, events):
+    """Apply the transition of event ``kind`` to ``st`` at time ``t`` (ground ``ah``, ``G``)."""
+    st[S_K1_VALID] = 0.0
+    mode = int(st[S_MODE])
+    lam = st[S_LAM]
+    sigma = st[S_SIGMA]
+    R = p[P_R]
+    alpha = p[P_ALPHA]
+    mu = p[P_MU]
+
+    if kind == K_FLIGHT:
+        st[S_STATUS] = STATUS_FLIGHT
+        log_event(st, events, t, mode, mode, C_FLIGHT)
+        stop(st, t)
+    elif kind == K_PAINLEVE:
+        st[S_STATUS] = STATUS_PAINLEVE
+        log_event(st, events, t, mode, mode, C_PAINLEVE)
+        stop(st, t)
+    elif kind == K_OVERTURN:
+        st[S_THETA] = HALF_PI
+        st[S_MODE] = OVERTURNED
+        st[S_OVERTURN_TIME] = t
+        st[S_DIRECTION] = lam
+        st[S_FALL_START] = st[S_FALL_CANDIDATE]
+        # step-end switching finds theta a little past pi/2 at the step's end: the block lies there
+        st[S_MAX_THETA] = HALF_PI
+        st[S_THETA_MAX_TIME] = t
+        log_event(st, events, t, mode, OVERTURNED, C_OVERTURN)
+        stop(st, t)
+    elif kind == K_SLIP_START:
+        if mode == REST:                                   # eq. 11: sigma = -sign(ah)
+            st[S_SIGMA] = -1.0 if ah > 0.0 else 1.0
+            st[S_XDOT] = 0.0
+            st[S_MODE] = SLIP
+            log_event(st, events, t, REST, SLIP, C_SLIP_START)
+        else:                                              # ROCK, eq. 21: sigma = -sign(Rx)
+            thdd = rock_acceleration(st[S_THETA], ah, G, lam, R, alpha)
+            Rx, _ = contact_forces(st[S_THETA], st[S_THETADOT], thdd, ah, G, lam, R, alpha)
+            st[S_SIGMA] = -1.0 if Rx > 0.0 else 1.0
+            st[S_XDOT] = 0.0
+            st[S_MODE] = ROCKSLIP
+            log_event(st, events, t, ROCK, ROCKSLIP, C_SLIP_START)
+    elif kind == K_LIFTOFF:
+        st[S_THETA] = 0.0
+        st[S_THETADOT] = 0.0
+        if mode == REST:                                   # eq. 7: lam = sign(ah)
+            st[S_LAM] = 1.0 if ah > 0.0 else -1.0
+            st[S_MODE] = ROCK
+            log_event(st, events, t, REST, ROCK, C_LIFTOFF)
+        else:                                              # SLIP, eq. 24: lam = sign(xddot + ah)
+            push = slip_acceleration(ah, G, p[P_NU], sigma) + ah
+            st[S_LAM] = 1.0 if push > 0.0 else -1.0
+            st[S_MODE] = ROCKSLIP
+            log_event(st, events, t, SLIP, ROCKSLIP, C_LIFTOFF)
+    elif kind == K_SLIP_STOP:
+        st[S_XDOT] = 0.0
+        # The pivot sticks if static friction holds the contact forces of the state without slip:
+        # N = G, Rx = ah upright (SLIP -> REST), ROCK's Rx and N lifted off (ROCKSLIP -> ROCK).
+        if mode == SLIP:
+            Rx, N, stuck = ah, G, REST
+        else:
+            thdd = rock_acceleration(st[S_THETA], ah, G, lam, R, alpha)
+            Rx, N = contact_forces(st[S_THETA], st[S_THETADOT], thdd, ah, G, lam, R, alpha)
+            stuck = ROCK
+        if slip_margin(mu, N, Rx) >= 0.0:
+            st[S_MODE] = stuck
+            log_event(st, events, t, mode, stuck, C_SLIP_STOP)
+        else:                                              # reversed: sigma = -sign(Rx)
+            st[S_SIGMA] = -1.0 if Rx > 0.0 else 1.0
+            log_event(st, events, t, mode, mode, C_SLIP_REVERSAL)
+    elif kind == K_IMPACT:
+        st[S_IMPACTS] += 1.0
+        energy_before = mechanical_energy(st, p)
+        st[S_THETA] = 0.0
+        w = rebound(st[S_THETADOT], p[P_E])
+        st[S_LAM] = -lam
+        # End of liftoff (model.md decision 3): the new edge's liftoff condition (eq. 6 from ROCK,
+        # eq. 23 from ROCKSLIP) is the sign of thetaddot at theta = thetadot = 0; when it does not
+        # hold and the rebound would rise less than THETA_END (predicted peak w^2 / (2 |thetaddot|)),
+        # the impacts have become too small to matter. The rule does not depend on the step.
+        # With step-end switching a landing is only seen at a step's end, so flights of a few steps
+        # cannot be resolved (they would chatter for ever): they end the liftoff too.
+        thdd0, _ = accelerations(mode, -lam, sigma, 0.0, 0.0, ah, G, p)
+        too_small = w * w <= 2.0 * THETA_END * abs(thdd0)
+        if p[P_LOCATED] == 0.0:
+            too_small = too_small or 2.0 * w <= STEP_END_FLIGHT_STEPS * p[P_H] * abs(thdd0)
+        if thdd0 <= 0.0 and too_small:
+            st[S_THETADOT] = 0.0
+            new_mode = REST if mode == ROCK else SLIP
+            st[S_MODE] = new_mode
+            log_event(st, events, t, mode, new_mode, C_LIFTOFF_END)
+        else:
+            st[S_THETADOT] = w
+            log_event(st, events, t, mode, mode, C_IMPACT)
+        st[S_W_IMPACT] += mechanical_energy(st, p) - energy_before
+        st[S_FALL_CANDIDATE] = math.nan
+
+
+@njit(cache=True)
+def settle(st, p, t, ah, av, events, gv, kinds, y):
+    """Apply at once every condition of the current state that already holds at time ``t``."""
+    G = p[P_G] + av
+    for _ in range(MAX_TRANSITIONS_PER_STEP):
+        if finished(st):
+            return
+        y[0] = st[S_THETA]
+        y[1] = st[S_THETADOT]
+        y[2] = st[S_X]
+        y[3] = st[S_XDOT]
+        n = event_values(int(st[S_MODE]), st[S_LAM], st[S_SIGMA], y, ah, G, p, gv, kinds)
+        fired = -1
+        for i in range(n):
+            if gv[i] < 0.0:
+                fired = i
+                break
+        if fired < 0:
+            return
+        apply_event(kinds[fired], st, p, t, ah, G, events)
+
+
+# ============================================================================================
+# REST: exact exits of a linear input, no integration
+# ============================================================================================
+
+@njit(cache=True)
+def first_negative(A, B, tau, tau_end):
+    """First local time in ``[tau, tau_end]`` at which ``A + B t`` is negative (its zero crossing),
+    or ``inf``."""
+    if A + B * tau < 0.0:
+        return tau
+    if B < 0.0:
+        r = -A / B
+        if r < tau:
+            r = tau
+        if r <= tau_end:
+            return r
+    return math.inf
+
+
+@njit(cache=True)
+def rest_exit(tau, tau_end, a0, sa, v0, sv, p, step_end, h):
+    """When and why the block leaves REST within ``[tau, tau_end]`` of the current interval.
+
+    The conditions are linear in time (eq. 6, eq. 11, and flight ``G < 0``). Returns
+    ``(time, kind)``; ``kind = -1`` if the block rests through. Ties go to the first row of
+    model.md's table (flight, then slip, then liftoff); with ``step_end`` the transition happens at
+    the end of the step in which the first condition was met, and among the conditions met within
+    that step the first row wins (decision 1).
+    """
+    g0 = p[P_G] + v0
+    mu = p[P_MU]
+    ta = p[P_TAN_ALPHA]
+    t_flight = first_negative(g0, sv, tau, tau_end)
+    t_slip = min(first_negative(mu * g0 - a0, mu * sv - sa, tau, tau_end),
+                 first_negative(mu * g0 + a0, mu * sv + sa, tau, tau_end))
+    t_lift = min(first_negative(ta * g0 - a0, ta * sv - sa, tau, tau_end),
+                 first_negative(ta * g0 + a0, ta * sv + sa, tau, tau_end))
+    best = min(t_flight, min(t_slip, t_lift))
+    if best == math.inf:
+        return best, -1
+    if step_end and best > tau:
+        # Move to the end of the step containing the first crossing; among the conditions met
+        # within that step the first row of the table wins (decision 1).
+        best = (math.floor(best / h) + 1.0) * h
+        if best >= tau_end:
+            best = tau_end
+            # a crossing exactly at the interval's end is not yet a negative margin
+            if min(t_flight, min(t_slip, t_lift)) >= tau_end:
+                return math.inf, -1
+        if t_flight < best:
+            return best, K_FLIGHT
+        if t_slip < best:
+            return best, K_SLIP_START
+        return best, K_LIFTOFF
+    if t_flight <= best:
+        return best, K_FLIGHT
+    if t_slip <= best:
+        return best, K_SLIP_START
+    return best, K_LIFTOFF
+
+
+# ============================================================================================
+# Moving states: RK4 steps with event location
+# ============================================================================================
+
+@njit(cache=True)
+def event_value_at(i, mode, lam, sigma, y0, tau_a, dtau, a0, sa, v0, sv, p, ytmp, gv, kinds):
+    """Event function ``i`` at ``tau_a + dtau``, reached by one RK4 step from ``y0``."""
+    rk4_from(mode, lam, sigma, y0, tau_a, dtau, a0, sa, v0, sv, p, ytmp)
+    t = tau_a + dtau
+    event_values(mode, lam, sigma, ytmp, a0 + sa * t, p[P_G] + v0 + sv * t, p, gv, kinds)
+    return gv[i]
+
+
+@njit(cache=True)
+def locate(i, mode, lam, sigma, y0, tau_a, tau_b, g_a, g_b, a0, sa, v0, sv, p, ytmp, gv, kinds):
+    """Local time of the zero crossing of event function ``i`` in ``(tau_a, tau_b]`` (Illinois).
+
+    ``g_a >= 0 > g_b``. Returns the upper end of the final bracket, where the event function is
+    already negative, so the new state's conditions hold there.
+    """
+    lo = 0.0
+    hi = tau_b - tau_a
+    glo = g_a
+    ghi = g_b
+    side = 0
+    tol = 1e-15 + LOCATE_TOLERANCE * hi
+    for _ in range(200):
+        if hi - lo <= tol:
+            break
+        if glo > 0.0 and ghi < 0.0:
+            m = hi - ghi * (hi - lo) / (ghi - glo)
+            if not (lo < m < hi):
+                m = 0.5 * (lo + hi)
+        else:
+            m = 0.5 * (lo + hi)
+        # keep the secant away from the ends so that the bracket always shrinks
+        width = hi - lo
+        if m - lo < 0.01 * width:
+            m = lo + 0.01 * width
+        elif hi - m < 0.01 * width:
+            m = hi - 0.01 * width
+        gm = event_value_at(i, mode, lam, sigma, y0, tau_a, m, a0, sa, v0, sv, p, ytmp, gv, kinds)
+        if gm < 0.0:
+            hi = m
+            ghi = gm
+            if side == -1:
+                glo *= 0.5
+            side = -1
+        else:
+            lo = m
+            glo = gm
+            if side == 1:
+                ghi *= 0.5
+            side = 1
+    return tau_a + hi
+
+
+@njit(cache=True)
+def advance(st, p, tau_a, tau_b, tk, a0, sa, v0, sv, events, y0, y1, ytmp, gv, kinds):
+    """Integrate the moving state from local time ``tau_a`` to ``tau_b`` (one step), handling
+    every transition inside it. Returns the local time reached: ``tau_b``, or earlier if the block
+    came to REST (the caller handles REST) or the run ended."""
+    located = p[P_LOCATED] != 0.0
+    g = p[P_G]
+    for _ in range(MAX_TRANSITIONS_PER_STEP):
+        mode = int(st[S_MODE])
+        if mode == REST or finished(st):
+            return tau_a
+        hh = tau_b - tau_a
+        if hh <= 0.0:
+            return tau_b
+        lam = st[S_LAM]
+        sigma = st[S_SIGMA]
+        load_state(st, y0)
+        rk4_from(mode, lam, sigma, y0, tau_a, hh, a0, sa, v0, sv, p, y1)
+        n = event_values(mode, lam, sigma, y1, a0 + sa * tau_b, g + v0 + sv * tau_b, p, gv, kinds)
+        first = -1
+        for i in range(n):
+            if gv[i] < 0.0:
+                first = i
+                break
+        if first < 0:              # the rest of the step holds no event
+            accept(st, y1[0], y1[1], y1[2], y1[3], y1[4], y1[5], mode, tau_a, tau_b, tk, p, True)
+            return tau_b
+        # an event inside this step
+        if located:
+            g_end = gv.copy()
+            kinds_end = kinds.copy()
+            # event values at the start of the step (all >= 0 by construction)
+            event_values(mode, lam, sigma, y0, a0 + sa * tau_a, g + v0 + sv * tau_a, p, gv, kinds)
+            g_start = gv.copy()
+            times = np.full(n, math.inf)
+            for i in range(n):
+                if g_end[i] < 0.0:
+                    ga = g_start[i] if g_start[i] > 0.0 else 0.0
+                    times[i] = locate(i, mode, lam, sigma, y0, tau_a, tau_b, ga, g_end[i],
+                                      a0, sa, v0, sv, p, ytmp, gv, kinds)
+            # The earliest wins; crossings within the location tolerance of it are ties, which go
+            # to the first row of the table (e.g. flight before the eq. 23 liftoff at G = 0).
+            best = times.min()
+            best_i = 0
+            while times[best_i] > best + TIE_TOLERANCE * hh + 1e-15:
+                best_i += 1
+            te = times[best_i]
+            kind = kinds_end[best_i]
+            if te < tau_b:
+                rk4_from(mode, lam, sigma, y0, tau_a, te - tau_a, a0, sa, v0, sv, p, y1)
+        else:
+            te = tau_b
+            kind = kinds[first]
+        accept(st, y1[0], y1[1], y1[2], y1[3], y1[4], y1[5], mode, tau_a, te, tk, p, True)
+        if kind == K_IMPACT:
+            if not located:
+                land_on_the_ground(st, p, g + v0 + sv * te)
+            st[S_THETA] = 0.0
+        elif kind == K_SLIP_STOP:
+            st[S_XDOT] = 0.0
+        ah_e = a0 + sa * te
+        av_e = v0 + sv * te
+        apply_event(kind, st, p, tk + te, ah_e, g + av_e, events)
+        settle(st, p, tk + te, ah_e, av_e, events, gv, kinds, ytmp)
+        tau_a = te
+    return tau_a
+
+
+@njit(cache=True)
+def land_on_the_ground(st, p, G):
+    """Step-end switching only: a landing found at the end of a step has ``theta < 0``. Bring
+    the block back to ``theta = 0`` at constant energy (the rise of potential energy in ``G`` is
+    taken from the rotation rate), otherwise each late landing would add energy and the impacts
+    of a block coming to rest would never die out."""
+    th = st[S_THETA]
+    if th >= 0.0:
+        return
+    R = p[P_R]
+    alpha = p[P_ALPHA]
+    rise = G * R * (math.cos(alpha) - math.cos(alpha - th))        # > 0 for th < 0
+    w2 = st[S_THETADOT] * st[S_THETADOT] - rise / ((2.0 / 3.0) * R * R)
+    st[S_THETADOT] = -math.sqrt(w2) if w2 > 0.0 else 0.0
+
+
+@njit(cache=True)
+def load_state(st, y):
+    """The integrated part of the state into ``y``: theta, thetadot, x, xdot, w_ground, w_friction."""
+    y[0] = st[S_THETA]
+    y[1] = st[S_THETADOT]
+    y[2] = st[S_X]
+    y[3] = st[S_XDOT]
+    y[4] = st[S_W_GROUND]
+    y[5] = st[S_W_FRICTION]
+
+
+@njit(cache=True, inline='always')
+def track(th0, thd0, x0, xd0, th1, thd1, x1, xd1, hh, t_start, alpha, max_th, max_th_time, max_x, fall,
+          peaks_inside):
+    """The bookkeeping of one step from ``(th0, thd0, x0, xd0)`` to ``(th1, thd1, x1, xd1)``,
+    pure: returns the updated ``(max theta, its time, max |x|, fall candidate)``.
+
+    Extremes are taken at the step's end and, with ``peaks_inside`` (fixed steps; not for the
+    reference solver's long steps), at a peak inside the step where the rate changes sign, from the
+    parabola through the step's ends (exact to O(h^3); the ends alone are off by up to
+    thetaddot h^2 / 8). The fall that ends in overturning starts when theta last passed alpha upwards.
+    """
+    if th1 > max_th:
+        max_th = th1
+        max_th_time = t_start + hh
+    if abs(x1) > max_x:
+        max_x = abs(x1)
+    if peaks_inside:
+        if thd0 > 0.0 >= thd1:
+            s_peak = hh * thd0 / (thd0 - thd1)
+            peak = th0 + 0.5 * thd0 * s_peak
+            if peak > max_th:
+                max_th = peak
+                max_th_time = t_start + s_peak
+        if xd0 * xd1 < 0.0:
+            peak = abs(x0 + 0.5 * xd0 * hh * xd0 / (xd0 - xd1))
+            if peak > max_x:
+                max_x = peak
+    if th0 <= alpha < th1:
+        fall = t_start + hh * (alpha - th0) / (th1 - th0)
+    elif th1 <= alpha:
+        fall = math.nan
+    return max_th, max_th_time, max_x, fall
+
+
+@njit(cache=True)
+def accept(st, th, thd, x, xd, wg, wf, mode, tau_a, tau_b, tk, p, peaks_inside):
+    """Take the state integrated from local time ``tau_a`` to ``tau_b`` into ``st``."""
+    st[S_K1_VALID] = 0.0
+    (st[S_MAX_THETA], st[S_THETA_MAX_TIME], st[S_MAX_X], st[S_FALL_CANDIDATE]) = track(
+        st[S_THETA], st[S_THETADOT], st[S_X], st[S_XDOT], th, thd, x, xd, tau_b - tau_a, tk + tau_a,
+        p[P_ALPHA], st[S_MAX_THETA], st[S_THETA_MAX_TIME], st[S_MAX_X], st[S_FALL_CANDIDATE], peaks_inside)
+    st[S_THETA] = th
+    st[S_THETADOT] = thd
+    st[S_X] = x
+    st[S_XDOT] = xd
+    st[S_W_GROUND] = wg
+    st[S_W_FRICTION] = wf
+    add_time(st, mode, tau_b - tau_a)
+
+
+@njit(cache=True, inline='always')
+def glide(st, p, mode, j, n_sub, h, dt_rec, tk, a0, sa, v0, sv, history, every, offset, n_base, t0):
+    """Full steps of the moving state ``mode`` from grid point ``j - 1`` of the interval for as
+    long as no event function turns negative, with the whole state in registers; ``st`` is written
+    back once. Returns the grid point reached (``n_sub + 1``: the interval is done; otherwise the
+    step ending at grid point ``j`` holds an event, for `advance`)."""
+    lam = st[S_LAM]
+    sigma = st[S_SIGMA]
+    th, thd, x, xd = st[S_THETA], st[S_THETADOT], st[S_X], st[S_XDOT]
+    wg, wf = st[S_W_GROUND], st[S_W_FRICTION]
+    max_th, max_th_time, max_x, fall = st[S_MAX_THETA], st[S_THETA_MAX_TIME], st[S_MAX_X], st[S_FALL_CANDIDATE]
+    alpha = p[P_ALPHA]
+    tau_a = (j - 1) * h
+    if st[S_K1_VALID] != 0.0:
+        a1, b1, pg1, pf1 = st[S_K1_THDD], st[S_K1_XDD], st[S_K1_PG], st[S_K1_PF]
+    else:
+        a1, b1, pg1, pf1, _, _, _, _, _ = evaluate(mode, lam, sigma, th, thd, xd, tau_a, a0, sa, v0, sv, p)
+    elapsed = 0.0
+    while j <= n_sub:
+        tau_b = j * h if j < n_sub else dt_rec
+        hh = tau_b - tau_a
+        th1, thd1, x1, xd1, wg1, wf1 = rk4_step(mode, lam, sigma, th, thd, x, xd, wg, wf, tau_a, hh,
+                                                a0, sa, v0, sv, p, a1, b1, pg1, pf1)
+        thdd, xdd, pg, pf, s, c, D, ah, G = evaluate(mode, lam, sigma, th1, thd1, xd1, tau_b, a0, sa, v0, sv, p)
+        g0, g1, g2, g3, g4 = event_functions(mode, lam, sigma, th1, thd1, xd1, ah, G, s, c, thdd, D, p)
+        if g0 < 0.0 or g1 < 0.0 or g2 < 0.0 or g3 < 0.0 or g4 < 0.0:
+            break
+        max_th, max_th_time, max_x, fall = track(th, thd, x, xd, th1, thd1, x1, xd1, hh, tk + tau_a, alpha,
+                                                 max_th, max_th_time, max_x, fall, True)
+        th, thd, x, xd, wg, wf = th1, thd1, x1, xd1, wg1, wf1
+        a1, b1, pg1, pf1 = thdd, xdd, pg, pf
+        elapsed += hh
+        store_row(st, history, every, offset, n_base + j, t0 + (n_base + j) * h, lam, th, thd, x, xd, mode)
+        tau_a = tau_b
+        j += 1
+    st[S_THETA], st[S_THETADOT], st[S_X], st[S_XDOT] = th, thd, x, xd
+    st[S_W_GROUND], st[S_W_FRICTION] = wg, wf
+    st[S_MAX_THETA], st[S_THETA_MAX_TIME], st[S_MAX_X], st[S_FALL_CANDIDATE] = max_th, max_th_time, max_x, fall
+    add_time(st, mode, elapsed)
+    st[S_K1_VALID] = 1.0
+    st[S_K1_THDD], st[S_K1_XDD], st[S_K1_PG], st[S_K1_PF] = a1, b1, pg1, pf1
+    return j
+
+
+# ============================================================================================
+# The driver
+# ============================================================================================
+
+@njit(cache=True)
+def run(p, ah, av, st, history, every, offset, events, k_end):
+    """Integrate from the interval ``st[S_K]`` up to (not including) ``k_end``.
+
+    Parameters
+    ----------
+    p : float64[N_PARAMS]
+        Constants (``P_*``).
+    ah, av : float64[K + 1]
+        Ground acceleration samples [m/s^2], tail of zeros included; interval ``k`` is
+        ``[t0 + k dt_rec, t0 + (k + 1) dt_rec]``.
+    st : float64[N_STATE]
+        The integration state, updated in place (resumable).
+    history : float64[6, n]
+        Output (rows ``HISTORY_COLUMNS``) for every ``every``-th grid point ``n``, in column
+        ``n // every - offset``; ``st[S_ROWS]`` counts the columns written. ``every = 0`` keeps none.
+    events : float64[m, 6]
+        Event log rows (``EVENT_COLUMNS``); ``st[S_N_EVENTS]`` counts all events, including those
+        beyond the log's capacity.
+    k_end : int
+        Stop before this interval (at most ``len(ah) - 1``).
+    """
+    # The constants as a tuple of scalars: unlike an array, it cannot alias the state arrays, so
+    # the compiler keeps them in registers instead of reloading them after every store.
+    p = (p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], p[12])
+    n_sub = int(p[P_N_SUB])
+    h = p[P_H]
+    dt_rec = p[P_DT_REC]
+    t0 = p[P_T0]
+    step_end = p[P_LOCATED] == 0.0
+    y0 = np.zeros(6)
+    y1 = np.zeros(6)
+    ytmp = np.zeros(6)
+    gv = np.zeros(MAX_EVENTS_PER_MODE)
+    kinds = np.zeros(MAX_EVENTS_PER_MODE, dtype=np.int64)
+    k = int(st[S_K])
+    if st[S_STARTED] == 0.0:
+        st[S_STARTED] = 1.0
+        st[S_E_INITIAL] = mechanical_energy(st, p)
+        settle(st, p, t0, ah[0], av[0], events, gv, kinds, ytmp)
+        note_extremes(st, t0)
+        write_history(st, history, every, offset, 0, t0)
+    while k < k_end and not finished(st):
+        a0 = ah[k]
+        sa = (ah[k + 1] - a0) / dt_rec
+        v0 = av[k]
+        sv = (av[k + 1] - v0) / dt_rec
+        tk = t0 + k * dt_rec
+        n_base = k * n_sub
+        tau = 0.0
+        j = 1                                   # next grid point of this interval
+        while j <= n_sub and not finished(st):
+            if st[S_MODE] == REST:
+                te, kind = rest_exit(tau, dt_rec, a0, sa, v0, sv, p, step_end, h)
+                if kind < 0:
+                    add_time(st, REST, dt_rec - tau)
+                    if every > 0:
+                        for jj in range(j, n_sub + 1):
+                            write_history(st, history, every, offset, n_base + jj, t0 + (n_base + jj) * h)
+                    j = n_sub + 1
+                    tau = dt_rec
+                    break
+                add_time(st, REST, te - tau)
+                while j <= n_sub and j * h <= te * (1.0 + 1e-14):
+                    write_history(st, history, every, offset, n_base + j, t0 + (n_base + j) * h)
+                    j += 1
+                tau = te
+                ah_e = a0 + sa * te
+                av_e = v0 + sv * te
+                apply_event(kind, st, p, tk + te, ah_e, p[P_G] + av_e, events)
+                settle(st, p, tk + te, ah_e, av_e, events, gv, kinds, ytmp)
+                continue
+            if tau == (j - 1) * h:         # on the grid: full steps while nothing happens
+                j = glide(st, p, int(st[S_MODE]), j, n_sub, h, dt_rec, tk, a0, sa, v0, sv,
+                          history, every, offset, n_base, t0)
+                if j > n_sub:
+                    break
+                tau = (j - 1) * h
+            tau_b = j * h if j < n_sub else dt_rec
+            tau = advance(st, p, tau, tau_b, tk, a0, sa, v0, sv, events, y0, y1, ytmp, gv, kinds)
+            if tau >= tau_b:
+                write_history(st, history, every, offset, n_base + j, t0 + (n_base + j) * h)
+                j += 1
+        k += 1
+    st[S_K] = k
+    return k

@@ -1,0 +1,343 @@
+"""Model + ground motion arrays -> Result. Pure: no files, no plotting.
+
+`simulate` sets up the compiled kernel (`kernel.run`), drives it chunk by chunk (so that an
+hour-long record needs bounded memory when the history is streamed with ``on_chunk``), and turns
+its state vector and logs into a `Result` whose summary is plain data (overturning, flight and the
+Painleve case are outcomes, not exceptions).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from . import kernel as K
+from .physics import (
+    OVERTURNED,
+    REST,
+    ROCK,
+    ROCKSLIP,
+    SLIP,
+    STATE_NAMES,
+    block_constants,
+    kinetic_energy,
+    potential_energy,
+)
+
+EVENT_DTYPE = np.dtype([("time", "f8"), ("from", "S10"), ("to", "S10"), ("cause", "S14"),
+                        ("edge", "i1"), ("slip_direction", "i1")])
+
+
+@dataclass(frozen=True)
+class Model:
+    """The block and its contact (docs/model.md, 'Scene and assumptions').
+
+    Attributes
+    ----------
+    half_width, half_height : float
+        ``b`` and ``h`` [m]: half the block's width and height.
+    mu_static, mu_kinetic : float
+        ``mu`` and ``nu`` [-]: static and kinetic friction coefficients (``nu <= mu``).
+    restitution : float
+        ``e`` [-]: coefficient of restitution of eq. 8, within [0, 1].
+    gravity : float
+        ``g`` [m/s^2].
+    mass : float
+        ``M`` [kg]; scales energies only.
+    """
+
+    half_width: float
+    half_height: float
+    mu_static: float
+    mu_kinetic: float
+    restitution: float
+    gravity: float = 9.80665
+    mass: float = 1.0
+
+    @classmethod
+    def from_block(cls, height, width, mu_static, mu_kinetic, restitution, gravity=9.80665, mass=1.0):
+        """From the full ``height`` and ``width`` [m] of the block."""
+        return cls(0.5 * width, 0.5 * height, mu_static, mu_kinetic, restitution, gravity, mass)
+
+    @property
+    def constants(self):
+        """``(R, alpha, p2)``: see `physics.block_constants`."""
+        return block_constants(self.half_width, self.half_height, self.gravity)
+
+
+@dataclass(frozen=True)
+class Settings:
+    """How to integrate.
+
+    Attributes
+    ----------
+    dt : float
+        Largest step [s] (default the paper's 0.1 ms). The step used is ``dt_record / n`` with the
+        smallest whole ``n`` that makes it ``<= dt``, so that input kinks fall on step boundaries.
+    events : str
+        ``"located"``: events found inside the step; ``"step-end"``: the paper-like switch at the end
+        of the step.
+    tail : float
+        Free vibration after the record [s] (ground still).
+    rotation, rotation_rate, slip_rate : float
+        Initial conditions: signed rotation ``phi`` [rad], its rate [rad/s], slip rate [m/s].
+    history_every : int
+        Keep every n-th step in the history (0: no history).
+    energy : bool
+        Integrate the energy ledger (work of the ground and of friction).
+    chunk_steps : int
+        Integration steps per kernel call at most (bounds the memory of a streamed history and the
+        time before Ctrl-C is noticed: the kernel returns to Python between chunks).
+    """
+
+    dt: float = 1e-4
+    events: str = "located"
+    tail: float = 0.0
+    rotation: float = 0.0
+    rotation_rate: float = 0.0
+    slip_rate: float = 0.0
+    history_every: int = 1
+    energy: bool = True
+    chunk_steps: int = 2_000_000
+
+
+@dataclass
+class Summary:
+    """What happened, as plain data (the fields of ``rockslide run --json``)."""
+
+    overturned: bool
+    overturn_time: float | None       # [s] when theta reached pi/2
+    direction: int | None             # sign of the rotation phi at overturning (+1: about the left edge)
+    fall_start_time: float | None     # [s] when theta last passed alpha before overturning
+    max_rotation: float               # [rad] max |phi|
+    max_rotation_time: float          # [s]
+    max_slip: float                   # [m] max |x|
+    residual_slip: float              # [m] x at the end
+    impacts: int
+    states_seen: list[str]
+    time_in_state: dict[str, float]   # [s]
+    status: str                       # ok | flight | painleve
+    end_time: float                   # [s] when the computation ended
+    energy: dict[str, float] = field(default_factory=dict)   # [J]
+
+    @property
+    def verdict(self) -> str:
+        if self.status != "ok":
+            return f"outside the model ({self.status} at t = {self.end_time:.4f} s)"
+        return "overturned" if self.overturned else "standing"
+
+
+@dataclass
+class Result:
+    """Time histories, event log and summary of one simulation."""
+
+    history: dict[str, np.ndarray]    # HISTORY_COLUMNS; state as int8
+    events: np.ndarray                # EVENT_DTYPE
+    summary: Summary
+    step: float                       # [s] the integration step used
+    ground_time: np.ndarray           # [s] ground samples as applied (tail included)
+    ground_horizontal: np.ndarray     # [m/s^2]
+    ground_vertical: np.ndarray       # [m/s^2]
+
+    def events_as_dicts(self) -> list[dict]:
+        return [{"time": float(e["time"]), "from": e["from"].decode(), "to": e["to"].decode(),
+                 "cause": e["cause"].decode()} for e in self.events]
+
+
+def substeps(dt_record: float, dt: float) -> int:
+    """Number of integration steps per record interval: the smallest ``n`` with
+    ``dt_record / n <= dt`` (a relative tolerance of 1e-9 absorbs decimal round-off)."""
+    return max(1, math.ceil(dt_record / dt * (1.0 - 1e-9)))
+
+
+def parameters(model: Model, dt_record: float, settings: Settings, start: float = 0.0) -> np.ndarray:
+    """The kernel's parameter vector ``p`` (indices ``kernel.P_*``)."""
+    R, alpha, _ = model.constants
+    n_sub = substeps(dt_record, settings.dt)
+    p = np.zeros(K.N_PARAMS)
+    p[K.P_R] = R
+    p[K.P_ALPHA] = alpha
+    p[K.P_TAN_ALPHA] = model.half_width / model.half_height
+    p[K.P_G] = model.gravity
+    p[K.P_MU] = model.mu_static
+    p[K.P_NU] = model.mu_kinetic
+    p[K.P_E] = model.restitution
+    p[K.P_H] = dt_record / n_sub
+    p[K.P_DT_REC] = dt_record
+    p[K.P_N_SUB] = n_sub
+    p[K.P_LOCATED] = 1.0 if settings.events == "located" else 0.0
+    p[K.P_T0] = start
+    p[K.P_ENERGY] = 1.0 if settings.energy else 0.0
+    return p
+
+
+def initial_state(settings: Settings) -> np.ndarray:
+    """Kernel state for the initial conditions (model.md decision 6).
+
+    A rotation (or rotation rate) starts in ROCK about the edge of its sign; a slip rate in SLIP,
+    or ROCKSLIP with a rotation too. The kernel applies the state's tests at once at t = 0.
+    """
+    st = K.new_state()
+    phi, phidot, xdot = settings.rotation, settings.rotation_rate, settings.slip_rate
+    rocking = phi != 0.0 or phidot != 0.0
+    if rocking:
+        lam = math.copysign(1.0, phi) if phi != 0.0 else math.copysign(1.0, phidot)
+        st[K.S_LAM] = lam
+        st[K.S_THETA] = abs(phi)
+        st[K.S_THETADOT] = lam * phidot
+    if xdot != 0.0:
+        st[K.S_SIGMA] = math.copysign(1.0, xdot)
+        st[K.S_XDOT] = xdot
+    st[K.S_MODE] = (ROCKSLIP if xdot != 0.0 else ROCK) if rocking else (SLIP if xdot != 0.0 else REST)
+    return st
+
+
+def extend_with_tail(horizontal, vertical, dt_record, tail):
+    """Ground samples with ``tail`` seconds of still ground appended (model.md decision 8)."""
+    n_tail = math.ceil(tail / dt_record - 1e-9) if tail > 0 else 0
+    ah = np.concatenate([np.asarray(horizontal, float), np.zeros(n_tail)])
+    av = np.concatenate([np.asarray(vertical, float), np.zeros(n_tail)])
+    return ah, av
+
+
+def simulate(model: Model, dt_record: float, horizontal, vertical, settings: Settings = Settings(),
+             start: float = 0.0, on_chunk=None) -> Result:
+    """Compute the response of ``model`` to the ground motion.
+
+    Parameters
+    ----------
+    model : Model
+    dt_record : float
+        Sampling step of the ground motion [s].
+    horizontal, vertical : array_like
+        Ground accelerations ``ah``, ``av`` [m/s^2] (up positive), same length, linearly
+        interpolated between samples.
+    settings : Settings
+    start : float
+        Time of the first sample [s].
+    on_chunk : callable, optional
+        ``on_chunk(rows)`` receives the history chunk by chunk (``float64[n, 6]``, columns
+        ``kernel.HISTORY_COLUMNS``) instead of keeping it in the result (bounded memory).
+
+    Returns
+    -------
+    Result
+    """
+    ah, av = extend_with_tail(horizontal, vertical, dt_record, settings.tail)
+    if ah.size < 2:
+        ah = np.concatenate([ah, np.zeros(2 - ah.size)])
+        av = np.concatenate([av, np.zeros(2 - av.size)])
+    p = parameters(model, dt_record, settings, start)
+    st = initial_state(settings)
+    n_sub = int(p[K.P_N_SUB])
+    every = int(settings.history_every)
+    n_intervals = ah.size - 1
+    kept = []
+    event_chunks = []
+    events = np.zeros((1024, len(K.EVENT_COLUMNS)))
+    k = 0
+    while k < n_intervals and not K.finished(st):
+        k_end = min(n_intervals, k + max(1, settings.chunk_steps // n_sub))
+        # history columns on the output grid between steps k*n_sub (exclusive, except at the
+        # start) and k_end*n_sub (inclusive)
+        if every > 0:
+            first = 0 if k == 0 else (k * n_sub) // every + 1
+            history = np.empty((len(K.HISTORY_COLUMNS), max(0, (k_end * n_sub) // every - first + 1)))
+        else:
+            first, history = 0, np.empty((len(K.HISTORY_COLUMNS), 0))
+        saved = st.copy()
+        while True:
+            st[K.S_N_EVENTS] = 0
+            st[K.S_ROWS] = 0
+            K.run(p, ah, av, st, history, every, first, events, k_end)
+            n_events = int(st[K.S_N_EVENTS])
+            if n_events <= events.shape[0]:
+                break
+            events = np.zeros((2 * n_events, len(K.EVENT_COLUMNS)))
+            st[:] = saved
+        event_chunks.append(events[:n_events].copy())
+        written = history[:, :int(st[K.S_ROWS])]
+        if on_chunk is not None:
+            on_chunk(written.T)
+        elif every > 0:
+            kept.append(written)
+        k = int(st[K.S_K])
+    columns = kept[0] if len(kept) == 1 else (np.concatenate(kept, axis=1) if kept
+                                              else np.empty((len(K.HISTORY_COLUMNS), 0)))
+    n_total = ah.size
+    ground_time = start + dt_record * np.arange(n_total)
+    return Result(
+        history=history_dict(columns),
+        events=event_table(np.concatenate(event_chunks) if event_chunks else np.zeros((0, 6))),
+        summary=summarise(st, model, start + (n_total - 1) * dt_record),
+        step=p[K.P_H],
+        ground_time=ground_time,
+        ground_horizontal=ah,
+        ground_vertical=av,
+    )
+
+
+def history_dict(columns: np.ndarray) -> dict[str, np.ndarray]:
+    """History arrays by name from the kernel's ``float64[6, n]`` output (views, no copies)."""
+    out = {name: columns[i] for i, name in enumerate(K.HISTORY_COLUMNS)}
+    out["state"] = out["state"].astype(np.int8)
+    return out
+
+
+def event_table(rows: np.ndarray) -> np.ndarray:
+    table = np.zeros(rows.shape[0], dtype=EVENT_DTYPE)
+    if rows.shape[0]:
+        table["time"] = rows[:, 0]
+        names = np.array([n.encode() for n in STATE_NAMES])
+        causes = np.array([c.encode() for c in K.CAUSE_NAMES])
+        table["from"] = names[rows[:, 1].astype(int)]
+        table["to"] = names[rows[:, 2].astype(int)]
+        table["cause"] = causes[rows[:, 3].astype(int)]
+        table["edge"] = rows[:, 4].astype(np.int8)
+        table["slip_direction"] = rows[:, 5].astype(np.int8)
+    return table
+
+
+def summarise(st: np.ndarray, model: Model, record_end: float) -> Summary:
+    """The summary from the kernel's final state vector."""
+    R, alpha, _ = model.constants
+    time_in = {"REST": st[K.S_T_REST], "SLIP": st[K.S_T_SLIP], "ROCK": st[K.S_T_ROCK],
+               "ROCKSLIP": st[K.S_T_ROCKSLIP]}
+    overturned = st[K.S_MODE] == OVERTURNED
+    seen = [name for name, t in time_in.items() if t > 0.0 or (name == "REST" and st[K.S_MODE] == REST)]
+    if overturned:
+        seen.append("OVERTURNED")
+    end_time = st[K.S_END_TIME] if not math.isnan(st[K.S_END_TIME]) else record_end
+    M = model.mass
+    kinetic = M * kinetic_energy(st[K.S_THETA], st[K.S_THETADOT], st[K.S_XDOT], st[K.S_LAM], R, alpha)
+    potential = M * potential_energy(st[K.S_THETA], model.gravity, R, alpha)
+    ground, friction, impact = M * st[K.S_W_GROUND], M * st[K.S_W_FRICTION], M * st[K.S_W_IMPACT]
+    energy = {
+        "kinetic": kinetic, "potential": potential, "work_ground": ground,
+        "friction_loss": -friction, "impact_loss": -impact,
+        "initial": M * st[K.S_E_INITIAL],
+        "balance_residual": kinetic + potential - M * st[K.S_E_INITIAL] - (ground + friction + impact),
+    }
+    fall = st[K.S_FALL_START]
+    return Summary(
+        overturned=bool(overturned),
+        overturn_time=float(st[K.S_OVERTURN_TIME]) if overturned else None,
+        direction=int(st[K.S_DIRECTION]) if overturned else None,
+        fall_start_time=None if math.isnan(fall) else float(fall),
+        max_rotation=float(st[K.S_MAX_THETA]),
+        max_rotation_time=float(st[K.S_THETA_MAX_TIME]),
+        max_slip=float(st[K.S_MAX_X]),
+        residual_slip=float(st[K.S_X]),
+        impacts=int(st[K.S_IMPACTS]),
+        states_seen=seen,
+        time_in_state={k: float(v) for k, v in time_in.items()},
+        status=K.STATUS_NAMES[int(st[K.S_STATUS])],
+        end_time=float(end_time),
+        energy={k: float(v) for k, v in energy.items()},
+    )
+
+
+__all__ = ["Model", "Settings", "Summary", "Result", "simulate", "substeps", "parameters",
+           "REST", "SLIP", "ROCK", "ROCKSLIP", "OVERTURNED"]
