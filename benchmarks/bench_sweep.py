@@ -104,7 +104,7 @@ def main() -> None:
     with Clock() as planning:
         plan = sw.plan_sweep(case, [sw.parse_axis("mu", args.mu), sw.parse_axis("pga", args.pga)],
                              records_dir=folder)
-    duration = (plan.base_h.size - 1) * float(plan.params[0, K.P_DT_REC])
+    duration = plan.base.shape[1] * float(plan.params[0, K.P_DT_REC])
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp)
         store = sw.ChunkStore.beside(out / "bench-sweep.sweep.h5", plan.key)
@@ -122,7 +122,7 @@ def main() -> None:
     # the same cases without chunks, store or progress: the batch kernel alone
     with Clock() as bare:
         numba.set_num_threads(threads)
-        batch.compute(plan.params, plan.states, plan.base_h, plan.base_v, plan.factor_h, plan.factor_v)
+        batch.compute(plan.params, plan.states, plan.base, 0, plan.base.shape[1], plan.factor_h, plan.factor_v)
 
     n = plan.n_cases
     shares = sw.time_shares(states)

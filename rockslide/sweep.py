@@ -56,7 +56,7 @@ from .case import Case, case_with
 from .core import batch
 from .core import kernel as K
 from .core.physics import OVERTURNED
-from .core.simulate import extend_with_tail, initial_state, parameters
+from .core.simulate import ground_array, initial_state, parameters
 from .errors import CaseError, OutputError, RecordError
 from .files import atomic_write
 from .plots import sweep_category, sweep_figure
@@ -307,10 +307,14 @@ class Plan:
         Each point's kernel parameters and initial state, flat in C order of the grid.
     factor_h, factor_v : float64[n]
         Each point's horizontal and vertical scale factors (`records.combine`).
-    base_h, base_v : float64[m]
-        The unscaled ground accelerations [m/s^2], the case's tail of zeros included.
-    record_end : float
-        [s] time of the last ground sample (tail included): the end of a run that ends standing.
+    base : float64[4, K]
+        The unscaled ground motion [m/s^2] interval by interval (`simulate.ground_array`), the
+        case's tail of zeros included; several records are concatenated.
+    first, count : int64[n]
+        Each point's record: intervals ``first ... first + count - 1`` of ``base``.
+    record_end : float64[n]
+        [s] time of each point's last ground sample (tail included): the end of a run that ends
+        standing.
     step : float
         [s] integration step.
     records : list of dict
@@ -328,9 +332,10 @@ class Plan:
     states: np.ndarray
     factor_h: np.ndarray
     factor_v: np.ndarray
-    base_h: np.ndarray
-    base_v: np.ndarray
-    record_end: float
+    base: np.ndarray
+    first: np.ndarray
+    count: np.ndarray
+    record_end: np.ndarray
     step: float
     records: list
     chunk_size: int
@@ -424,10 +429,9 @@ def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = N
     check_size(case, unscaled, history=False)
 
     settings = settings_for(case, history=False, energy=False)
-    base_h, base_v = extend_with_tail(unscaled.horizontal, unscaled.vertical, unscaled.dt,
-                                      settings.tail)
+    base = ground_array(unscaled.horizontal, unscaled.vertical, unscaled.dt, settings.tail)
     start = unscaled.start + case.ground.time_shift
-    record_end = start + (max(base_h.size, 2) - 1) * unscaled.dt
+    record_end = start + base.shape[1] * unscaled.dt
 
     params = np.empty((n, K.N_PARAMS))
     states = np.empty((n, K.N_STATE))
@@ -466,8 +470,8 @@ def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = N
         states[i] = initial_state(point_settings)
         factor_h[i], factor_v[i] = factors[scale]
     plan = Plan(case=case, axes=axes, mu_kinetic_ratio=ratio, params=params, states=states,
-                factor_h=factor_h, factor_v=factor_v, base_h=np.ascontiguousarray(base_h),
-                base_v=np.ascontiguousarray(base_v), record_end=float(record_end),
+                factor_h=factor_h, factor_v=factor_v, base=base, first=np.zeros(n, dtype=np.int64),
+                count=np.full(n, base.shape[1], dtype=np.int64), record_end=np.full(n, record_end),
                 step=float(params[0, K.P_H]), records=entries, chunk_size=chunk_size)
     plan.key = definition_key(plan)
     return plan
@@ -529,7 +533,7 @@ def definition_key(plan: Plan) -> str:
         "kernel_source": batch.SOURCE_STAMP,
     }
     digest.update(json.dumps(header, sort_keys=True).encode())
-    for array in (plan.params, plan.states, plan.factor_h, plan.factor_v, plan.base_h, plan.base_v):
+    for array in (plan.params, plan.states, plan.factor_h, plan.factor_v, plan.base, plan.first, plan.count):
         digest.update(np.ascontiguousarray(array, dtype=np.float64).tobytes())
     return digest.hexdigest()
 
@@ -680,8 +684,9 @@ def _compute_local(plan, store, chunks, workers, progress):
 
 
 def _chunk_inputs(plan: Plan, indices: np.ndarray):
-    return (plan.params[indices], plan.states[indices], plan.base_h, plan.base_v,
-            plan.factor_h[indices], plan.factor_v[indices])
+    """`batch.compute`'s arguments for the cases ``indices``."""
+    return (plan.params[indices], plan.states[indices], plan.base, plan.first[indices],
+            plan.count[indices], plan.factor_h[indices], plan.factor_v[indices])
 
 
 def _compute_dask(plan, store, chunks, address, progress):
@@ -700,11 +705,11 @@ def _compute_dask(plan, store, chunks, address, progress):
                         f"{_one_line(exc)}", source="--scheduler") from None
     futures = {}
     try:
-        base = client.scatter([plan.base_h, plan.base_v], broadcast=True)
+        base = client.scatter(plan.base, broadcast=True)
         for chunk in chunks:
             indices = plan.chunk_indices(chunk)
-            p, s, _, _, kh, kv = _chunk_inputs(plan, indices)
-            future = client.submit(batch.compute, p, s, base[0], base[1], kh, kv, parallel=False,
+            p, s, _, first, count, kh, kv = _chunk_inputs(plan, indices)
+            future = client.submit(batch.compute, p, s, base, first, count, kh, kv, parallel=False,
                                    pure=False)
             futures[future] = (chunk, indices)
         for future in distributed.as_completed(list(futures), loop=client.loop):

@@ -400,6 +400,30 @@ def test_newmark_rectangular_pulse(A_over_mu_g, sign):
     assert abs(slip) > abs(newmark(t1))          # the ramp adds impulse
 
 
+@pytest.mark.parametrize("A_over_mu_g", [1.5, 3.0, 8.0])
+@pytest.mark.parametrize("sign", [1.0, -1.0])
+def test_newmark_exact_rectangular_pulse_as_interval_values(A_over_mu_g, sign):
+    """The same pulse given as interval end values (`simulate.ground_array`, shape (2, n)): the
+    ground jumps to A at t = 0 and back to 0 at t1 exactly, with no ramp, so Newmark's formula
+    V^2 / (2 mu g) (1 - mu g / A) holds to rounding (RK4 is exact on the piecewise-constant slip
+    acceleration; the slip stop is located to ~1e-17 s of local time): 1e-12 relative. The ground
+    as written back (`simulate.ground_series`) repeats the jump times with both values."""
+    mu, t1, d = 0.3, 0.2, 1e-3
+    A = sign * A_over_mu_g * mu * G0
+    model = Model.from_block(0.1, 1.0, mu, mu, 0.8)
+    n_pulse = round(t1 / d)
+    values = np.zeros((2, n_pulse + round((t1 * A_over_mu_g + 0.5) / d)))
+    values[:, :n_pulse] = A
+    result = simulate(model, d, values, np.zeros_like(values), Settings())
+    assert result.summary.states_seen == ["REST", "SLIP"]
+    V = abs(A) * t1
+    exact = -sign * V * V / (2 * mu * G0) * (1 - mu * G0 / abs(A))
+    assert result.summary.residual_slip == pytest.approx(exact, rel=1e-12)
+    t, h = result.ground_time, result.ground_horizontal
+    assert np.count_nonzero(t == t1) == 2 and list(h[t == t1]) == [A, 0.0]
+    assert t[0] == 0.0 and h[0] == A and np.all(np.diff(t) >= 0.0)
+
+
 # ================================================================================================
 # Mirror symmetry
 # ================================================================================================

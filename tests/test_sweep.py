@@ -220,7 +220,7 @@ def mixed(example):
     axes = [sw.parse_axis("mu", "0.45,0.6"), sw.parse_axis("pga", "500gal,750gal,900gal"),
             sw.parse_axis("restitution", "0.7,0.9"), sw.parse_axis("slenderness", "0.45,0.5")]
     plan = sw.plan_sweep(example, axes, records_dir=RECORDS, chunk_size=5)
-    states = batch.compute(plan.params, plan.states, plan.base_h, plan.base_v, plan.factor_h,
+    states = batch.compute(plan.params, plan.states, plan.base, 0, plan.base.shape[1], plan.factor_h,
                            plan.factor_v)
     return plan, sw.sweep_variables(plan, states)
 
@@ -263,7 +263,7 @@ def test_vertical_factor_and_gravity_points_equal_rockslide_run(example, axes, t
 
 def test_batch_drivers_agree(mixed):
     plan, _ = mixed
-    inputs = (plan.params, plan.states, plan.base_h, plan.base_v, plan.factor_h, plan.factor_v)
+    inputs = (plan.params, plan.states, plan.base, 0, plan.base.shape[1], plan.factor_h, plan.factor_v)
     parallel = batch.compute(*inputs, parallel=True)
     serial = batch.compute(*inputs, parallel=False)
     assert np.array_equal(parallel, serial, equal_nan=True)

@@ -2,7 +2,8 @@
 
 Pure numerical core: numpy and numba only, no I/O. A sweep (``rockslide sweep``) builds one
 parameter vector (``kernel.P_*``) and one initial state vector (``kernel.S_*``) per case, and the
-ground motion once, unscaled; each case scales its own copy of the ground motion by its factors
+ground motion of its records once, unscaled and concatenated (each case names its record by its
+first interval and interval count); each case scales its own copy of its record by its factors
 (``ah = kh * base_h``, ``av = kv * base_v``: the product `records.combine` forms, element by
 element), so that a case of a batch is computed with exactly the arithmetic of a single run
 (`simulate.simulate`): same kernel, same inputs, bit-identical results.
@@ -64,7 +65,7 @@ SOURCE_STAMP = _source_stamp()
 
 
 @njit
-def run_case(p, st, base_h, base_v, kh, kv):
+def run_case(p, st, base, first, count, kh, kv):
     """Run one case to its end, in place.
 
     Parameters
@@ -73,25 +74,27 @@ def run_case(p, st, base_h, base_v, kh, kv):
         The case's parameters (``kernel.P_*``).
     st : float64[N_STATE]
         Its initial state (``kernel.S_*``), replaced by the final state.
-    base_h, base_v : float64[m]
-        Unscaled ground accelerations [m/s^2], tail of zeros included.
+    base : float64[4, M]
+        Unscaled ground motion of one or more records, interval by interval (``kernel.GROUND_ROWS``),
+        tails of zeros included.
+    first, count : int
+        The case's record: intervals ``first ... first + count - 1`` of ``base``.
     kh, kv : float
         The case's horizontal and vertical scale factors.
     """
-    m = base_h.shape[0]
-    n = max(m, 2)                 # `simulate` pads a record of one sample to two
-    ah = np.zeros(n)
-    av = np.zeros(n)
-    for j in range(m):
-        ah[j] = kh * base_h[j]
-        av[j] = kv * base_v[j]
+    ground = np.empty((4, count))
+    for j in range(count):
+        ground[0, j] = kh * base[0, first + j]
+        ground[1, j] = kh * base[1, first + j]
+        ground[2, j] = kv * base[2, first + j]
+        ground[3, j] = kv * base[3, first + j]
     history = np.empty((len(K.HISTORY_COLUMNS), 0))
     events = np.empty((0, len(K.EVENT_COLUMNS)))
     every = history.shape[1]      # 0, not a literal: the kernel's cached signature is reused
     # contiguous copies: the kernel gets the array types `simulate` gives it
     p_case = p.copy()
     st_case = st.copy()
-    K.run(p_case, ah, av, st_case, history, every, every, events, n - 1)
+    K.run(p_case, ground, st_case, history, every, every, events, count)
     st[:] = st_case
 
 
@@ -99,18 +102,18 @@ def _drivers(stamp):
     """The two drivers, with ``stamp`` compiled in (their cache key changes with it)."""
 
     @njit(parallel=True, cache=True)
-    def run_parallel(params, states, base_h, base_v, kh, kv):
+    def run_parallel(params, states, base, first, count, kh, kv):
         if stamp == 0:            # folded away; it makes ``stamp`` part of the cache key
             return
         for i in prange(params.shape[0]):
-            run_case(params[i], states[i], base_h, base_v, kh[i], kv[i])
+            run_case(params[i], states[i], base, first[i], count[i], kh[i], kv[i])
 
     @njit(nogil=True, cache=True)
-    def run_serial(params, states, base_h, base_v, kh, kv):
+    def run_serial(params, states, base, first, count, kh, kv):
         if stamp == 0:
             return
         for i in range(params.shape[0]):
-            run_case(params[i], states[i], base_h, base_v, kh[i], kv[i])
+            run_case(params[i], states[i], base, first[i], count[i], kh[i], kv[i])
 
     return run_parallel, run_serial
 
@@ -124,15 +127,18 @@ params : float64[n, N_PARAMS]
     One parameter vector per case (``kernel.P_*``).
 states : float64[n, N_STATE]
     Initial states (``kernel.S_*``), replaced by the final states (the results are read from them).
-base_h, base_v : float64[m]
-    Unscaled ground accelerations [m/s^2] shared by the cases, tail of zeros included.
+base : float64[4, M]
+    Unscaled ground motion of the records the cases use, concatenated (`simulate.ground_array` of
+    each, tails included).
+first, count : int64[n]
+    Each case's record: intervals ``first[i] ... first[i] + count[i] - 1`` of ``base``.
 kh, kv : float64[n]
     Horizontal and vertical scale factors of each case.
 """
 run_serial.__doc__ = """`run_parallel` on the calling thread only, with the GIL released; same arguments."""
 
 
-def compute(params, states, base_h, base_v, kh, kv, *, parallel=True):
+def compute(params, states, base, first, count, kh, kv, *, parallel=True):
     """Run a batch of cases and return their final states (the inputs are not changed).
 
     Parameters
@@ -140,7 +146,8 @@ def compute(params, states, base_h, base_v, kh, kv, *, parallel=True):
     params : array_like, float64[n, N_PARAMS]
     states : array_like, float64[n, N_STATE]
         Initial states.
-    base_h, base_v : array_like, float64[m]
+    base : array_like, float64[4, M]
+    first, count : array_like, int64[n]
     kh, kv : array_like, float64[n]
         As for `run_parallel`.
     parallel : bool
@@ -153,10 +160,12 @@ def compute(params, states, base_h, base_v, kh, kv, *, parallel=True):
     """
     params = np.ascontiguousarray(params, dtype=np.float64)
     out = np.array(states, dtype=np.float64, order="C", copy=True)
-    args = (params, out, np.ascontiguousarray(base_h, dtype=np.float64),
-            np.ascontiguousarray(base_v, dtype=np.float64),
+    n = params.shape[0]
+    args = (params, out, np.ascontiguousarray(base, dtype=np.float64),
+            np.ascontiguousarray(np.broadcast_to(first, n), dtype=np.int64),
+            np.ascontiguousarray(np.broadcast_to(count, n), dtype=np.int64),
             np.ascontiguousarray(kh, dtype=np.float64), np.ascontiguousarray(kv, dtype=np.float64))
-    if params.shape[0] == 0:
+    if n == 0:
         return out
     if parallel:
         with numba.parallel_chunksize(1):
@@ -174,5 +183,4 @@ def warm_up(parallel=True):
     p[0, K.P_G], p[0, K.P_MU], p[0, K.P_NU], p[0, K.P_E] = 9.80665, 0.5, 0.5, 0.8
     p[0, K.P_H], p[0, K.P_DT_REC], p[0, K.P_N_SUB], p[0, K.P_LOCATED] = 0.01, 0.01, 1.0, 1.0
     states = K.new_state()[None, :]
-    ground = np.zeros(2)
-    compute(p, states, ground, ground, np.ones(1), np.ones(1), parallel=parallel)
+    compute(p, states, np.zeros((4, 1)), 0, 1, np.ones(1), np.ones(1), parallel=parallel)

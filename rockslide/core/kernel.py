@@ -80,6 +80,8 @@ CAUSE_NAMES = ("slip-start", "liftoff", "slip-stop", "slip-reversal", "impact",
 K_FLIGHT, K_PAINLEVE, K_SLIP_START, K_LIFTOFF, K_SLIP_STOP, K_IMPACT, K_OVERTURN = range(7)
 MAX_EVENTS_PER_MODE = 5
 
+# rows of the ground array: ah and av at the start and at the end of each record interval
+GROUND_ROWS = ("ah_start", "ah_end", "av_start", "av_end")
 # history columns: time, rotation phi = lam theta, rotation rate, slip, slip rate, state
 HISTORY_COLUMNS = ("time", "rotation", "rotation_rate", "slip", "slip_rate", "state")
 # event log columns
@@ -759,16 +761,18 @@ def glide(st, p, mode, j, n_sub, h, dt_rec, tk, a0, sa, v0, sv, history, every, 
 # ============================================================================================
 
 @njit(cache=True)
-def run(p, ah, av, st, history, every, offset, events, k_end):
+def run(p, ground, st, history, every, offset, events, k_end):
     """Integrate from the interval ``st[S_K]`` up to (not including) ``k_end``.
 
     Parameters
     ----------
     p : float64[N_PARAMS]
         Constants (``P_*``).
-    ah, av : float64[K + 1]
-        Ground acceleration samples [m/s^2], tail of zeros included; interval ``k`` is
-        ``[t0 + k dt_rec, t0 + (k + 1) dt_rec]``.
+    ground : float64[4, K]
+        The ground motion [m/s^2] interval by interval (`GROUND_ROWS`): ``ah`` and ``av`` at the
+        start and at the end of interval ``k``, ``[t0 + k dt_rec, t0 + (k + 1) dt_rec]``, linear in
+        between; tail of zeros included. A record's samples give ``ground[1, k] = ground[0, k + 1]``;
+        an analytic pulse may jump at an interval's boundary.
     st : float64[N_STATE]
         The integration state, updated in place (resumable).
     history : float64[6, n]
@@ -778,7 +782,7 @@ def run(p, ah, av, st, history, every, offset, events, k_end):
         Event log rows (``EVENT_COLUMNS``); ``st[S_N_EVENTS]`` counts all events, including those
         beyond the log's capacity.
     k_end : int
-        Stop before this interval (at most ``len(ah) - 1``).
+        Stop before this interval (at most ``K``).
     """
     # The constants as a tuple of scalars: unlike an array, it cannot alias the state arrays, so
     # the compiler keeps them in registers instead of reloading them after every store.
@@ -797,14 +801,16 @@ def run(p, ah, av, st, history, every, offset, events, k_end):
     if st[S_STARTED] == 0.0:
         st[S_STARTED] = 1.0
         st[S_E_INITIAL] = mechanical_energy(st, p)
-        settle(st, p, t0, ah[0], av[0], events, gv, kinds, ytmp)
+        settle(st, p, t0, ground[0, 0], ground[2, 0], events, gv, kinds, ytmp)
         note_extremes(st, t0)
         write_history(st, history, every, offset, 0, t0)
     while k < k_end and not finished(st):
-        a0 = ah[k]
-        sa = (ah[k + 1] - a0) / dt_rec
-        v0 = av[k]
-        sv = (av[k + 1] - v0) / dt_rec
+        a0 = ground[0, k]
+        sa = (ground[1, k] - a0) / dt_rec
+        v0 = ground[2, k]
+        sv = (ground[3, k] - v0) / dt_rec
+        if k > 0 and (a0 != ground[1, k - 1] or v0 != ground[3, k - 1]):
+            st[S_K1_VALID] = 0.0        # the ground jumps: the derivative at the step's start changes
         tk = t0 + k * dt_rec
         n_base = k * n_sub
         tau = 0.0

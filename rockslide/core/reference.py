@@ -22,7 +22,8 @@ from .simulate import (
     Result,
     Settings,
     event_table,
-    extend_with_tail,
+    ground_array,
+    ground_series,
     history_dict,
     initial_state,
     parameters,
@@ -42,9 +43,7 @@ def simulate_reference(model: Model, dt_record: float, horizontal, vertical,
     the kernel's step ``h``), from the solver's dense output. ``settings.events`` is ignored (events
     are always located); ``settings.dt`` only sets the history grid.
     """
-    ah, av = extend_with_tail(horizontal, vertical, dt_record, settings.tail)
-    if ah.size < 2:
-        ah, av = np.zeros(2), np.zeros(2)
+    ground = ground_array(horizontal, vertical, dt_record, settings.tail)
     p = parameters(model, dt_record, settings, start)
     p[K.P_LOCATED] = 1.0
     h = p[K.P_H]
@@ -59,17 +58,18 @@ def simulate_reference(model: Model, dt_record: float, horizontal, vertical,
 
     st[K.S_STARTED] = 1.0
     st[K.S_E_INITIAL] = K.mechanical_energy(st, p)
-    K.settle(st, p, start, ah[0], av[0], events, gv, kinds, ytmp)
+    K.settle(st, p, start, ground[0, 0], ground[2, 0], events, gv, kinds, ytmp)
     K.note_extremes(st, start)
     if every > 0:
         rows.append(_row(st, start))
 
-    for k in range(ah.size - 1):
+    n_intervals = ground.shape[1]
+    for k in range(n_intervals):
         if K.finished(st):
             break
-        a0, v0 = ah[k], av[k]
-        sa = (ah[k + 1] - a0) / dt_record
-        sv = (av[k + 1] - v0) / dt_record
+        a0, v0 = ground[0, k], ground[2, k]
+        sa = (ground[1, k] - a0) / dt_record
+        sv = (ground[3, k] - v0) / dt_record
         tk = start + k * dt_record
         grid = [j for j in range(1, n_sub + 1) if every > 0 and (k * n_sub + j) % every == 0]
         tau = 0.0
@@ -90,15 +90,16 @@ def simulate_reference(model: Model, dt_record: float, horizontal, vertical,
                                     grid, start, h, k * n_sub, n_sub, rows, rtol, atol)
 
     n_events = int(st[K.S_N_EVENTS])
+    ground_time, ground_h, ground_v = ground_series(ground, dt_record, start)
     history_columns = np.array(rows).T if rows else np.zeros((6, 0))
     return Result(
         history=history_dict(history_columns),
         events=event_table(events[:n_events]),
-        summary=summarise(st, model, start + (ah.size - 1) * dt_record),
+        summary=summarise(st, model, start + n_intervals * dt_record),
         step=h,
-        ground_time=start + dt_record * np.arange(ah.size),
-        ground_horizontal=ah,
-        ground_vertical=av,
+        ground_time=ground_time,
+        ground_horizontal=ground_h,
+        ground_vertical=ground_v,
     )
 
 

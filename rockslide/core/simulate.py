@@ -194,12 +194,57 @@ def initial_state(settings: Settings) -> np.ndarray:
     return st
 
 
-def extend_with_tail(horizontal, vertical, dt_record, tail):
-    """Ground samples with ``tail`` seconds of still ground appended (model.md decision 8)."""
+def _intervals(component, n_tail: int) -> np.ndarray:
+    """One component as ``float64[2, K]`` (start and end value of each interval), tail included."""
+    values = np.asarray(component, dtype=np.float64)
+    if values.ndim == 1:                       # samples, linear in between
+        samples = np.concatenate([values, np.zeros(n_tail)])
+        if samples.size < 2:                   # a single sample: one interval, constant
+            samples = np.concatenate([samples, np.zeros(2 - samples.size)])
+        return np.stack([samples[:-1], samples[1:]])
+    if values.ndim != 2 or values.shape[0] != 2:
+        raise ValueError(f"a ground component is samples (n,) or interval end values (2, n), got "
+                         f"shape {values.shape}")
+    return np.concatenate([values, np.zeros((2, n_tail))], axis=1)
+
+
+def ground_array(horizontal, vertical, dt_record: float, tail: float = 0.0) -> np.ndarray:
+    """The kernel's ground motion, ``float64[4, K]`` (rows `kernel.GROUND_ROWS`), with ``tail``
+    seconds of still ground appended (model.md decision 8).
+
+    Parameters
+    ----------
+    horizontal, vertical : array_like
+        Each either samples ``(n,)`` [m/s^2] at ``dt_record``, linear in between (a record), or
+        ``(2, n)``: the values at the start and at the end of each interval, linear in between and
+        free to jump at the boundaries (an analytic pulse with steps). Same number of intervals.
+    dt_record : float
+        [s] the sampling step.
+    tail : float
+        [s] still ground appended.
+    """
     n_tail = math.ceil(tail / dt_record - 1e-9) if tail > 0 else 0
-    ah = np.concatenate([np.asarray(horizontal, float), np.zeros(n_tail)])
-    av = np.concatenate([np.asarray(vertical, float), np.zeros(n_tail)])
-    return ah, av
+    ah = _intervals(horizontal, n_tail)
+    av = _intervals(vertical, n_tail)
+    if ah.shape != av.shape:
+        raise ValueError(f"horizontal and vertical ground motion differ in length: {ah.shape[1]} and "
+                         f"{av.shape[1]} intervals")
+    return np.ascontiguousarray(np.concatenate([ah, av]))
+
+
+def ground_series(ground: np.ndarray, dt_record: float, start: float = 0.0):
+    """The ground motion of `ground_array` as a time series ``(time, ah, av)`` [s, m/s^2, m/s^2]:
+    the samples, with a time repeated where the motion jumps (its value before, then after)."""
+    K = ground.shape[1]
+    t = start + dt_record * np.arange(K + 1)
+    jumps = np.flatnonzero((ground[1, :-1] != ground[0, 1:]) | (ground[3, :-1] != ground[2, 1:])) + 1
+    h = np.concatenate([ground[0], ground[1, -1:]])
+    v = np.concatenate([ground[2], ground[3, -1:]])
+    if jumps.size == 0:
+        return t, h, v
+    # before each jump, the value at the end of the previous interval
+    return (np.insert(t, jumps, t[jumps]), np.insert(h, jumps, ground[1, jumps - 1]),
+            np.insert(v, jumps, ground[3, jumps - 1]))
 
 
 def simulate(model: Model, dt_record: float, horizontal, vertical, settings: Settings = Settings(),
@@ -212,8 +257,8 @@ def simulate(model: Model, dt_record: float, horizontal, vertical, settings: Set
     dt_record : float
         Sampling step of the ground motion [s].
     horizontal, vertical : array_like
-        Ground accelerations ``ah``, ``av`` [m/s^2] (up positive), same length, linearly
-        interpolated between samples.
+        Ground accelerations ``ah``, ``av`` [m/s^2] (up positive): samples linearly interpolated,
+        or interval end values that may jump at the samples (see `ground_array`).
     settings : Settings
     start : float
         Time of the first sample [s].
@@ -225,15 +270,12 @@ def simulate(model: Model, dt_record: float, horizontal, vertical, settings: Set
     -------
     Result
     """
-    ah, av = extend_with_tail(horizontal, vertical, dt_record, settings.tail)
-    if ah.size < 2:
-        ah = np.concatenate([ah, np.zeros(2 - ah.size)])
-        av = np.concatenate([av, np.zeros(2 - av.size)])
+    ground = ground_array(horizontal, vertical, dt_record, settings.tail)
     p = parameters(model, dt_record, settings, start)
     st = initial_state(settings)
     n_sub = int(p[K.P_N_SUB])
     every = int(settings.history_every)
-    n_intervals = ah.size - 1
+    n_intervals = ground.shape[1]
     kept = []
     event_chunks = []
     events = np.zeros((1024, len(K.EVENT_COLUMNS)))
@@ -251,7 +293,7 @@ def simulate(model: Model, dt_record: float, horizontal, vertical, settings: Set
         while True:
             st[K.S_N_EVENTS] = 0
             st[K.S_ROWS] = 0
-            K.run(p, ah, av, st, history, every, first, events, k_end)
+            K.run(p, ground, st, history, every, first, events, k_end)
             n_events = int(st[K.S_N_EVENTS])
             if n_events <= events.shape[0]:
                 break
@@ -266,16 +308,15 @@ def simulate(model: Model, dt_record: float, horizontal, vertical, settings: Set
         k = int(st[K.S_K])
     columns = kept[0] if len(kept) == 1 else (np.concatenate(kept, axis=1) if kept
                                               else np.empty((len(K.HISTORY_COLUMNS), 0)))
-    n_total = ah.size
-    ground_time = start + dt_record * np.arange(n_total)
+    ground_time, ground_h, ground_v = ground_series(ground, dt_record, start)
     return Result(
         history=history_dict(columns),
         events=event_table(np.concatenate(event_chunks) if event_chunks else np.zeros((0, 6))),
-        summary=summarise(st, model, start + (n_total - 1) * dt_record),
+        summary=summarise(st, model, start + n_intervals * dt_record),
         step=p[K.P_H],
         ground_time=ground_time,
-        ground_horizontal=ah,
-        ground_vertical=av,
+        ground_horizontal=ground_h,
+        ground_vertical=ground_v,
     )
 
 
@@ -339,5 +380,6 @@ def summarise(st: np.ndarray, model: Model, record_end: float) -> Summary:
     )
 
 
-__all__ = ["Model", "Settings", "Summary", "Result", "simulate", "substeps", "parameters",
+__all__ = ["Model", "Settings", "Summary", "Result", "simulate", "substeps", "parameters", "ground_array",
+           "ground_series",
            "REST", "SLIP", "ROCK", "ROCKSLIP", "OVERTURNED"]
