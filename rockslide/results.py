@@ -34,7 +34,9 @@ Layout (format ``rockslide-result``, version 1):
 - ``/time_history/state`` attribute ``codes`` = "0 REST, 1 SLIP, 2 ROCK, 3 ROCKSLIP, 4 OVERTURNED".
 - ``/events`` fields: ``time`` (f8) [s]; ``from``, ``to`` (S10, state names); ``cause`` (S14:
   slip-start, liftoff, slip-stop, slip-reversal, impact, liftoff-end, overturn, flight, painleve);
-  ``edge`` (i1, the pivot ``lam``: +1 left, -1 right); ``slip_direction`` (i1, ``sigma``).
+  ``edge`` (i1, the pivot ``lam``: +1 left, -1 right); ``slip_direction`` (i1, ``sigma``);
+  ``impact`` (S8: the branch of the impact law, stick, slip or flat; empty for other events);
+  ``energy_loss`` (f8) [J]: the kinetic energy an impact took (>= 0; 0 for other events).
 - ``/records/<role>`` attributes: ``role``, ``path`` (the file name only, never a folder),
   ``sha256`` (of the file's bytes), ``format``, ``units`` (of the file), ``scale_factor``.
 - ``/case`` holds the case (``case.case_to_dict``) as attributes with dotted keys such as
@@ -335,9 +337,10 @@ def _write_body(f: h5py.File, result: Result, *, name, case_text, case, records,
 
     events = np.asarray(result.events).astype(EVENT_DTYPE)
     ds = f.create_dataset("events", data=events, dtype=EVENT_DTYPE)
-    ds.attrs["units"] = "time: s"
+    ds.attrs["units"] = "time: s, energy_loss: J"
     ds.attrs["description"] = ("time [s], from/to: state names, cause, edge: pivot lam (+1 left, "
-                               "-1 right, 0 none), slip_direction: sigma")
+                               "-1 right, 0 none), slip_direction: sigma, impact: branch of the impact "
+                               "law (stick, slip, flat), energy_loss: kinetic energy the impact took [J]")
 
     if case_text or case:
         group = f.create_group("case", track_order=True)
@@ -756,7 +759,8 @@ def summary_to_json_dict(summary: Summary, events=()) -> dict:
 
     None stays None (``null``); a non-finite float becomes None too, so the output is strict JSON.
     ``events`` (EVENT_DTYPE array or list of dicts) becomes a list of
-    ``{"time", "from", "to", "cause"}``.
+    ``{"time", "from", "to", "cause"}``, with ``"impact"`` (the branch) and ``"energy_loss"`` [J] for
+    impacts.
     """
     out = {}
     for f in dataclasses.fields(summary):
@@ -787,8 +791,16 @@ def _event_dict(event) -> dict:
     def text(v):
         return v.decode() if isinstance(v, bytes) else str(v)
 
-    return {"time": _json_value(float(event["time"])), "from": text(event["from"]),
-            "to": text(event["to"]), "cause": text(event["cause"])}
+    out = {"time": _json_value(float(event["time"])), "from": text(event["from"]),
+           "to": text(event["to"]), "cause": text(event["cause"])}
+    if "impact" in _fields(event) and text(event["impact"]):
+        out["impact"] = text(event["impact"])
+        out["energy_loss"] = _json_value(float(event["energy_loss"]))
+    return out
+
+
+def _fields(event):
+    return event.keys() if isinstance(event, dict) else event.dtype.names
 
 
 # --------------------------------------------------------------------------------------------------

@@ -791,7 +791,7 @@ def collect(plan: Plan, store: ChunkStore) -> np.ndarray:
 #: Bits of the ``modes`` variable.
 MODE_BITS = {"slip": 1, "liftoff": 2, "liftoff_slip": 4}
 
-STATUS_FLAGS = {"flag_values": np.array([0, 1, 2], dtype=np.int8),
+STATUS_FLAGS = {"flag_values": np.arange(len(K.STATUS_NAMES), dtype=np.int8),
                 "flag_meanings": " ".join(K.STATUS_NAMES)}
 
 

@@ -20,6 +20,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from rockslide.core import physics as P
 
@@ -361,11 +363,180 @@ def test_margins_eq6_eq11_eq21_eq23():
         assert P.liftoff_margin(ta, G, push) == pytest.approx(ta * G - abs(push), abs=4 * EPS * 150)
 
 
-@pytest.mark.parametrize("e", [0.0, 0.5, 0.8, 1.0])
-def test_eq8_rebound(e):
-    """Eq. 8 with decision 2: thetadot+ = e |thetadot-| (the block lifts off about the other edge)."""
-    for w in (-3.7, -1e-9, 0.0, 2.5):
-        assert P.rebound(w, e) == e * abs(w)
+# ------------------------------------------------------------------------------------------------
+# The impact law (eq. 8 and model.md decision 2), against rigid-body mechanics written out here
+# ------------------------------------------------------------------------------------------------
+#
+# At theta = 0 a block pivoting on edge lam has its centre of gravity at (lam b, h) from the pivot:
+# its velocity is (xdot - lam h thetadot, b thetadot) and its angular velocity lam thetadot
+# (counter-clockwise positive). Impulses per unit mass are the changes of the centre's velocity.
+# Quantities are O(1), so relative rounding tolerances of 1e-13 cover every comparison.
+
+def _body(thetadot, xdot, lam, b, h):
+    """Centre-of-gravity velocity (vx, vz) and angular velocity of the block at theta = 0."""
+    return xdot - lam * h * thetadot, b * thetadot, lam * thetadot
+
+
+def _impact_outcome(u, xdot, lam, e, mu, nu, b, h):
+    """The law's branch and the state after: (branch, thetadot+, xdot+, lam+)."""
+    R, alpha, _ = P.block_constants(b, h, G0)
+    branch, w, xi_plus = P.impact(u, lam * xdot, e, mu, nu, R, alpha)
+    return P.IMPACT_BRANCHES[branch], w, lam * xi_plus, -lam
+
+
+def _kinetic(thetadot, xdot, lam, b, h):
+    vx, vz, omega = _body(thetadot, xdot, lam, b, h)
+    return 0.5 * (vx * vx + vz * vz) + 0.5 * (b * b + h * h) / 3.0 * omega * omega
+
+
+def _momentum_about_landing_edge(thetadot, xdot, lam, lam_before, b, h):
+    """I omega + (r_G - r_edge) x v_G about the edge that lands when pivot ``lam_before`` lifts off
+    it: the edge at (lam_before b, -h) from the centre of gravity (opposite the old pivot)."""
+    vx, vz, omega = _body(thetadot, xdot, lam, b, h)
+    rx, rz = -lam_before * b, h                   # the centre of gravity from the landing edge
+    return (b * b + h * h) / 3.0 * omega + rx * vz - rz * vx
+
+
+def _friction_bound(e, b, h):
+    """mu above which a rocking block (xdot- = 0) sticks at the impact: (1 - e) / ((1 + e) tan(alpha))."""
+    return (1.0 - e) / ((1.0 + e) * (b / h))
+
+
+@pytest.mark.parametrize("e", [0.0, 0.3, 0.8, 1.0])
+@pytest.mark.parametrize("gamma", [0.3, 2.0, 6.0])          # h / b
+def test_impact_of_a_rocking_block_is_the_papers_rule_above_the_friction_bound(e, gamma):
+    """xdot- = 0 and mu >= (1 - e) / ((1 + e) tan(alpha)): thetadot+ = e |thetadot-| and xdot+ = 0
+    exactly (eq. 8; every ROCK impact of Table 1). e = 0 is a flat landing that stops the block.
+    Just below the bound the landing edge slides: xdot+ != 0 (a rocking block slips at the impact)."""
+    b = 0.1
+    h = gamma * b
+    bound = _friction_bound(e, b, h)
+    for mu in (bound * (1 + 1e-12), 1.01 * bound, 5.0 * bound + 0.1):   # (at the bound itself: rounding)
+        for nu in (0.0, 0.5 * mu, mu):
+            for lam in (1.0, -1.0):
+                for u in (1e-6, 0.37, 4.2):
+                    branch, w, xdot, _ = _impact_outcome(u, 0.0, lam, e, mu, nu, b, h)
+                    assert branch == ("flat" if e == 0.0 else "stick")
+                    assert w == e * u and xdot == 0.0
+    if bound > 0.0:
+        s, c = b / math.hypot(b, h), h / math.hypot(b, h)
+        nu = 0.9 * min(bound, (1 + 3 * s * s) / (3 * s * c))      # below the Painleve bound
+        branch, w, xdot, _ = _impact_outcome(1.0, 0.0, 1.0, e, 0.99 * bound, nu, b, h)
+        assert branch in ("slip", "flat") and xdot != 0.0
+
+
+def test_impact_with_housners_restitution_conserves_angular_momentum_about_the_landing_edge():
+    """e = 1 - 1.5 sin^2(alpha) (Housner 1963): in the stick branch the angular momentum about the
+    landing edge, I w + (r_G - r_edge) x v_G from the rigid body's velocities, is the same before
+    and after (the landing edge's impulse has no moment about it); in the slip branch
+    w / u = (1/3 - s^2 + sig nu s c) / (1/3 + s^2 - sig nu s c)."""
+    rng = np.random.default_rng(3)
+    seen = set()
+    for _ in range(N_DRAWS):
+        b, h, R, alpha, _ = _geometry(rng)
+        s, c = math.sin(alpha), math.cos(alpha)
+        e = 1.0 - 1.5 * s * s
+        lam = rng.choice([-1.0, 1.0])
+        u, xdot = rng.uniform(0.01, 5.0), rng.uniform(-1.0, 1.0) * R * 3.0
+        mu = rng.uniform(0.0, 1.5)
+        nu = rng.uniform(0.0, 1.0) * min(mu, 0.99 * (1 + 3 * s * s) / (3 * s * c))
+        branch, w, xdot_plus, lam_plus = _impact_outcome(u, xdot, lam, e, mu, nu, b, h)
+        seen.add(branch)
+        if branch == "stick":
+            before = _momentum_about_landing_edge(-u, xdot, lam, lam, b, h)
+            after = _momentum_about_landing_edge(w, xdot_plus, lam_plus, lam, b, h)
+            assert after == pytest.approx(before, rel=1e-12, abs=1e-13 * R * R * u)
+            assert w == pytest.approx(e * u + 0.75 * c / R * lam * xdot, rel=1e-13)
+        elif branch == "slip":
+            sig = math.copysign(1.0, lam * xdot_plus)
+            ratio = (1 / 3 - s * s + sig * nu * s * c) / (1 / 3 + s * s - sig * nu * s * c)
+            assert w / u == pytest.approx(ratio, rel=1e-12)
+    assert {"stick", "slip"} <= seen
+
+
+def test_impact_without_friction_keeps_the_horizontal_velocity_of_the_centre():
+    """mu = nu = 0: no horizontal impulse, so the centre of gravity keeps its horizontal velocity
+    through the impact, whichever branch (slip or flat) the law takes."""
+    rng = np.random.default_rng(5)
+    seen = set()
+    for _ in range(N_DRAWS):
+        b, h, R, *_ = _geometry(rng)
+        e, lam = rng.uniform(0, 1), rng.choice([-1.0, 1.0])
+        u, xdot = rng.uniform(0.01, 5.0), rng.uniform(-3.0, 3.0) * R
+        branch, w, xdot_plus, lam_plus = _impact_outcome(u, xdot, lam, e, 0.0, 0.0, b, h)
+        seen.add(branch)
+        vx_before = _body(-u, xdot, lam, b, h)[0]
+        vx_after = _body(w, xdot_plus, lam_plus, b, h)[0]
+        assert vx_after == pytest.approx(vx_before, rel=1e-12, abs=1e-14 * (abs(xdot) + R * u))
+    assert seen == {"slip", "flat"}
+
+
+@settings(max_examples=400, deadline=None)
+@given(gamma=st.floats(0.15, 8.0), e=st.floats(0.0, 1.0), mu_share=st.floats(0.0, 0.99),
+       nu_share=st.floats(0.0, 1.0), u=st.floats(1e-6, 20.0), xi_over_ru=st.floats(-5.0, 5.0),
+       lam=st.sampled_from([-1.0, 1.0]))
+def test_impact_never_creates_energy_and_respects_coulomb(gamma, e, mu_share, nu_share, u, xi_over_ru, lam):
+    """Any block, e, mu below the Painleve bound (1 + 3 s^2) / (3 s c), nu <= mu, slip and rotation
+    rates: the kinetic energy after <= before (to 1e-12 relative); stick: the friction impulse is
+    within the cone |Px| <= mu Pz; slip: at its limit |Px| = nu Pz against the slip that follows;
+    flat: within the cone if the block stops, at nu Pz against the slide otherwise; w >= 0;
+    everything finite. Pz = b (u + w) for stick and slip (the landing edge alone)."""
+    b = 0.1
+    h = gamma * b
+    R, alpha, _ = P.block_constants(b, h, G0)
+    s, c = math.sin(alpha), math.cos(alpha)
+    mu = mu_share * min(3.0, (1 + 3 * s * s) / (3 * s * c))
+    nu = nu_share * mu
+    xdot = lam * xi_over_ru * R * u
+    branch, w, xdot_plus, lam_plus = _impact_outcome(u, xdot, lam, e, mu, nu, b, h)
+    assert branch in ("stick", "slip", "flat")
+    assert math.isfinite(w) and math.isfinite(xdot_plus) and w >= 0.0
+    before = _kinetic(-u, xdot, lam, b, h)
+    after = _kinetic(w, xdot_plus, lam_plus, b, h) if w > 0 else 0.5 * xdot_plus * xdot_plus
+    assert after <= before * (1 + 1e-12) + 1e-300
+    vx0, vz0, _ = _body(-u, xdot, lam, b, h)
+    vx1, vz1, _ = _body(w, xdot_plus, lam_plus, b, h) if w > 0 else (xdot_plus, 0.0, 0.0)
+    Px, Pz = vx1 - vx0, vz1 - vz0
+    scale = 1e-12 * (abs(xdot) + R * u)
+    if branch == "stick":
+        assert xdot_plus == 0.0 and abs(Px) <= mu * Pz + scale
+        assert Pz == pytest.approx(b * (u + w), rel=1e-12)
+    elif branch == "slip":
+        assert abs(Px) == pytest.approx(nu * Pz, abs=scale)
+        assert Px * xdot_plus <= scale * abs(xdot_plus)       # friction opposes the slip
+    elif xdot_plus == 0.0:
+        assert abs(Px) <= mu * Pz + scale
+    else:
+        assert abs(Px) == pytest.approx(nu * Pz, abs=scale) and Px * xdot_plus <= scale * abs(xdot_plus)
+
+
+@pytest.mark.parametrize("xdot,expected", [(-0.30, ("slip", -0.1824, 0.0945)), (-0.10, ("stick", 0.0, 0.200)),
+                                           (0.0, ("stick", 0.0, 0.800)), (0.15, ("slip", 0.0529, 1.3828))])
+def test_impact_of_the_papers_block(xdot, expected):
+    """The paper's block (b = 0.05, h = 0.1, e = 0.8), lam = +1, |thetadot-| = 1 rad/s, mu = 0.52,
+    nu = 0.494: the values worked out by hand in the issue that revised the law (4 digits)."""
+    branch, w, xdot_plus, _ = _impact_outcome(1.0, xdot, 1.0, 0.8, 0.52, 0.494, 0.05, 0.1)
+    assert (branch, round(xdot_plus, 4), round(w, 4)) == (expected[0], pytest.approx(expected[1], abs=1e-4),
+                                                          pytest.approx(expected[2], abs=1e-4))
+
+
+def test_a_dropped_rebound_never_adds_energy():
+    """The end of liftoff (decision 3) drops a rebound w <= w_z. Keeping the law's slip velocity
+    (the contract's words) when the block slides away from the landing edge (xi+ < 0) would leave
+    0.5 xi+^2 > the kinetic energy before the impact: here (the paper's block, mu = nu = 0.05,
+    sliding at 0.5 m/s, u = w_z / 2) by ~1e-4 J/kg. rockslide keeps the centre of gravity's velocity
+    xi+ + h w there, which never exceeds the energy before (nor after) the impact."""
+    b, h, e, mu = 0.05, 0.1, 0.8, 0.05
+    R, alpha, p2 = P.block_constants(b, h, G0)
+    w_z = P.zeno_rate(1e-7, p2, alpha)
+    assert w_z == pytest.approx(math.sqrt(2 * p2 * (math.cos(alpha - 1e-7) - math.cos(alpha))), rel=1e-6)
+    u, xi = 0.5 * w_z, -0.5
+    branch, w, xi_plus = P.impact(u, xi, e, mu, mu, R, alpha)
+    assert branch == P.IMPACT_SLIP and w <= w_z and xi_plus < 0.0
+    before = _kinetic(-u, xi, 1.0, b, h)
+    assert 0.5 * xi_plus ** 2 - before > 1e-5                      # the literal rule gains energy
+    kept = xi_plus + h * w
+    assert 0.5 * kept ** 2 <= _kinetic(w, xi_plus, -1.0, b, h) <= before
 
 
 def test_energies_from_the_lagrangian_eq13():

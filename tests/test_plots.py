@@ -42,7 +42,7 @@ KINDS = {
     "rockslip": (lambda: pulse(6.0, 0.52), lambda s: "ROCKSLIP" in s.states_seen and not s.overturned),
     "overturn": (lambda: pulse(5.5, 0.8, vertical=0.0), lambda s: s.overturned),
     "flight": (lambda: pulse(6.0, 0.8, vertical=-2.2, vertical_abs=True), lambda s: s.status == "flight"),
-    "painleve": (lambda: pulse(3.0, 2.0, vertical=0.0, rotation=0.05, slip_rate=0.5),
+    "painleve": (lambda: pulse(3.0, 2.0, vertical=0.0, slip_rate=0.5),
                  lambda s: s.status == "painleve"),
 }
 

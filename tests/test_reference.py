@@ -32,7 +32,19 @@ CASES = {
     "high friction, rocking only": (Model.from_block(0.2, 0.1, 0.9, 0.85, 0.8), 5),
     "low friction, slip only": (Model.from_block(0.2, 0.1, 0.3, 0.28, 0.8), 7),
     "nu above tan(alpha): slip lifts off": (Model.from_block(0.3, 0.1, 0.6, 0.5, 0.7), 11),
+    "plastic impacts: flat landings, nu above tan(alpha)": (Model.from_block(0.2, 0.1, 0.6, 0.57, 0.0), 19),
+    "slender block, slip branch at impacts": (Model.from_block(0.5, 0.15, 0.35, 0.32, 0.8), 17),
 }
+
+
+def test_the_cases_reach_every_branch_of_the_impact_law():
+    """Between them the cases reach the stick, slip and flat branches (model.md decision 2) and the
+    end of liftoff (decision 3), so the comparison below covers each."""
+    seen = set()
+    for model, seed in CASES.values():
+        events = simulate(model, *pulse_input(seed), Settings(tail=1.0, history_every=0)).events
+        seen |= {b.decode() for b in events["impact"] if b} | {c.decode() for c in events["cause"]}
+    assert {"stick", "slip", "flat", "liftoff-end"} <= seen
 
 
 @pytest.mark.parametrize("name", list(CASES))
@@ -45,7 +57,8 @@ def test_kernel_and_reference_agree_event_by_event(name):
     assert len(ek) > 0
     n = min(len(ek), len(er))
     for i in range(n):
-        same = (ek[i]["from"], ek[i]["to"], ek[i]["cause"]) == (er[i]["from"], er[i]["to"], er[i]["cause"])
+        same = ((ek[i]["from"], ek[i]["to"], ek[i]["cause"], ek[i]["impact"])
+                == (er[i]["from"], er[i]["to"], er[i]["cause"], er[i]["impact"]))
         assert same and abs(ek[i]["time"] - er[i]["time"]) < EVENT_TIME_TOLERANCE, (
             f"event {i} differs: kernel {ek[i]} reference {er[i]}")
     assert len(ek) == len(er)

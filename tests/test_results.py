@@ -152,7 +152,7 @@ def test_none_fields_are_restored(tmp_path, result, overturned):
 
 
 def test_outcomes_outside_the_model_round_trip(tmp_path):
-    r = pulse_result(amplitude=3.0, mu=2.0, vertical=0.0, rotation=0.05, slip_rate=0.5)
+    r = pulse_result(amplitude=3.0, mu=2.0, vertical=0.0, slip_rate=0.5)    # nu = 1.9 > 4/3: Painleve at once
     assert r.summary.status == "painleve"
     back = read_result(write_result(tmp_path / "p.h5", r, name="p")).result
     assert back.summary == r.summary
@@ -217,7 +217,8 @@ def test_units_compression_and_codes(tmp_path, result):
             if isinstance(obj, h5py.Dataset):
                 assert "units" in obj.attrs, name
         f.visititems(has_units)
-        assert f["events"].dtype.names == ("time", "from", "to", "cause", "edge", "slip_direction")
+        assert f["events"].dtype.names == ("time", "from", "to", "cause", "edge", "slip_direction", "impact",
+                                           "energy_loss")
         assert f["events"].dtype["cause"].kind == "S" and f["events"].dtype["edge"] == np.int8
 
 

@@ -300,8 +300,8 @@ def test_xarray_opens_a_labelled_dataset(swept):
             assert ds[name].attrs["units"] == units and ds[name].attrs["long_name"], name
         assert ds["overturned"].dtype == np.int8 and ds["direction"].dtype == np.int8
         assert ds["impacts"].dtype == np.int32 and ds["modes"].dtype == np.int8
-        assert ds["status"].attrs["flag_meanings"] == "ok flight painleve"
-        assert ds["status"].attrs["flag_values"].tolist() == [0, 1, 2]
+        assert ds["status"].attrs["flag_meanings"] == "ok flight painleve chatter"
+        assert ds["status"].attrs["flag_values"].tolist() == [0, 1, 2, 3]
         assert ds["modes"].attrs["flag_masks"].tolist() == [1, 2, 4]
         over = ds["overturned"].values.astype(bool)
         assert over.any() and not over.all()

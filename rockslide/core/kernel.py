@@ -30,6 +30,9 @@ import numpy as np
 from numba import njit
 
 from .physics import (
+    IMPACT_FLAT,
+    IMPACT_PAINLEVE,
+    IMPACT_STICK,
     OVERTURNED,
     REST,
     ROCK,
@@ -37,16 +40,19 @@ from .physics import (
     SLIP,
     contact_forces,
     contact_forces_sc,
+    impact,
     kinetic_energy,
     liftoff_margin,
     potential_energy,
-    rebound,
     rock_acceleration,
     rock_acceleration_sc,
     rockslip_accelerations_sc,
+    rockslip_determinant,
+    rockslip_determinant_rate,
     slip_acceleration,
     slip_margin,
     tilt,
+    zeno_rate,
 )
 
 # --- parameter vector ``p`` -------------------------------------------------------------------
@@ -63,12 +69,13 @@ N_PARAMS = 13   # `run` unpacks p into a 13-tuple: keep the two in step
  S_W_GROUND, S_W_FRICTION, S_W_IMPACT,                      # energy ledger [J/kg]
  S_FALL_CANDIDATE, S_THETA_MAX_TIME, S_E_INITIAL,
  S_K1_VALID, S_K1_THDD, S_K1_XDD, S_K1_PG, S_K1_PF,  # first RK4 stage of the next step
- S_ROWS) = range(34)                                 # history columns written by the last call
-N_STATE = 34
+ S_ROWS,                                             # history columns written by the last call
+ S_LAST_EVENT_TIME, S_EVENTS_AT_ONCE) = range(36)    # transitions at one instant (chatter guard)
+N_STATE = 36
 
 # --- outcomes ---------------------------------------------------------------------------------
-STATUS_OK, STATUS_FLIGHT, STATUS_PAINLEVE = 0, 1, 2
-STATUS_NAMES = ("ok", "flight", "painleve")
+STATUS_OK, STATUS_FLIGHT, STATUS_PAINLEVE, STATUS_CHATTER = 0, 1, 2, 3
+STATUS_NAMES = ("ok", "flight", "painleve", "chatter")
 
 # --- event causes (the event log's ``cause`` column) -------------------------------------------
 (C_SLIP_START, C_LIFTOFF, C_SLIP_STOP, C_SLIP_REVERSAL, C_IMPACT, C_LIFTOFF_END,
@@ -84,8 +91,9 @@ MAX_EVENTS_PER_MODE = 5
 GROUND_ROWS = ("ah_start", "ah_end", "av_start", "av_end")
 # history columns: time, rotation phi = lam theta, rotation rate, slip, slip rate, state
 HISTORY_COLUMNS = ("time", "rotation", "rotation_rate", "slip", "slip_rate", "state")
-# event log columns
-EVENT_COLUMNS = ("time", "from", "to", "cause", "edge", "slip_direction")
+# event log columns: ``impact`` is the branch of the impact law (`physics.IMPACT_BRANCHES`, 0: not an
+# impact), ``energy_loss`` the kinetic energy the impact took [J/kg]
+EVENT_COLUMNS = ("time", "from", "to", "cause", "edge", "slip_direction", "impact", "energy_loss")
 
 HALF_PI = 0.5 * math.pi
 THETA_END = 1e-7   # [rad] a rebound predicted to rise less than this ends the liftoff (decision 3)
@@ -93,11 +101,17 @@ STEP_END_FLIGHT_STEPS = 4.0   # step-end switching also ends liftoff for flights
 LOCATE_TOLERANCE = 1e-13      # event location: bracket width relative to the step
 TIE_TOLERANCE = 1e-12         # located crossings closer than this (relative to the step) are ties
 MAX_TRANSITIONS_PER_STEP = 200
+SINGULAR_FRACTION = 0.05      # near a Painleve point a ROCKSLIP step may change D by this fraction at most
+PAINLEVE_TIME = 1e-12         # [s] D would reach 0 sooner than this: the Painleve point is reached
+MAX_SUBSTEPS = 2000           # sub-steps of one step approaching a Painleve point (~400 are needed)
+MAX_EVENTS_AT_ONCE = 50       # transitions within EVENT_INSTANT beyond this: the run stops ('chatter')
+EVENT_INSTANT = 1e-9          # [s] transitions closer than this to the first of a cluster are 'at once'
 
 
 def new_state():
     """A state vector at rest, before the first call of `run`."""
     st = np.zeros(N_STATE)
+    st[S_LAST_EVENT_TIME] = math.nan
     st[S_LAM] = 1.0
     st[S_SIGMA] = 1.0
     st[S_FALL_START] = math.nan
@@ -168,36 +182,55 @@ def rk4_step(mode, lam, sigma, th, thd, x, xd, wg, wf, tau, hh, a0, sa, v0, sv, 
 
     The state is ``theta, thetadot, x, xdot, w_ground, w_friction``; the ground is
     ``ah = a0 + sa t``, ``av = v0 + sv t`` (linear within the interval). ``a1, b1, pg1, pf1`` are
-    the derivatives at the start (the first stage, from `evaluate`). Returns the new state.
+    the derivatives at the start (the first stage, from `evaluate`). Returns the new state and
+    the smallest ROCKSLIP determinant ``D`` of the later stages (1 in other states): a stage with
+    ``D <= 0`` evaluated the model where it has no solution, and the step must be shortened.
     """
     half = 0.5 * hh
     th2 = th + half * thd
     thd2 = thd + half * a1
     xd2 = xd + half * b1
-    a2, b2, pg2, pf2, _, _, _, _, _ = evaluate(mode, lam, sigma, th2, thd2, xd2, tau + half, a0, sa, v0, sv, p)
+    a2, b2, pg2, pf2, _, _, D2, _, _ = evaluate(mode, lam, sigma, th2, thd2, xd2, tau + half, a0, sa, v0, sv, p)
     th3 = th + half * thd2
     thd3 = thd + half * a2
     xd3 = xd + half * b2
-    a3, b3, pg3, pf3, _, _, _, _, _ = evaluate(mode, lam, sigma, th3, thd3, xd3, tau + half, a0, sa, v0, sv, p)
+    a3, b3, pg3, pf3, _, _, D3, _, _ = evaluate(mode, lam, sigma, th3, thd3, xd3, tau + half, a0, sa, v0, sv, p)
     th4 = th + hh * thd3
     thd4 = thd + hh * a3
     xd4 = xd + hh * b3
-    a4, b4, pg4, pf4, _, _, _, _, _ = evaluate(mode, lam, sigma, th4, thd4, xd4, tau + hh, a0, sa, v0, sv, p)
+    a4, b4, pg4, pf4, _, _, D4, _, _ = evaluate(mode, lam, sigma, th4, thd4, xd4, tau + hh, a0, sa, v0, sv, p)
     f = hh / 6.0
     return (th + f * (thd + 2.0 * thd2 + 2.0 * thd3 + thd4),
             thd + f * (a1 + 2.0 * a2 + 2.0 * a3 + a4),
             x + f * (xd + 2.0 * xd2 + 2.0 * xd3 + xd4),
             xd + f * (b1 + 2.0 * b2 + 2.0 * b3 + b4),
             wg + f * (pg1 + 2.0 * pg2 + 2.0 * pg3 + pg4),
-            wf + f * (pf1 + 2.0 * pf2 + 2.0 * pf3 + pf4))
+            wf + f * (pf1 + 2.0 * pf2 + 2.0 * pf3 + pf4),
+            min(D2, min(D3, D4)))
 
 
 @njit(cache=True)
 def rk4_from(mode, lam, sigma, y, tau, hh, a0, sa, v0, sv, p, out):
-    """`rk4_step` on arrays (``y`` -> ``out``), computing its own first stage (event location)."""
+    """`rk4_step` on arrays (``y`` -> ``out``), computing its own first stage (event location).
+    Returns the smallest stage determinant (see `rk4_step`)."""
     a1, b1, pg1, pf1, _, _, _, _, _ = evaluate(mode, lam, sigma, y[0], y[1], y[3], tau, a0, sa, v0, sv, p)
-    out[0], out[1], out[2], out[3], out[4], out[5] = rk4_step(
+    out[0], out[1], out[2], out[3], out[4], out[5], d_min = rk4_step(
         mode, lam, sigma, y[0], y[1], y[2], y[3], y[4], y[5], tau, hh, a0, sa, v0, sv, p, a1, b1, pg1, pf1)
+    return d_min
+
+
+@njit(cache=True)
+def time_to_painleve(lam, sigma, theta, thetadot, p):
+    """In ROCKSLIP, the time [s] the determinant ``D`` would take to reach 0 at its present rate
+    ``dD/dtheta thetadot`` (``inf`` while it does not fall; 0 at or past the Painleve point)."""
+    s, c = tilt(theta, p[P_ALPHA])
+    D = rockslip_determinant(s, c, lam, sigma, p[P_NU], p[P_R])
+    rate = rockslip_determinant_rate(s, c, lam, sigma, p[P_NU], p[P_R]) * thetadot
+    if D <= 0.0:
+        return 0.0
+    if rate >= 0.0:
+        return math.inf
+    return D / -rate
 
 
 # What each event function of a state is, in the order of model.md's table (-1: unused slot).
@@ -249,7 +282,9 @@ def event_values(mode, lam, sigma, y, ah, G, p, gv, kinds):
 # ============================================================================================
 
 @njit(cache=True)
-def log_event(st, events, t, mode_from, mode_to, cause):
+def log_event(st, events, t, mode_from, mode_to, cause, branch, loss):
+    """Append an event (`EVENT_COLUMNS`); ``branch`` and ``loss`` [J/kg] describe an impact (0
+    otherwise). Events beyond the log's capacity are counted, not stored."""
     n = int(st[S_N_EVENTS])
     if n < events.shape[0]:
         events[n, 0] = t
@@ -258,6 +293,8 @@ def log_event(st, events, t, mode_from, mode_to, cause):
         events[n, 3] = cause
         events[n, 4] = st[S_LAM]
         events[n, 5] = st[S_SIGMA]
+        events[n, 6] = branch
+        events[n, 7] = loss
     st[S_N_EVENTS] = n + 1
 
 
@@ -330,8 +367,22 @@ def mechanical_energy(st, p):
 
 @njit(cache=True)
 def apply_event(kind, st, p, t, ah, G, events):
-    """Apply the transition of event ``kind`` to ``st`` at time ``t`` (ground ``ah``, ``G``)."""
+    """Apply the transition of event ``kind`` to ``st`` at time ``t`` (ground ``ah``, ``G``).
+
+    A state machine that keeps switching at one instant (a chatter that the end-of-liftoff rule,
+    decision 3, should have ended; rounding may move it on by an ulp now and then) stops the run
+    with status 'chatter' after `MAX_EVENTS_AT_ONCE` transitions within `EVENT_INSTANT` of the first,
+    instead of looping for ever."""
     st[S_K1_VALID] = 0.0
+    if t - st[S_LAST_EVENT_TIME] <= EVENT_INSTANT:
+        st[S_EVENTS_AT_ONCE] += 1.0
+        if st[S_EVENTS_AT_ONCE] > MAX_EVENTS_AT_ONCE:
+            st[S_STATUS] = STATUS_CHATTER
+            stop(st, t)
+            return
+    else:
+        st[S_LAST_EVENT_TIME] = t
+        st[S_EVENTS_AT_ONCE] = 0.0
     mode = int(st[S_MODE])
     lam = st[S_LAM]
     sigma = st[S_SIGMA]
@@ -341,11 +392,11 @@ def apply_event(kind, st, p, t, ah, G, events):
 
     if kind == K_FLIGHT:
         st[S_STATUS] = STATUS_FLIGHT
-        log_event(st, events, t, mode, mode, C_FLIGHT)
+        log_event(st, events, t, mode, mode, C_FLIGHT, 0, 0.0)
         stop(st, t)
     elif kind == K_PAINLEVE:
         st[S_STATUS] = STATUS_PAINLEVE
-        log_event(st, events, t, mode, mode, C_PAINLEVE)
+        log_event(st, events, t, mode, mode, C_PAINLEVE, 0, 0.0)
         stop(st, t)
     elif kind == K_OVERTURN:
         st[S_THETA] = HALF_PI
@@ -356,33 +407,33 @@ def apply_event(kind, st, p, t, ah, G, events):
         # step-end switching finds theta a little past pi/2 at the step's end: the block lies there
         st[S_MAX_THETA] = HALF_PI
         st[S_THETA_MAX_TIME] = t
-        log_event(st, events, t, mode, OVERTURNED, C_OVERTURN)
+        log_event(st, events, t, mode, OVERTURNED, C_OVERTURN, 0, 0.0)
         stop(st, t)
     elif kind == K_SLIP_START:
         if mode == REST:                                   # eq. 11: sigma = -sign(ah)
             st[S_SIGMA] = -1.0 if ah > 0.0 else 1.0
             st[S_XDOT] = 0.0
             st[S_MODE] = SLIP
-            log_event(st, events, t, REST, SLIP, C_SLIP_START)
+            log_event(st, events, t, REST, SLIP, C_SLIP_START, 0, 0.0)
         else:                                              # ROCK, eq. 21: sigma = -sign(Rx)
             thdd = rock_acceleration(st[S_THETA], ah, G, lam, R, alpha)
             Rx, _ = contact_forces(st[S_THETA], st[S_THETADOT], thdd, ah, G, lam, R, alpha)
             st[S_SIGMA] = -1.0 if Rx > 0.0 else 1.0
             st[S_XDOT] = 0.0
             st[S_MODE] = ROCKSLIP
-            log_event(st, events, t, ROCK, ROCKSLIP, C_SLIP_START)
+            log_event(st, events, t, ROCK, ROCKSLIP, C_SLIP_START, 0, 0.0)
     elif kind == K_LIFTOFF:
         st[S_THETA] = 0.0
         st[S_THETADOT] = 0.0
         if mode == REST:                                   # eq. 7: lam = sign(ah)
             st[S_LAM] = 1.0 if ah > 0.0 else -1.0
             st[S_MODE] = ROCK
-            log_event(st, events, t, REST, ROCK, C_LIFTOFF)
+            log_event(st, events, t, REST, ROCK, C_LIFTOFF, 0, 0.0)
         else:                                              # SLIP, eq. 24: lam = sign(xddot + ah)
             push = slip_acceleration(ah, G, p[P_NU], sigma) + ah
             st[S_LAM] = 1.0 if push > 0.0 else -1.0
             st[S_MODE] = ROCKSLIP
-            log_event(st, events, t, SLIP, ROCKSLIP, C_LIFTOFF)
+            log_event(st, events, t, SLIP, ROCKSLIP, C_LIFTOFF, 0, 0.0)
     elif kind == K_SLIP_STOP:
         st[S_XDOT] = 0.0
         # The pivot sticks if static friction holds the contact forces of the state without slip:
@@ -395,36 +446,69 @@ def apply_event(kind, st, p, t, ah, G, events):
             stuck = ROCK
         if slip_margin(mu, N, Rx) >= 0.0:
             st[S_MODE] = stuck
-            log_event(st, events, t, mode, stuck, C_SLIP_STOP)
+            log_event(st, events, t, mode, stuck, C_SLIP_STOP, 0, 0.0)
         else:                                              # reversed: sigma = -sign(Rx)
             st[S_SIGMA] = -1.0 if Rx > 0.0 else 1.0
-            log_event(st, events, t, mode, mode, C_SLIP_REVERSAL)
+            log_event(st, events, t, mode, mode, C_SLIP_REVERSAL, 0, 0.0)
     elif kind == K_IMPACT:
-        st[S_IMPACTS] += 1.0
-        energy_before = mechanical_energy(st, p)
-        st[S_THETA] = 0.0
-        w = rebound(st[S_THETADOT], p[P_E])
-        st[S_LAM] = -lam
-        # End of liftoff (model.md decision 3): the new edge's liftoff condition (eq. 6 from ROCK,
-        # eq. 23 from ROCKSLIP) is the sign of thetaddot at theta = thetadot = 0; when it does not
-        # hold and the rebound would rise less than THETA_END (predicted peak w^2 / (2 |thetaddot|)),
-        # the impacts have become too small to matter. The rule does not depend on the step.
-        # With step-end switching a landing is only seen at a step's end, so flights of a few steps
-        # cannot be resolved (they would chatter for ever): they end the liftoff too.
-        thdd0, _ = accelerations(mode, -lam, sigma, 0.0, 0.0, ah, G, p)
-        too_small = w * w <= 2.0 * THETA_END * abs(thdd0)
-        if p[P_LOCATED] == 0.0:
-            too_small = too_small or 2.0 * w <= STEP_END_FLIGHT_STEPS * p[P_H] * abs(thdd0)
-        if thdd0 <= 0.0 and too_small:
-            st[S_THETADOT] = 0.0
-            new_mode = REST if mode == ROCK else SLIP
-            st[S_MODE] = new_mode
-            log_event(st, events, t, mode, new_mode, C_LIFTOFF_END)
+        impact_of_the_landing_edge(st, p, t, mode, ah, G, events)
+
+
+@njit(cache=True)
+def impact_of_the_landing_edge(st, p, t, mode, ah, G, events):
+    """The impact at ``theta = 0``, ``thetadot < 0`` (model.md decisions 2 and 3): the law of
+    `physics.impact`, the end of liftoff when the rebound is too small to matter, the energy lost."""
+    lam = st[S_LAM]
+    R = p[P_R]
+    alpha = p[P_ALPHA]
+    st[S_IMPACTS] += 1.0
+    st[S_THETA] = 0.0
+    st[S_FALL_CANDIDATE] = math.nan
+    energy_before = mechanical_energy(st, p)
+    branch, w, xi_plus = impact(abs(st[S_THETADOT]), lam * st[S_XDOT], p[P_E], p[P_MU], p[P_NU], R, alpha)
+    if branch == IMPACT_PAINLEVE:
+        st[S_STATUS] = STATUS_PAINLEVE
+        log_event(st, events, t, mode, mode, C_PAINLEVE, branch, 0.0)
+        stop(st, t)
+        return
+    st[S_LAM] = -lam                       # the landing edge pivots from now on
+    cause = C_IMPACT
+    w_z = zeno_rate(THETA_END, 0.75 * p[P_G] / R, alpha)
+    thetadot, xdot = w, lam * xi_plus
+    if branch != IMPACT_FLAT:
+        new_mode = ROCK if branch == IMPACT_STICK else ROCKSLIP
+        # End of liftoff (decision 3): a rebound whose free-rocking peak is below THETA_END, w <= w_z,
+        # is dropped and the block goes on upright with the law's slip velocity. When the block
+        # slides away from the landing edge (xi+ < 0) the tipping rebound carries its centre of mass
+        # the other way, at h w: there the block keeps its centre of mass's velocity, xi+ + h w,
+        # since keeping xi+ would add up to h |xi+| w_z of kinetic energy. With step-end switching a
+        # landing is only seen at a step's end, so flights shorter than a few steps cannot be
+        # resolved (they would chatter for ever): they end the liftoff too.
+        too_small = w <= w_z
+        if p[P_LOCATED] == 0.0 and not too_small:
+            sigma_new = 1.0 if xdot >= 0.0 else -1.0
+            thdd0, _ = accelerations(new_mode, -lam, sigma_new, 0.0, 0.0, ah, G, p)
+            too_small = thdd0 < 0.0 and 2.0 * w <= STEP_END_FLIGHT_STEPS * p[P_H] * abs(thdd0)
+        if too_small:
+            thetadot = 0.0
+            xdot = lam * (xi_plus if xi_plus >= 0.0 else xi_plus + R * math.cos(alpha) * w)
+            cause = C_LIFTOFF_END
         else:
-            st[S_THETADOT] = w
-            log_event(st, events, t, mode, mode, C_IMPACT)
-        st[S_W_IMPACT] += mechanical_energy(st, p) - energy_before
-        st[S_FALL_CANDIDATE] = math.nan
+            st[S_MODE] = new_mode
+    if thetadot == 0.0:
+        # Upright after the impact (a flat landing, or a dropped rebound): a slip velocity on the
+        # scale of a negligible rebound, |xdot| <= R w_z, goes too (decision 3). Otherwise a block with
+        # nu > tan(alpha) chatters: it slips, lifts off from SLIP at once (eq. 23), falls back, lands.
+        if abs(xdot) <= R * w_z:
+            xdot = 0.0
+        st[S_MODE] = REST if xdot == 0.0 else SLIP
+    st[S_THETADOT] = thetadot
+    st[S_XDOT] = xdot
+    if xdot != 0.0:
+        st[S_SIGMA] = 1.0 if xdot > 0.0 else -1.0
+    loss = energy_before - mechanical_energy(st, p)
+    st[S_W_IMPACT] -= loss
+    log_event(st, events, t, mode, st[S_MODE], cause, branch, loss)
 
 
 @njit(cache=True)
@@ -571,10 +655,15 @@ def locate(i, mode, lam, sigma, y0, tau_a, tau_b, g_a, g_b, a0, sa, v0, sv, p, y
 def advance(st, p, tau_a, tau_b, tk, a0, sa, v0, sv, events, y0, y1, ytmp, gv, kinds):
     """Integrate the moving state from local time ``tau_a`` to ``tau_b`` (one step), handling
     every transition inside it. Returns the local time reached: ``tau_b``, or earlier if the block
-    came to REST (the caller handles REST) or the run ended."""
+    came to REST (the caller handles REST) or the run ended.
+
+    Near a Painleve point the ROCKSLIP accelerations grow like ``1/D``: the step is cut into
+    sub-steps over which ``D`` falls by at most `SINGULAR_FRACTION`, so the approach (and a flight
+    that may come first) is resolved whatever the step, no RK4 stage evaluates ``D <= 0``, and the
+    Painleve point is reached when ``D`` would vanish within `PAINLEVE_TIME`."""
     located = p[P_LOCATED] != 0.0
     g = p[P_G]
-    for _ in range(MAX_TRANSITIONS_PER_STEP):
+    for _ in range(MAX_TRANSITIONS_PER_STEP + MAX_SUBSTEPS):
         mode = int(st[S_MODE])
         if mode == REST or finished(st):
             return tau_a
@@ -583,18 +672,35 @@ def advance(st, p, tau_a, tau_b, tk, a0, sa, v0, sv, events, y0, y1, ytmp, gv, k
             return tau_b
         lam = st[S_LAM]
         sigma = st[S_SIGMA]
+        tau_end = tau_b
+        if mode == ROCKSLIP:
+            remaining = time_to_painleve(lam, sigma, st[S_THETA], st[S_THETADOT], p)
+            if remaining <= PAINLEVE_TIME:
+                apply_event(K_PAINLEVE, st, p, tk + tau_a, a0 + sa * tau_a, g + v0 + sv * tau_a, events)
+                return tau_a
+            if hh > SINGULAR_FRACTION * remaining:
+                tau_end = tau_a + SINGULAR_FRACTION * remaining
         load_state(st, y0)
-        rk4_from(mode, lam, sigma, y0, tau_a, hh, a0, sa, v0, sv, p, y1)
-        n = event_values(mode, lam, sigma, y1, a0 + sa * tau_b, g + v0 + sv * tau_b, p, gv, kinds)
+        d_min = rk4_from(mode, lam, sigma, y0, tau_a, tau_end - tau_a, a0, sa, v0, sv, p, y1)
+        for _ in range(60):                   # a stage past D = 0 (should not happen): shorten
+            if d_min > 0.0:
+                break
+            tau_end = tau_a + 0.5 * (tau_end - tau_a)
+            d_min = rk4_from(mode, lam, sigma, y0, tau_a, tau_end - tau_a, a0, sa, v0, sv, p, y1)
+        hh = tau_end - tau_a
+        n = event_values(mode, lam, sigma, y1, a0 + sa * tau_end, g + v0 + sv * tau_end, p, gv, kinds)
         first = -1
         for i in range(n):
             if gv[i] < 0.0:
                 first = i
                 break
-        if first < 0:              # the rest of the step holds no event
-            accept(st, y1[0], y1[1], y1[2], y1[3], y1[4], y1[5], mode, tau_a, tau_b, tk, p, True)
-            return tau_b
-        # an event inside this step
+        if first < 0:              # the rest of the (sub-)step holds no event
+            accept(st, y1[0], y1[1], y1[2], y1[3], y1[4], y1[5], mode, tau_a, tau_end, tk, p, True)
+            if tau_end >= tau_b:
+                return tau_b
+            tau_a = tau_end
+            continue
+        # an event inside this (sub-)step
         if located:
             g_end = gv.copy()
             kinds_end = kinds.copy()
@@ -605,7 +711,7 @@ def advance(st, p, tau_a, tau_b, tk, a0, sa, v0, sv, events, y0, y1, ytmp, gv, k
             for i in range(n):
                 if g_end[i] < 0.0:
                     ga = g_start[i] if g_start[i] > 0.0 else 0.0
-                    times[i] = locate(i, mode, lam, sigma, y0, tau_a, tau_b, ga, g_end[i],
+                    times[i] = locate(i, mode, lam, sigma, y0, tau_a, tau_end, ga, g_end[i],
                                       a0, sa, v0, sv, p, ytmp, gv, kinds)
             # The earliest wins; crossings within the location tolerance of it are ties, which go
             # to the first row of the table (e.g. flight before the eq. 23 liftoff at G = 0).
@@ -615,10 +721,10 @@ def advance(st, p, tau_a, tau_b, tk, a0, sa, v0, sv, events, y0, y1, ytmp, gv, k
                 best_i += 1
             te = times[best_i]
             kind = kinds_end[best_i]
-            if te < tau_b:
+            if te < tau_end:
                 rk4_from(mode, lam, sigma, y0, tau_a, te - tau_a, a0, sa, v0, sv, p, y1)
         else:
-            te = tau_b
+            te = tau_end
             kind = kinds[first]
         accept(st, y1[0], y1[1], y1[2], y1[3], y1[4], y1[5], mode, tau_a, te, tk, p, True)
         if kind == K_IMPACT:
@@ -717,7 +823,7 @@ def glide(st, p, mode, j, n_sub, h, dt_rec, tk, a0, sa, v0, sv, history, every, 
     """Full steps of the moving state ``mode`` from grid point ``j - 1`` of the interval for as
     long as no event function turns negative, with the whole state in registers; ``st`` is written
     back once. Returns the grid point reached (``n_sub + 1``: the interval is done; otherwise the
-    step ending at grid point ``j`` holds an event, for `advance`)."""
+    step ending at grid point ``j`` holds an event, or approaches a Painleve point, for `advance`)."""
     lam = st[S_LAM]
     sigma = st[S_SIGMA]
     th, thd, x, xd = st[S_THETA], st[S_THETADOT], st[S_X], st[S_XDOT]
@@ -733,11 +839,13 @@ def glide(st, p, mode, j, n_sub, h, dt_rec, tk, a0, sa, v0, sv, history, every, 
     while j <= n_sub:
         tau_b = j * h if j < n_sub else dt_rec
         hh = tau_b - tau_a
-        th1, thd1, x1, xd1, wg1, wf1 = rk4_step(mode, lam, sigma, th, thd, x, xd, wg, wf, tau_a, hh,
-                                                a0, sa, v0, sv, p, a1, b1, pg1, pf1)
+        if mode == ROCKSLIP and hh > SINGULAR_FRACTION * time_to_painleve(lam, sigma, th, thd, p):
+            break                  # near a Painleve point: `advance` takes sub-steps
+        th1, thd1, x1, xd1, wg1, wf1, d_min = rk4_step(mode, lam, sigma, th, thd, x, xd, wg, wf, tau_a, hh,
+                                                       a0, sa, v0, sv, p, a1, b1, pg1, pf1)
         thdd, xdd, pg, pf, s, c, D, ah, G = evaluate(mode, lam, sigma, th1, thd1, xd1, tau_b, a0, sa, v0, sv, p)
         g0, g1, g2, g3, g4 = event_functions(mode, lam, sigma, th1, thd1, xd1, ah, G, s, c, thdd, D, p)
-        if g0 < 0.0 or g1 < 0.0 or g2 < 0.0 or g3 < 0.0 or g4 < 0.0:
+        if d_min <= 0.0 or g0 < 0.0 or g1 < 0.0 or g2 < 0.0 or g3 < 0.0 or g4 < 0.0:
             break
         max_th, max_th_time, max_x, fall = track(th, thd, x, xd, th1, thd1, x1, xd1, hh, tk + tau_a, alpha,
                                                  max_th, max_th_time, max_x, fall, True)

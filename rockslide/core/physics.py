@@ -87,12 +87,26 @@ def slip_acceleration(ah, G, nu, sigma):
 
 
 @njit(cache=True)
+def rockslip_determinant(s, c, lam, sigma, nu, R):
+    """The determinant of the ROCKSLIP system (eqs. 15, 16 with 22), ``D = R (4/3 - c^2 + lam nu
+    sigma s c)`` [m] with ``s``, ``c`` from `tilt`. ``D <= 0`` is the Painleve case."""
+    return R * (4.0 / 3.0 - c * c + lam * nu * sigma * s * c)
+
+
+@njit(cache=True)
+def rockslip_determinant_rate(s, c, lam, sigma, nu, R):
+    """``dD/dtheta = R (-2 s c + lam nu sigma (s^2 - c^2))`` [m/rad] (``ds/dtheta = -c``,
+    ``dc/dtheta = s``): how fast the motion approaches the Painleve point."""
+    return R * (-2.0 * s * c + lam * nu * sigma * (s * s - c * c))
+
+
+@njit(cache=True)
 def rockslip_accelerations_sc(s, c, thetadot, ah, G, lam, sigma, nu, R):
     """Eqs. 15, 16 and 22 with ``s``, ``c`` from `tilt`; see `rockslip_accelerations`."""
     b1 = -G * s + lam * ah * c
     b2 = -ah - nu * sigma * G + R * thetadot * thetadot * (nu * sigma * c + lam * s)
     a21 = R * (nu * sigma * s - lam * c)
-    D = (4.0 / 3.0) * R + lam * c * a21
+    D = rockslip_determinant(s, c, lam, sigma, nu, R)
     if D <= 0.0:
         return 0.0, 0.0, D
     thetaddot = (b1 + lam * c * b2) / D
@@ -168,13 +182,97 @@ def liftoff_margin(tan_alpha, G, push):
     return tan_alpha * G - abs(push)
 
 
-@njit(cache=True)
-def rebound(thetadot_before, restitution):
-    """Impact, eq. 8 with model.md's decision 2: ``thetadot+ = e |thetadot-|`` [rad/s].
+# Branches of the impact law (model.md decision 2), as the event log stores them (0: not an impact).
+IMPACT_NONE, IMPACT_STICK, IMPACT_SLIP, IMPACT_FLAT, IMPACT_PAINLEVE = 0, 1, 2, 3, 4
+IMPACT_BRANCHES = ("", "stick", "slip", "flat", "painleve")
 
-    The pivot changes to the other edge (``lam -> -lam``); the slip velocity is unchanged.
+
+@njit(cache=True)
+def impact(u, xi, restitution, mu, nu, R, alpha):
+    """The impact of the landing edge: eq. 8 extended to a sliding block (model.md decision 2).
+
+    Worked in the frame of the edge that pivoted before the impact (``lam = +1`` there, so the
+    landing edge lies at ``+2b`` and the block rotated with ``thetadot = -u``). The paper's ``e``
+    fixes the rotational impulse; the landing edge's friction impulse is bounded by Coulomb's law
+    and acts through the coupled inertia of slip and rotation. With ``s = sin(alpha)``,
+    ``c = cos(alpha)``, ``b = R s``, ``h = R c``, ``k = 1 + 3 s^2``, the first branch that holds:
+
+    - *stick*: ``w = e u + (3 c / (4 R)) xi``; holds if ``w > 0`` and the friction impulse needed
+      to stop the slip, ``|h (1 - e) u + (k / 4) xi|``, is within ``mu b (u + w)`` (``b (u + w)``
+      is the normal impulse). Then ``xi+ = 0``. If that impulse is within the cone but ``w <= 0``,
+      the edge cannot slide and the block cannot rebound: a flat landing (the contract would try
+      the slip branch here, which can report Painleve for a plastic impact, ``e = 0``, with
+      ``mu >= 4/3``, against its own property ``thetadot+ = e |thetadot-|``).
+    - *slip*: the landing edge slides in direction ``sig = sign(xi + 4 h (1 - e) u / k)`` under the
+      kinetic friction impulse ``nu b (u + w)``, and the angular momentum about the landing edge
+      changes as the restitution says, ``(4/3) R^2 (w - e u) = -h (xi+ - xi)``:
+      ``w = u (4 e - 3 c^2 + 3 sig nu s c) / den`` with ``den = k - 3 sig nu s c`` (``den <= 0``:
+      the Painleve case, no solution), ``xi+ = xi + h (u - w) - sig nu b (u + w)``; holds if
+      ``w > 0`` and ``sig xi+ > 0``.
+    - *flat landing*: the block lands on its base; ``q = xi + h u`` is the horizontal velocity of
+      the centre of mass, the normal impulse is ``b u``: it stops if ``|q| <= mu b u``, else slides
+      on at ``sign(q) (|q| - nu b u)``.
+
+    The kinetic energy never rises (for ``nu <= mu`` below the Painleve bound); with
+    ``e = 1 - 1.5 sin^2(alpha)`` (Housner) the stick branch conserves the angular momentum about the
+    landing edge; with ``xi = 0`` and ``mu >= (1 - e) / ((1 + e) tan(alpha))`` it is the paper's
+    ``thetadot+ = e |thetadot-|``; the old edge's share of the impulse is implied, not modelled, and
+    the slip direction is constant within one impact.
+
+    Parameters
+    ----------
+    u : float
+        ``|thetadot-|`` [rad/s], > 0: the rotation rate before the impact.
+    xi : float
+        ``lam xdot-`` [m/s]: the slip velocity before the impact, positive toward the landing edge.
+    restitution, mu, nu : float
+        ``e``, ``mu``, ``nu`` [-].
+    R, alpha : float
+        [m], [rad]: `block_constants`.
+
+    Returns
+    -------
+    branch : int
+        ``IMPACT_STICK``, ``IMPACT_SLIP``, ``IMPACT_FLAT`` or ``IMPACT_PAINLEVE``.
+    w : float
+        ``thetadot+`` [rad/s] about the landing edge (0 for a flat landing).
+    xi_plus : float
+        ``lam xdot+`` [m/s] with the old ``lam`` (0 when the block sticks or stops).
     """
-    return restitution * abs(thetadot_before)
+    e = restitution
+    s = math.sin(alpha)
+    c = math.cos(alpha)
+    b = R * s
+    h = R * c
+    k = 1.0 + 3.0 * s * s
+    if u > 0.0:                # (u = 0: a landing without speed, flat by the formulas below)
+        w = e * u + 0.75 * c / R * xi
+        edge_holds = abs(h * (1.0 - e) * u + 0.25 * k * xi) <= mu * b * (u + max(w, 0.0))
+        if edge_holds and w > 0.0:
+            return IMPACT_STICK, w, 0.0
+        if not edge_holds:     # the landing edge slides
+            sig = 1.0 if xi + 4.0 * h * (1.0 - e) * u / k >= 0.0 else -1.0
+            den = k - 3.0 * sig * nu * s * c
+            if den <= 0.0:
+                return IMPACT_PAINLEVE, 0.0, xi
+            w = u * (4.0 * e - 3.0 * c * c + 3.0 * sig * nu * s * c) / den
+            xi_plus = xi + h * (u - w) - sig * nu * b * (u + w)
+            if w > 0.0 and sig * xi_plus > 0.0:
+                return IMPACT_SLIP, w, xi_plus
+    q = xi + h * u
+    if abs(q) <= mu * b * u:
+        return IMPACT_FLAT, 0.0, 0.0
+    return IMPACT_FLAT, 0.0, math.copysign(abs(q) - nu * b * u, q)
+
+
+@njit(cache=True)
+def zeno_rate(theta_z, p2, alpha):
+    """``w_z`` [rad/s]: the rebound rate whose free-rocking peak is ``theta_z`` [rad] (energy
+    ``(2/3) R^2 w_z^2 = g R (cos(alpha - theta_z) - cos(alpha))``), so
+    ``w_z = sqrt(2 p^2 (cos(alpha - theta_z) - cos(alpha)))``; a rebound below it is too small to
+    matter (model.md decision 3). ``cos(alpha - t) - cos(alpha) = 2 sin(alpha - t/2) sin(t/2)``
+    avoids the cancellation of the difference."""
+    return math.sqrt(4.0 * p2 * math.sin(alpha - 0.5 * theta_z) * math.sin(0.5 * theta_z))
 
 
 @njit(cache=True)

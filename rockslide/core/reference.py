@@ -94,7 +94,7 @@ def simulate_reference(model: Model, dt_record: float, horizontal, vertical,
     history_columns = np.array(rows).T if rows else np.zeros((6, 0))
     return Result(
         history=history_dict(history_columns),
-        events=event_table(events[:n_events]),
+        events=event_table(events[:n_events], model.mass),
         summary=summarise(st, model, start + n_intervals * dt_record),
         step=h,
         ground_time=ground_time,
@@ -172,7 +172,7 @@ def _integrate_moving(st, p, tau, tau_end, tk, a0, sa, v0, sv, events, gv, kinds
         _set_state(st, solution.y[:, -1].copy())
         if mode == K.ROCKSLIP:
             st[K.S_STATUS] = K.STATUS_PAINLEVE
-            K.log_event(st, events, tk + t_stop, mode, mode, K.C_PAINLEVE)
+            K.log_event(st, events, tk + t_stop, mode, mode, K.C_PAINLEVE, 0, 0.0)
             K.stop(st, tk + t_stop)
             return t_stop
         raise RuntimeError(f"the reference solver failed at t = {tk + t_stop:.9g} s in state "

@@ -15,6 +15,7 @@ import numpy as np
 
 from . import kernel as K
 from .physics import (
+    IMPACT_BRANCHES,
     OVERTURNED,
     REST,
     ROCK,
@@ -26,8 +27,11 @@ from .physics import (
     potential_energy,
 )
 
+#: The event log of a result: time [s], the state before and after, the cause, the pivoting edge
+#: (``lam``) and slip direction (``sigma``) after the event, and for an impact the branch of the impact
+#: law (stick, slip, flat; empty for other events) and the kinetic energy it took [J] (>= 0).
 EVENT_DTYPE = np.dtype([("time", "f8"), ("from", "S10"), ("to", "S10"), ("cause", "S14"),
-                        ("edge", "i1"), ("slip_direction", "i1")])
+                        ("edge", "i1"), ("slip_direction", "i1"), ("impact", "S8"), ("energy_loss", "f8")])
 
 
 @dataclass(frozen=True)
@@ -118,12 +122,14 @@ class Summary:
     impacts: int
     states_seen: list[str]
     time_in_state: dict[str, float]   # [s]
-    status: str                       # ok | flight | painleve
+    status: str                       # ok | flight | painleve | chatter
     end_time: float                   # [s] when the computation ended
     energy: dict[str, float] = field(default_factory=dict)   # [J]
 
     @property
     def verdict(self) -> str:
+        if self.status == "chatter":
+            return f"stopped: the state machine chattered at t = {self.end_time:.4f} s (a bug; please report it)"
         if self.status != "ok":
             return f"outside the model ({self.status} at t = {self.end_time:.4f} s)"
         return "overturned" if self.overturned else "standing"
@@ -142,8 +148,16 @@ class Result:
     ground_vertical: np.ndarray       # [m/s^2]
 
     def events_as_dicts(self) -> list[dict]:
-        return [{"time": float(e["time"]), "from": e["from"].decode(), "to": e["to"].decode(),
-                 "cause": e["cause"].decode()} for e in self.events]
+        """The event log as plain data; impacts also give their branch and the energy lost [J]."""
+        out = []
+        for e in self.events:
+            event = {"time": float(e["time"]), "from": e["from"].decode(), "to": e["to"].decode(),
+                     "cause": e["cause"].decode()}
+            if e["impact"]:
+                event["impact"] = e["impact"].decode()
+                event["energy_loss"] = float(e["energy_loss"])
+            out.append(event)
+        return out
 
 
 def substeps(dt_record: float, dt: float) -> int:
@@ -311,7 +325,8 @@ def simulate(model: Model, dt_record: float, horizontal, vertical, settings: Set
     ground_time, ground_h, ground_v = ground_series(ground, dt_record, start)
     return Result(
         history=history_dict(columns),
-        events=event_table(np.concatenate(event_chunks) if event_chunks else np.zeros((0, 6))),
+        events=event_table(np.concatenate(event_chunks) if event_chunks
+                           else np.zeros((0, len(K.EVENT_COLUMNS))), model.mass),
         summary=summarise(st, model, start + n_intervals * dt_record),
         step=p[K.P_H],
         ground_time=ground_time,
@@ -327,17 +342,22 @@ def history_dict(columns: np.ndarray) -> dict[str, np.ndarray]:
     return out
 
 
-def event_table(rows: np.ndarray) -> np.ndarray:
+def event_table(rows: np.ndarray, mass: float = 1.0) -> np.ndarray:
+    """`EVENT_DTYPE` records from the kernel's event rows (`kernel.EVENT_COLUMNS`); energies per unit
+    mass become joules with ``mass`` [kg]."""
     table = np.zeros(rows.shape[0], dtype=EVENT_DTYPE)
     if rows.shape[0]:
         table["time"] = rows[:, 0]
         names = np.array([n.encode() for n in STATE_NAMES])
         causes = np.array([c.encode() for c in K.CAUSE_NAMES])
+        branches = np.array([b.encode() for b in IMPACT_BRANCHES])
         table["from"] = names[rows[:, 1].astype(int)]
         table["to"] = names[rows[:, 2].astype(int)]
         table["cause"] = causes[rows[:, 3].astype(int)]
         table["edge"] = rows[:, 4].astype(np.int8)
         table["slip_direction"] = rows[:, 5].astype(np.int8)
+        table["impact"] = branches[rows[:, 6].astype(int)]
+        table["energy_loss"] = mass * rows[:, 7]
     return table
 
 
