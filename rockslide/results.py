@@ -349,12 +349,12 @@ def write_result(path, result: Result, *, name: str, case_text: str = "", case: 
 
 def _write_body(f: h5py.File, result: Result, *, name, case_text, case, records, extra_attrs,
                 ground=None) -> None:
-    ground = f.create_group("ground", track_order=True)
+    group = f.create_group("ground", track_order=True)
     for key, values in (("time", result.ground_time), ("horizontal", result.ground_horizontal),
                         ("vertical", result.ground_vertical)):
         values = np.asarray(values, dtype=np.float64)
         options = {"chunks": (min(values.size, _CHUNK_ROWS),), **_COMPRESSION} if values.size else {}
-        ds = ground.create_dataset(key, data=values, **options)
+        ds = group.create_dataset(key, data=values, **options)
         ds.attrs["units"] = GROUND_UNITS[key]
 
     ds = f.create_dataset("events", data=_events_for_file(result.events), dtype=EVENT_FILE_DTYPE)
