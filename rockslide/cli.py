@@ -51,7 +51,15 @@ def _sigterm_raises():
 
 
 class RockslideGroup(click.Group):
-    """Turns the one exception family into messages, once."""
+    """Turns the one exception family into messages, once; takes ``--debug`` anywhere."""
+
+    def parse_args(self, ctx, args):
+        # --debug is the group's option, but a user adds it to the command that failed: move it
+        # before the command (not past a "--", after which everything is an argument)
+        end = args.index("--") if "--" in args else len(args)
+        if "--debug" in args[1:end]:
+            args = ["--debug"] + [a for a in args[:end] if a != "--debug"] + args[end:]
+        return super().parse_args(ctx, args)
 
     def invoke(self, ctx):
         debug = "--debug" in sys.argv[1:] or bool(ctx.params.get("debug"))
@@ -110,7 +118,8 @@ def main(debug):
 
     \b
     Example:
-        rockslide run configs/example.yaml
+        rockslide example
+        rockslide run example/example.yaml
     """
 
 
@@ -143,7 +152,7 @@ def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, robustness
 
     \b
     Example:
-        rockslide run configs/example.yaml --json
+        rockslide run example/example.yaml --json
     """
     from . import records, results, runner
     from .case import load_case
@@ -207,7 +216,7 @@ def plot(result_file, output, time_shift, window, crop, dpi):
     \b
     Example:
         rockslide plot out/example.h5
-        rockslide plot out/example.h5 --window 6.5:7.5 -o out/example-impact.pdf
+        rockslide plot out/example.h5 --window 6.6:7.2 -o out/example-impact.pdf
         rockslide plot out/example.sweep.h5
     """
     from . import results
@@ -267,7 +276,7 @@ def info(record, fmt, units, time_column, column, dt, skip_lines, as_json):
 
     \b
     Example:
-        rockslide info records/synthetic_kt_h.at2
+        rockslide info example/synthetic_kt_h.at2
     """
     from .records import record_info
 
@@ -291,18 +300,28 @@ def info(record, fmt, units, time_column, column, dt, skip_lines, as_json):
 @records_dir_option
 @click.option("--configs", type=click.Path(file_okay=False, path_type=Path), default=Path("configs/table1"),
               show_default=True, help="Folder of the Table 1 case files.")
-@click.option("--out", type=click.Path(file_okay=False, path_type=Path), default=Path("results"),
-              show_default=True, help="Where table1.md, table1.csv and fig05-fig10.png go (replaced).")
-def table1(records_dir, configs, out):
-    """Reproduce the paper's Table 1 and Figures 5-10 from its records (make table1).
+@click.option("--out-dir", "out", type=click.Path(file_okay=False, path_type=Path),
+              default=Path("results"), show_default=True,
+              help="Where table1.md, table1.csv and fig05-fig10.png go (replaced).")
+@click.option("--out", "old_out", type=click.Path(file_okay=False, path_type=Path), default=None,
+              hidden=True, help="The former name of --out-dir.")
+def table1(records_dir, configs, out, old_out):
+    """Reproduce the paper's Table 1 and Figures 5-10 from its records (make table1), from the
+    repository's root (the case files are in configs/table1).
 
     \b
     Example:
-        rockslide table1 --records-dir ../shared/records
+        rockslide table1 --records-dir ../shared/records --out-dir results
     """
     from . import records
     from .table1 import reproduce
 
+    if old_out is not None:
+        from click.core import ParameterSource
+
+        if click.get_current_context().get_parameter_source("out") is ParameterSource.COMMANDLINE:
+            raise CaseError("--out is the former name of --out-dir: give one of them", source="--out")
+        out = old_out
     if not configs.is_dir():
         raise CaseError("folder not found; expected the folder of the Table 1 case files "
                         "(configs/table1 in the repository)", source=str(configs), field="--configs")
@@ -312,6 +331,27 @@ def table1(records_dir, configs, out):
                    f"{s['all']}/{s['rows']} verdicts and descriptions")
     click.echo(f"wrote {', '.join(str(p) for p in report['files'])} and {len(report['figures'])} figures "
                f"in {report['elapsed']:.1f} s")
+
+
+@main.command()
+@click.argument("folder", type=click.Path(file_okay=False, path_type=Path), default=Path("example"),
+                required=False)
+@click.option("--overwrite", is_flag=True, help="Replace the files if they exist.")
+def example(folder, overwrite):
+    """Write the shipped example into FOLDER (default: ./example): example.yaml, the paper's block on
+    the project's own synthetic records, and those two records (synthetic_kt_h.at2,
+    synthetic_kt_v.at2), so that the examples of every command's --help work anywhere.
+
+    \b
+    Example:
+        rockslide example
+        rockslide run example/example.yaml
+    """
+    from .example import write_example
+
+    paths = write_example(folder, overwrite=overwrite)
+    click.echo(f"wrote {', '.join(str(p) for p in paths)}")
+    click.echo(f"next: rockslide run {paths[0]}")
 
 
 @main.command()
@@ -331,7 +371,7 @@ def criteria(height, width, vertical, ah_max, mu_max, output, overwrite, dpi):
 
     \b
     Example:
-        rockslide criteria --height 0.2m --width 0.1m -o criteria.png
+        rockslide criteria --height 0.2m --width 0.1m --av=-0.5g,0g,0.5g -o criteria.png
     """
     import numpy as np
 
@@ -404,7 +444,8 @@ def _axis_option(name: str, kind: str, what: str, example: str):
 @click.option("--chunk-size", type=int, default=None, metavar="N",
               help="Cases per chunk (default: about 1/100 of the grid, 4 to 256). Part of the sweep's "
                    "definition: a different size does not resume an interrupted run.")
-@click.option("--no-progress", is_flag=True, help="No progress bar on stderr.")
+@click.option("--no-progress", is_flag=True,
+              help="No progress bar on stderr (there is none anyway when stderr is not a terminal).")
 @dpi_option("PNG maps")
 def sweep(case_file, mu, pga, vertical_factor, restitution, slenderness, gravity, mu_kinetic_ratio,
           records_dir, out_dir, overwrite, no_plot, workers, scheduler, chunk_size, no_progress, dpi):
@@ -418,7 +459,7 @@ def sweep(case_file, mu, pga, vertical_factor, restitution, slenderness, gravity
 
     \b
     Example:
-        rockslide sweep configs/example.yaml --mu 0.30:0.70:0.01 --pga 100gal:1000gal:25gal
+        rockslide sweep example/example.yaml --mu 0.30:0.70:0.01 --pga 100gal:1000gal:25gal
     """
     from tqdm import tqdm
 
@@ -462,8 +503,10 @@ def sweep(case_file, mu, pga, vertical_factor, restitution, slenderness, gravity
                        "each change of the kernel)")
     computing = time.perf_counter()
     try:
+        # disable=None: tqdm draws only on a terminal, so that no frames land in log files
         with tqdm(total=plan.n_cases, initial=reused_cases, unit="case", file=sys.stderr,
-                  disable=no_progress, dynamic_ncols=True, desc=case.name, smoothing=0.1) as bar:
+                  disable=True if no_progress else None, dynamic_ncols=True, desc=case.name,
+                  smoothing=0.1) as bar:
             sw.compute(plan, store, missing, workers=workers, scheduler=scheduler, progress=bar.update)
     except KeyboardInterrupt as exc:
         if isinstance(exc, _Terminated):
