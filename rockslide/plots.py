@@ -424,11 +424,10 @@ def _response_panel(ax, result, shift, span, *, label, window=None, notes=True):
     _shade_states(ax, result, shift, span)
     history = result.history or {}
     t = np.asarray(history.get("time", np.zeros(0)))
-    i0 = max(int(np.searchsorted(t, a, side="left")) - 1, 0)
-    i1 = min(int(np.searchsorted(t, b, side="right")) + 1, t.size)
-    t = t[i0:i1]
-    phi = np.asarray(history.get("rotation", np.zeros(0)))[i0:i1]
-    x_mm = 1e3 * np.asarray(history.get("slip", np.zeros(0)))[i0:i1]
+    shown = _within(t, span)
+    t = t[shown]
+    phi = np.asarray(history.get("rotation", np.zeros(0)))[shown]
+    x_mm = 1e3 * np.asarray(history.get("slip", np.zeros(0)))[shown]
 
     slip_ax = ax.twinx()
     ax.set_label(label)
@@ -472,6 +471,14 @@ def _response_panel(ax, result, shift, span, *, label, window=None, notes=True):
         slip_ax.axvspan(window[0], window[1], fill=False, ls=":", lw=1.0, ec="0.35", zorder=4)
 
 
+def _within(times: np.ndarray, span) -> slice:
+    """The samples of sorted ``times`` within ``span``, and one more on each side (so that a line
+    reaches the panel's edges)."""
+    i0 = max(int(np.searchsorted(times, span[0], side="left")) - 1, 0)
+    i1 = min(int(np.searchsorted(times, span[1], side="right")) + 1, times.size)
+    return slice(i0, i1)
+
+
 def _shade_states(ax, result, shift, span):
     a, b = span
     trans = ax.get_xaxis_transform()
@@ -508,12 +515,10 @@ def _mark_end(ax, result, shift, span, *, hatch):
 
 
 def _ground_panel(ax, result, shift, span):
-    t = np.asarray(result.ground_time) + shift
-    a, b = span
-    i0 = max(int(np.searchsorted(t - shift, a, side="left")) - 1, 0)
-    i1 = min(int(np.searchsorted(t - shift, b, side="right")) + 1, t.size)
+    t = np.asarray(result.ground_time)
+    shown = _within(t, span)
     for key, values in (("horizontal", result.ground_horizontal), ("vertical", result.ground_vertical)):
-        ax.plot(*_envelope(t[i0:i1], np.asarray(values)[i0:i1] / GAL), color=GROUND_COLOURS[key],
+        ax.plot(*_envelope(t[shown] + shift, np.asarray(values)[shown] / GAL), color=GROUND_COLOURS[key],
                 lw=0.8, label=key, alpha=0.9 if key == "horizontal" else 0.8)
     ax.axhline(0.0, color="0.6", lw=0.5)
     ax.set_ylabel("ground acc. [gal]")

@@ -24,6 +24,7 @@ import numpy as np
 import pytest
 import yaml
 from click.testing import CliRunner
+from conftest import one_line_error
 from rocking_reference import free_rocking_impacts
 
 from rockslide import example, results
@@ -40,15 +41,6 @@ EXAMPLE = REPO / "configs" / "example.yaml"
 
 def invoke(*args, **kwargs):
     return CliRunner().invoke(main, [str(a) for a in args], **kwargs)
-
-
-def one_line_error(result, *parts):
-    lines = result.stderr.splitlines()
-    assert result.exit_code == 2, (result.exit_code, result.output, result.exception)
-    assert len(lines) == 1 and lines[0].startswith("rockslide: error: "), result.stderr
-    for part in parts:
-        assert part in lines[0], f"{part!r} not in {lines[0]!r}"
-    return lines[0]
 
 
 @pytest.fixture(scope="module")
@@ -195,8 +187,9 @@ def help_examples() -> list[tuple[str, list[str]]]:
 @pytest.mark.slow
 def test_every_help_example_works_outside_the_checkout(tmp_path, monkeypatch):
     """In an empty folder, after `rockslide example` (itself an example), every example of every
-    --help runs (in the order given, so that `plot` finds what `run` and `sweep` wrote), except
-    `table1`, which needs the paper's third-party records and the repository's case files."""
+    --help runs (run and sweep first, so that `plot` finds what they wrote; figures at 40 dpi to
+    save time), except `table1`, which needs the paper's third-party records and the repository's
+    case files."""
     monkeypatch.chdir(tmp_path)
     monkeypatch.delenv("ROCKSLIDE_RECORDS", raising=False)
     examples = help_examples()
@@ -208,7 +201,8 @@ def test_every_help_example_works_outside_the_checkout(tmp_path, monkeypatch):
             continue
         done.add(tuple(words))
         again = ["--overwrite"] if words[1] in {"example", "run", "sweep", "criteria"} else []  # seen twice
-        result = invoke(*words[1:], *again)
+        coarse = ["--dpi", "40"] if words[1] in {"run", "sweep", "criteria", "plot"} else []   # for speed
+        result = invoke(*words[1:], *again, *coarse)
         assert result.exit_code == 0, (words, result.output)
     assert {w[1] for _, w in examples} >= {"example", "run", "plot", "info", "sweep", "criteria", "table1"}
     assert (tmp_path / "out" / "example-impact.pdf").read_bytes()[:5] == b"%PDF-"

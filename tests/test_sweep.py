@@ -18,6 +18,7 @@ import numpy as np
 import pytest
 import yaml
 from click.testing import CliRunner
+from conftest import one_line_error
 
 from rockslide import results, runner
 from rockslide import sweep as sw
@@ -56,16 +57,6 @@ def invoke(*args):
 def sweep_args(out: Path, *axes, extra=()):
     return ["sweep", EXAMPLE, *axes, "--records-dir", RECORDS, "--out-dir", out, "--no-progress",
             *extra]
-
-
-def one_line_error(result, *parts):
-    """Exit code 2 and one line on stderr naming each of ``parts``."""
-    lines = result.stderr.splitlines()
-    assert result.exit_code == 2, (result.exit_code, result.output, result.exception)
-    assert len(lines) == 1 and lines[0].startswith("rockslide: error: "), result.stderr
-    for part in parts:
-        assert part in lines[0], f"{part!r} not in {lines[0]!r}"
-    return lines[0]
 
 
 def variables_equal(a: Path, b: Path) -> None:
