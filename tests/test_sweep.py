@@ -522,3 +522,11 @@ def test_rockslide_plot_redraws_a_sweep_file(swept, tmp_path):
     result = invoke("plot", source, "-o", png)
     assert result.exit_code == 0, result.output
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 20_000
+
+
+@pytest.mark.parametrize("option, value", [("--window", "1:2"), ("--crop", "all"), ("--time-shift", "5 s")])
+def test_options_of_result_figures_are_refused_for_a_sweep_file(swept, tmp_path, option, value):
+    out, _ = swept
+    one_line_error(invoke("plot", out / "example.sweep.h5", option, value, "-o", tmp_path / "x.png"),
+                   f"{option}: applies to result files, not to sweep files")
+    assert not (tmp_path / "x.png").exists()
