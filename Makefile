@@ -1,6 +1,10 @@
-# rockslide: common tasks. The paper's records are read from RECORDS (default ../shared/records when
-# that folder exists, else ./records); override with `make table1 RECORDS=/path/to/records`.
+# rockslide: common tasks. The paper's records are read from, in this order: an exported
+# ROCKSLIDE_RECORDS, else RECORDS (`make table1 RECORDS=/path/to/records`), else ../shared/records
+# when that folder exists, else ./records. Every target sees the choice as ROCKSLIDE_RECORDS.
 PYTHON ?= python
+ifneq ($(strip $(ROCKSLIDE_RECORDS)),)
+override RECORDS := $(ROCKSLIDE_RECORDS)
+endif
 RECORDS ?= $(if $(wildcard ../shared/records/*),../shared/records,records)
 export ROCKSLIDE_RECORDS := $(abspath $(RECORDS))
 
@@ -26,7 +30,7 @@ test-fast:
 	$(PYTHON) -m pytest -m "not slow"
 
 lint:
-	ruff check rockslide tests
+	ruff check rockslide tests benchmarks
 	lint-imports
 
 check: lint test
@@ -36,10 +40,10 @@ bench:
 	$(PYTHON) benchmarks/bench_sweep.py > results/bench_sweep.md
 
 table1:
-	$(PYTHON) -m rockslide.cli table1 --records-dir "$(RECORDS)" --out results
+	$(PYTHON) -m rockslide table1 --records-dir "$(ROCKSLIDE_RECORDS)" --out-dir results
 
 example:
-	$(PYTHON) -m rockslide.cli run configs/example.yaml --overwrite
+	$(PYTHON) -m rockslide run configs/example.yaml --overwrite
 
 records:
 	$(PYTHON) records/make_example_records.py

@@ -4,20 +4,15 @@
 
 They are the project's own data (no third-party record): Kanai-Tajimi / Clough-Penzien filtered
 white noise with a Jennings envelope, seeded, 20 s at 0.01 s, written as PEER AT2 in g. See
-`rockslide/synthetic.py` for the model and `records/README.md` for the files.
+`rockslide/synthetic.py` for the model, `rockslide/example.py` for the files (``rockslide example``
+writes the same ones beside the example case) and `records/README.md`.
 """
 
 from pathlib import Path
 
-from rockslide.records import write_at2
-from rockslide.synthetic import example_pair
+from rockslide.example import write_records
 
 HERE = Path(__file__).resolve().parent
 
 if __name__ == "__main__":
-    horizontal, vertical = example_pair()
-    write_at2(HERE / "synthetic_kt_h.at2", horizontal, 0.01,
-              title="rockslide synthetic Kanai-Tajimi record, seed 1995", component="horizontal")
-    write_at2(HERE / "synthetic_kt_v.at2", vertical, 0.01,
-              title="rockslide synthetic Kanai-Tajimi record, seed 1996", component="vertical")
-    print("wrote", HERE / "synthetic_kt_h.at2", "and", HERE / "synthetic_kt_v.at2")
+    print("wrote", " and ".join(str(p) for p in write_records(HERE)))

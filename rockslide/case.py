@@ -1,13 +1,14 @@
 """The case file: one YAML document describing a block, its contact, the ground motion and the run.
 
 A case file is plain data (``yaml.safe_load``; no tags that construct objects). Every quantity may
-be a number, taken as SI, or a string with a unit (``"800 gal"``, ``"0.1 ms"``, ``"5 deg"``; see
-:mod:`rockslide.units`). Everything inside rockslide is SI: [m], [kg], [s], [rad].
+be a string with a unit (``"800 gal"``, ``"0.1 ms"``, ``"5 deg"``) or a number, taken as SI, except
+an acceleration, which needs its unit (a bare ``0.8`` is refused with what it would mean in g, gal and
+m/s^2; see :mod:`rockslide.units`). Everything inside rockslide is SI: [m], [kg], [s], [rad].
 
 The schema :data:`CASE_KEYS` drives the validation (unknown keys and their nearest valid key,
 required keys, types, unit kinds, defaults and bounds) and the key reference in the README. Checks
 that involve two keys (``mu_kinetic <= mu_static``, ``output.interval`` a multiple of
-``solver.dt``, exclusive scale keys, at least one record) are in :func:`_cross_checks`.
+``solver.dt``, exclusive scale keys, a record or a tail) are in :func:`_cross_checks`.
 
 A ``null`` value is the same as leaving the key out: the default applies, or a required key is
 reported missing.
@@ -31,7 +32,7 @@ from pathlib import Path
 import yaml
 
 from .errors import CaseError
-from .units import STANDARD_GRAVITY, UNITS, parse_quantity, unit_factor
+from .units import SI_UNITS, STANDARD_GRAVITY, UNIT_REQUIRED, UNITS, parse_quantity, unit_factor, written_unit
 
 __all__ = [
     "CASE_KEYS",
@@ -173,7 +174,7 @@ class Ground:
     Parameters
     ----------
     horizontal, vertical : RecordSpec or None
-        The records; at least one is given.
+        The records; without either, the ground is still and ``tail`` is a free vibration.
     scale : Scale
         Scaling of the records.
     tail : float
@@ -261,6 +262,9 @@ class Case:
         Folder of the case file; record files resolve against it first.
     text : str
         The case file's text, stored with the results.
+    units : dict
+        The unit each quantity was written in, by dotted key (``{"ground.scale.pga_horizontal":
+        "gal"}``), to show results in the user's units; keys given as bare numbers are absent.
     """
 
     name: str
@@ -274,6 +278,7 @@ class Case:
     source: str = "<case>"
     base_dir: Path | None = None
     text: str = ""
+    units: dict = dataclasses.field(default_factory=dict, compare=False)
 
 
 # --------------------------------------------------------------------------------------------------
@@ -281,10 +286,7 @@ class Case:
 # --------------------------------------------------------------------------------------------------
 
 #: SI unit of each quantity kind, for messages and the README.
-SI_UNIT: dict[str, str] = {
-    "length": "m", "mass": "kg", "time": "s", "acceleration": "m/s^2", "angle": "rad",
-    "angular_rate": "rad/s", "velocity": "m/s", "dimensionless": "",
-}
+SI_UNIT: dict[str, str] = SI_UNITS
 
 NAME_PATTERN = r"^[A-Za-z0-9][A-Za-z0-9._-]*$"
 _NAME_RE = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]*")
@@ -346,7 +348,8 @@ CASE_KEYS: dict[str, dict] = {
         "restitution": _key("dimensionless", "coefficient of restitution of the rocking impacts",
                             required=True, bounds=[(">=", 0.0), ("<=", 1.0)]),
     }),
-    "ground": _key("mapping", "ground motion (at least one of horizontal, vertical)", required=True,
+    "ground": _key("mapping", "ground motion: horizontal and/or vertical records, or none for a free "
+                   "vibration over tail", required=True,
                    keys={
         "horizontal": _key("record", "horizontal record: a file name or a mapping",
                            keys=_RECORD_KEYS),
@@ -634,10 +637,12 @@ def _with_unit(x: float, unit: str) -> str:
 
 
 class _Ctx:
-    """Where the data came from, for messages."""
+    """Where the data came from, for messages; how bare numbers are read; the units written."""
 
-    def __init__(self, source: str):
+    def __init__(self, source: str, si_numbers: bool = False):
         self.source = source
+        self.si_numbers = si_numbers
+        self.units: dict[str, str] = {}
 
     def fail(self, path: str | None, message: str):
         raise CaseError(_one_line(message), source=self.source, field=path or None)
@@ -751,9 +756,11 @@ _OPS = {
 def _read_quantity(value, spec: dict, path: str, ctx: _Ctx) -> float:
     kind = spec["type"]
     try:
-        number = parse_quantity(value, kind, source=ctx.source, field=path)
+        number = parse_quantity(value, kind, source=ctx.source, field=path, si_numbers=ctx.si_numbers)
     except OverflowError:
         ctx.fail(path, f"{_show(value)} is too large (expected a finite {kind})")
+    if written_unit(value):
+        ctx.units[path] = written_unit(value)
     unit = spec.get("unit", "")
     for op, limit in spec.get("bounds", ()):
         if not _OPS[op][0](number, limit):
@@ -790,9 +797,10 @@ def _cross_checks(raw: dict, ctx: _Ctx) -> None:
 
     ground = raw["ground"]
     scale = ground["scale"]
-    if ground["horizontal"] is None and ground["vertical"] is None:
-        ctx.fail("ground", "needs at least one record: ground.horizontal or ground.vertical "
-                 "(a file name or a mapping with 'file')")
+    if ground["horizontal"] is None and ground["vertical"] is None and not ground["tail"] > 0.0:
+        ctx.fail("ground", "needs a record (ground.horizontal or ground.vertical: a file name or a "
+                 "mapping with 'file'), or, for a free vibration without record, a ground.tail "
+                 "(e.g. 'tail: 5 s') and initial conditions")
     if scale["pga_horizontal"] is not None and scale["factor"] is not None:
         ctx.fail("ground.scale", f"pga_horizontal ({_with_unit(scale['pga_horizontal'], 'm/s^2')}) "
                  f"and factor ({_num(scale['factor'])}) are exclusive: give one of them")
@@ -823,8 +831,8 @@ def _cross_checks(raw: dict, ctx: _Ctx) -> None:
                      f" got {_with_unit(interval, 's')} ({_num(ratio)} steps)")
 
 
-def _build(data, *, source: str, base_dir: Path | None, text: str) -> Case:
-    ctx = _Ctx(source)
+def _build(data, *, source: str, base_dir: Path | None, text: str, si_numbers: bool = False) -> Case:
+    ctx = _Ctx(source, si_numbers)
     if data is None:
         ctx.fail(None, f"the case file is empty (expected a mapping with keys: {', '.join(CASE_KEYS)})")
     if not isinstance(data, Mapping):
@@ -842,7 +850,7 @@ def _build(data, *, source: str, base_dir: Path | None, text: str) -> Case:
         ground=Ground(scale=sections["ground.scale"], tail=ground["tail"],
                       time_shift=ground["time_shift"], **records),
         initial=sections["initial"], solver=sections["solver"], output=sections["output"],
-        source=source, base_dir=base_dir, text=text,
+        source=source, base_dir=base_dir, text=text, units=ctx.units,
     )
 
 
@@ -857,16 +865,19 @@ def _at(tree: dict, path: str):
 # --------------------------------------------------------------------------------------------------
 
 
-def case_to_dict(case: Case) -> dict:
+def case_to_dict(case: Case, *, case_file: bool = False) -> dict:
     """The case as a plain nested dict of SI values, keys as in the case file.
 
     Keys whose value is None (not given, no default) are left out, so the dict suits HDF5
-    attributes and JSON. ``parse_case(yaml.safe_dump(case_to_dict(c)))`` gives back ``c`` apart
-    from ``text``, ``source`` and ``base_dir``.
+    attributes and JSON. ``parse_case(yaml.safe_dump(case_to_dict(c, case_file=True)))`` gives
+    back ``c`` apart from ``text``, ``source``, ``base_dir`` and ``units``.
 
     Parameters
     ----------
     case : Case
+    case_file : bool, optional
+        Write accelerations as strings with their unit (``"9.80665 m/s^2"``, exact), as a case file
+        needs them, instead of numbers.
 
     Returns
     -------
@@ -881,7 +892,7 @@ def case_to_dict(case: Case) -> dict:
     ground = {k: plain(v) for k, v in ground.items() if v is not None}
     ground.update(scale=plain(case.ground.scale), tail=case.ground.tail,
                   time_shift=case.ground.time_shift)
-    return {
+    out = {
         "name": case.name,
         "gravity": case.gravity,
         "block": plain(case.block),
@@ -891,6 +902,15 @@ def case_to_dict(case: Case) -> dict:
         "solver": plain(case.solver),
         "output": plain(case.output),
     }
+    if case_file:
+        for path, spec in iter_case_keys():
+            *parents, leaf = path.split(".")
+            node = out
+            for part in parents:
+                node = node.get(part) if isinstance(node, dict) else None
+            if spec["type"] in UNIT_REQUIRED and isinstance(node, dict) and node.get(leaf) is not None:
+                node[leaf] = f"{node[leaf]!r} {SI_UNIT[spec['type']]}"
+    return out
 
 
 def case_with(case: Case, changes: Mapping[str, object]) -> Case:
@@ -902,10 +922,11 @@ def case_with(case: Case, changes: Mapping[str, object]) -> Case:
         The case to start from (its SI values, :func:`case_to_dict`).
     changes : mapping of str to object
         Dotted keys and new values, e.g. ``{"contact.mu_static": 0.5, "block.width": "50 mm",
-        "ground.scale.pga_horizontal": 8.0}``. Values are SI numbers or strings with units, as in a
-        case file; None removes a key (its default applies), which is how to switch between
-        exclusive keys (``{"ground.scale.factor": None, "ground.scale.pga_horizontal": 8.0}``). A
-        whole section or record may be given as a mapping (or a record as a file name).
+        "ground.scale.pga_horizontal": 8.0}``. Values are SI numbers (accelerations included: this
+        is the Python API, where every number is SI) or strings with units; None removes a key (its
+        default applies), which is how to switch between exclusive keys
+        (``{"ground.scale.factor": None, "ground.scale.pga_horizontal": 8.0}``). A whole section or
+        record may be given as a mapping (or a record as a file name).
 
     Returns
     -------
@@ -926,7 +947,7 @@ def case_with(case: Case, changes: Mapping[str, object]) -> Case:
     ``mu_kinetic == mu_static`` (the default), ``mu_kinetic`` follows the new ``mu_static``. An
     explicitly different ``mu_kinetic`` is kept, and a ``mu_static`` below it is rejected.
     """
-    ctx = _Ctx(case.source)
+    ctx = _Ctx(case.source, si_numbers=True)
     data = case_to_dict(case)
     if ("contact.mu_static" in changes and "contact.mu_kinetic" not in changes
             and case.contact.mu_kinetic == case.contact.mu_static):
@@ -953,7 +974,7 @@ def case_with(case: Case, changes: Mapping[str, object]) -> Case:
             node[parts[-1]] = value
     summary = ", ".join(f"{k}={_one_line(_repr.repr(v))}" for k, v in changes.items())
     try:
-        new = _build(data, source=case.source, base_dir=case.base_dir, text=case.text)
+        new = _build(data, source=case.source, base_dir=case.base_dir, text=case.text, si_numbers=True)
     except CaseError as exc:
         raise CaseError(f"{exc.message} (after changing {summary})", source=exc.source,
                         field=exc.field) from None
@@ -962,7 +983,7 @@ def case_with(case: Case, changes: Mapping[str, object]) -> Case:
         text += "\n"
     text += "# case_with changes:\n" + "".join(f"#   {k}: {_one_line(repr(v))}\n"
                                                for k, v in changes.items())
-    return dataclasses.replace(new, text=text)
+    return dataclasses.replace(new, text=text, units={**case.units, **new.units})
 
 
 def _check_key_path(key: str, ctx: _Ctx) -> None:

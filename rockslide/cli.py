@@ -51,7 +51,15 @@ def _sigterm_raises():
 
 
 class RockslideGroup(click.Group):
-    """Turns the one exception family into messages, once."""
+    """Turns the one exception family into messages, once; takes ``--debug`` anywhere."""
+
+    def parse_args(self, ctx, args):
+        # --debug is the group's option, but a user adds it to the command that failed: move it
+        # before the command (not past a "--", after which everything is an argument)
+        end = args.index("--") if "--" in args else len(args)
+        if "--debug" in args[1:end]:
+            args = ["--debug"] + [a for a in args[:end] if a != "--debug"] + args[end:]
+        return super().parse_args(ctx, args)
 
     def invoke(self, ctx):
         debug = "--debug" in sys.argv[1:] or bool(ctx.params.get("debug"))
@@ -110,7 +118,8 @@ def main(debug):
 
     \b
     Example:
-        rockslide run configs/example.yaml
+        rockslide example
+        rockslide run example/example.yaml
     """
 
 
@@ -118,6 +127,13 @@ records_dir_option = click.option(
     "--records-dir", type=click.Path(file_okay=False, path_type=Path), default=None,
     help="Folder of accelerograms (default: $ROCKSLIDE_RECORDS, else ./records). Record files "
          "resolve against the case file's folder first.")
+
+
+def dpi_option(what: str):
+    """``--dpi``: the resolution of raster figures (PNG); vector formats (PDF, SVG) ignore it. The
+    default is `plots.DPI` (not imported here: matplotlib takes most of a second to load)."""
+    return click.option("--dpi", type=click.IntRange(20, 1200), default=None, metavar="N",
+                        help=f"Resolution of the {what} [dots per inch] (default 150).")
 
 
 @main.command()
@@ -130,12 +146,13 @@ records_dir_option = click.option(
 @click.option("--no-plot", is_flag=True, help="Do not draw the PNG figure.")
 @click.option("--robustness", is_flag=True,
               help="Also rerun at dt/2 and with mu 1 % lower and higher, and say whether the verdict holds.")
-def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, robustness):
+@dpi_option("PNG figure")
+def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, robustness, dpi):
     """Compute one case: CASE_FILE (YAML) -> OUT/NAME.h5 and OUT/NAME.png.
 
     \b
     Example:
-        rockslide run configs/example.yaml --json
+        rockslide run example/example.yaml --json
     """
     from . import records, results, runner
     from .case import load_case
@@ -155,21 +172,21 @@ def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, robustness
         check = runner.verdict_robustness(prepared, result.summary.overturned) if robustness else None
         extra = {} if check is None else {"verdict_robust": check["holds"],
                                           "robustness": json.dumps(check["variants"], default=_json_default)}
+        ground = prepared.ground.as_applied()
         writer.finish(result, name=case.name, case_text=case.text, case=_case_dict(case),
-                      records=runner.record_entries(prepared), extra_attrs=extra)
+                      records=runner.record_entries(prepared), extra_attrs=extra, ground=ground)
     if not no_plot:
-        _draw(results.read_result(h5_path), png_path, overwrite=overwrite,
-              time_shift=0.0)
+        _draw(results.read_result(h5_path), png_path, overwrite=overwrite, dpi=dpi)
     elapsed = time.perf_counter() - started
     summary = result.summary
     if as_json:
         payload = {"name": case.name, **results.summary_to_json_dict(summary, result.events),
-                   "robustness": check,
+                   "ground": ground, "robustness": check,
                    "files": {"hdf5": str(h5_path), "png": None if no_plot else str(png_path)},
                    "elapsed_s": round(elapsed, 3)}
         click.echo(json.dumps(payload, allow_nan=False, default=_json_default))
     else:
-        click.echo(human_summary(case.name, summary))
+        click.echo(human_summary(case.name, summary, ground=ground, units=case.units))
         if check is not None:
             flips = [name for name, v in check["variants"].items() if v["overturned"] != summary.overturned]
             click.echo("  verdict robust: holds at dt/2 and mu +-1 %" if check["holds"] else
@@ -181,29 +198,64 @@ def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, robustness
 @main.command()
 @click.argument("result_file", type=click.Path(path_type=Path))
 @click.option("-o", "--output", type=click.Path(dir_okay=False, path_type=Path), default=None,
-              help="PNG to write (default: the result's name with .png, next to it).")
-@click.option("--time-shift", type=float, default=0.0, show_default=True,
-              help="Seconds added to the time axis (to lay the figure beside another's).")
-def plot(result_file, output, time_shift):
-    """Redraw the figure of a result file or a sweep file (replaces its PNG).
+              help="Figure to write; the format follows its extension: .png, .pdf, .svg, .eps... "
+                   "(default: the result's name with .png, next to it).")
+@click.option("--time-shift", default="0 s", show_default=True, metavar="TIME",
+              help="Time added to the time axis, with a unit as in case files (e.g. '-25 s'; a bare "
+                   "number is in s), to lay the figure beside another's.")
+@click.option("--window", default="auto", show_default=True, metavar="START:END|auto|none",
+              help="The magnified window, in the figure's time (e.g. 30:36 or '30 s:36 s'); none: no "
+                   "magnified panel.")
+@click.option("--crop", default="auto", show_default=True, metavar="START:END|auto|all",
+              help="Time range of the response and ground panels (auto: where the ground or the block "
+                   "moves; all: the whole record).")
+@dpi_option("figure (PNG)")
+def plot(result_file, output, time_shift, window, crop, dpi):
+    """Redraw the figure of a result file or a sweep file (replaces it).
 
     \b
     Example:
         rockslide plot out/example.h5
+        rockslide plot out/example.h5 --window 6.6:7.2 -o out/example-impact.pdf
         rockslide plot out/example.sweep.h5
     """
     from . import results
+    from .units import parse_quantity
 
-    if not math.isfinite(time_shift):
-        raise CaseError(f"expected a finite number of seconds, got {time_shift}", source="--time-shift")
+    shift = parse_quantity(time_shift, "time", source="--time-shift")
+    zoom = _time_range(window, "--window", {"auto": "auto", "none": None})
+    span = _time_range(crop, "--crop", {"auto": "auto", "all": None})
     png = output if output is not None else Path(result_file).with_suffix(".png")
     if results.file_format(result_file) == results.SWEEP_FORMAT:
         from .plots import save_figure
         from .sweep import stored_figure
-        save_figure(stored_figure(results.read_sweep(result_file)), png, overwrite=True)
+        given = [option for option, value, default in (("--time-shift", shift, 0.0), ("--window", zoom, "auto"),
+                                                       ("--crop", span, "auto")) if value != default]
+        if given:
+            raise CaseError("applies to result files, not to sweep files", source=given[0])
+        save_figure(stored_figure(results.read_sweep(result_file)), png, overwrite=True, dpi=dpi)
     else:
-        _draw(results.read_result(result_file), png, overwrite=True, time_shift=time_shift)
+        _draw(results.read_result(result_file), png, overwrite=True, time_shift=shift, zoom=zoom, crop=span,
+              dpi=dpi)
     click.echo(f"redrew {png}")
+
+
+def _time_range(text: str, option: str, words: dict):
+    """``START:END`` (times with units as in case files, bare numbers in s) as a pair of seconds,
+    or the value of one of ``words``."""
+    from .units import parse_quantity
+
+    key = text.strip().lower()
+    if key in words:
+        return words[key]
+    parts = text.split(":")
+    if len(parts) != 2:
+        raise CaseError(f"expected START:END (e.g. 30:36 or '30 s:36 s') or one of "
+                        f"{', '.join(words)}, got {text!r}", source=option)
+    start, end = (parse_quantity(p.strip(), "time", source=option) for p in parts)
+    if not end > start:
+        raise CaseError(f"the end must come after the start, got {text!r}", source=option)
+    return start, end
 
 
 @main.command()
@@ -224,7 +276,7 @@ def info(record, fmt, units, time_column, column, dt, skip_lines, as_json):
 
     \b
     Example:
-        rockslide info records/synthetic_kt_h.at2
+        rockslide info example/synthetic_kt_h.at2
     """
     from .records import record_info
 
@@ -248,18 +300,28 @@ def info(record, fmt, units, time_column, column, dt, skip_lines, as_json):
 @records_dir_option
 @click.option("--configs", type=click.Path(file_okay=False, path_type=Path), default=Path("configs/table1"),
               show_default=True, help="Folder of the Table 1 case files.")
-@click.option("--out", type=click.Path(file_okay=False, path_type=Path), default=Path("results"),
-              show_default=True, help="Where table1.md, table1.csv and fig05-fig10.png go (replaced).")
-def table1(records_dir, configs, out):
-    """Reproduce the paper's Table 1 and Figures 5-10 from its records (make table1).
+@click.option("--out-dir", "out", type=click.Path(file_okay=False, path_type=Path),
+              default=Path("results"), show_default=True,
+              help="Where table1.md, table1.csv and fig05-fig10.png go (replaced).")
+@click.option("--out", "old_out", type=click.Path(file_okay=False, path_type=Path), default=None,
+              hidden=True, help="The former name of --out-dir.")
+def table1(records_dir, configs, out, old_out):
+    """Reproduce the paper's Table 1 and Figures 5-10 from its records (make table1), from the
+    repository's root (the case files are in configs/table1).
 
     \b
     Example:
-        rockslide table1 --records-dir ../shared/records
+        rockslide table1 --records-dir ../shared/records --out-dir results
     """
     from . import records
     from .table1 import reproduce
 
+    if old_out is not None:
+        from click.core import ParameterSource
+
+        if click.get_current_context().get_parameter_source("out") is ParameterSource.COMMANDLINE:
+            raise CaseError("--out is the former name of --out-dir: give one of them", source="--out")
+        out = old_out
     if not configs.is_dir():
         raise CaseError("folder not found; expected the folder of the Table 1 case files "
                         "(configs/table1 in the repository)", source=str(configs), field="--configs")
@@ -272,40 +334,61 @@ def table1(records_dir, configs, out):
 
 
 @main.command()
+@click.argument("folder", type=click.Path(file_okay=False, path_type=Path), default=Path("example"),
+                required=False)
+@click.option("--overwrite", is_flag=True, help="Replace the files if they exist.")
+def example(folder, overwrite):
+    """Write the shipped example into FOLDER (default: ./example): example.yaml, the paper's block on
+    the project's own synthetic records, and those two records (synthetic_kt_h.at2,
+    synthetic_kt_v.at2), so that the examples of every command's --help work anywhere.
+
+    \b
+    Example:
+        rockslide example
+        rockslide run example/example.yaml
+    """
+    from .example import write_example
+
+    paths = write_example(folder, overwrite=overwrite)
+    click.echo(f"wrote {', '.join(str(p) for p in paths)}")
+    click.echo(f"next: rockslide run {paths[0]}")
+
+
+@main.command()
 @click.option("--height", type=str, default="0.2 m", show_default=True, help="Block height.")
 @click.option("--width", type=str, default="0.1 m", show_default=True, help="Block width.")
-@click.option("--av", "vertical", type=str, default="-0.5,0,0.5", show_default=True,
-              help="Vertical accelerations in g, comma separated (one panel each).")
-@click.option("--ah-max", type=float, default=1.5, show_default=True, help="Largest |A_h| [g] on the map.")
+@click.option("--av", "vertical", type=str, default="-0.5g,0g,0.5g", show_default=True,
+              help="Vertical accelerations with units (g, gal, m/s^2), comma separated (one panel each).")
+@click.option("--ah-max", type=str, default="1.5g", show_default=True,
+              help="Largest |A_h| on the map, with a unit (g, gal, m/s^2).")
 @click.option("--mu-max", type=float, default=1.2, show_default=True, help="Largest mu on the map.")
 @click.option("-o", "--output", type=click.Path(dir_okay=False, path_type=Path), default=Path("criteria.png"),
               show_default=True, help="PNG to write.")
 @click.option("--overwrite", is_flag=True, help="Replace an existing PNG.")
-def criteria(height, width, vertical, ah_max, mu_max, output, overwrite):
+@dpi_option("PNG")
+def criteria(height, width, vertical, ah_max, mu_max, output, overwrite, dpi):
     """Draw the mode-initiation map (rest / slip / liftoff / liftoff-slip) of a block, from eqs. 6, 11, 26.
 
     \b
     Example:
-        rockslide criteria --height 0.2m --width 0.1m -o criteria.png
+        rockslide criteria --height 0.2m --width 0.1m --av=-0.5g,0g,0.5g -o criteria.png
     """
     import numpy as np
 
     from .core import criteria as crit
     from .plots import criteria_figure, save_figure
-    from .units import parse_quantity
+    from .units import STANDARD_GRAVITY, parse_quantity
 
     h = parse_quantity(height, "length", source="--height")
     w = parse_quantity(width, "length", source="--width")
     if h <= 0 or w <= 0:
         raise CaseError("height and width must be positive lengths", source="--height/--width")
-    try:
-        avs = [float(v) for v in vertical.split(",") if v.strip()]
-    except ValueError:
-        raise CaseError(f"expected numbers in g separated by commas, got {vertical!r}",
-                        source="--av") from None
+    avs = [parse_quantity(v, "acceleration", source="--av") / STANDARD_GRAVITY
+           for v in vertical.split(",") if v.strip()]
+    ah_max = parse_quantity(ah_max, "acceleration", source="--ah-max") / STANDARD_GRAVITY
     for option, value in (("--ah-max", ah_max), ("--mu-max", mu_max)):
         if not (math.isfinite(value) and value > 0):
-            raise CaseError(f"expected a positive finite number, got {value}", source=option)
+            raise CaseError(f"expected a positive finite value, got {value:g}", source=option)
     if not avs or any(not -1.0 < a for a in avs):
         raise CaseError("each vertical acceleration must be above -1 g (the block would fly)", source="--av")
     if not overwrite and (output.exists() or output.is_symlink()):
@@ -314,7 +397,7 @@ def criteria(height, width, vertical, ah_max, mu_max, output, overwrite):
     mu = np.linspace(0.0, mu_max, 241)
     maps = [(f"A_v = {a:+.2f} g", crit.mode_map(ah, mu, a, w / 2, h / 2)) for a in avs]
     figure = criteria_figure(ah, mu, maps, title=f"modes initiated from rest: {w:g} m wide, {h:g} m high")
-    save_figure(figure, output, overwrite=overwrite)
+    save_figure(figure, output, overwrite=overwrite, dpi=dpi)
     click.echo(f"wrote {output}")
 
 
@@ -327,7 +410,7 @@ def _axis_option(name: str, kind: str, what: str, example: str):
 
     units = ""
     if kind == "acceleration":
-        units = " Values may carry units as in case files (one unit for a range)."
+        units = " Values need a unit (g, gal, cm/s^2, m/s^2) as in case files; one unit for a range."
     return click.option(f"--{name.replace('_', '-')}", name, default=None, metavar="SPEC", callback=remember,
                         help=f"{what}: START:STOP:STEP or a comma list, e.g. {example}.{units}")
 
@@ -345,7 +428,7 @@ def _axis_option(name: str, kind: str, what: str, example: str):
               "0.6:0.9:0.1")
 @_axis_option("slenderness", "dimensionless", "Width / height of the block (the height kept)",
               "0.3:0.6:0.05")
-@_axis_option("gravity", "acceleration", "Gravitational acceleration (gravity)", "9.8,9.80665")
+@_axis_option("gravity", "acceleration", "Gravitational acceleration (gravity)", "9.8m/s^2,9.80665m/s^2")
 @click.option("--mu-kinetic-ratio", type=float, default=None, metavar="R",
               help="mu_kinetic = R * mu_static for --mu (default: the case's ratio).")
 @records_dir_option
@@ -361,9 +444,11 @@ def _axis_option(name: str, kind: str, what: str, example: str):
 @click.option("--chunk-size", type=int, default=None, metavar="N",
               help="Cases per chunk (default: about 1/100 of the grid, 4 to 256). Part of the sweep's "
                    "definition: a different size does not resume an interrupted run.")
-@click.option("--no-progress", is_flag=True, help="No progress bar on stderr.")
+@click.option("--no-progress", is_flag=True,
+              help="No progress bar on stderr (there is none anyway when stderr is not a terminal).")
+@dpi_option("PNG maps")
 def sweep(case_file, mu, pga, vertical_factor, restitution, slenderness, gravity, mu_kinetic_ratio,
-          records_dir, out_dir, overwrite, no_plot, workers, scheduler, chunk_size, no_progress):
+          records_dir, out_dir, overwrite, no_plot, workers, scheduler, chunk_size, no_progress, dpi):
     """Grid of cases over friction, intensity, vertical factor, restitution, slenderness or gravity:
     CASE_FILE (YAML) -> OUT/NAME.sweep.h5 and OUT/NAME.sweep.png.
 
@@ -374,7 +459,7 @@ def sweep(case_file, mu, pga, vertical_factor, restitution, slenderness, gravity
 
     \b
     Example:
-        rockslide sweep configs/example.yaml --mu 0.30:0.70:0.01 --pga 100gal:1000gal:25gal
+        rockslide sweep example/example.yaml --mu 0.30:0.70:0.01 --pga 100gal:1000gal:25gal
     """
     from tqdm import tqdm
 
@@ -418,8 +503,10 @@ def sweep(case_file, mu, pga, vertical_factor, restitution, slenderness, gravity
                        "each change of the kernel)")
     computing = time.perf_counter()
     try:
+        # disable=None: tqdm draws only on a terminal, so that no frames land in log files
         with tqdm(total=plan.n_cases, initial=reused_cases, unit="case", file=sys.stderr,
-                  disable=no_progress, dynamic_ncols=True, desc=case.name, smoothing=0.1) as bar:
+                  disable=True if no_progress else None, dynamic_ncols=True, desc=case.name,
+                  smoothing=0.1) as bar:
             sw.compute(plan, store, missing, workers=workers, scheduler=scheduler, progress=bar.update)
     except KeyboardInterrupt as exc:
         if isinstance(exc, _Terminated):
@@ -434,7 +521,7 @@ def sweep(case_file, mu, pga, vertical_factor, restitution, slenderness, gravity
     results.write_sweep(h5_path, sw.coordinates(plan), variables,
                         attrs=sw.root_attributes(plan, _command_line(ctx, case_file)), overwrite=overwrite)
     if not no_plot:
-        save_figure(sw.figure(plan, variables), png_path, overwrite=overwrite)
+        save_figure(sw.figure(plan, variables), png_path, overwrite=overwrite, dpi=dpi)
     store.remove()
     n_new = plan.n_cases - reused_cases
     over = int(variables["overturned"][0].sum())
@@ -489,11 +576,11 @@ def _column(value):
     return int(value) if str(value).isdigit() else value
 
 
-def _draw(stored, png_path, *, overwrite, time_shift):
+def _draw(stored, path, *, overwrite, dpi, time_shift=0.0, zoom="auto", crop="auto"):
     from .plots import response_figure, save_figure
 
-    figure = response_figure(stored.result, title=stored.name, time_shift=time_shift)
-    save_figure(figure, png_path, overwrite=overwrite)
+    figure = response_figure(stored.result, title=stored.name, time_shift=time_shift, zoom=zoom, crop=crop)
+    save_figure(figure, path, overwrite=overwrite, dpi=dpi)
 
 
 def _case_dict(case):
@@ -509,23 +596,64 @@ def _json_default(value):
     raise TypeError(f"cannot serialise {type(value).__name__}")
 
 
-def human_summary(name, summary) -> str:
-    """A short text summary of one run."""
-    lines = [f"{name}: {summary.verdict}"]
+def human_summary(name, summary, *, ground=None, units=None) -> str:
+    """A short text summary of one run.
+
+    Parameters
+    ----------
+    name : str
+    summary : Summary
+    ground : dict, optional
+        The ground motion as applied (`records.GroundMotion.as_applied`).
+    units : dict, optional
+        The case's units as written (`case.Case.units`): peaks are shown in the unit of
+        ``ground.scale.pga_horizontal`` (the vertical: of ``pga_vertical`` if given), else in gal,
+        and in g.
+    """
+    from .units import percent_text
+
+    units = units or {}
+    verdict = summary.verdict
+    if summary.status == "ok" and not summary.overturned and math.isfinite(summary.max_rotation_ratio):
+        verdict += f", {percent_text(summary.max_rotation_ratio)} of alpha"
+    lines = [f"{name}: {verdict}"]
+    if ground is not None:
+        lines.append("  " + _ground_line(ground, units))
     if summary.overturned:
         direction = "+" if summary.direction > 0 else "-"
         fall = ("" if summary.fall_start_time is None
                 else f", falling since {summary.fall_start_time:.4f} s (rotation past alpha)")
         lines.append(f"  overturned at {summary.overturn_time:.4f} s, rotation {direction}pi/2{fall}")
+    alpha = (f" (alpha {summary.alpha:.4f} rad, {math.degrees(summary.alpha):.2f} deg)"
+             if math.isfinite(summary.alpha) else "")
     lines.append(f"  max rotation {summary.max_rotation:.5f} rad "
                  f"({math.degrees(summary.max_rotation):.3f} deg)"
-                 f" at {summary.max_rotation_time:.3f} s; impacts {summary.impacts}")
+                 f" at {summary.max_rotation_time:.3f} s{alpha}; impacts {summary.impacts}")
     lines.append(f"  max slip {1000 * summary.max_slip:.2f} mm; "
                  f"residual slip {1000 * summary.residual_slip:.2f} mm")
     seen = ", ".join(f"{s} {summary.time_in_state.get(s, 0.0):.2f} s" if s != "OVERTURNED" else s
                      for s in summary.states_seen)
     lines.append(f"  states: {seen}")
     return "\n".join(lines)
+
+
+def _ground_line(ground: dict, units: dict) -> str:
+    """``ground as applied: peaks 700 gal (0.714 g) H, 350 gal (0.357 g) V (records x1.19)``."""
+    from .units import acceleration_text
+
+    h_unit = units.get("ground.scale.pga_horizontal")
+    v_unit = units.get("ground.scale.pga_vertical", h_unit)
+    scales = [(role, ground[f"scale_{role}"]) for role in ("horizontal", "vertical")
+              if ground.get(f"scale_{role}") is not None]
+    if not scales:
+        return "ground as applied: still (no record: a free vibration)"
+    peaks = (f"peaks {acceleration_text(ground['pga_horizontal'], h_unit)} H, "
+             f"{acceleration_text(ground['pga_vertical'], v_unit)} V")
+    if len(scales) == 2 and f"{scales[0][1]:.4g}" == f"{scales[1][1]:.4g}":
+        factors = f"x{scales[0][1]:.4g}"
+    else:
+        factors = ", ".join(f"x{factor:.4g} {role[0].upper()}" for role, factor in scales)
+    return f"ground as applied: {peaks} (records {factors})"
 
 
 if __name__ == "__main__":  # pragma: no cover

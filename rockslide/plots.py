@@ -6,13 +6,20 @@ GUI backend and nothing to close; figures are freed with their last reference.
 
 `response_figure` draws, from top to bottom:
 
-1. the whole record: the liftoff angle (signed rotation ``phi`` [rad], left axis) and the slip
-   displacement (``x`` [mm], right axis) over the state, shaded in the background (SLIP, ROCK,
-   ROCKSLIP; REST unshaded), with overturning (or the end of a computation that left the model:
-   flight, Painleve) marked by a vertical line and a label;
+1. the response where the motion is (`motion_range`: where the ground or the block moves, the whole
+   record when that is most of it): the liftoff angle (signed rotation ``phi`` [rad], left axis,
+   with +-alpha drawn once the rotation comes near it) and the slip displacement (``x`` [mm], right
+   axis) over the state, shaded in the background (SLIP, ROCK, ROCKSLIP; REST unshaded), with
+   overturning (or the end of a computation that left the model: flight, Painleve) marked by a
+   vertical line;
 2. the same, magnified on the window where things happen (`zoom_window`), as in every figure of
    the paper;
-3. the horizontal and vertical ground acceleration as applied [gal].
+3. the horizontal and vertical ground acceleration as applied [gal], over the same time as 1.
+
+Labels never cover data: what a panel needs to say (overturning, the end of the computation, alpha
+off the scale, a block at rest) goes in its title line, and the legends below the panels. Lines are
+decimated for drawing (`_envelope`, a min/max envelope of at most `MAX_LINE_POINTS` points), never
+in what is stored. The format follows the file name in `save_figure` (PNG, PDF, SVG...).
 """
 
 from __future__ import annotations
@@ -29,27 +36,38 @@ from matplotlib.patches import Patch
 from .core.physics import OVERTURNED, REST, ROCK, ROCKSLIP, SLIP, STATE_NAMES
 from .errors import OutputError
 from .files import atomic_write, check_destination
+from .units import percent_text
 
 GAL = 0.01          # [m/s^2]
 FIGSIZE = (11.0, 8.0)   # [in]
-DPI = 120
+DPI = 150
 
 ROTATION_COLOUR = "#1f4e9c"   # dark blue: liftoff angle, left axis
 SLIP_COLOUR = "#c0392b"       # red: slip displacement, right axis
+ALPHA_COLOUR = "#5b6f8f"      # +-alpha: the rotation past which gravity tips the block over
 GROUND_COLOURS = {"horizontal": "#222222", "vertical": "#2e8b57"}
 STATE_COLOURS = {SLIP: "#fde2b8", ROCK: "#d3ead0", ROCKSLIP: "#e2d3f0"}   # REST unshaded
 OVERTURN_COLOUR = "black"
 STOP_COLOUR = "#8b0000"
 
-#: Events spread over more than this [s] are not magnified as a whole: the zoom shows
-#: `ZOOM_LONG_WINDOW` seconds around the largest rotation instead.
+#: Motion spread over more than this [s] is not magnified as a whole: the zoom shows the episode
+#: around the largest rotation (or the end), see `zoom_window`.
 ZOOM_LONG_SPAN = 10.0
-ZOOM_LONG_WINDOW = 5.0
+#: Moving states less than this apart [s] belong to one episode.
+EPISODE_GAP = 1.0
 #: Margin around the events in the zoom [s]: ``max(ZOOM_MIN_PAD, ZOOM_PAD_FRACTION * span)``.
 ZOOM_MIN_PAD = 0.25
 ZOOM_PAD_FRACTION = 0.1
-#: "auto" leaves the zoom out when the window covers this fraction of the record or more.
+#: "auto" leaves the zoom out when the window covers this fraction of the shown range or more.
 ZOOM_USELESS_FRACTION = 0.9
+#: The ground "moves" where its acceleration exceeds this fraction of its peak (`motion_range`).
+GROUND_MOVES_FRACTION = 0.02
+#: Margin around the motion in `motion_range` [s]: ``max(MOTION_MIN_PAD, MOTION_PAD_FRACTION * span)``.
+MOTION_MIN_PAD = 1.0
+MOTION_PAD_FRACTION = 0.05
+#: +-alpha is drawn on a rotation axis when the rotation shown reaches this fraction of alpha
+#: (below it, alpha would squash the curve to a flat line: the panel says alpha is off the scale).
+ALPHA_SHOWN_FRACTION = 0.25
 #: Lines with more points than this are drawn as a min/max envelope of about that many points.
 MAX_LINE_POINTS = 20_000
 
@@ -77,8 +95,7 @@ def state_segments(result) -> list[tuple[float, float, int]]:
     else:
         state = REST
     summary = result.summary
-    stopped = summary.overturned or summary.status != "ok"
-    end = summary.end_time if stopped else max(t_last, summary.end_time)
+    end = summary.end_time if _stop_time(result) is not None else max(t_last, summary.end_time)
     segments = []
     start = t_first
     for event in events:
@@ -96,38 +113,81 @@ def state_segments(result) -> list[tuple[float, float, int]]:
 def zoom_window(result) -> tuple[float, float] | None:
     """The time window where things happen [s] (not shifted), or None if the block only rests.
 
-    From ``pad`` before the first non-REST state to ``pad`` after the last one ends (overturning or
-    the end of the computation included), with ``pad = max(0.25 s, 10 % of that span)``. If the span
-    is longer than `ZOOM_LONG_SPAN` (10 s), the window is the `ZOOM_LONG_WINDOW` (5 s) around the
-    largest rotation (or the fastest slip if the block never lifted off); for an overturned block or
-    a computation that stopped, the 5 s that end just after it. The window is kept within the record.
+    All the motion (the moving states, and overturning or the end of a computation that stopped)
+    with a margin ``pad = max(0.25 s, 10 % of its span)``, when it spans at most `ZOOM_LONG_SPAN`
+    (10 s). Longer, the episode (moving states less than `EPISODE_GAP` apart) around the largest
+    rotation, or the one that ends in overturning or the stop, with the same margin; and if that
+    episode is itself longer than 10 s, its swings around that moment: from the second impact
+    before it to the second impact after it (or the stop), so that the opposite swings on both
+    sides are whole. The window is kept within the record.
     """
     t_first, t_last = _record_range(result)
-    summary = result.summary
+    stop = _stop_time(result)
     moving = [(a, b) for a, b, s in state_segments(result) if s != REST]
-    stop = summary.end_time if (summary.overturned or summary.status != "ok") else None
-    if not moving and stop is None:
+    marks = moving + ([(stop, stop)] if stop is not None else [])
+    if not marks:
         return None
-    starts = [a for a, _ in moving] + ([stop] if stop is not None else [])
-    ends = [b for _, b in moving] + ([stop] if stop is not None else [])
-    first, last = min(starts), max(ends)
-    span = last - first
-    if span > ZOOM_LONG_SPAN:
-        if stop is not None:
-            t1 = stop + ZOOM_MIN_PAD
-            t0 = t1 - ZOOM_LONG_WINDOW
-        else:
-            centre = _peak_time(result)
-            t0, t1 = centre - 0.5 * ZOOM_LONG_WINDOW, centre + 0.5 * ZOOM_LONG_WINDOW
-        shift = max(0.0, t_first - t0) - max(0.0, t1 - t_last)
-        t0, t1 = t0 + shift, t1 + shift
-    else:
-        pad = max(ZOOM_MIN_PAD, ZOOM_PAD_FRACTION * span)
-        t0, t1 = first - pad, last + pad
-    t0, t1 = max(t0, t_first), min(t1, t_last)
-    if t1 <= t0:
-        t0, t1 = max(t_first, t0 - ZOOM_MIN_PAD), min(t_last, t1 + ZOOM_MIN_PAD)
+    first, last = min(a for a, _ in marks), max(b for _, b in marks)
+    if last - first > ZOOM_LONG_SPAN:
+        focus = stop if stop is not None else _peak_time(result)
+        first, last = _episode_around(marks, focus)
+        if last - first > ZOOM_LONG_SPAN:
+            impacts = np.array([float(e["time"]) for e in result.events if _text(e["cause"]) == "impact"
+                                and first <= float(e["time"]) <= last])
+            before, after = impacts[impacts < focus], impacts[impacts > focus]
+            first = before[-2] if before.size >= 2 else first
+            last = stop if stop is not None else (after[1] if after.size >= 2 else last)
+    pad = max(ZOOM_MIN_PAD, ZOOM_PAD_FRACTION * (last - first))
+    t0, t1 = max(first - pad, t_first), min(last + pad, t_last)
     return (float(t0), float(t1)) if t1 > t0 else None
+
+
+def motion_range(result) -> tuple[float, float]:
+    """The part of the record worth showing [s] (not shifted): from where the ground or the block
+    first moves to where the last of them stops (the ground moves where its acceleration exceeds
+    `GROUND_MOVES_FRACTION` of its peak; the block moves in any state but REST, up to overturning
+    or the end of the computation, after which nothing is shown but the margin), with a margin
+    ``max(1 s, 5 % of the span)``. The whole record
+    when the block stays at rest on still ground, or when the motion covers most of the record
+    (`ZOOM_USELESS_FRACTION`)."""
+    t_first, t_last = _record_range(result)
+    marks = [(a, b) for a, b, s in state_segments(result) if s != REST]
+    stop = _stop_time(result)
+    if stop is not None:
+        marks.append((stop, stop))
+    ground = np.maximum(np.abs(np.asarray(result.ground_horizontal)), np.abs(np.asarray(result.ground_vertical)))
+    if ground.size and ground.max() > 0.0:
+        moves = np.flatnonzero(ground > GROUND_MOVES_FRACTION * ground.max())
+        times = np.asarray(result.ground_time)
+        last_move = float(times[moves[-1]]) if stop is None else min(float(times[moves[-1]]), stop)
+        marks.append((min(float(times[moves[0]]), last_move), last_move))
+    if not marks:
+        return t_first, t_last
+    first, last = min(a for a, _ in marks), max(b for _, b in marks)
+    pad = max(MOTION_MIN_PAD, MOTION_PAD_FRACTION * (last - first))
+    t0, t1 = max(t_first, first - pad), min(t_last, last + pad)
+    if t1 - t0 >= ZOOM_USELESS_FRACTION * (t_last - t_first) or t1 <= t0:
+        return t_first, t_last
+    return float(t0), float(t1)
+
+
+def _episode_around(marks, focus: float) -> tuple[float, float]:
+    """The episode (``marks`` merged where less than `EPISODE_GAP` apart) that holds ``focus``, or
+    the nearest one."""
+    episodes: list[list[float]] = []
+    for a, b in sorted(marks):
+        if episodes and a - episodes[-1][1] < EPISODE_GAP:
+            episodes[-1][1] = max(episodes[-1][1], b)
+        else:
+            episodes.append([a, b])
+    a, b = min(episodes, key=lambda ab: max(ab[0] - focus, focus - ab[1], 0.0))
+    return a, b
+
+
+def _stop_time(result) -> float | None:
+    """When the computation ended early (overturning, flight, Painleve), else None."""
+    summary = result.summary
+    return summary.end_time if (summary.overturned or summary.status != "ok") else None
 
 
 def _peak_time(result) -> float:
@@ -154,8 +214,12 @@ def _record_range(result) -> tuple[float, float]:
     return float(both.min()), float(both.max())
 
 
+def _text(name) -> str:
+    return name.decode() if isinstance(name, bytes) else str(name)
+
+
 def _code(name) -> int:
-    return STATE_NAMES.index(name.decode() if isinstance(name, bytes) else str(name))
+    return STATE_NAMES.index(_text(name))
 
 
 # --------------------------------------------------------------------------------------------------
@@ -164,7 +228,7 @@ def _code(name) -> int:
 
 
 def response_figure(result, *, title: str = "", time_shift: float = 0.0,
-                    zoom: tuple | None | str = "auto") -> Figure:
+                    zoom: tuple | None | str = "auto", crop: tuple | None | str = "auto") -> Figure:
     """The response of one simulation in the paper's style (module docstring).
 
     Parameters
@@ -177,31 +241,39 @@ def response_figure(result, *, title: str = "", time_shift: float = 0.0,
         Added to every time on the figure [s], e.g. to lay it beside the paper's time axis.
     zoom : "auto", (t0, t1) or None
         The magnified window: ``"auto"`` = `zoom_window` (left out when nothing happens or the
-        window is almost the whole record); ``(t0, t1)`` in the figure's time (time_shift
+        window is almost the whole shown range); ``(t0, t1)`` in the figure's time (time_shift
         included) [s]; None = no magnified panel.
+    crop : "auto", (t0, t1) or None
+        The time range of the response and ground panels: ``"auto"`` = `motion_range`;
+        ``(t0, t1)`` in the figure's time [s]; None = the whole record.
 
     Returns
     -------
     matplotlib.figure.Figure
         11 x 8 in; save it with `save_figure`. Its axes are labelled (``Axes.get_label``)
-        ``"record"`` and ``"record-slip"`` (whole record: rotation, and the slip twin), ``"zoom"`` and
-        ``"zoom-slip"`` (if magnified) and ``"ground"``.
+        ``"record"`` and ``"record-slip"`` (the response: rotation, and the slip twin), ``"zoom"``
+        and ``"zoom-slip"`` (if magnified) and ``"ground"``.
     """
     if hasattr(result, "result") and hasattr(result, "case_text"):   # a StoredResult
         title = title or result.name
         result = result.result
     shift = float(time_shift)
-    window = _choose_zoom(result, zoom, shift)
+    t0, t1 = _choose_range(result, crop, shift)
+    window = _choose_zoom(result, zoom, shift, (t0, t1))
 
     fig = Figure(figsize=FIGSIZE, dpi=DPI, layout="constrained")
     ratios = [3.0, 3.0, 2.0] if window else [3.0, 2.0]
     axes = fig.subplots(len(ratios), 1, gridspec_kw={"height_ratios": ratios})
     top, ground = axes[0], axes[-1]
     ground.sharex(top)
-    t0, t1 = _record_range(result)
 
     _response_panel(top, result, shift, (t0, t1), window=window, label="record")
-    top.set_title("whole record", loc="left", fontsize=10)
+    record = _record_range(result)
+    if (t0, t1) == record:
+        top.set_title("whole record", loc="left", fontsize=10)
+    else:
+        top.set_title(f"{t0 + shift:.2f} to {t1 + shift:.2f} s of the {record[0] + shift:.4g} to "
+                      f"{record[1] + shift:.4g} s record", loc="left", fontsize=10)
     if window:
         zax = axes[1]
         _response_panel(zax, result, shift, (window[0] - shift, window[1] - shift), label="zoom")
@@ -213,14 +285,15 @@ def response_figure(result, *, title: str = "", time_shift: float = 0.0,
         ax.set_xlabel("time [s]")
 
     fig.suptitle(_title(result, title), fontsize=12)
-    fig.legend(handles=_legend_handles(result), loc="outside lower center", ncols=7, frameon=False,
+    fig.legend(handles=_legend_handles(result), loc="outside lower center", ncols=6, frameon=False,
                fontsize=9)
     return fig
 
 
 def paper_figure(panels, *, title: str = "", time_shift: float = 0.0) -> Figure:
     """Several responses in the layout of the paper's Figures 6 to 10: one row per sub-figure
-    ((a), (b), (c)), the whole record on the left and the magnified window on the right.
+    ((a), (b), (c)), the response where the motion is (`motion_range`) on the left and the
+    magnified window on the right.
 
     Parameters
     ----------
@@ -235,40 +308,24 @@ def paper_figure(panels, *, title: str = "", time_shift: float = 0.0) -> Figure:
     axes = fig.subplots(len(panels), 2, squeeze=False, gridspec_kw={"width_ratios": [1.6, 1.0]})
     for row, (label, result, caption) in enumerate(panels):
         whole, zoomed = axes[row]
-        t0, t1 = _active_range(result)
-        window = _choose_zoom(result, "auto", time_shift)
+        t0, t1 = motion_range(result)
+        window = _choose_zoom(result, "auto", time_shift, (t0, t1))
         _response_panel(whole, result, time_shift, (t0, t1), window=window, label=f"record{row}")
         whole.set_title(f"{label} {caption}", loc="left", fontsize=10)
         if window is None:
             window = (t0 + time_shift, t1 + time_shift)
         _response_panel(zoomed, result, time_shift, (window[0] - time_shift, window[1] - time_shift),
-                        label=f"zoom{row}")
+                        label=f"zoom{row}", notes=False)
         zoomed.set_title(f"magnified: {window[0]:.2f} to {window[1]:.2f} s", loc="left", fontsize=10)
         for ax in (whole, zoomed):
             ax.set_xlabel("time [s]")
     if title:
         fig.suptitle(title, fontsize=12)
-    handles = [h for _, r, _ in panels for h in _legend_handles(r)]
+    handles = [h for _, r, _ in panels for h in _legend_handles(r, ground=False)]
     unique = {h.get_label(): h for h in handles}
     fig.legend(handles=list(unique.values()), loc="outside lower center", ncols=7, frameon=False,
                fontsize=9)
     return fig
-
-
-def _active_range(result, fraction: float = 0.02, pad: float = 2.0) -> tuple[float, float]:
-    """The part of the record where the ground moves (above ``fraction`` of its peak), padded, and
-    extended to the end of the computation if that comes later (zero-padded records otherwise
-    leave most of a panel empty)."""
-    t0, t1 = _record_range(result)
-    ground = np.maximum(np.abs(result.ground_horizontal), np.abs(result.ground_vertical))
-    if ground.size == 0 or ground.max() == 0.0:
-        return t0, t1
-    moving = np.flatnonzero(ground > fraction * ground.max())
-    times = result.ground_time
-    start = max(t0, times[moving[0]] - pad)
-    end = min(t1, max(times[moving[-1]] + pad, result.summary.end_time if result.summary.status != "ok"
-                      or result.summary.overturned else -math.inf))
-    return start, end
 
 
 CRITERIA_COLOURS = {REST: "#ffffff", SLIP: STATE_COLOURS[SLIP], ROCK: STATE_COLOURS[ROCK],
@@ -309,7 +366,20 @@ def criteria_figure(ah_over_g, mu_values, maps, *, title: str = "") -> Figure:
     return fig
 
 
-def _choose_zoom(result, zoom, shift):
+def _choose_range(result, crop, shift) -> tuple[float, float]:
+    """The time range of the response and ground panels [s], not shifted."""
+    if crop is None:
+        return _record_range(result)
+    if isinstance(crop, str):
+        if crop != "auto":
+            raise ValueError(f"crop must be 'auto', a (start, end) pair or None, got {crop!r}")
+        return motion_range(result)
+    a, b = _time_pair(crop, "crop range")
+    return a - shift, b - shift
+
+
+def _choose_zoom(result, zoom, shift, shown):
+    """The magnified window [s] in the figure's time (shifted), or None."""
     if zoom is None:
         return None
     if isinstance(zoom, str):
@@ -318,13 +388,16 @@ def _choose_zoom(result, zoom, shift):
         window = zoom_window(result)
         if window is None:
             return None
-        t0, t1 = _record_range(result)
-        if window[1] - window[0] >= ZOOM_USELESS_FRACTION * (t1 - t0):
+        if window[1] - window[0] >= ZOOM_USELESS_FRACTION * (shown[1] - shown[0]):
             return None
         return window[0] + shift, window[1] + shift
-    a, b = (float(v) for v in zoom)
+    return _time_pair(zoom, "zoom window")
+
+
+def _time_pair(pair, what: str) -> tuple[float, float]:
+    a, b = (float(v) for v in pair)
     if not (math.isfinite(a) and math.isfinite(b) and b > a):
-        raise ValueError(f"zoom window must be (start, end) with start < end, got {zoom!r}")
+        raise ValueError(f"{what} must be (start, end) with start < end, got {pair!r}")
     return a, b
 
 
@@ -333,13 +406,17 @@ def _title(result, name: str) -> str:
     head = f"{name}: {s.verdict}" if name else s.verdict
     facts = [f"max |φ| = {s.max_rotation:.4g} rad", f"max |x| = {1e3 * s.max_slip:.4g} mm",
              f"residual x = {1e3 * s.residual_slip:.4g} mm", f"impacts: {s.impacts}"]
+    if math.isfinite(s.alpha) and not s.overturned:
+        facts.insert(1, f"{percent_text(s.max_rotation_ratio)} of α = {s.alpha:.4g} rad")
     if s.overturned and s.overturn_time is not None:
         facts.insert(0, f"overturned at t = {s.overturn_time:.3f} s")
     return head + "\n" + ",  ".join(facts)
 
 
-def _response_panel(ax, result, shift, span, *, label, window=None):
-    """Rotation (left axis) and slip in mm (right axis) over the shaded states, for ``span``.
+def _response_panel(ax, result, shift, span, *, label, window=None, notes=True):
+    """Rotation (left axis, with +-alpha) and slip in mm (right axis) over the shaded states, for
+    ``span``. What the panel has to say goes in its title line, on the right, never over the data
+    (unless not ``notes``: a narrow panel beside one that says it).
 
     The axes are labelled ``label`` (rotation) and ``label + "-slip"`` (the twin, slip).
     """
@@ -347,23 +424,31 @@ def _response_panel(ax, result, shift, span, *, label, window=None):
     _shade_states(ax, result, shift, span)
     history = result.history or {}
     t = np.asarray(history.get("time", np.zeros(0)))
-    i0 = max(int(np.searchsorted(t, a, side="left")) - 1, 0)
-    i1 = min(int(np.searchsorted(t, b, side="right")) + 1, t.size)
-    t = t[i0:i1]
-    phi = np.asarray(history.get("rotation", np.zeros(0)))[i0:i1]
-    x_mm = 1e3 * np.asarray(history.get("slip", np.zeros(0)))[i0:i1]
+    shown = _within(t, span)
+    t = t[shown]
+    phi = np.asarray(history.get("rotation", np.zeros(0)))[shown]
+    x_mm = 1e3 * np.asarray(history.get("slip", np.zeros(0)))[shown]
 
     slip_ax = ax.twinx()
     ax.set_label(label)
     slip_ax.set_label(f"{label}-slip")
+    said = []
     if t.size:
         ax.plot(*_envelope(t + shift, phi), color=ROTATION_COLOUR, lw=1.0, zorder=3)
         slip_ax.plot(*_envelope(t + shift, x_mm), color=SLIP_COLOUR, lw=1.0, zorder=3)
     else:
-        ax.text(0.5, 0.5, "no time history stored", transform=ax.transAxes, ha="center",
-                va="center", color="0.4")
+        said.append("no time history stored")
     ax.axhline(0.0, color="0.6", lw=0.5, zorder=1)
-    rot_lim, slip_lim = _aligned_limits(phi, x_mm)
+    alpha = result.summary.alpha
+    sides = []
+    if math.isfinite(alpha) and phi.size:
+        reach = {1.0: float(phi.max(initial=0.0)), -1.0: -float(phi.min(initial=0.0))}
+        sides = [side for side, r in reach.items() if r >= ALPHA_SHOWN_FRACTION * alpha]
+    rot_lim, slip_lim = _aligned_limits(np.append(phi, [side * alpha for side in sides]), x_mm)
+    for side in sides:
+        ax.axhline(side * alpha, color=ALPHA_COLOUR, ls="--", lw=0.9, zorder=2)
+    if math.isfinite(alpha) and phi.size and not sides:
+        said.append(f"±α = ±{alpha:.4g} rad off scale")
     ax.set_ylim(*rot_lim)
     slip_ax.set_ylim(*slip_lim)
     ax.set_xlim(a + shift, b + shift)
@@ -374,12 +459,24 @@ def _response_panel(ax, result, shift, span, *, label, window=None):
     ax.grid(True, axis="x", color="0.88", lw=0.6)
 
     if result.summary.states_seen == ["REST"] and result.summary.status == "ok":
-        ax.text(0.01, 0.94, "the block stays at rest", transform=ax.transAxes, va="top",
-                fontsize=9, color="0.3")
-    # the twin (slip) axes is drawn over the main one: marks go there to stay on top
-    _mark_end(slip_ax, result, shift, span, label=True)
+        said.append("the block stays at rest")
+    end = _mark_end(ax, result, shift, span, hatch=True)
+    colour = "0.3"
+    if end is not None:
+        said.insert(0, end[0])
+        colour = end[1]
+    if said and notes:
+        ax.set_title("; ".join(said), loc="right", fontsize=9, color=colour)
     if window is not None:
         slip_ax.axvspan(window[0], window[1], fill=False, ls=":", lw=1.0, ec="0.35", zorder=4)
+
+
+def _within(times: np.ndarray, span) -> slice:
+    """The samples of sorted ``times`` within ``span``, and one more on each side (so that a line
+    reaches the panel's edges)."""
+    i0 = max(int(np.searchsorted(times, span[0], side="left")) - 1, 0)
+    i1 = min(int(np.searchsorted(times, span[1], side="right")) + 1, times.size)
+    return slice(i0, i1)
 
 
 def _shade_states(ax, result, shift, span):
@@ -393,57 +490,60 @@ def _shade_states(ax, result, shift, span):
                                              edgecolors="none", zorder=0), autolim=False)
 
 
-def _mark_end(ax, result, shift, span, *, label):
-    """A vertical line (and a label) where the block overturned or the computation stopped."""
+def _mark_end(ax, result, shift, span, *, hatch):
+    """A vertical line where the block overturned or the computation stopped (hatched after it if
+    ``hatch``: nothing is computed there). Returns ``(text, colour)`` for the panel's title if the
+    line is in ``span``, else None."""
     s = result.summary
     if s.overturned and s.overturn_time is not None:
         t, colour, ls = s.overturn_time, OVERTURN_COLOUR, "-"
-        text = f"OVERTURNED\nt = {s.overturn_time + shift:.3f} s"
+        text = f"OVERTURNED at t = {s.overturn_time + shift:.3f} s"
     elif s.status != "ok":
         t, colour, ls = s.end_time, STOP_COLOUR, "--"
         what = {"painleve": "PAINLEVE case", "flight": "FLIGHT"}.get(s.status, s.status.upper())
-        text = f"{what}: outside the model\ncomputation stopped, t = {s.end_time + shift:.3f} s"
+        text = f"{what}: outside the model, computation stopped at t = {s.end_time + shift:.3f} s"
     else:
-        return
+        return None
     a, b = span
     if not (a <= t <= b):
-        return
+        return None
     ax.axvline(t + shift, color=colour, ls=ls, lw=1.4, zorder=5)
-    if label:   # nothing is computed after this time: hatch it
+    if hatch:
         ax.axvspan(t + shift, b + shift, facecolor="none", edgecolor="0.85", hatch="//", lw=0.0,
                    zorder=0)
-    if label:
-        right_half = (t - a) > 0.6 * (b - a)
-        ax.text(t + shift, 0.97, f" {text} " if not right_half else f"{text} ",
-                transform=ax.get_xaxis_transform(), ha="right" if right_half else "left",
-                va="top", fontsize=9, color=colour, zorder=6,
-                bbox={"boxstyle": "round,pad=0.2", "fc": "white", "ec": "none", "alpha": 0.8})
+    return text, colour
 
 
 def _ground_panel(ax, result, shift, span):
-    t = np.asarray(result.ground_time) + shift
+    t = np.asarray(result.ground_time)
+    shown = _within(t, span)
     for key, values in (("horizontal", result.ground_horizontal), ("vertical", result.ground_vertical)):
-        ax.plot(*_envelope(t, np.asarray(values) / GAL), color=GROUND_COLOURS[key], lw=0.8,
-                label=f"{key}", alpha=0.9 if key == "horizontal" else 0.8)
+        ax.plot(*_envelope(t[shown] + shift, np.asarray(values)[shown] / GAL), color=GROUND_COLOURS[key],
+                lw=0.8, label=key, alpha=0.9 if key == "horizontal" else 0.8)
     ax.axhline(0.0, color="0.6", lw=0.5)
     ax.set_ylabel("ground acc. [gal]")
     ax.set_title("ground acceleration as applied", loc="left", fontsize=10)
-    ax.legend(loc="upper right", fontsize=8, ncols=2, frameon=False)
     ax.grid(True, axis="x", color="0.88", lw=0.6)
-    _mark_end(ax, result, shift, span, label=False)
+    _mark_end(ax, result, shift, span, hatch=False)
     peak = max(float(np.max(np.abs(result.ground_horizontal), initial=0.0)),
                float(np.max(np.abs(result.ground_vertical), initial=0.0))) / GAL
     if peak == 0.0:
         ax.set_ylim(-1.0, 1.0)
+        ax.set_title("still ground (no record)", loc="right", fontsize=9, color="0.3")
 
 
-def _legend_handles(result) -> list:
+def _legend_handles(result, *, ground: bool = True) -> list:
     handles = [Line2D([], [], color=ROTATION_COLOUR, lw=1.5, label="liftoff angle φ"),
-               Line2D([], [], color=SLIP_COLOUR, lw=1.5, label="slip x"),
-               Patch(facecolor="white", edgecolor="0.6", lw=0.5, label="REST"),
-               Patch(facecolor=STATE_COLOURS[SLIP], label="SLIP"),
-               Patch(facecolor=STATE_COLOURS[ROCK], label="ROCK (liftoff)"),
-               Patch(facecolor=STATE_COLOURS[ROCKSLIP], label="ROCKSLIP (liftoff-slip)")]
+               Line2D([], [], color=SLIP_COLOUR, lw=1.5, label="slip x")]
+    if math.isfinite(result.summary.alpha):
+        handles.append(Line2D([], [], color=ALPHA_COLOUR, ls="--", lw=0.9, label="±α (tips over past it)"))
+    if ground:
+        handles += [Line2D([], [], color=GROUND_COLOURS[key], lw=1.0, label=f"ground {key}")
+                    for key in ("horizontal", "vertical")]
+    handles += [Patch(facecolor="white", edgecolor="0.6", lw=0.5, label="REST"),
+                Patch(facecolor=STATE_COLOURS[SLIP], label="SLIP"),
+                Patch(facecolor=STATE_COLOURS[ROCK], label="ROCK (liftoff)"),
+                Patch(facecolor=STATE_COLOURS[ROCKSLIP], label="ROCKSLIP (liftoff-slip)")]
     s = result.summary
     if s.overturned:
         handles.append(Line2D([], [], color=OVERTURN_COLOUR, lw=1.4, label="OVERTURNED"))
@@ -682,11 +782,12 @@ def _short(value) -> str:
 # --------------------------------------------------------------------------------------------------
 
 
-def save_figure(fig: Figure, path, *, overwrite: bool = False, dpi: float = DPI) -> Path:
+def save_figure(fig: Figure, path, *, overwrite: bool = False, dpi: float | None = None) -> Path:
     """Save ``fig`` to ``path`` atomically (a temporary file in the same folder, then a rename).
 
     The format follows the file name (``.png``, ``.pdf``, ``.svg``...). An existing file is kept
-    unless ``overwrite``; the folder is created if missing.
+    unless ``overwrite``; the folder is created if missing. ``dpi`` sets the resolution of raster
+    formats (default `DPI`).
 
     Raises
     ------
@@ -701,7 +802,7 @@ def save_figure(fig: Figure, path, *, overwrite: bool = False, dpi: float = DPI)
                           + ", ".join(f".{k}" for k in sorted(supported)), source=str(path))
     check_destination(path, overwrite=overwrite, example="out/case.png")
     with atomic_write(path, overwrite=overwrite, what="figure") as handle:
-        fig.savefig(handle, format=fmt, dpi=dpi)
+        fig.savefig(handle, format=fmt, dpi=DPI if dpi is None else dpi)
     return path
 
 

@@ -787,11 +787,32 @@ class GroundMotion:
     vertical_factor: float
     files: tuple
 
+    def as_applied(self) -> dict:
+        """The ground motion as applied, in SI: ``pga_horizontal`` and ``pga_vertical`` [m/s^2]
+        (the peaks of the scaled components, 0 for an absent record), ``scale_horizontal`` and
+        ``scale_vertical`` (the factors applied to each record; None for an absent record)."""
+        given = {entry["role"] for entry in self.files}
+        return {
+            "pga_horizontal": float(np.max(np.abs(self.horizontal), initial=0.0)),
+            "pga_vertical": float(np.max(np.abs(self.vertical), initial=0.0)),
+            "scale_horizontal": float(self.horizontal_factor) if "horizontal" in given else None,
+            "scale_vertical": float(self.vertical_factor) if "vertical" in given else None,
+        }
+
+
+def still_ground(dt: float) -> GroundMotion:
+    """No record: one sample of still ground at t = 0, at the sampling step ``dt`` [s] (the
+    solver's step, so that it integrates at exactly that step). A case's ``ground.tail`` then
+    appends the free vibration."""
+    return GroundMotion(dt=float(dt), start=0.0, horizontal=_frozen(np.zeros(1)),
+                        vertical=_frozen(np.zeros(1)), horizontal_factor=1.0, vertical_factor=1.0,
+                        files=())
+
 
 def combine(horizontal: obspy.Trace | None, vertical: obspy.Trace | None, *,
             pga_horizontal: float | None = None, factor: float | None = None,
             pga_vertical: float | None = None, vertical_factor: float = 1.0,
-            source: str | None = None) -> GroundMotion:
+            source: str | None = None, still_dt: float | None = None) -> GroundMotion:
     """Scale and align a horizontal and a vertical record (the paper's Table 1 convention).
 
     Parameters
@@ -810,6 +831,9 @@ def combine(horizontal: obspy.Trace | None, vertical: obspy.Trace | None, *,
         PGA keeps the record's V/H ratio (times this factor).
     source : str, optional
         What errors name (the case file).
+    still_dt : float, optional
+        [s] With no record at all, give the still ground sampled at this step (`still_ground`: a
+        free vibration) instead of an error; the scale options must then keep their defaults.
 
     Returns
     -------
@@ -822,6 +846,9 @@ def combine(horizontal: obspy.Trace | None, vertical: obspy.Trace | None, *,
         records that do not share one time grid (rockslide does not resample).
     """
     if horizontal is None and vertical is None:
+        if still_dt is not None and pga_horizontal is None and pga_vertical is None and \
+                factor is None and vertical_factor == 1.0:
+            return still_ground(still_dt)
         raise RecordError("no record: give a horizontal and/or a vertical record", source=source)
     if pga_horizontal is not None and factor is not None:
         raise RecordError("give either pga_horizontal or factor, not both", source=source,

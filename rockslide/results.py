@@ -32,11 +32,13 @@ Layout (format ``rockslide-result``, version 1):
 | `/records/vertical` | group (attrs) | | the same for the vertical record |
 
 - ``/time_history/state`` attribute ``codes`` = "0 REST, 1 SLIP, 2 ROCK, 3 ROCKSLIP, 4 OVERTURNED".
-- ``/events`` fields: ``time`` (f8) [s]; ``from``, ``to`` (S10, state names); ``cause`` (S14:
-  slip-start, liftoff, slip-stop, slip-reversal, impact, liftoff-end, overturn, flight, painleve);
-  ``edge`` (i1, the pivot ``lam``: +1 left, -1 right); ``slip_direction`` (i1, ``sigma``);
-  ``impact`` (S8: the branch of the impact law, stick, slip or flat; empty for other events);
-  ``energy_loss`` (f8) [J]: the kinetic energy an impact took (>= 0; 0 for other events).
+- ``/events`` fields: ``time`` (f8) [s]; ``from``, ``to`` (UTF-8 text, state names); ``cause``
+  (UTF-8 text: slip-start, liftoff, slip-stop, slip-reversal, impact, liftoff-end, overturn, flight,
+  painleve); ``edge`` (i1, the pivot ``lam``: +1 left, -1 right); ``slip_direction`` (i1,
+  ``sigma``); ``impact`` (UTF-8 text: the branch of the impact law, stick, slip or flat; empty for
+  other events); ``energy_loss`` (f8) [J]: the kinetic energy an impact took (>= 0; 0 for other
+  events). h5py hands text in compound datasets over as ``bytes`` (``.decode()`` them);
+  `read_result` gives the log back as the core holds it (`EVENT_DTYPE`).
 - ``/records/<role>`` attributes: ``role``, ``path`` (the file name only, never a folder),
   ``sha256`` (of the file's bytes), ``format``, ``units`` (of the file), ``scale_factor``.
 - ``/case`` holds the case (``case.case_to_dict``) as attributes with dotted keys such as
@@ -48,9 +50,14 @@ level 4 with shuffle). Root attributes:
 - the summary: ``overturned`` (bool), ``overturn_time`` [s], ``direction``, ``fall_start_time`` [s],
   ``max_rotation`` [rad], ``max_rotation_time`` [s], ``max_slip`` [m], ``residual_slip`` [m],
   ``impacts``, ``states_seen`` (comma-joined names), ``status`` (ok | flight | painleve),
-  ``end_time`` [s], ``time_in_state_REST`` ... [s] (one per state), ``energy_kinetic`` ... [J] (one
-  per energy term). A time that is None is stored as NaN, a direction that is None as 0;
-  `read_result` gives back None.
+  ``end_time`` [s], ``alpha`` [rad] (``atan(b/h)``), ``max_rotation_ratio`` (``max_rotation /
+  alpha``: 0.94 is 94 % of the way to the angle past which gravity tips the block over),
+  ``time_in_state_REST`` ... [s] (one per state), ``energy_kinetic`` ... [J] (one per energy term).
+  A time that is None is stored as NaN, a direction that is None as 0; `read_result` gives back
+  None.
+- the ground motion as applied, if given: ``ground_pga_horizontal``, ``ground_pga_vertical``
+  [m/s^2] (peaks of the scaled records) and ``ground_scale_horizontal``, ``ground_scale_vertical``
+  (the factors applied to the records; NaN for an absent record).
 - ``verdict``, ``name``, ``integration_step`` [s], ``format`` = "rockslide-result",
   ``format_version`` = 1, ``created`` (ISO 8601, UTC);
 - versions: ``rockslide_version``, ``python_version``, ``numpy_version``, ``numba_version``,
@@ -106,7 +113,14 @@ VERSIONED_PACKAGES = ("rockslide", "python", "numpy", "numba", "h5py", "obspy", 
 _CHUNK_ROWS = 16384
 _COMPRESSION = {"compression": "gzip", "compression_opts": 4, "shuffle": True}
 _SUMMARY_SCALARS = ("overturned", "overturn_time", "direction", "fall_start_time", "max_rotation",
-                    "max_rotation_time", "max_slip", "residual_slip", "impacts", "status", "end_time")
+                    "max_rotation_time", "max_slip", "residual_slip", "impacts", "status", "end_time",
+                    "alpha", "max_rotation_ratio")
+#: ``/events`` in the file: `EVENT_DTYPE` with its names as UTF-8 text (variable length) instead of
+#: the core's fixed-length bytes.
+EVENT_FILE_DTYPE = np.dtype([(name, h5py.string_dtype("utf-8") if EVENT_DTYPE[name].kind == "S"
+                              else EVENT_DTYPE[name]) for name in EVENT_DTYPE.names])
+#: The ground motion as applied (`records.GroundMotion.as_applied`), root attributes ``ground_<key>``.
+GROUND_KEYS = ("pga_horizontal", "pga_vertical", "scale_horizontal", "scale_vertical")
 _PROVENANCE = ("verdict", "name", "integration_step", "format", "format_version", "created",
                *(f"{p}_version" for p in VERSIONED_PACKAGES))
 
@@ -129,6 +143,9 @@ class StoredResult:
         One dict per record (keys ``RECORD_KEYS``), horizontal first.
     attrs : dict
         All root attributes as plain Python values (summary, provenance, extra attributes).
+    ground : dict
+        The ground motion as applied (keys ``GROUND_KEYS``, SI; None where not stored), ``{}`` if
+        the file has none.
     """
 
     name: str
@@ -137,6 +154,7 @@ class StoredResult:
     case: dict
     records: list[dict]
     attrs: dict
+    ground: dict = dataclasses.field(default_factory=dict)
 
 
 # --------------------------------------------------------------------------------------------------
@@ -233,10 +251,11 @@ class ResultWriter:
             raise
 
     def finish(self, result: Result, *, name: str, case_text: str = "", case: dict | None = None,
-               records=(), extra_attrs: dict | None = None) -> Path:
+               records=(), extra_attrs: dict | None = None, ground: dict | None = None) -> Path:
         """Write the ground motion, events, summary and metadata, then publish the file.
 
-        The streamed history is used if rows were appended; otherwise ``result.history``.
+        The streamed history is used if rows were appended; otherwise ``result.history``. The
+        arguments are those of `write_result`.
 
         Returns
         -------
@@ -248,7 +267,7 @@ class ResultWriter:
             if self._rows == 0 and result.history and len(result.history.get("time", ())):
                 self._write_history_dict(result.history)
             _write_body(self._file, result, name=name, case_text=case_text, case=case,
-                        records=records, extra_attrs=extra_attrs)
+                        records=records, extra_attrs=extra_attrs, ground=ground)
             self._file.flush()
             self._file.close()
         except BaseException:
@@ -290,7 +309,8 @@ class ResultWriter:
 
 
 def write_result(path, result: Result, *, name: str, case_text: str = "", case: dict | None = None,
-                 records=(), extra_attrs: dict | None = None, overwrite: bool = False) -> Path:
+                 records=(), extra_attrs: dict | None = None, ground: dict | None = None,
+                 overwrite: bool = False) -> Path:
     """Write ``result`` to the HDF5 file ``path`` (layout in the module docstring), atomically.
 
     Parameters
@@ -309,6 +329,9 @@ def write_result(path, result: Result, *, name: str, case_text: str = "", case: 
         only the file name of ``path`` is stored.
     extra_attrs : dict, optional
         More root attributes (scalars or strings); they may not replace the standard ones.
+    ground : dict, optional
+        The ground motion as applied (`records.GroundMotion.as_applied`: keys ``GROUND_KEYS``, SI),
+        stored as root attributes ``ground_<key>``.
     overwrite : bool
         Replace an existing file.
 
@@ -323,20 +346,20 @@ def write_result(path, result: Result, *, name: str, case_text: str = "", case: 
     """
     with ResultWriter(path, overwrite=overwrite) as writer:
         return writer.finish(result, name=name, case_text=case_text, case=case, records=records,
-                             extra_attrs=extra_attrs)
+                             extra_attrs=extra_attrs, ground=ground)
 
 
-def _write_body(f: h5py.File, result: Result, *, name, case_text, case, records, extra_attrs) -> None:
-    ground = f.create_group("ground", track_order=True)
+def _write_body(f: h5py.File, result: Result, *, name, case_text, case, records, extra_attrs,
+                ground=None) -> None:
+    group = f.create_group("ground", track_order=True)
     for key, values in (("time", result.ground_time), ("horizontal", result.ground_horizontal),
                         ("vertical", result.ground_vertical)):
         values = np.asarray(values, dtype=np.float64)
         options = {"chunks": (min(values.size, _CHUNK_ROWS),), **_COMPRESSION} if values.size else {}
-        ds = ground.create_dataset(key, data=values, **options)
+        ds = group.create_dataset(key, data=values, **options)
         ds.attrs["units"] = GROUND_UNITS[key]
 
-    events = np.asarray(result.events).astype(EVENT_DTYPE)
-    ds = f.create_dataset("events", data=events, dtype=EVENT_DTYPE)
+    ds = f.create_dataset("events", data=_events_for_file(result.events), dtype=EVENT_FILE_DTYPE)
     ds.attrs["units"] = "time: s, energy_loss: J"
     ds.attrs["description"] = ("time [s], from/to: state names, cause, edge: pivot lam (+1 left, "
                                "-1 right, 0 none), slip_direction: sigma, impact: branch of the impact "
@@ -367,6 +390,9 @@ def _write_body(f: h5py.File, result: Result, *, name, case_text, case, records,
     attrs = f.attrs
     for key, value in _summary_attrs(result.summary).items():
         attrs[key] = value
+    for key in GROUND_KEYS if ground else ():
+        value = ground.get(key)
+        attrs[f"ground_{key}"] = math.nan if value is None else float(value)
     attrs["verdict"] = result.summary.verdict
     attrs["name"] = name
     attrs["integration_step"] = float(result.step)
@@ -379,6 +405,30 @@ def _write_body(f: h5py.File, result: Result, *, name, case_text, case, records,
         if key in attrs:
             raise ValueError(f"extra attribute {key!r} would replace a standard attribute")
         attrs[key] = _attr_value(value)
+
+
+def _events_for_file(events) -> np.ndarray:
+    """The event log with its names as text (`EVENT_FILE_DTYPE`)."""
+    events = np.asarray(events).astype(EVENT_DTYPE)
+    out = np.empty(events.shape, dtype=EVENT_FILE_DTYPE)
+    for name in EVENT_DTYPE.names:
+        out[name] = ([v.decode() for v in events[name]] if EVENT_DTYPE[name].kind == "S"
+                     else events[name])
+    return out
+
+
+def _events_from_file(stored: np.ndarray) -> np.ndarray:
+    """The event log as the core holds it (`EVENT_DTYPE`), from text names or, in files written
+    before they were text, fixed-length bytes (fields a file lacks stay empty)."""
+    out = np.zeros(stored.shape, dtype=EVENT_DTYPE)
+    for name in EVENT_DTYPE.names:
+        if name not in stored.dtype.names:        # written before impacts were described
+            continue
+        values = stored[name]
+        if EVENT_DTYPE[name].kind == "S":
+            values = [v.encode() if isinstance(v, str) else bytes(v) for v in values]
+        out[name] = values
+    return out
 
 
 def _summary_attrs(summary: Summary) -> dict:
@@ -505,7 +555,7 @@ def _read_body(f: h5py.File) -> StoredResult:
         values = f["time_history"][name][()]
         history[name] = values.astype(np.int8) if name == "state" else values.astype(np.float64)
     ground = f["ground"]
-    events = f["events"][()].astype(EVENT_DTYPE)
+    events = _events_from_file(f["events"][()])
     result = Result(
         history=history,
         events=events,
@@ -527,8 +577,10 @@ def _read_body(f: h5py.File) -> StoredResult:
                 group = f["records"][role]
                 records.append({key: _none_if_empty(_plain(group.attrs.get(key, "")))
                                 for key in RECORD_KEYS})
+    ground = {key: None if math.isnan(attrs[f"ground_{key}"]) else float(attrs[f"ground_{key}"])
+              for key in GROUND_KEYS if f"ground_{key}" in attrs}
     return StoredResult(name=str(attrs.get("name", "")), result=result, case_text=case_text,
-                        case=case, records=records, attrs=attrs)
+                        case=case, records=records, attrs=attrs, ground=ground)
 
 
 def _summary_from_attrs(attrs: dict) -> Summary:
@@ -556,6 +608,8 @@ def _summary_from_attrs(attrs: dict) -> Summary:
         end_time=float(attrs["end_time"]),
         energy={key[len("energy_"):]: float(value) for key, value in attrs.items()
                 if key.startswith("energy_")},
+        alpha=float(attrs.get("alpha", math.nan)),
+        max_rotation_ratio=float(attrs.get("max_rotation_ratio", math.nan)),
     )
 
 

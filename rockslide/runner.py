@@ -30,7 +30,8 @@ class Prepared:
 
 
 def load_ground(case: Case, records_dir: Path | None = None) -> rec.GroundMotion:
-    """Read, scale and align the case's records (``ground.horizontal`` and ``ground.vertical``)."""
+    """Read, scale and align the case's records (``ground.horizontal`` and ``ground.vertical``);
+    without either, the still ground sampled at ``solver.dt`` (a free vibration over ``ground.tail``)."""
     folder = records_dir if records_dir is not None else rec.records_dir()
     traces = {}
     for role in ("horizontal", "vertical"):
@@ -48,7 +49,8 @@ def load_ground(case: Case, records_dir: Path | None = None) -> rec.GroundMotion
     try:
         return rec.combine(traces["horizontal"], traces["vertical"], pga_horizontal=scale.pga_horizontal,
                            factor=scale.factor, pga_vertical=scale.pga_vertical,
-                           vertical_factor=scale.vertical_factor, source=case.source)
+                           vertical_factor=scale.vertical_factor, source=case.source,
+                           still_dt=case.solver.dt)
     except RecordError as exc:
         if exc.field is None:
             raise

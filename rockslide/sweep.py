@@ -6,9 +6,10 @@ and computes every point with the batch kernel (`batch`), without history or eve
 
 - **Axes.** ``start:stop:step`` (the stop is included when it falls on the grid, within 1e-9 of a
   step) or a comma list; values take units as in case files (``100gal:1000gal:25gal``; a unit on
-  every value or on none, none meaning SI). Ranges are computed in decimal, so ``0.30:0.70:0.01``
-  gives exactly the floats of ``0.37`` and ``125 gal`` that a case file would. Dimension ``i`` of
-  the result is the ``i``-th axis given on the command line.
+  every value or on none, none meaning SI, except for accelerations, which need their unit).
+  Ranges are computed in decimal, so ``0.30:0.70:0.01`` gives exactly the floats of ``0.37`` and
+  ``125 gal`` that a case file would. Dimension ``i`` of the result is the ``i``-th axis given on
+  the command line.
 - **Points.** Every point is the case with the axis values replaced through `case.case_with`
   (validated like a case file; a bad value is a one-line `CaseError` naming the option) and its
   ground motion checked like ``rockslide run`` checks it (`runner.check_against_ground`). ``--mu``
@@ -57,11 +58,11 @@ from .core import batch
 from .core import kernel as K
 from .core.physics import OVERTURNED
 from .core.simulate import ground_array, initial_state, parameters
-from .errors import CaseError, OutputError, RecordError
+from .errors import CaseError, OutputError
 from .files import atomic_write
 from .plots import sweep_category, sweep_figure
 from .runner import check_against_ground, check_size, model_for, settings_for
-from .units import parse_quantity
+from .units import UNIT_REQUIRED, parse_quantity
 
 __all__ = ["AXES", "AxisKind", "Axis", "Plan", "ChunkStore", "parse_axis", "plan_sweep",
            "definition_key", "compute", "collect", "sweep_variables", "MAX_POINTS"]
@@ -200,8 +201,8 @@ def parse_axis(name: str, spec: str) -> Axis:
         parts = [_split(option, kind.kind, p) for p in text.split(",")]
         units = {unit for _, unit in parts}
         if len(units) > 1 and "" in units:
-            raise CaseError(f"give a unit on every value or on none (none means SI), got {text!r}",
-                            source=option)
+            none = "" if kind.kind in UNIT_REQUIRED else " or on none (none means SI)"
+            raise CaseError(f"give a unit on every value{none}, got {text!r}", source=option)
         texts = [f"{number}{unit}" for number, unit in parts]
     values = [parse_quantity(t, kind.kind, source=option) for t in texts]
     seen = {}
@@ -232,8 +233,8 @@ def _range_texts(option: str, kind: str, text: str, pieces) -> list[str]:
     """The values of ``start:stop:step`` as texts with their unit, computed in decimal."""
     (start, u0), (stop, u1), (step, u2) = pieces
     if len({u0, u1, u2}) != 1:
-        raise CaseError(f"give start, stop and step in one unit, or all without unit (SI), got "
-                        f"{text!r}", source=option)
+        none = "" if kind in UNIT_REQUIRED else ", or all without unit (SI)"
+        raise CaseError(f"give start, stop and step in one unit{none}, got {text!r}", source=option)
     if step <= 0:
         raise CaseError(f"the step must be positive, got {text!r}", source=option)
     if stop < start:
@@ -425,7 +426,8 @@ def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = N
     chunk_size = default_chunk_size(n) if chunk_size is None else int(chunk_size)
 
     traces, entries = _read_traces(case, records_dir)
-    unscaled = rec.combine(traces["horizontal"], traces["vertical"], source=case.source)
+    unscaled = rec.combine(traces["horizontal"], traces["vertical"], source=case.source,
+                           still_dt=case.solver.dt)
     check_size(case, unscaled, history=False)
 
     settings = settings_for(case, history=False, energy=False)
@@ -457,7 +459,7 @@ def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = N
                 grounds[scale] = rec.combine(traces["horizontal"], traces["vertical"],
                                              pga_horizontal=scale[0], factor=scale[1],
                                              pga_vertical=scale[2], vertical_factor=scale[3],
-                                             source=case.source)
+                                             source=case.source, still_dt=case.solver.dt)
             ground = grounds[scale]
             try:
                 check_against_ground(point, ground)
@@ -495,8 +497,6 @@ def _read_traces(case: Case, records_dir: Path | None):
         meta = dict(trace.stats.get("rockslide", {}))
         entries.append({"role": role, "path": Path(str(meta.get("path", spec.file))).name,
                         "sha256": str(meta.get("sha256", ""))})
-    if traces["horizontal"] is None and traces["vertical"] is None:   # pragma: no cover - case.py
-        raise RecordError("no record", source=case.source)
     return traces, entries
 
 
@@ -813,6 +813,7 @@ def sweep_variables(plan: Plan, states: np.ndarray) -> dict:
     modes = ((t_slip > 0) * MODE_BITS["slip"] + (t_rock > 0) * MODE_BITS["liftoff"]
              + (t_rockslip > 0) * MODE_BITS["liftoff_slip"]).astype(np.int8)
     end = np.where(np.isnan(st[:, K.S_END_TIME]), plan.record_end, st[:, K.S_END_TIME])
+    alpha = plan.params[:, K.P_ALPHA]
 
     def grid(values, dtype):
         return np.asarray(values, dtype=dtype).reshape(shape)
@@ -834,6 +835,12 @@ def sweep_variables(plan: Plan, states: np.ndarray) -> dict:
                              "overturning (NaN: standing)"}),
         "max_rotation": (grid(st[:, K.S_MAX_THETA], np.float64),
                          {"units": "rad", "long_name": "largest rotation |phi|"}),
+        "alpha": (grid(alpha, np.float64),
+                  {"units": "rad", "long_name": "alpha = atan(b/h): the rotation past which gravity "
+                   "tips the block over"}),
+        "max_rotation_ratio": (grid(st[:, K.S_MAX_THETA] / alpha, np.float64),
+                               {"units": "1", "long_name": "largest rotation / alpha: how near "
+                                "overturning (above 1: past alpha)"}),
         "max_slip": (grid(st[:, K.S_MAX_X], np.float64),
                      {"units": "m", "long_name": "largest slip displacement |x|"}),
         "residual_slip": (grid(st[:, K.S_X], np.float64),

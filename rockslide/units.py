@@ -1,8 +1,13 @@
 """Quantities with units: SI inside, conversions once at the edge.
 
-Case files and command-line options may give a quantity as a plain number (SI) or as a string with
-a unit (``"800 gal"``, ``"0.1 ms"``, ``"5 deg"``). The unit ``g`` is the standard gravity
-9.80665 m/s^2 (as in PEER and K-NET files), whatever gravity a case uses for its physics.
+Case files and command-line options give a quantity as a string with a unit (``"800 gal"``,
+``"0.1 ms"``, ``"5 deg"``) or as a plain number, which is SI (``0.2`` for a length is 0.2 m). The one
+exception is an acceleration: engineers write 0.8 meaning g and 800 meaning gal as often as SI, so a
+bare number for an acceleration (:data:`UNIT_REQUIRED`) is refused with a message that says what it
+would mean in each unit; only 0, which means the same in every unit, may go without one. Programs
+that hand over SI values they computed (``case.case_with``, ``case.case_to_dict``) say so with
+``si_numbers=True``. The unit ``g`` is the standard gravity 9.80665 m/s^2 (as in PEER and K-NET
+files), whatever gravity a case uses for its physics.
 """
 
 from __future__ import annotations
@@ -13,6 +18,10 @@ import re
 from .errors import CaseError
 
 STANDARD_GRAVITY = 9.80665  # [m/s^2]
+
+#: The SI unit of each kind, as written in messages.
+SI_UNITS = {"length": "m", "mass": "kg", "time": "s", "acceleration": "m/s^2", "angle": "rad",
+            "angular_rate": "rad/s", "velocity": "m/s", "dimensionless": ""}
 
 UNITS: dict[str, dict[str, float]] = {
     "length": {"m": 1.0, "cm": 1e-2, "mm": 1e-3},
@@ -29,6 +38,11 @@ UNITS: dict[str, dict[str, float]] = {
     "velocity": {"m/s": 1.0, "cm/s": 1e-2, "mm/s": 1e-3},
     "dimensionless": {"": 1.0},
 }
+
+#: Quantity kinds that need a unit: a bare number is refused (a bare 0 is accepted).
+UNIT_REQUIRED = frozenset({"acceleration"})
+#: The units a message proposes for a bare number, by kind.
+PROPOSED_UNITS = {"acceleration": (("g",), ("gal", "cm/s^2"), ("m/s^2",))}
 
 _QUANTITY = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([A-Za-z/^*0-9]*)\s*$")
 
@@ -51,7 +65,8 @@ def unit_factor(unit: str, kind: str, *, source: str | None = None, field: str |
                     source=source, field=field)
 
 
-def parse_quantity(value, kind: str, *, source: str | None = None, field: str | None = None) -> float:
+def parse_quantity(value, kind: str, *, source: str | None = None, field: str | None = None,
+                   si_numbers: bool = False) -> float:
     """Convert a number (taken as SI) or a ``"number unit"`` string to an SI float.
 
     Parameters
@@ -60,16 +75,22 @@ def parse_quantity(value, kind: str, *, source: str | None = None, field: str | 
         ``0.2``, ``"200 mm"``, ``"800 gal"``, ``"0.1 ms"``...
     kind : str
         One of the keys of ``UNITS``.
+    si_numbers : bool
+        Take a bare number as SI for every kind, those of :data:`UNIT_REQUIRED` included: for values
+        a program computed in SI, never for what a person typed.
 
     Raises
     ------
     CaseError
-        Naming ``source`` and ``field`` when the value is not a finite number with a known unit.
+        Naming ``source`` and ``field`` when the value is not a finite number with a known unit, or
+        is a bare number other than 0 for a kind of :data:`UNIT_REQUIRED` (the message says what
+        it would mean in each unit).
     """
     if isinstance(value, bool):
         raise CaseError(f"expected {_article(kind)} {kind} (a number or a string like "
                         f"{_example(kind)!r}), got {value!r}", source=source, field=field)
-    if isinstance(value, (int, float)):
+    bare = isinstance(value, (int, float))
+    if bare:
         number = float(value)
     elif isinstance(value, str):
         match = _QUANTITY.match(value)
@@ -81,12 +102,56 @@ def parse_quantity(value, kind: str, *, source: str | None = None, field: str | 
                             f"a unit, like {_example(kind)!r})", source=source, field=field)
         number = float(match.group(1)) * unit_factor(match.group(2), kind, source=source, field=field) \
             if match.group(2) else float(match.group(1))
+        bare = not match.group(2)
     else:
         raise CaseError(f"expected {_article(kind)} {kind} (a number or a string like {_example(kind)!r}), "
                         f"got {type(value).__name__}", source=source, field=field)
     if not math.isfinite(number):
         raise CaseError(f"{value!r} is not a finite number", source=source, field=field)
+    if bare and kind in UNIT_REQUIRED and number != 0.0 and not si_numbers:
+        raise CaseError(bare_number_message(value, kind), source=source, field=field)
     return number
+
+
+def bare_number_message(value, kind: str) -> str:
+    """Why a bare number is refused for ``kind``, and what it would mean in each unit.
+
+    ``bare_number_message(0.8, "acceleration")`` gives "0.8 has no unit (an acceleration needs
+    one): '0.8 g' is 7.845 m/s^2, '0.8 gal' or '0.8 cm/s^2' is 0.0008158 g, '0.8 m/s^2' is
+    0.08158 g".
+    """
+    text = str(value).strip()
+    number = float(text)
+    readings = []
+    for units in PROPOSED_UNITS[kind]:
+        value_si = number * UNITS[kind][units[0]]
+        meaning = f"{value_si:.4g} {SI_UNITS[kind]}" if units == ("g",) else f"{value_si / STANDARD_GRAVITY:.4g} g"
+        readings.append(" or ".join(f"'{text} {u}'" for u in units) + f" is {meaning}")
+    return f"{text} has no unit ({_article(kind)} {kind} needs one): {', '.join(readings)}"
+
+
+def acceleration_text(value: float, unit: str | None = None) -> str:
+    """An acceleration [m/s^2] in ``unit`` (default gal) and in g: ``"700 gal (0.714 g)"``, or for
+    ``unit = "g"`` in g and gal: ``"0.714 g (700 gal)"``."""
+    unit = unit or "gal"
+    factor = unit_factor(unit, "acceleration")
+    if factor == STANDARD_GRAVITY:
+        return f"{value / factor:.4g} {unit} ({value / 0.01:.4g} gal)"
+    return f"{value / factor:.4g} {unit} ({value / STANDARD_GRAVITY:.3g} g)"
+
+
+def percent_text(ratio: float) -> str:
+    """A ratio as a percentage with two significant digits at least: ``0.94`` -> ``"94 %"``,
+    ``0.0053`` -> ``"0.53 %"``."""
+    percent = 100.0 * ratio
+    return f"{percent:.0f} %" if abs(percent) >= 9.95 else f"{percent:.2g} %"
+
+
+def written_unit(value) -> str | None:
+    """The unit of a ``"number unit"`` string as written (``"800 gal"`` -> ``"gal"``), None if
+    there is none (a bare number, or text that is not a quantity)."""
+    match = _QUANTITY.match(value) if isinstance(value, str) else None
+    return match.group(2) if match and match.group(2) else None
 
 
 def _example(kind: str) -> str:

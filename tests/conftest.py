@@ -41,3 +41,13 @@ def records_dir_real() -> Path:
     if folder is None:
         pytest.skip("needs the paper's records: set ROCKSLIDE_RECORDS or place them in ../shared/records")
     return folder
+
+
+def one_line_error(result, *parts):
+    """Exit code 2 and one line on stderr naming each of ``parts``."""
+    lines = result.stderr.splitlines()
+    assert result.exit_code == 2, (result.exit_code, result.output, result.exception)
+    assert len(lines) == 1 and lines[0].startswith("rockslide: error: "), result.stderr
+    for part in parts:
+        assert part in lines[0], f"{part!r} not in {lines[0]!r}"
+    return lines[0]

@@ -154,6 +154,19 @@ class TestValid:
         assert case.ground.scale.pga_vertical == pytest.approx(0.5 * 9.80665)
         assert case.ground.tail == pytest.approx(0.5)
 
+    def test_a_bare_zero_acceleration_needs_no_unit(self):
+        """0 means the same in every unit; any other bare acceleration is refused (TestBad)."""
+        case = parse_case(variant({"ground.scale.pga_vertical": 0, "ground.scale.vertical_factor": None}))
+        assert case.ground.scale.pga_vertical == 0.0
+
+    def test_units_as_written_are_kept(self):
+        case = parse_case(EXAMPLE)
+        assert case.units["ground.scale.pga_horizontal"] == "gal"
+        assert case.units["gravity"] == "m/s^2"
+        assert "block.height" not in case.units                     # a bare number (SI)
+        assert case_with(case, {"ground.scale.pga_horizontal": "0.5 g"}).units[
+            "ground.scale.pga_horizontal"] == "g"
+
     def test_null_means_default(self):
         case = parse_case(variant({"initial": None, "output.interval": None, "gravity": None}))
         assert case.initial == Initial()
@@ -183,7 +196,7 @@ class TestValid:
     def test_round_trip(self, text):
         case = parse_case(text, source=SOURCE, base_dir=Path("cases"))
         plain = case_to_dict(case)
-        again = parse_case(yaml.safe_dump(plain))
+        again = parse_case(yaml.safe_dump(case_to_dict(case, case_file=True)))
         assert dataclasses.replace(again, text=case.text, source=case.source,
                                    base_dir=case.base_dir) == case
         assert case_to_dict(again) == plain
@@ -240,7 +253,7 @@ class TestSchema:
         assert {f.name for f in dataclasses.fields(Block)} == set(CASE_KEYS["block"]["keys"])
         assert {f.name for f in dataclasses.fields(Contact)} == set(CASE_KEYS["contact"]["keys"])
         assert {f.name for f in dataclasses.fields(Ground)} == set(CASE_KEYS["ground"]["keys"])
-        case_fields = {f.name for f in dataclasses.fields(Case)} - {"source", "base_dir", "text"}
+        case_fields = {f.name for f in dataclasses.fields(Case)} - {"source", "base_dir", "text", "units"}
         assert case_fields == set(CASE_KEYS)
 
     def test_every_key_documented(self):
@@ -393,8 +406,8 @@ BAD = [
     ("null-block", variant({"block": None}), ["block: is null, a value is required"]),
     ("null-file", variant({"ground.vertical.file": None}),
      ["ground.vertical.file: is null, a value is required"]),
-    ("no-records", variant(drop=("ground.horizontal", "ground.vertical", "ground.scale")),
-     ["ground: needs at least one record", "ground.horizontal or ground.vertical"]),
+    ("no-records", variant({"ground.tail": "0 s"}, drop=("ground.horizontal", "ground.vertical", "ground.scale")),
+     ["ground: needs a record", "ground.horizontal or ground.vertical", "or, for a free vibration"]),
     ("missing-file", variant({"ground.horizontal": {"dt": 0.01}}),
      ["ground.horizontal.file: missing required key"]),
     # types
@@ -479,8 +492,15 @@ BAD = [
     ("pga-horizontal-zero", variant({"ground.scale.pga_horizontal": 0}),
      ["ground.scale.pga_horizontal: must be greater than 0 m/s^2, got 0 m/s^2"]),
     ("pga-vertical-negative",
-     variant({"ground.scale.pga_vertical": -1, "ground.scale.vertical_factor": None}),
+     variant({"ground.scale.pga_vertical": "-1 m/s^2", "ground.scale.vertical_factor": None}),
      ["ground.scale.pga_vertical: must be at least 0 m/s^2, got -1 m/s^2"]),
+    ("pga-horizontal-bare", variant({"ground.scale.pga_horizontal": 0.8}),
+     ["ground.scale.pga_horizontal: 0.8 has no unit", "'0.8 g' is 7.845 m/s^2", "'0.8 m/s^2' is 0.08158 g"]),
+    ("pga-horizontal-bare-string", variant({"ground.scale.pga_horizontal": "800"}),
+     ["ground.scale.pga_horizontal: 800 has no unit", "'800 gal' or '800 cm/s^2' is 0.8158 g"]),
+    ("pga-vertical-bare", variant({"ground.scale.pga_vertical": 3, "ground.scale.vertical_factor": None}),
+     ["ground.scale.pga_vertical: 3 has no unit", "'3 g' is 29.42 m/s^2"]),
+    ("gravity-bare", variant({"gravity": 9.81}), ["gravity: 9.81 has no unit", "'9.81 m/s^2' is 1 g"]),
     ("factor-zero", variant({"ground.scale": {"factor": 0}}),
      ["ground.scale.factor: must be greater than 0, got 0"]),
     ("vertical-factor-negative", variant({"ground.scale.vertical_factor": -0.5}),
@@ -488,7 +508,7 @@ BAD = [
     ("pga-and-factor", variant({"ground.scale.factor": 2}),
      ["ground.scale: pga_horizontal (8 m/s^2) and factor (2) are exclusive"]),
     ("pga-vertical-and-factor",
-     variant({"ground.scale.pga_vertical": 3, "ground.scale.vertical_factor": 0.5}),
+     variant({"ground.scale.pga_vertical": "3 m/s^2", "ground.scale.vertical_factor": 0.5}),
      ["ground.scale: pga_vertical (3 m/s^2) and vertical_factor (0.5) are exclusive"]),
     ("pga-without-record", variant(drop=("ground.horizontal",)),
      ["ground.scale.pga_horizontal: given, but there is no ground.horizontal record"]),
@@ -608,5 +628,5 @@ def test_random_case_with(changes):
         assert "\n" not in str(exc)
         return
     assert isinstance(new, Case)
-    again = parse_case(yaml.safe_dump(case_to_dict(new)))
+    again = parse_case(yaml.safe_dump(case_to_dict(new, case_file=True)))
     assert dataclasses.replace(again, text=new.text, source=new.source, base_dir=new.base_dir) == new

@@ -88,6 +88,17 @@ def test_outputs_are_written(table):
     assert "| figure |" in text and "Findings" in text
 
 
+def test_the_committed_table_is_what_make_table1_writes_now(table):
+    """results/table1.md and table1.csv in the repository are exactly what `make table1` writes
+    with this code: nothing in them depends on when or how fast they were made (no timing line),
+    so a rerun changes them only when the results change, and they never fall behind the code
+    unnoticed. After a change of the results: `make table1` and commit them."""
+    for name in ("table1.md", "table1.csv"):
+        written = (table["out"] / name).read_text()
+        assert written == (REPO / "results" / name).read_text(), f"results/{name} is out of date: make table1"
+        assert "Computed in" not in written and " s (both gravities" not in written
+
+
 def test_the_kobe_vertical_peaks_of_table_1_follow_from_the_recorded_ratio(table):
     """Table 1 lists 243.7 and 324.9 gal for Kobe at 600 and 800 gal: the recorded V/H ratio."""
     rows = {(r.figure, r.mu): r for r in table["rows"]}

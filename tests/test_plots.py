@@ -1,4 +1,5 @@
-"""Figures: every kind of response renders and saves; the zoom finds the events; no pyplot."""
+"""Figures: every kind of response renders and saves; the panels show where the motion is and the
+zoom finds whole swings; +-alpha is drawn; labels never cover data; no pyplot."""
 
 from __future__ import annotations
 
@@ -12,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.collections import PolyCollection
 from matplotlib.figure import Figure
 
@@ -72,7 +74,7 @@ def axis(fig: Figure, label: str):
 def texts(fig: Figure) -> str:
     parts = [fig._suptitle.get_text()] if fig._suptitle else []
     for ax in fig.axes:
-        parts += [t.get_text() for t in ax.texts] + [ax.get_title(loc="left")]
+        parts += [t.get_text() for t in ax.texts] + [ax.get_title(loc="left"), ax.get_title(loc="right")]
     return "\n".join(parts)
 
 
@@ -89,7 +91,7 @@ def test_each_kind_renders_and_saves_a_png(tmp_path, responses, kind):
     assert fig.get_size_inches().tolist() == [11.0, 8.0]
     path = save_figure(fig, tmp_path / "figs" / f"{kind}.png")
     data = path.read_bytes()
-    assert png_size(data) == (1320, 960)           # 11 x 8 in at 120 dpi
+    assert png_size(data) == (1650, 1200)          # 11 x 8 in at 150 dpi
     assert len(data) > 20_000
     assert sorted(os.listdir(tmp_path / "figs")) == [f"{kind}.png"]
     title = fig._suptitle.get_text()
@@ -127,14 +129,14 @@ def test_the_end_is_marked(responses, kind, label):
     assert f"t = {end:.3f} s" in texts(fig)
     verticals = [line for ax in fig.axes for line in ax.lines
                  if len(line.get_xdata()) == 2 and np.all(np.asarray(line.get_xdata()) == end)]
-    assert len(verticals) >= 3                      # whole record, zoom and ground panels
+    assert len(verticals) >= 3                      # response, zoom and ground panels
     if kind != "overturn":
         assert result.summary.status in fig._suptitle.get_text()
 
 
 def test_history_ends_early_but_ground_continues(responses):
     result = responses["overturn"]
-    fig = response_figure(result, zoom=None)
+    fig = response_figure(result, zoom=None, crop=None)
     top, ground = axis(fig, "record"), axis(fig, "ground")
     assert top.lines[0].get_xdata()[-1] == pytest.approx(result.summary.overturn_time, abs=1e-3)
     assert ground.lines[0].get_xdata()[-1] == result.ground_time[-1]
@@ -195,6 +197,126 @@ def test_long_histories_are_reduced_to_an_envelope():
     assert np.all(np.diff(tt) >= 0)
 
 
+def test_a_long_history_is_drawn_decimated_and_kept_whole(responses):
+    """A 150 s history at 0.1 ms (1.5 M rows, a Kobe record at the paper's step) is drawn with at
+    most MAX_LINE_POINTS points per line, its extremes kept; the result itself is not changed."""
+    n = 1_500_001
+    t = np.linspace(0.0, 150.0, n)
+    rotation = 1e-3 * np.sin(7.0 * t) * np.exp(-((t - 40.0) / 5.0) ** 2)
+    history = {"time": t, "rotation": rotation, "rotation_rate": np.zeros(n), "slip": 1e-3 * np.tanh(t - 40.0),
+               "slip_rate": np.zeros(n), "state": np.zeros(n, np.int8)}
+    base = synthetic([(30.0, "REST", "ROCK"), (50.0, "ROCK", "REST")], duration=150.0, max_rotation_time=40.0)
+    result = Result(history=history, events=base.events, summary=base.summary, step=1e-4,
+                    ground_time=base.ground_time, ground_horizontal=base.ground_horizontal,
+                    ground_vertical=base.ground_vertical)
+    fig = response_figure(result, crop=None)
+    for ax in fig.axes:
+        for line in ax.lines:
+            assert len(line.get_xdata()) <= plots.MAX_LINE_POINTS
+    drawn = axis(fig, "record").lines[0].get_ydata()
+    assert drawn.max() == rotation.max() and drawn.min() == rotation.min()
+    assert result.history["rotation"] is rotation and rotation.size == n
+
+
+# --------------------------------------------------------------------------------------------------
+# Where the motion is, +-alpha, labels off the data
+# --------------------------------------------------------------------------------------------------
+
+
+def with_ground(result, moving: tuple[float, float]) -> Result:
+    """``result`` with a horizontal ground acceleration of 1 m/s^2 within ``moving`` [s], still elsewhere."""
+    t = result.ground_time
+    ah = np.where((t >= moving[0]) & (t <= moving[1]), 1.0, 0.0)
+    return Result(history=result.history, events=result.events, summary=result.summary, step=result.step,
+                  ground_time=t, ground_horizontal=ah, ground_vertical=0.3 * ah)
+
+
+@pytest.mark.parametrize("events, kwargs, moving, expected", [
+    # the ground moves from 20 to 30 s of a 100 s record, the block within: that, 1 s on each side
+    ([(25.0, "REST", "ROCK"), (26.0, "ROCK", "REST")], {}, (20.0, 30.0), (19.0, 31.0)),
+    # the block still rocks after the ground has calmed down: up to its end, 5 % margin
+    ([(25.0, "REST", "ROCK"), (50.0, "ROCK", "REST")], {}, (20.0, 30.0), (18.5, 51.5)),
+    # overturned at 24 s: nothing after it but the margin
+    ([(23.0, "REST", "ROCK"), (24.0, "ROCK", "OVERTURNED")], {"overturn": 24.0}, (20.0, 30.0), (19.0, 25.0)),
+    # the ground moves over most of the record: all of it
+    ([], {}, (2.0, 98.0), (0.0, 100.0)),
+    # nothing moves: the whole record
+    ([], {}, (200.0, 300.0), (0.0, 100.0)),
+])
+def test_motion_range(events, kwargs, moving, expected):
+    result = with_ground(synthetic(events, duration=100.0, **kwargs), moving)
+    assert plots.motion_range(result) == pytest.approx(expected)
+
+
+def test_the_response_panels_show_where_the_motion_is(responses):
+    """By default the response and ground panels span `motion_range`; crop=None the whole record;
+    a given crop is in the figure's time."""
+    result = with_ground(synthetic([(25.0, "REST", "ROCK"), (26.0, "ROCK", "REST")], duration=100.0),
+                         (20.0, 30.0))
+    fig = response_figure(result, time_shift=5.0)
+    assert axis(fig, "record").get_xlim() == axis(fig, "ground").get_xlim() == pytest.approx((24.0, 36.0))
+    assert "19.00 to 31.00 s of the 0 to 100 s record" not in texts(fig)
+    assert "24.00 to 36.00 s of the 5 to 105 s record" in texts(fig)
+    assert axis(response_figure(result, crop=None), "record").get_xlim() == (0.0, 100.0)
+    assert axis(response_figure(result, crop=(40.0, 60.0)), "record").get_xlim() == (40.0, 60.0)
+    with pytest.raises(ValueError, match="crop"):
+        response_figure(result, crop=(60.0, 40.0))
+
+
+def horizontal_lines_at(ax, y: float) -> list:
+    return [line for line in ax.lines if len(line.get_ydata()) == 2
+            and np.all(np.asarray(line.get_ydata()) == y)]
+
+
+@pytest.mark.parametrize("kind", ["overturn", "rock"])
+def test_alpha_is_drawn_where_the_rotation_comes_near_it(responses, kind):
+    """alpha = atan(b/h) (0.1 m wide, 0.2 m high: atan(0.5)) on each side the rotation reaches a
+    quarter of it, within the axis limits."""
+    result = responses[kind]
+    alpha = result.summary.alpha
+    assert alpha == pytest.approx(np.arctan(0.5), rel=1e-15)
+    phi = result.history["rotation"]
+    ax = axis(response_figure(result), "record")
+    for side, reach in ((1.0, phi.max()), (-1.0, -phi.min())):
+        drawn = horizontal_lines_at(ax, side * alpha)
+        assert len(drawn) == (1 if reach >= 0.25 * alpha else 0), side
+        if drawn:
+            low, high = ax.get_ylim()
+            assert low < side * alpha < high
+    assert horizontal_lines_at(ax, alpha) or horizontal_lines_at(ax, -alpha)
+
+
+def test_alpha_far_off_the_scale_is_said_not_drawn(responses):
+    result = responses["rockslip"]
+    assert result.summary.max_rotation < 0.25 * result.summary.alpha
+    fig = response_figure(result)
+    ax = axis(fig, "record")
+    assert not horizontal_lines_at(ax, result.summary.alpha) and not horizontal_lines_at(ax, -result.summary.alpha)
+    assert f"±α = ±{result.summary.alpha:.4g} rad off scale" in ax.get_title(loc="right")
+    assert "% of α" in fig._suptitle.get_text()
+
+
+@pytest.mark.parametrize("kind", list(KINDS))
+def test_labels_never_cover_data(responses, kind):
+    """Every text of the figure (titles, notes, legends) lies outside every plotting area."""
+    fig = response_figure(responses[kind], title=kind)
+    canvas = FigureCanvasAgg(fig)
+    canvas.draw()
+    renderer = canvas.get_renderer()
+    areas = [ax.get_window_extent(renderer) for ax in fig.axes]
+    texts_ = [fig._suptitle] + [t for legend in fig.legends for t in legend.get_texts()]
+    for ax in fig.axes:
+        texts_ += list(ax.texts) + [ax.title, ax._left_title, ax._right_title]
+        if ax.get_legend():
+            texts_ += ax.get_legend().get_texts()
+    for text in texts_:
+        if not text.get_text():
+            continue
+        box = text.get_window_extent(renderer)
+        for area in areas:
+            assert not box.overlaps(area), (kind, text.get_text())
+
+
 # --------------------------------------------------------------------------------------------------
 # zoom_window on known events
 # --------------------------------------------------------------------------------------------------
@@ -202,9 +324,11 @@ def test_long_histories_are_reduced_to_an_envelope():
 
 def synthetic(events, *, duration=10.0, overturn=None, status="ok", max_rotation=0.1,
               max_rotation_time=0.0) -> Result:
+    """A result with the event log ``events`` (``(time, from, to)``, cause liftoff, or ``(time,
+    from, to, cause)``) and no history."""
     table = np.zeros(len(events), dtype=EVENT_DTYPE)
-    for row, (time, old, new) in zip(table, events, strict=True):
-        row["time"], row["from"], row["to"], row["cause"] = time, old, new, "liftoff"
+    for row, (time, old, new, *cause) in zip(table, events, strict=True):
+        row["time"], row["from"], row["to"], row["cause"] = time, old, new, (cause or ["liftoff"])[0]
     end = overturn if overturn is not None else duration
     summary = Summary(overturned=overturn is not None, overturn_time=overturn,
                       direction=1 if overturn is not None else None, fall_start_time=None,
@@ -227,15 +351,26 @@ def synthetic(events, *, duration=10.0, overturn=None, status="ok", max_rotation
     # kept within the record
     ([(0.1, "REST", "SLIP"), (0.6, "SLIP", "REST")], {}, (0.0, 0.85)),
     ([(9.5, "REST", "ROCK")], {}, (9.25, 10.0)),
-    # events spread over 16 s: the 5 s around the largest rotation
+    # events spread over 16 s: the episode of the largest rotation, with its margin
     ([(2.0, "REST", "ROCK"), (3.0, "ROCK", "REST"), (17.0, "REST", "ROCK"), (18.0, "ROCK", "REST")],
-     {"duration": 30.0, "max_rotation_time": 10.0}, (7.5, 12.5)),
-    # ... near the end of the record: shifted inside it
-    ([(2.0, "REST", "ROCK"), (29.0, "ROCK", "REST")], {"duration": 30.0, "max_rotation_time": 29.0},
-     (25.0, 30.0)),
-    # overturning after a long time: the 5 s that end just after it
+     {"duration": 30.0, "max_rotation_time": 17.5}, (16.75, 18.25)),
+    # ... episodes less than 1 s apart are one
+    ([(2.0, "REST", "ROCK"), (3.0, "ROCK", "REST"), (15.0, "REST", "SLIP"), (16.0, "SLIP", "REST"),
+      (16.5, "REST", "ROCK"), (18.0, "ROCK", "REST")],
+     {"duration": 30.0, "max_rotation_time": 17.5}, (14.7, 18.3)),
+    # a long rocking episode (slow swings, impacts every 2.2 s): the swing of the largest rotation and
+    # the opposite swings before and after it, whole (from the second impact before the peak to
+    # the second after it), where a fixed 5 s window (12 to 17 s) would cut both
+    ([(2.0, "REST", "ROCK"), (3.0, "ROCK", "REST"), (5.0, "REST", "ROCK")]
+     + [(5.0 + 2.2 * k, "ROCK", "ROCK", "impact") for k in range(1, 10)] + [(26.0, "ROCK", "REST")],
+     {"duration": 30.0, "max_rotation_time": 14.5}, (5 + 2.2 * 3 - 0.66, 5 + 2.2 * 6 + 0.66)),
+    # overturning after a long time: the episode that ends in it
     ([(2.0, "REST", "ROCK"), (3.0, "ROCK", "REST"), (18.0, "REST", "ROCK"), (20.0, "ROCK", "OVERTURNED")],
-     {"duration": 30.0, "overturn": 20.0, "max_rotation_time": 20.0}, (15.25, 20.25)),
+     {"duration": 30.0, "overturn": 20.0, "max_rotation_time": 20.0}, (17.75, 20.25)),
+    # ... after a long rocking episode: from the second impact before it
+    ([(2.0, "REST", "ROCK"), (3.0, "ROCK", "REST"), (5.0, "REST", "ROCK")]
+     + [(5.0 + 2.0 * k, "ROCK", "ROCK", "impact") for k in range(1, 11)] + [(26.0, "ROCK", "OVERTURNED")],
+     {"duration": 30.0, "overturn": 26.0, "max_rotation_time": 26.0}, (22.7, 26.3)),
     # overturning soon
     ([(3.0, "REST", "ROCK"), (4.0, "ROCK", "OVERTURNED")], {"overturn": 4.0}, (2.75, 4.25)),
 ])

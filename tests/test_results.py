@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 from rockslide import results
-from rockslide.core.kernel import HISTORY_COLUMNS
+from rockslide.core.kernel import CAUSE_NAMES, HISTORY_COLUMNS
 from rockslide.core.simulate import EVENT_DTYPE, Model, Settings, Summary, simulate
 from rockslide.errors import OutputError
 from rockslide.results import ResultWriter, StoredResult, read_result, summary_to_json_dict, write_result
@@ -219,7 +219,10 @@ def test_units_compression_and_codes(tmp_path, result):
         f.visititems(has_units)
         assert f["events"].dtype.names == ("time", "from", "to", "cause", "edge", "slip_direction", "impact",
                                            "energy_loss")
-        assert f["events"].dtype["cause"].kind == "S" and f["events"].dtype["edge"] == np.int8
+        assert f["events"].dtype["edge"] == np.int8
+        for name in ("from", "to", "cause", "impact"):          # text, not bytes
+            assert h5py.check_string_dtype(f["events"].dtype[name]).encoding == "utf-8"
+        assert {c.decode() for c in f["events"]["cause"]} <= set(CAUSE_NAMES)
 
 
 def test_root_attributes(tmp_path, result):

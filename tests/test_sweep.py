@@ -18,6 +18,7 @@ import numpy as np
 import pytest
 import yaml
 from click.testing import CliRunner
+from conftest import one_line_error
 
 from rockslide import results, runner
 from rockslide import sweep as sw
@@ -34,7 +35,7 @@ EXAMPLE = REPO / "configs" / "example.yaml"
 EXAMPLE_TEXT = EXAMPLE.read_text().replace("../records/", "")   # copies find the records via --records-dir
 RECORDS = REPO / "records"
 SUMMARY_FIELDS = ("overturned", "overturn_time", "direction", "max_rotation", "max_slip",
-                  "residual_slip", "impacts")
+                  "residual_slip", "impacts", "alpha", "max_rotation_ratio")
 
 
 @pytest.fixture(scope="module", autouse=True)
@@ -56,16 +57,6 @@ def invoke(*args):
 def sweep_args(out: Path, *axes, extra=()):
     return ["sweep", EXAMPLE, *axes, "--records-dir", RECORDS, "--out-dir", out, "--no-progress",
             *extra]
-
-
-def one_line_error(result, *parts):
-    """Exit code 2 and one line on stderr naming each of ``parts``."""
-    lines = result.stderr.splitlines()
-    assert result.exit_code == 2, (result.exit_code, result.output, result.exception)
-    assert len(lines) == 1 and lines[0].startswith("rockslide: error: "), result.stderr
-    for part in parts:
-        assert part in lines[0], f"{part!r} not in {lines[0]!r}"
-    return lines[0]
 
 
 def variables_equal(a: Path, b: Path) -> None:
@@ -104,7 +95,7 @@ def test_units_as_in_case_files():
     assert axis.values == tuple(parse_quantity(f"{g} gal", "acceleration") for g in range(100, 1001, 25))
     assert axis.texts[1] == "125gal"
     assert sw.parse_axis("pga", "0.5 g, 800 gal, 700gal").values == (0.5 * 9.80665, 8.0, 7.0)
-    assert sw.parse_axis("pga", "5, 8").values == (5.0, 8.0)
+    assert sw.parse_axis("pga", "5m/s^2, 8m/s^2").values == (5.0, 8.0)
     assert sw.parse_axis("pga", "1 m/s^2 : 3 m/s^2 : 1 m/s^2").values == (1.0, 2.0, 3.0)
     assert sw.parse_axis("gravity", "9.8 m/s^2, 1g").values == (9.8, 9.80665)
     assert sw.parse_axis("restitution", "0.7, 0.8").values == (0.7, 0.8)
@@ -121,7 +112,10 @@ def test_units_as_in_case_files():
     ("mu", "0.5 gal", "unit"),
     ("mu", "0.5,0.5", "repeats"),
     ("pga", "100gal:1000:25gal", "one unit"),
-    ("pga", "3, 500gal", "a unit on every value or on none"),
+    ("pga", "3, 500gal", "give a unit on every value, got"),
+    ("pga", "5, 8", "5 has no unit (an acceleration needs one): '5 g' is 49.03 m/s^2"),
+    ("pga", "100:1000:25", "100 has no unit"),
+    ("gravity", "9.8", "'9.8 m/s^2' is 0.9993 g"),
     ("pga", "100 furlong", "unknown acceleration unit"),
     ("mu", "0:1000:0.0001", "at most"),
 ])
@@ -138,11 +132,11 @@ def test_bad_axis_specs_are_one_line_errors_naming_the_option(option, spec, expe
     (["--mu", "-0.1,0.5"], ["--mu", "contact.mu_static", "--mu -0.1"]),
     (["--restitution", "0.8,1.2"], ["--restitution", "contact.restitution", "1.2"]),
     (["--slenderness", "0,0.5"], ["--slenderness", "block.width"]),
-    (["--gravity", "-9.8"], ["--gravity", "gravity"]),
+    (["--gravity", "-9.8m/s^2"], ["--gravity", "gravity"]),
     (["--mu", "0.5", "--pga", "700gal,5g"], ["--pga", "ground.scale", "would fly", "--pga 5g"]),
     ([], ["give at least one axis"]),
     (["--mu", "0.5", "--mu-kinetic-ratio", "1.5"], ["--mu-kinetic-ratio", "[0, 1]"]),
-    (["--pga", "7", "--mu-kinetic-ratio", "0.9"], ["--mu-kinetic-ratio", "--mu"]),
+    (["--pga", "7m/s^2", "--mu-kinetic-ratio", "0.9"], ["--mu-kinetic-ratio", "--mu"]),
     (["--mu", "0.5", "--workers", "0"], ["--workers"]),
     (["--mu", "0.5", "--workers", "1", "--scheduler", "tcp://127.0.0.1:1"], ["--workers", "--scheduler"]),
     (["--mu", "0.5", "--chunk-size", "0"], ["--chunk-size"]),
@@ -237,7 +231,7 @@ def test_grid_points_equal_single_runs(example, mixed):
         assert_point_equals_run(plan, variables, index, result.summary)
 
 
-@pytest.mark.parametrize("axes", [["--vertical-factor", "0,0.6"], ["--gravity", "9.7,9.80665"]])
+@pytest.mark.parametrize("axes", [["--vertical-factor", "0,0.6"], ["--gravity", "9.7m/s^2,9.80665m/s^2"]])
 def test_vertical_factor_and_gravity_points_equal_rockslide_run(example, axes, tmp_path):
     """Through the command line both ways: `rockslide sweep` and `rockslide run` on a case file
     written with the point's values."""
@@ -252,7 +246,7 @@ def test_vertical_factor_and_gravity_points_equal_rockslide_run(example, axes, t
         point = point_case(example, plan, index)
         folder = tmp_path / f"p{index}"
         folder.mkdir()
-        data = case_to_dict(point)
+        data = case_to_dict(point, case_file=True)
         data["name"] = f"p{index}"
         (folder / "p.yaml").write_text(yaml.safe_dump(data))
         run = invoke("run", folder / "p.yaml", "--records-dir", RECORDS, "--out-dir", folder, "--no-plot")
@@ -295,7 +289,8 @@ def test_xarray_opens_a_labelled_dataset(swept):
         assert ds["pga"].attrs["long_name"] == "peak horizontal ground acceleration"
         for name, units in (("overturned", "1"), ("overturn_time", "s"), ("direction", "1"),
                             ("max_rotation", "rad"), ("max_slip", "m"), ("residual_slip", "m"),
-                            ("impacts", "1"), ("status", "1"), ("modes", "1")):
+                            ("impacts", "1"), ("status", "1"), ("modes", "1"), ("alpha", "rad"),
+                            ("max_rotation_ratio", "1")):
             assert ds[name].dims == ("mu", "pga"), name
             assert ds[name].attrs["units"] == units and ds[name].attrs["long_name"], name
         assert ds["overturned"].dtype == np.int8 and ds["direction"].dtype == np.int8
@@ -527,3 +522,11 @@ def test_rockslide_plot_redraws_a_sweep_file(swept, tmp_path):
     result = invoke("plot", source, "-o", png)
     assert result.exit_code == 0, result.output
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 20_000
+
+
+@pytest.mark.parametrize("option, value", [("--window", "1:2"), ("--crop", "all"), ("--time-shift", "5 s")])
+def test_options_of_result_figures_are_refused_for_a_sweep_file(swept, tmp_path, option, value):
+    out, _ = swept
+    one_line_error(invoke("plot", out / "example.sweep.h5", option, value, "-o", tmp_path / "x.png"),
+                   f"{option}: applies to result files, not to sweep files")
+    assert not (tmp_path / "x.png").exists()

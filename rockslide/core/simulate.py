@@ -125,6 +125,8 @@ class Summary:
     status: str                       # ok | flight | painleve | chatter
     end_time: float                   # [s] when the computation ended
     energy: dict[str, float] = field(default_factory=dict)   # [J]
+    alpha: float = math.nan           # [rad] atan(b/h): the rotation past which gravity tips the block over
+    max_rotation_ratio: float = math.nan   # max |phi| / alpha: how near overturning (> 1: passed alpha)
 
     @property
     def verdict(self) -> str:
@@ -397,6 +399,8 @@ def summarise(st: np.ndarray, model: Model, record_end: float) -> Summary:
         status=K.STATUS_NAMES[int(st[K.S_STATUS])],
         end_time=float(end_time),
         energy={k: float(v) for k, v in energy.items()},
+        alpha=float(alpha),
+        max_rotation_ratio=float(st[K.S_MAX_THETA]) / alpha,
     )
 
 
