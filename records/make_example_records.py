@@ -3,14 +3,16 @@
     python records/make_example_records.py
 
 They are the project's own data (no third-party record): Kanai-Tajimi / Clough-Penzien filtered
-white noise with a Jennings envelope, seeded, 20 s at 0.01 s, written as PEER AT2 in g. See
-`rockslide/synthetic.py` for the model and `records/README.md` for the files.
+white noise with a Jennings envelope, seeded, at 0.01 s, written as PEER AT2 in g: the example's
+pair (20 s) and the six pairs of the synthetic suite in `suite-synthetic/` (listed by
+`suite-synthetic.yaml`). See `rockslide/synthetic.py` for the model and `records/README.md` for the
+files.
 """
 
 from pathlib import Path
 
 from rockslide.records import write_at2
-from rockslide.synthetic import example_pair
+from rockslide.synthetic import SUITE, example_pair, suite_pair
 
 HERE = Path(__file__).resolve().parent
 
@@ -21,3 +23,12 @@ if __name__ == "__main__":
     write_at2(HERE / "synthetic_kt_v.at2", vertical, 0.01,
               title="rockslide synthetic Kanai-Tajimi record, seed 1996", component="vertical")
     print("wrote", HERE / "synthetic_kt_h.at2", "and", HERE / "synthetic_kt_v.at2")
+    folder = HERE / "suite-synthetic"
+    folder.mkdir(exist_ok=True)
+    for name, (seed, *_) in SUITE.items():
+        horizontal, vertical = suite_pair(name)
+        write_at2(folder / f"{name}_h.at2", horizontal, 0.01,
+                  title=f"rockslide synthetic suite record {name}, seed {seed}", component="horizontal")
+        write_at2(folder / f"{name}_v.at2", vertical, 0.01,
+                  title=f"rockslide synthetic suite record {name}, seed {seed + 100}", component="vertical")
+    print("wrote", len(SUITE), "pairs in", folder)
