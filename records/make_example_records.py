@@ -3,16 +3,28 @@
     python records/make_example_records.py
 
 They are the project's own data (no third-party record): Kanai-Tajimi / Clough-Penzien filtered
-white noise with a Jennings envelope, seeded, 20 s at 0.01 s, written as PEER AT2 in g. See
-`rockslide/synthetic.py` for the model, `rockslide/example.py` for the files (``rockslide example``
-writes the same ones beside the example case) and `records/README.md`.
+white noise with a Jennings envelope, seeded, at 0.01 s, written as PEER AT2 in g: the example's
+pair (20 s; `rockslide/example.py` writes the same files, ``rockslide example``) and the six pairs
+of the synthetic suite in `suite-synthetic/` (listed by `suite-synthetic.yaml`). See
+`rockslide/synthetic.py` for the model and `records/README.md` for the files.
 """
 
 from pathlib import Path
 
 from rockslide.example import write_records
+from rockslide.records import write_at2
+from rockslide.synthetic import SUITE, suite_pair
 
 HERE = Path(__file__).resolve().parent
 
 if __name__ == "__main__":
     print("wrote", " and ".join(str(p) for p in write_records(HERE)))
+    folder = HERE / "suite-synthetic"
+    folder.mkdir(exist_ok=True)
+    for name, (seed, *_) in SUITE.items():
+        horizontal, vertical = suite_pair(name)
+        write_at2(folder / f"{name}_h.at2", horizontal, 0.01,
+                  title=f"rockslide synthetic suite record {name}, seed {seed}", component="horizontal")
+        write_at2(folder / f"{name}_v.at2", vertical, 0.01,
+                  title=f"rockslide synthetic suite record {name}, seed {seed + 100}", component="vertical")
+    print("wrote", len(SUITE), "pairs in", folder)

@@ -45,11 +45,15 @@ __all__ = [
     "RecordSpec",
     "Scale",
     "Solver",
+    "Suite",
+    "SuiteEntry",
     "case_to_dict",
     "case_with",
     "iter_case_keys",
     "load_case",
+    "load_suite",
     "parse_case",
+    "parse_suite",
 ]
 
 # --------------------------------------------------------------------------------------------------
@@ -439,21 +443,26 @@ def load_case(path) -> Case:
         Naming the file when it is missing, unreadable or invalid.
     """
     p = Path(path)
+    text = _read_text(p, "case file")
+    return parse_case(text, source=str(path), base_dir=p.absolute().parent)
+
+
+def _read_text(path: Path, what: str) -> str:
+    """The UTF-8 text of a YAML file (a ``what``: "case file", "suite file"), or a CaseError."""
     source = str(path)
     try:
-        text = p.read_text(encoding="utf-8")
+        return path.read_text(encoding="utf-8")
     except FileNotFoundError:
-        raise CaseError("case file not found", source=source) from None
+        raise CaseError(f"{what} not found", source=source) from None
     except IsADirectoryError:
-        raise CaseError("is a folder, expected a case file (YAML)", source=source) from None
+        raise CaseError(f"is a folder, expected a {what} (YAML)", source=source) from None
     except PermissionError:
-        raise CaseError("cannot read the case file: permission denied", source=source) from None
+        raise CaseError(f"cannot read the {what}: permission denied", source=source) from None
     except UnicodeDecodeError as exc:
-        raise CaseError(f"not UTF-8 text (byte {exc.start}); expected a YAML case file",
+        raise CaseError(f"not UTF-8 text (byte {exc.start}); expected a YAML {what}",
                         source=source) from None
     except OSError as exc:
-        raise CaseError(f"cannot read the case file: {exc.strerror or exc}", source=source) from None
-    return parse_case(text, source=source, base_dir=p.absolute().parent)
+        raise CaseError(f"cannot read the {what}: {exc.strerror or exc}", source=source) from None
 
 
 def parse_case(text: str, *, source: str = "<case>", base_dir: Path | None = None) -> Case:
@@ -996,3 +1005,124 @@ def _check_key_path(key: str, ctx: _Ctx) -> None:
             ctx.fail(".".join([*done, part]), f"unknown key ({_suggest(part, keys)})")
         done.append(part)
         keys = keys[part].get("keys")
+
+
+# --------------------------------------------------------------------------------------------------
+# Record suites (``rockslide fragility --suite``)
+# --------------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class SuiteEntry:
+    """One record of a suite: a horizontal accelerogram, and optionally its vertical companion.
+
+    Parameters
+    ----------
+    name : str
+        The record's name in results (unique in its suite).
+    horizontal : RecordSpec
+        The horizontal record, read like a case's ``ground.horizontal``.
+    vertical : RecordSpec or None
+        Its vertical record, read like ``ground.vertical``.
+    """
+
+    name: str
+    horizontal: RecordSpec
+    vertical: RecordSpec | None = None
+
+
+@dataclass(frozen=True)
+class Suite:
+    """A validated suite of records.
+
+    Parameters
+    ----------
+    entries : tuple of SuiteEntry
+        In the order of the file.
+    source : str
+        The suite file's name as used in messages.
+    base_dir : Path or None
+        The folder record files resolve against first.
+    text : str
+        The suite file's text.
+    """
+
+    entries: tuple
+    source: str = "<suite>"
+    base_dir: Path | None = None
+    text: str = ""
+
+
+#: The keys of one entry of a suite file's ``records`` list (the README's suite reference).
+SUITE_ENTRY_KEYS: dict[str, dict] = {
+    "name": _key("string", "the record's name in results (default: the horizontal file's name "
+                 "without its extension)"),
+    "horizontal": _key("record", "horizontal record: a file name or a mapping, keys as "
+                       "ground.horizontal", required=True, keys=_RECORD_KEYS),
+    "vertical": _key("record", "vertical record, scaled by the same factor: a file name or a "
+                     "mapping, keys as ground.vertical", keys=_RECORD_KEYS),
+}
+
+
+def load_suite(path) -> Suite:
+    """Read and validate a suite file (YAML).
+
+    A suite file is a mapping with one key, ``records``: a list whose items are a horizontal
+    record's file name, or a mapping with :data:`SUITE_ENTRY_KEYS` (each record validated like a
+    case's ``ground.horizontal``).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+
+    Returns
+    -------
+    Suite
+        With ``base_dir`` the file's (absolute) folder.
+
+    Raises
+    ------
+    CaseError
+        Naming the file, the entry (``records[3].horizontal.units``) and what is wrong: a missing
+        or unreadable file, YAML errors, unknown keys, no records, names given twice.
+    """
+    p = Path(path)
+    text = _read_text(p, "suite file")
+    return parse_suite(text, source=str(path), base_dir=p.absolute().parent)
+
+
+def parse_suite(text: str, *, source: str = "<suite>", base_dir: Path | None = None) -> Suite:
+    """Validate the text of a suite file (`load_suite`)."""
+    data = _load_yaml(text, source)
+    ctx = _Ctx(source)
+    example = "records: [{name: kobe, horizontal: {file: kobe.at2}}, ...]"
+    if not isinstance(data, Mapping):
+        ctx.fail(None, f"expected a mapping with the key 'records' (e.g. {example}), got {_show(data)}")
+    for key in data:
+        if key != "records":
+            ctx.fail(_key_text(key), f"unknown key (a suite file has one key, 'records': e.g. {example})")
+    items = data.get("records")
+    if not isinstance(items, list) or not items:
+        ctx.fail("records", f"expected a non-empty list of records (e.g. {example}), got {_show(items)}")
+    entries, seen = [], {}
+    for i, item in enumerate(items):
+        path = f"records[{i}]"
+        if isinstance(item, str):
+            item = {"horizontal": item}
+        raw = _read_mapping(item, SUITE_ENTRY_KEYS, path, ctx, "a file name or a mapping")
+        horizontal = RecordSpec(**raw["horizontal"])
+        vertical = None if raw["vertical"] is None else RecordSpec(**raw["vertical"])
+        name = raw["name"] if raw["name"] is not None else _file_stem(horizontal.file)
+        if name in seen:
+            ctx.fail(f"{path}.name" if raw["name"] is not None else path,
+                     f"the name {name!r} is also records[{seen[name]}]'s; give each record its own "
+                     "'name'")
+        seen[name] = i
+        entries.append(SuiteEntry(name=name, horizontal=horizontal, vertical=vertical))
+    return Suite(entries=tuple(entries), source=source, base_dir=base_dir, text=text)
+
+
+def _file_stem(name: str) -> str:
+    """A file's name without its folder and last extension (POSIX or Windows style)."""
+    base = str(name).replace("\\", "/").rstrip("/").rsplit("/", 1)[-1]
+    return base.rsplit(".", 1)[0] if "." in base.strip(".") else base

@@ -211,13 +211,14 @@ def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, robustness
                    "moves; all: the whole record).")
 @dpi_option("figure (PNG)")
 def plot(result_file, output, time_shift, window, crop, dpi):
-    """Redraw the figure of a result file or a sweep file (replaces it).
+    """Redraw the figure of a result, sweep or fragility file (replaces it).
 
     \b
     Example:
         rockslide plot out/example.h5
         rockslide plot out/example.h5 --window 6.6:7.2 -o out/example-impact.pdf
         rockslide plot out/example.sweep.h5
+        rockslide plot out/example.fragility.h5
     """
     from . import results
     from .units import parse_quantity
@@ -226,7 +227,8 @@ def plot(result_file, output, time_shift, window, crop, dpi):
     zoom = _time_range(window, "--window", {"auto": "auto", "none": None})
     span = _time_range(crop, "--crop", {"auto": "auto", "all": None})
     png = output if output is not None else Path(result_file).with_suffix(".png")
-    if results.file_format(result_file) == results.SWEEP_FORMAT:
+    kind = results.file_format(result_file)
+    if kind == results.SWEEP_FORMAT:
         from .plots import save_figure
         from .sweep import stored_figure
         given = [option for option, value, default in (("--time-shift", shift, 0.0), ("--window", zoom, "auto"),
@@ -234,6 +236,15 @@ def plot(result_file, output, time_shift, window, crop, dpi):
         if given:
             raise CaseError("applies to result files, not to sweep files", source=given[0])
         save_figure(stored_figure(results.read_sweep(result_file)), png, overwrite=True, dpi=dpi)
+    elif kind == results.FRAGILITY_FORMAT:
+        from .fragility import stored_figure as stored_fragility_figure
+        from .plots import save_figure
+        given = [option for option, value, default in (("--time-shift", shift, 0.0), ("--window", zoom, "auto"),
+                                                       ("--crop", span, "auto")) if value != default]
+        if given:
+            raise CaseError("applies to result files, not to fragility files", source=given[0])
+        stored = results.read_dataset(result_file, format=results.FRAGILITY_FORMAT)
+        save_figure(stored_fragility_figure(stored), png, overwrite=True, dpi=dpi)
     else:
         _draw(results.read_result(result_file), png, overwrite=True, time_shift=shift, zoom=zoom, crop=span,
               dpi=dpi)
@@ -461,12 +472,9 @@ def sweep(case_file, mu, pga, vertical_factor, restitution, slenderness, gravity
     Example:
         rockslide sweep example/example.yaml --mu 0.30:0.70:0.01 --pga 100gal:1000gal:25gal
     """
-    from tqdm import tqdm
-
     from . import records, results
     from . import sweep as sw
     from .case import load_case
-    from .core import batch
     from .plots import save_figure
 
     ctx = click.get_current_context()
@@ -484,46 +492,15 @@ def sweep(case_file, mu, pga, vertical_factor, restitution, slenderness, gravity
         raise OutputError(f"{png_path} exists (use --overwrite to replace it)")
     plan = sw.plan_sweep(case, axes, records_dir=records.records_dir(records_dir),
                          mu_kinetic_ratio=mu_kinetic_ratio, chunk_size=chunk_size)
-    store = sw.ChunkStore.beside(h5_path, plan.key)
-    for other in store.others():
-        click.echo(f"  note: {other} holds chunks of another sweep definition (not used; delete it "
-                   "to free the space)")
-    missing = sw.missing_chunks(plan, store)
-    reused = plan.n_chunks - len(missing)
-    reused_cases = plan.n_cases - sum(plan.chunk_indices(c).size for c in missing)
-    where = f"on the dask scheduler {scheduler}" if scheduler else "on this machine"
-    click.echo(f"sweep {case.name}: {plan.describe()} in {plan.n_chunks} chunks, {where}")
-    if reused:
-        click.echo(f"  reused {reused} of {plan.n_chunks} chunks ({reused_cases} cases) from {store.folder}")
-    if not scheduler and missing:
-        compiling = time.perf_counter()
-        batch.warm_up(parallel=True)
-        if time.perf_counter() - compiling > 3.0:
-            click.echo(f"  compiled the batch kernel in {time.perf_counter() - compiling:.0f} s (once after "
-                       "each change of the kernel)")
-    computing = time.perf_counter()
-    try:
-        # disable=None: tqdm draws only on a terminal, so that no frames land in log files
-        with tqdm(total=plan.n_cases, initial=reused_cases, unit="case", file=sys.stderr,
-                  disable=True if no_progress else None, dynamic_ncols=True, desc=case.name,
-                  smoothing=0.1) as bar:
-            sw.compute(plan, store, missing, workers=workers, scheduler=scheduler, progress=bar.update)
-    except KeyboardInterrupt as exc:
-        if isinstance(exc, _Terminated):
-            raise
-        kept = store.count()
-        click.echo(f"rockslide: interrupted: {kept} of {plan.n_chunks} chunks are kept in {store.folder}; "
-                   "the same command resumes from them", err=True)
-        ctx.exit(EXIT_INTERRUPTED)
-    computed = time.perf_counter() - computing
-    states = sw.collect(plan, store)
+    store, states, n_new, computed = _compute_plan(
+        ctx, plan, h5_path, what="sweep", description=plan.describe(), label=case.name, unit="case",
+        workers=workers, scheduler=scheduler, no_progress=no_progress)
     variables = sw.sweep_variables(plan, states)
     results.write_sweep(h5_path, sw.coordinates(plan), variables,
                         attrs=sw.root_attributes(plan, _command_line(ctx, case_file)), overwrite=overwrite)
     if not no_plot:
         save_figure(sw.figure(plan, variables), png_path, overwrite=overwrite, dpi=dpi)
     store.remove()
-    n_new = plan.n_cases - reused_cases
     over = int(variables["overturned"][0].sum())
     outside = int((variables["status"][0] != 0).sum())
     rate = f" ({n_new / computed:.0f} cases/s)" if n_new and computed > 0 else ""
@@ -533,14 +510,167 @@ def sweep(case_file, mu, pga, vertical_factor, restitution, slenderness, gravity
     click.echo(f"  wrote {written} in {time.perf_counter() - started:.1f} s")
 
 
+@main.command()
+@click.argument("case_file", type=click.Path(path_type=Path))
+@click.option("--suite", "suite_spec", required=True, metavar="SUITE",
+              help="The records: a suite file (YAML: records: [{name:, horizontal:, vertical:}, ...]), a "
+                   "folder of horizontal records, or a quoted glob of them ('records/*.csv').")
+@click.option("--im", "im_text", default="pga", show_default=True, metavar="IM",
+              help="Intensity measure each record is scaled to: pga, pgv, pga_rocking (PGA / (g tan "
+                   "alpha)) or sa(T) (5 %-damped spectral acceleration, e.g. 'sa(0.5s)').")
+@click.option("--levels", "levels_text", required=True, metavar="SPEC",
+              help="Levels of the IM: START:STOP:STEP or a comma list, with units as in case files, "
+                   "e.g. 0.1g:1.5g:0.1g (pgv: 10cm/s:100cm/s:10cm/s; pga_rocking: no unit).")
+@click.option("--damage", "damage_texts", multiple=True, metavar="STATE",
+              help="A damage state besides overturning (repeat for more): 'rotation>0.5alpha', "
+                   "'rotation>10deg', 'slip>50mm', 'residual>10mm'.")
+@click.option("--units", default=None, metavar="UNIT",
+              help="Acceleration unit of a folder's or glob's record files that do not state theirs "
+                   "(g, gal, m/s^2).")
+@click.option("--bootstrap", "resamples", type=click.IntRange(0, 100_000), default=1000, show_default=True,
+              metavar="N", help="Bootstrap resamples of the records for the confidence intervals (0: none).")
+@records_dir_option
+@click.option("--out-dir", type=click.Path(file_okay=False, path_type=Path), default=None,
+              help="Output folder (default: the case's output.dir).")
+@click.option("--json", "as_json", is_flag=True, help="Print the fits as one JSON object on stdout.")
+@click.option("--overwrite", is_flag=True, help="Replace an existing result of this analysis.")
+@click.option("--no-plot", is_flag=True, help="Do not draw the PNG figure.")
+@click.option("--workers", type=int, default=None, metavar="N",
+              help="numba threads for a local run (default: all cores).")
+@click.option("--scheduler", default=None, metavar="ADDRESS",
+              help="Compute the chunks on this dask.distributed scheduler (e.g. tcp://10.0.0.5:8786).")
+@click.option("--chunk-size", type=int, default=None, metavar="N",
+              help="Runs per chunk (default: about 1/100 of them, 4 to 256); part of the definition.")
+@click.option("--no-progress", is_flag=True, help="No progress bar on stderr.")
+@dpi_option("figure (PNG)")
+def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, resamples, records_dir,
+              out_dir, as_json, overwrite, no_plot, workers, scheduler, chunk_size, no_progress, dpi):
+    """Fragility curves of a block over a record suite scaled to levels of an intensity measure:
+    CASE_FILE (YAML) -> OUT/NAME.fragility.h5 and OUT/NAME.fragility.png.
+
+    Every record of the suite is scaled (horizontal and vertical by one factor) so that its
+    intensity measure equals each level, and the case file's block is run under it with the
+    compiled kernel, as 'rockslide sweep' runs its grids (all cores or a dask cluster, resumable
+    after Ctrl-C). Lognormal fragility curves are fitted per damage state by maximum likelihood
+    over the stripes, with bootstrap confidence intervals over the records, and by the method of
+    moments on each record's first exceedance. Runs that leave the model (flight, Painleve) are
+    counted and left out of the fits.
+
+    \b
+    Example:
+        rockslide fragility configs/example.yaml --suite records/suite-synthetic.yaml --levels 0.1g:1.5g:0.1g
+        rockslide fragility configs/example.yaml --suite ../shared/records/suite-slammer --units g \\
+            --im 'sa(0.3s)' --levels 0.25g:4g:0.25g --damage 'rotation>0.5alpha' --damage 'slip>50mm' --json
+    """
+    from . import fragility as fr
+    from . import records, results
+    from .case import load_case
+    from .plots import save_figure
+
+    ctx = click.get_current_context()
+    started = time.perf_counter()
+    case = load_case(case_file)
+    im = fr.parse_im(im_text)
+    levels = fr.parse_levels(levels_text, im)
+    states = fr.damage_states(damage_texts)
+    if workers is not None and scheduler:
+        raise CaseError("sets the local threads; with --scheduler the cluster's workers compute",
+                        source="--workers")
+    suite = fr.suite_from(suite_spec, units=units)
+    fplan = fr.plan_fragility(case, suite, im, levels, records_dir=records.records_dir(records_dir),
+                              chunk_size=chunk_size)
+    folder = Path(out_dir) if out_dir is not None else Path(case.output.dir)
+    h5_path = folder / f"{case.name}.fragility.h5"
+    png_path = folder / f"{case.name}.fragility.png"
+    results.check_destination(h5_path, overwrite=overwrite)              # input errors first, then outputs
+    if not no_plot and not overwrite and (png_path.exists() or png_path.is_symlink()):
+        raise OutputError(f"{png_path} exists (use --overwrite to replace it)")
+    plan = fplan.plan
+    store, final_states, n_new, computed = _compute_plan(
+        ctx, plan, h5_path, what="fragility", description=fplan.describe(), label=case.name, unit="run",
+        workers=workers, scheduler=scheduler, no_progress=no_progress, err=as_json)
+    analysis = fr.analyse(fplan, final_states, states, resamples=resamples)
+    coords, variables, attrs = fr.dataset(fplan, analysis, _command_line(ctx, case_file))
+    results.write_dataset(h5_path, coords, variables, format=results.FRAGILITY_FORMAT, attrs=attrs,
+                          overwrite=overwrite)
+    if not no_plot:
+        save_figure(fr.figure(fplan, analysis), png_path, overwrite=overwrite, dpi=dpi)
+    store.remove()
+    elapsed = time.perf_counter() - started
+    if as_json:
+        payload = {**fr.json_summary(fplan, analysis),
+                   "files": {"hdf5": str(h5_path), "png": None if no_plot else str(png_path)},
+                   "elapsed_s": round(elapsed, 3)}
+        click.echo(json.dumps(payload, allow_nan=False, default=_json_default))
+        return
+    outside = int((analysis.variables["status"][0] != 0).sum())
+    rate = f" ({n_new / computed:.0f} runs/s)" if n_new and computed > 0 else ""
+    click.echo(f"  computed {n_new} runs in {computed:.1f} s{rate}; {outside} of {plan.n_cases} outside the "
+               "model (left out of the fits)")
+    for state, fit in zip(analysis.states, analysis.fits, strict=True):
+        click.echo("  " + fr.describe_fit(state, fit, im))
+    written = f"{h5_path}" + ("" if no_plot else f" and {png_path}")
+    click.echo(f"  wrote {written} in {elapsed:.1f} s")
+
+
+def _compute_plan(ctx, plan, h5_path, *, what, description, label, unit, workers, scheduler, no_progress,
+                  err=False):
+    """Compute what a sweep plan (`sweep.Plan`) still misses, with the chunks kept beside ``h5_path``
+    (`sweep.ChunkStore`): say what is reused, compile the kernel, show a progress bar, and on
+    Ctrl-C keep the finished chunks and exit 130. ``what`` (``sweep``, ``fragility``), ``label``
+    (the case's name) and ``description`` head the messages, which go to stderr with ``err``.
+
+    Returns ``(store, final states, cases computed now, seconds computing)``.
+    """
+    from tqdm import tqdm
+
+    from . import sweep as sw
+    from .core import batch
+
+    store = sw.ChunkStore.beside(h5_path, plan.key)
+    for other in store.others():
+        click.echo(f"  note: {other} holds chunks of another {what} definition (not used; delete it "
+                   "to free the space)", err=err)
+    missing = sw.missing_chunks(plan, store)
+    reused = plan.n_chunks - len(missing)
+    reused_cases = plan.n_cases - sum(plan.chunk_indices(c).size for c in missing)
+    where = f"on the dask scheduler {scheduler}" if scheduler else "on this machine"
+    click.echo(f"{what} {label}: {description} in {plan.n_chunks} chunks, {where}", err=err)
+    if reused:
+        click.echo(f"  reused {reused} of {plan.n_chunks} chunks ({reused_cases} {unit}s) from {store.folder}",
+                   err=err)
+    if not scheduler and missing:
+        compiling = time.perf_counter()
+        batch.warm_up(parallel=True)
+        if time.perf_counter() - compiling > 3.0:
+            click.echo(f"  compiled the batch kernel in {time.perf_counter() - compiling:.0f} s (once after "
+                       "each change of the kernel)", err=err)
+    computing = time.perf_counter()
+    try:
+        # disable=None: tqdm draws only on a terminal, so that no frames land in log files
+        with tqdm(total=plan.n_cases, initial=reused_cases, unit=unit, file=sys.stderr,
+                  disable=True if no_progress else None, dynamic_ncols=True, desc=label, smoothing=0.1) as bar:
+            sw.compute(plan, store, missing, workers=workers, scheduler=scheduler, progress=bar.update)
+    except KeyboardInterrupt as exc:
+        if isinstance(exc, _Terminated):
+            raise
+        kept = store.count()
+        click.echo(f"rockslide: interrupted: {kept} of {plan.n_chunks} chunks are kept in {store.folder}; "
+                   "the same command resumes from them", err=True)
+        ctx.exit(EXIT_INTERRUPTED)
+    computed = time.perf_counter() - computing
+    return store, sw.collect(plan, store), plan.n_cases - reused_cases, computed
+
+
 def _command_line(ctx, case_file) -> str:
-    """The sweep's command line: the axes in the order given, then the other options given."""
+    """A sweep's or fragility analysis's command line: the sweep's axes in the order given, then the
+    other options given."""
     import shlex
 
     from click.core import ParameterSource
 
     axes = ctx.meta.get("rockslide.sweep.axes", [])
-    words = ["rockslide", "sweep", str(case_file)]
+    words = ["rockslide", ctx.command.name, str(case_file)]
     for name, text in axes:
         words += [f"--{name.replace('_', '-')}", text]
     for param in ctx.command.params:
@@ -551,6 +681,9 @@ def _command_line(ctx, case_file) -> str:
         value = ctx.params.get(param.name)
         if param.is_flag:
             words += [param.opts[0]] if value else []
+        elif param.multiple:
+            for item in value or ():
+                words += [param.opts[0], str(item)]
         elif value is not None:
             words += [param.opts[0], str(value)]
     return shlex.join(words)

@@ -778,6 +778,65 @@ def _short(value) -> str:
 
 
 # --------------------------------------------------------------------------------------------------
+# Fragility curves
+# --------------------------------------------------------------------------------------------------
+
+FRAGILITY_COLOURS = ("#3a3a3a", "#1f4e9c", "#c0392b", "#2e8b57", "#8e44ad", "#d35400", "#16a085")
+
+
+def fragility_figure(levels, grid, curves, *, xlabel: str, confidence: float, title: str = "") -> Figure:
+    """Fragility curves: the observed fraction of each stripe, the fitted curve and its band.
+
+    Parameters
+    ----------
+    levels : array_like
+        The stripes' intensity levels, in the unit shown.
+    grid : array_like
+        Intensities the curves are drawn at, in the unit shown.
+    curves : list of dict
+        One per damage state: ``label`` (legend text), ``fraction`` (observed fraction per level,
+        NaN where no run counts), and optionally ``fitted`` (the maximum-likelihood curve on
+        ``grid``), ``band`` (``[2, grid]``: lower and upper bound of the confidence band),
+        ``moments`` (the method-of-moments curve on ``grid``).
+    xlabel : str
+        The intensity measure and its unit.
+    confidence : float
+        Level of the band, for the legend.
+    title : str
+    """
+    fig = Figure(figsize=(9.0, 6.0), dpi=DPI, layout="constrained")
+    ax = fig.subplots()
+    levels, grid = np.asarray(levels, dtype=float), np.asarray(grid, dtype=float)
+    for i, curve in enumerate(curves):
+        colour = FRAGILITY_COLOURS[i % len(FRAGILITY_COLOURS)]
+        if curve.get("band") is not None:
+            ax.fill_between(grid, curve["band"][0], curve["band"][1], color=colour, alpha=0.15, lw=0)
+        if curve.get("fitted") is not None:
+            ax.plot(grid, curve["fitted"], color=colour, lw=2.0)
+        if curve.get("moments") is not None:
+            ax.plot(grid, curve["moments"], color=colour, lw=1.0, ls="--")
+        ax.plot(levels, curve["fraction"], "o", color=colour, ms=6, mfc="white" if curve.get("fitted") is None
+                else colour, label=curve["label"])
+    handles, labels = ax.get_legend_handles_labels()
+    for key, handle, label in (
+            ("fitted", Line2D([], [], color="0.3", lw=2.0), "maximum-likelihood lognormal fit"),
+            ("moments", Line2D([], [], color="0.3", lw=1.0, ls="--"), "method of moments (first exceedances)"),
+            ("band", Patch(facecolor="0.3", alpha=0.15), f"{100 * confidence:g} % bootstrap band over records")):
+        if any(curve.get(key) is not None for curve in curves):
+            handles.append(handle)
+            labels.append(label)
+    ax.legend(handles, labels, loc="upper left", fontsize=8, frameon=False)
+    ax.set_xlim(0.0, float(grid[-1]))
+    ax.set_ylim(-0.02, 1.02)
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel("probability of reaching the damage state")
+    ax.grid(True, color="0.9")
+    if title:
+        ax.set_title(title, fontsize=11)
+    return fig
+
+
+# --------------------------------------------------------------------------------------------------
 # Saving
 # --------------------------------------------------------------------------------------------------
 
@@ -807,4 +866,4 @@ def save_figure(fig: Figure, path, *, overwrite: bool = False, dpi: float | None
 
 
 __all__ = ["response_figure", "save_figure", "zoom_window", "state_segments", "sweep_figure",
-           "sweep_category", "SWEEP_CATEGORIES"]
+           "sweep_category", "SWEEP_CATEGORIES", "fragility_figure"]

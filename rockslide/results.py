@@ -645,6 +645,14 @@ def _unflatten(flat: dict) -> dict:
 
 SWEEP_FORMAT = "rockslide-sweep"
 SWEEP_FORMAT_VERSION = 1
+FRAGILITY_FORMAT = "rockslide-fragility"
+FRAGILITY_FORMAT_VERSION = 1
+#: The ``format`` of each kind of rockslide file and its version (`file_format`).
+FORMATS = {FORMAT: FORMAT_VERSION, SWEEP_FORMAT: SWEEP_FORMAT_VERSION,
+           FRAGILITY_FORMAT: FRAGILITY_FORMAT_VERSION}
+#: What messages call each kind of file, and what it is a "rockslide ..." of; its name's ending.
+_FORMAT_WHAT = {SWEEP_FORMAT: ("sweep file", "sweep", ".sweep.h5"),
+                FRAGILITY_FORMAT: ("fragility file", "fragility analysis", ".fragility.h5")}
 
 
 @dataclass
@@ -666,15 +674,30 @@ class StoredSweep:
     attrs: dict
 
 
+@dataclass
+class StoredDataset:
+    """A netCDF-4 style file read back (`read_dataset`).
+
+    Attributes
+    ----------
+    coords : list of (str, numpy.ndarray, dict)
+        The dimensions in order: name, coordinate values (strings as ``str``), attributes.
+    variables : dict
+        ``name -> (dimension names, array, attributes)``.
+    attrs : dict
+        Root attributes as plain Python values.
+    """
+
+    coords: list
+    variables: dict
+    attrs: dict
+
+
 def write_sweep(path, coords, variables, *, attrs: dict | None = None, overwrite: bool = False) -> Path:
     """Write a sweep's results on its grid to the HDF5 file ``path``, atomically.
 
-    The layout follows the netCDF-4 data model, so that ``xarray.open_dataset(path,
-    engine="h5netcdf")`` (or netCDF tools) read a labelled dataset: each axis is a 1-D float64
-    dataset at the root made an HDF5 dimension scale (with ``units``, ``long_name`` and
-    ``_Netcdf4Dimid``), and each variable is a root dataset whose dimensions are attached to the
-    axes in order. Root attributes: ``format`` = "rockslide-sweep", ``format_version``,
-    ``created``, the `versions`, then ``attrs``.
+    `write_dataset` with every variable on every axis, in order, and ``format`` =
+    "rockslide-sweep".
 
     Parameters
     ----------
@@ -700,15 +723,59 @@ def write_sweep(path, coords, variables, *, attrs: dict | None = None, overwrite
     ValueError
         A variable's shape is not the grid's, or a name is used twice.
     """
+    dims = tuple(str(name) for name, _, _ in coords)
+    return write_dataset(path, coords, {name: (dims, values, a) for name, (values, a) in variables.items()},
+                         format=SWEEP_FORMAT, attrs=attrs, overwrite=overwrite)
+
+
+def write_dataset(path, coords, variables, *, format: str, attrs: dict | None = None,
+                  overwrite: bool = False) -> Path:
+    """Write labelled arrays to the HDF5 file ``path`` in the netCDF-4 data model, atomically.
+
+    ``xarray.open_dataset(path, engine="h5netcdf")`` (or netCDF tools) read a labelled dataset:
+    each dimension is a 1-D dataset at the root (float64, or variable-length UTF-8 strings: netCDF's
+    ``string``) made an HDF5 dimension scale (with its attributes and ``_Netcdf4Dimid``), and each
+    variable is a root dataset whose dimensions are attached to those scales in order. Root
+    attributes: ``format``, ``format_version`` (from :data:`FORMATS`), ``created``, the
+    `versions`, then ``attrs``. Written to a temporary file in the folder, then renamed.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file; its folder is created if missing.
+    coords : sequence of (str, array_like, dict)
+        The dimensions in order: name, coordinate values (1-D numbers or strings), attributes.
+    variables : mapping of str to (tuple of str, array_like, dict)
+        Each variable's dimension names (a subset of ``coords``, in any order; ``()`` for a
+        scalar), values shaped accordingly (numbers or strings) and attributes.
+    format : str
+        A key of :data:`FORMATS`.
+    attrs : dict, optional
+        More root attributes (scalars, strings or 1-D numeric arrays).
+    overwrite : bool
+        Replace an existing file.
+
+    Raises
+    ------
+    OutputError
+        The file exists (without ``overwrite``) or cannot be written.
+    ValueError
+        A variable's shape does not match its dimensions, a dimension is unknown, or a name is
+        used twice.
+    """
     path = check_destination(path, overwrite=overwrite)
-    coords = [(str(name), np.asarray(values, dtype=np.float64), dict(a)) for name, values, a in coords]
-    shape = tuple(values.size for _, values, _ in coords)
+    coords = [(str(name), _column(values), dict(a)) for name, values, a in coords]
+    sizes = {name: values.size for name, values, _ in coords}
     names = [name for name, _, _ in coords] + list(variables)
     if len(set(names)) != len(names):
         raise ValueError(f"names must be unique, got {names}")
-    for name, (values, _) in variables.items():
-        if np.shape(values) != shape:
-            raise ValueError(f"variable {name!r} has shape {np.shape(values)}, the grid {shape}")
+    for name, (dims, values, _) in variables.items():
+        unknown = [d for d in dims if d not in sizes]
+        if unknown:
+            raise ValueError(f"variable {name!r} has unknown dimensions {unknown}")
+        if np.shape(values) != tuple(sizes[d] for d in dims):
+            raise ValueError(f"variable {name!r} has shape {np.shape(values)}, its dimensions {dims} "
+                             f"{tuple(sizes[d] for d in dims)}")
     tmp = temporary_path(path)
     try:
         try:
@@ -718,34 +785,34 @@ def write_sweep(path, coords, variables, *, attrs: dict | None = None, overwrite
                               source=str(path.parent)) from None
         with f:
             root = f.attrs
-            root["format"] = SWEEP_FORMAT
-            root["format_version"] = SWEEP_FORMAT_VERSION
+            root["format"] = format
+            root["format_version"] = FORMATS[format]
             root["created"] = datetime.now(timezone.utc).isoformat(timespec="seconds")
             for key, value in {**versions(), **(attrs or {})}.items():
                 root[key] = _attr_value(value)
-            scales = []
+            scales = {}
             for i, (name, values, a) in enumerate(coords):
                 ds = f.create_dataset(name, data=values)
                 for key, value in a.items():
                     ds.attrs[key] = _attr_value(value)
                 ds.make_scale(name)
                 ds.attrs["_Netcdf4Dimid"] = np.int32(i)
-                scales.append(ds)
-            for name, (values, a) in variables.items():
-                values = np.asarray(values)
+                scales[name] = ds
+            for name, (dims, values, a) in variables.items():
+                values = _column(values) if np.ndim(values) == 1 else _array(values)
                 options = {"chunks": True, **_COMPRESSION} if values.size > 65536 else {}
                 ds = f.create_dataset(name, data=values, **options)
                 for key, value in a.items():
                     ds.attrs[key] = value if isinstance(value, np.ndarray) else _attr_value(value)
-                for i, scale in enumerate(scales):
-                    ds.dims[i].attach_scale(scale)
+                for i, dim in enumerate(dims):
+                    ds.dims[i].attach_scale(scales[dim])
             f.flush()
     except OutputError:
         remove_quietly(tmp)
         raise
     except OSError as exc:
         remove_quietly(tmp)
-        raise OutputError(f"cannot write the sweep file ({_reason(exc)})", source=str(path)) from None
+        raise OutputError(f"cannot write the {_what(format)} ({_reason(exc)})", source=str(path)) from None
     except BaseException:
         remove_quietly(tmp)
         raise
@@ -753,15 +820,33 @@ def write_sweep(path, coords, variables, *, attrs: dict | None = None, overwrite
     return path
 
 
+def _array(values) -> np.ndarray:
+    """Numbers as they are; strings as HDF5 variable-length UTF-8 (netCDF-4 ``string``)."""
+    values = np.asarray(values)
+    if values.dtype.kind in "USO":
+        return np.asarray(values, dtype=object).astype(h5py.string_dtype("utf-8"))
+    return values
+
+
+def _column(values) -> np.ndarray:
+    """A coordinate: float64 numbers, or strings."""
+    values = np.asarray(values)
+    return _array(values) if values.dtype.kind in "USO" else np.asarray(values, dtype=np.float64)
+
+
+def _what(format: str) -> str:
+    return _FORMAT_WHAT.get(format, ("file", "file", ""))[0]
+
+
 def file_format(path) -> str | None:
-    """The ``format`` attribute of a rockslide HDF5 file (``"rockslide-result"`` or
-    ``"rockslide-sweep"``), or None if the file cannot be read as one."""
+    """The ``format`` attribute of a rockslide HDF5 file (a key of :data:`FORMATS`: result, sweep or
+    fragility file), or None if the file cannot be read as one."""
     try:
         with h5py.File(path, "r") as f:
             value = _plain(f.attrs.get("format"))
     except OSError:
         return None
-    return value if value in (FORMAT, SWEEP_FORMAT) else None
+    return value if value in FORMATS else None
 
 
 def read_sweep(path) -> StoredSweep:
@@ -772,30 +857,56 @@ def read_sweep(path) -> StoredSweep:
     OutputError
         The file is missing, not HDF5, or not a rockslide sweep (of a known version).
     """
+    stored = read_dataset(path, format=SWEEP_FORMAT)
+    return StoredSweep(coords=stored.coords,
+                       variables={name: (values, a) for name, (_, values, a) in stored.variables.items()},
+                       attrs=stored.attrs)
+
+
+def read_dataset(path, *, format: str) -> StoredDataset:
+    """Read a file written by `write_dataset` with ``format`` (a key of :data:`FORMATS`).
+
+    Raises
+    ------
+    OutputError
+        The file is missing, not HDF5, or not of that format (and a known version).
+    """
+    what, short, suffix = _FORMAT_WHAT.get(format, ("file", "file", ""))
     source = str(path)
     path = Path(path)
     if not path.is_file():
-        raise OutputError("sweep file not found" if not path.exists() else "is a folder, expected a "
-                          "sweep file (.sweep.h5)", source=source)
+        raise OutputError(f"{what} not found" if not path.exists() else f"is a folder, expected a "
+                          f"{what} ({suffix})", source=source)
     try:
         f = h5py.File(path, "r")
     except OSError as exc:
-        raise OutputError(f"cannot read as a rockslide sweep ({_reason(exc)})", source=source) from None
+        raise OutputError(f"cannot read as a rockslide {short} ({_reason(exc)})", source=source) from None
     with f:
-        if _plain(f.attrs.get("format")) != SWEEP_FORMAT:
-            raise OutputError(f"not a rockslide sweep (format is not {SWEEP_FORMAT!r})", source=source)
-        if _plain(f.attrs.get("format_version")) != SWEEP_FORMAT_VERSION:
-            raise OutputError(f"sweep format version {_plain(f.attrs.get('format_version'))!r} is "
-                              f"not supported (this rockslide reads {SWEEP_FORMAT_VERSION})",
+        if _plain(f.attrs.get("format")) != format:
+            raise OutputError(f"not a rockslide {short} (format is not {format!r})", source=source)
+        if _plain(f.attrs.get("format_version")) != FORMATS[format]:
+            raise OutputError(f"{short} format version {_plain(f.attrs.get('format_version'))!r} is "
+                              f"not supported (this rockslide reads {FORMATS[format]})",
                               source=source)
         scales = {name: ds for name, ds in f.items()
                   if isinstance(ds, h5py.Dataset) and ds.is_scale}
         order = sorted(scales, key=lambda n: int(scales[n].attrs.get("_Netcdf4Dimid", 0)))
-        coords = [(name, scales[name][()], _dataset_attrs(scales[name])) for name in order]
-        variables = {name: (ds[()], _dataset_attrs(ds)) for name, ds in f.items()
-                     if isinstance(ds, h5py.Dataset) and name not in scales}
+        coords = [(name, _values(scales[name]), _dataset_attrs(scales[name])) for name in order]
+        variables = {name: (tuple(_dim_name(dim) for dim in ds.dims), _values(ds), _dataset_attrs(ds))
+                     for name, ds in f.items() if isinstance(ds, h5py.Dataset) and name not in scales}
         attrs = {key: _plain(value) for key, value in f.attrs.items()}
-    return StoredSweep(coords=coords, variables=variables, attrs=attrs)
+    return StoredDataset(coords=coords, variables=variables, attrs=attrs)
+
+
+def _values(ds) -> np.ndarray:
+    """A dataset's values; strings as ``str``."""
+    if h5py.check_string_dtype(ds.dtype) is not None:
+        return ds.asstr()[()]
+    return ds[()]
+
+
+def _dim_name(dim) -> str:
+    return dim[0].name.rsplit("/", 1)[-1] if len(dim) else ""
 
 
 def _dataset_attrs(ds) -> dict:

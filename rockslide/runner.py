@@ -75,13 +75,10 @@ def settings_for(case: Case, *, history: bool = True, energy: bool = True) -> Se
 
 
 def check_against_ground(case: Case, ground: rec.GroundMotion) -> None:
-    """Checks that need the records: the step is not coarser than the record's sampling, and the
-    scaled vertical motion never lifts the block off the ground (``g + av > 0``, model.md's 'no free
-    flight'), reported before any computation."""
-    if case.solver.dt > ground.dt * (1.0 + 1e-9):
-        raise CaseError(f"dt = {case.solver.dt:g} s is larger than the record's sampling step "
-                        f"{ground.dt:g} s; expected dt <= {ground.dt:g} s",
-                        source=case.source, field="solver.dt")
+    """Checks that need the records: the step is not coarser than the record's sampling
+    (`check_step`), and the scaled vertical motion never lifts the block off the ground (``g + av >
+    0``, model.md's 'no free flight'), reported before any computation."""
+    check_step(case, ground)
     if ground.vertical.size:
         lowest = float(np.min(ground.vertical))
         if case.gravity + lowest <= 0.0:
@@ -91,6 +88,14 @@ def check_against_ground(case: Case, ground: rec.GroundMotion) -> None:
                 f"t = {ground.start + i * ground.dt:.3f} s, so g + av = {case.gravity + lowest:.3f} m/s^2 "
                 f"<= 0 (the block would fly, outside the model); lower ground.scale",
                 source=case.source, field="ground.scale")
+
+
+def check_step(case: Case, ground: rec.GroundMotion) -> None:
+    """The case's ``solver.dt`` is not coarser than the record's sampling step."""
+    if case.solver.dt > ground.dt * (1.0 + 1e-9):
+        raise CaseError(f"dt = {case.solver.dt:g} s is larger than the record's sampling step "
+                        f"{ground.dt:g} s; expected dt <= {ground.dt:g} s",
+                        source=case.source, field="solver.dt")
 
 
 #: Sizes beyond these are mistakes (a slip of unit in ``tail`` or ``dt``), reported before the run
@@ -162,7 +167,7 @@ def record_entries(prepared: Prepared) -> list[dict]:
     return out
 
 
-__all__ = ["Prepared", "load_ground", "model_for", "settings_for", "check_against_ground", "check_size",
+__all__ = ["Prepared", "load_ground", "model_for", "settings_for", "check_against_ground", "check_step", "check_size",
            "prepare", "simulate_prepared", "run_case", "record_entries", "start_time", "verdict_robustness"]
 
 

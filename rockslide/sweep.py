@@ -143,17 +143,21 @@ class Axis:
         The values as written (``"125gal"``), for messages.
     spec : str
         The option's text as given.
+    given_kind : AxisKind, optional
+        What the axis is, for an axis that is not one of :data:`AXES` (``rockslide fragility``'s
+        levels).
     """
 
     name: str
     values: tuple
     texts: tuple
     spec: str
+    given_kind: AxisKind | None = None
 
     @property
     def kind(self) -> AxisKind:
-        """What the axis changes (:data:`AXES`)."""
-        return AXES[self.name]
+        """What the axis changes (:data:`AXES`, or ``given_kind``)."""
+        return self.given_kind if self.given_kind is not None else AXES[self.name]
 
     def __len__(self) -> int:
         return len(self.values)
@@ -166,15 +170,17 @@ class Axis:
 _PIECE = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([A-Za-z/^*0-9]*?)\s*$")
 
 
-def parse_axis(name: str, spec: str) -> Axis:
+def parse_axis(name: str, spec: str, kind: AxisKind | None = None) -> Axis:
     """Read an axis option: ``start:stop:step``, a comma list, or one value.
 
     Parameters
     ----------
     name : str
-        A key of :data:`AXES`.
+        A key of :data:`AXES`, or any name with ``kind``.
     spec : str
         The option's text, e.g. ``"0.30:0.70:0.01"``, ``"100gal:1000gal:25gal"``, ``"0.5,0.52,0.55"``.
+    kind : AxisKind, optional
+        What the axis is when it is not one of :data:`AXES` (its ``option`` and unit ``kind``).
 
     Returns
     -------
@@ -186,7 +192,8 @@ def parse_axis(name: str, spec: str) -> Axis:
         Naming the option: not a range or list of numbers, unknown unit, a unit on some values
         only, a step that is not positive, a stop below the start, repeated values, too many values.
     """
-    kind = AXES[name]
+    given = kind
+    kind = AXES[name] if given is None else given
     option = kind.option
     text = str(spec).strip()
     if not text:
@@ -210,7 +217,7 @@ def parse_axis(name: str, spec: str) -> Axis:
         if v in seen:
             raise CaseError(f"{t} repeats {seen[v]} (each value once)", source=option)
         seen[v] = t
-    return Axis(name, tuple(values), tuple(texts), text)
+    return Axis(name, tuple(values), tuple(texts), text, given)
 
 
 def _split(option: str, kind: str, piece: str) -> tuple[Decimal, str]:

@@ -63,3 +63,27 @@ def example_pair(duration: float = 20.0, dt: float = 0.01, seed: int = 1995):
     horizontal = 0.6 * kanai_tajimi(duration, dt, seed=seed)
     vertical = 0.3 * kanai_tajimi(duration, dt, seed=seed + 1, omega_g=2 * np.pi * 6.0, zeta_g=0.5)
     return horizontal, vertical
+
+
+#: The shipped synthetic suite (``records/suite-synthetic``): name -> (seed, soil frequency [Hz],
+#: soil damping, strong phase end [s], duration [s], horizontal peak [g]). Soft to firm soils,
+#: short to long strong phases; each vertical has a stiffer soil filter (2.4 times the frequency)
+#: and half the horizontal peak.
+SUITE = {
+    "kt01": (2101, 1.5, 0.4, 10.0, 25.0, 0.35),
+    "kt02": (2102, 2.5, 0.6, 8.0, 20.0, 0.45),
+    "kt03": (2103, 4.0, 0.6, 6.0, 18.0, 0.30),
+    "kt04": (2104, 6.0, 0.5, 5.0, 15.0, 0.55),
+    "kt05": (2105, 2.0, 0.3, 12.0, 25.0, 0.25),
+    "kt06": (2106, 3.0, 0.5, 7.0, 20.0, 0.40),
+}
+
+
+def suite_pair(name: str, dt: float = 0.01):
+    """One record of the synthetic suite (`SUITE`): horizontal and vertical accelerations [g]."""
+    seed, frequency, damping, strong_end, duration, peak = SUITE[name]
+    horizontal = peak * kanai_tajimi(duration, dt, seed=seed, omega_g=2 * np.pi * frequency, zeta_g=damping,
+                                     strong_end=strong_end)
+    vertical = 0.5 * peak * kanai_tajimi(duration, dt, seed=seed + 100, omega_g=2 * np.pi * 2.4 * frequency,
+                                         zeta_g=0.5, strong_end=strong_end)
+    return horizontal, vertical

@@ -1,0 +1,1089 @@
+"""Record suites, intensity measures and fragility curves (``rockslide fragility``).
+
+A fragility analysis runs one block (a case file) under every record of a suite, each scaled so
+that its intensity measure (IM) equals each of a list of levels (multiple stripe analysis), and
+fits lognormal fragility curves ``P(damage | IM = x) = Phi(ln(x / median) / beta)`` to the
+fraction of runs that reach each damage state.
+
+- **A sweep with a record axis.** The runs form a grid ``record x level`` computed exactly as
+  ``rockslide sweep`` computes its grids (`sweep.Plan`: one batch of the compiled kernel, chunks
+  kept for resuming, local threads or a dask cluster). Each run is the case file with its records
+  replaced by the suite's and scaled by one factor ``k = level / IM(record)`` for horizontal and
+  vertical alike (the paper's Table 1 convention; the case's ``ground.scale.vertical_factor``
+  still multiplies the vertical), validated like a case file; `point_case` gives it, and
+  ``rockslide run`` of that case gives identical numbers.
+- **Intensity measures** (:data:`INTENSITY_MEASURES`, `core.intensity`): ``pga``, ``pgv``
+  (baseline-corrected, see `core.intensity`), ``pga_rocking`` = PGA / (g tan alpha) with the
+  case's block and gravity, and ``sa(T)``, the 5 %-damped pseudo-spectral acceleration at period
+  ``T``, all of the horizontal record as read. PGV/PGA is reported for each record but cannot be a
+  stripe IM: scaling a record does not change it.
+- **Damage states** (`parse_damage`): overturning always, and ``rotation>0.5alpha`` (max |rotation|
+  over alpha; or ``rotation>10deg``), ``slip>50mm`` (max |slip|), ``residual>10mm`` (|residual
+  slip|). An overturned block exceeds every state. A run that leaves the model (status flight or
+  painleve) is counted, reported, and left out of every fit: never a survival.
+- **Fits** (`fit_state`). The maximum-likelihood lognormal fit over the stripes (Baker 2015,
+  Earthquake Spectra 31(1): the binomial likelihood of multiple stripes), solved as a probit
+  regression on ln(x) by Newton's method with step halving (the log-likelihood is concave); 95 %
+  confidence intervals by the percentile bootstrap over records (`BOOTSTRAP_RESAMPLES` resamples
+  of the suite's records with replacement, seed `BOOTSTRAP_SEED`); and the method of moments on
+  each record's first-exceedance level (Baker 2015, as for incremental dynamic analysis: the mean
+  and the standard deviation (n - 1) of the logarithms) as a second estimate, with the same
+  resamples for its intervals. A fit is refused, with the reason, where the data cannot support
+  one: no run or every run exceeds, or the runs separate (every run at or below some level stays
+  below the state and every run above it exceeds: the likelihood grows without bound as beta goes
+  to 0), or the fitted probability falls as the IM rises. Bootstrap resamples that cannot support a
+  fit are left out of the intervals; how many were used is reported. The moments need every
+  record's first exceedance: a record that never exceeds up to the highest level leaves them
+  undefined (censored).
+"""
+
+from __future__ import annotations
+
+import glob
+import math
+import os
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from scipy.special import log_ndtr, ndtr, ndtri
+
+from . import records as rec
+from . import sweep as sw
+from .case import Case, RecordSpec, Suite, SuiteEntry, case_with, load_suite
+from .core import intensity
+from .core import kernel as K
+from .core.simulate import ground_array, initial_state, parameters
+from .errors import CaseError, RecordError
+from .plots import fragility_figure
+from .runner import check_size, check_step, model_for, settings_for
+from .units import STANDARD_GRAVITY, parse_quantity, unit_factor
+
+__all__ = ["IntensityMeasure", "INTENSITY_MEASURES", "parse_im", "parse_levels", "DamageState",
+           "parse_damage", "damage_states", "suite_from", "FragilityPlan", "plan_fragility",
+           "point_case", "StateFit", "fit_state", "probit_mle", "stripe_counts", "exceedances",
+           "analyse", "Analysis", "dataset", "json_summary", "figure", "stored_figure",
+           "BOOTSTRAP_RESAMPLES", "BOOTSTRAP_SEED", "CONFIDENCE"]
+
+#: Bootstrap resamples of the records for the confidence intervals (the default of ``--bootstrap``).
+BOOTSTRAP_RESAMPLES = 1000
+#: Seed of the resampling (numpy's default generator): the same data give the same intervals.
+BOOTSTRAP_SEED = 2015
+#: Confidence level of the intervals (percentiles 2.5 and 97.5 of the resamples).
+CONFIDENCE = 0.95
+#: Newton iterations of the maximum-likelihood fit at most; it stops when a step moves the
+#: parameters by less than `FIT_TOLERANCE` (relative).
+FIT_ITERATIONS = 100
+FIT_TOLERANCE = 1e-12
+#: Files of a folder suite that are not records: hidden files and these endings.
+NOT_RECORDS = (".md", ".rst", ".pdf", ".html", ".yaml", ".yml", ".json", ".py", ".zip", ".gz")
+
+
+
+# --------------------------------------------------------------------------------------------------
+# Intensity measures
+# --------------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class IntensityMeasure:
+    """An intensity measure of the horizontal record.
+
+    Attributes
+    ----------
+    name : str
+        ``pga``, ``pgv``, ``pga_rocking`` or ``sa(T)`` (as ``sa(0.5 s)``).
+    kind : str
+        Unit kind of its levels (a key of `units.UNITS`).
+    units : str
+        Its SI unit (``1`` when dimensionless).
+    long_name : str
+        What it is, in words.
+    label : str
+        Its symbol in figures (``PGA``, ``Sa(0.5 s, 5 %)``).
+    display_unit : str
+        Unit of figures and messages (``g``, ``cm/s``; empty when dimensionless);
+        ``display_scale`` is its size in SI.
+    period : float or None
+        [s] the oscillator's period, for ``sa(T)``.
+    """
+
+    name: str
+    kind: str
+    units: str
+    long_name: str
+    label: str
+    display_unit: str
+    display_scale: float
+    period: float | None = None
+
+    def of_record(self, acceleration, dt: float, gravity: float, tan_alpha: float) -> float:
+        """The measure of a horizontal record [SI]; ``gravity`` [m/s^2] and ``tan_alpha`` (the
+        block's b/h) serve ``pga_rocking``."""
+        if self.name == "pgv":
+            return intensity.peak_velocity(acceleration, dt)
+        if self.period is not None:
+            return intensity.spectral_acceleration(acceleration, dt, self.period)
+        peak = intensity.peak_acceleration(acceleration)
+        return peak / (gravity * tan_alpha) if self.name == "pga_rocking" else peak
+
+    def axis_label(self) -> str:
+        """``PGA [g]``, ``PGA / (g tan α)`` (dimensionless: no unit)."""
+        return f"{self.label} [{self.display_unit}]" if self.display_unit else self.label
+
+    def number(self, value: float) -> str:
+        """A value [SI] as a number in the display unit, e.g. ``0.62``."""
+        return f"{value / self.display_scale:.3g}"
+
+    def show(self, value: float) -> str:
+        """A value [SI] in the display unit, e.g. ``0.62 g``."""
+        number = self.number(value)
+        return f"{number} {self.display_unit}" if self.display_unit else number
+
+
+_CM_PER_S = 0.01
+#: The fixed measures by name; ``sa(T)`` is made by `parse_im`.
+INTENSITY_MEASURES = {m.name: m for m in (
+    IntensityMeasure("pga", "acceleration", "m/s^2", "peak horizontal ground acceleration", "PGA", "g",
+                     STANDARD_GRAVITY),
+    IntensityMeasure("pgv", "velocity", "m/s", "peak horizontal ground velocity (baseline-corrected)",
+                     "PGV", "cm/s", _CM_PER_S),
+    IntensityMeasure("pga_rocking", "dimensionless", "1", "rocking-normalised PGA: PGA / (g tan alpha)",
+                     "PGA / (g tan α)", "", 1.0),
+)}
+_SA = re.compile(r"^\s*sa\s*\(\s*(?P<period>[^()]*?)\s*\)\s*$", re.IGNORECASE)
+_IM_CHOICES = "pga, pgv, pga_rocking or sa(T) with a period, e.g. 'sa(0.5s)'"
+
+
+def parse_im(text: str) -> IntensityMeasure:
+    """Read ``--im``: ``pga``, ``pgv``, ``pga_rocking`` or ``sa(T)`` (``sa(0.5s)``, ``sa(300 ms)``).
+
+    Raises
+    ------
+    CaseError
+        Naming ``--im``: an unknown measure, a period that is not a positive time, or PGV/PGA
+        (scaling a record does not change it).
+    """
+    name = str(text).strip().lower()
+    if name in INTENSITY_MEASURES:
+        return INTENSITY_MEASURES[name]
+    if name.replace(" ", "") in ("pgv_pga", "pgv/pga"):
+        raise CaseError("PGV/PGA does not change when a record is scaled, so records cannot be scaled "
+                        f"to levels of it (it is reported for each record); choose {_IM_CHOICES}",
+                        source="--im")
+    match = _SA.match(name)
+    if match is None:
+        raise CaseError(f"unknown intensity measure {text!r}; expected {_IM_CHOICES}", source="--im")
+    period = parse_quantity(match.group("period"), "time", source="--im")
+    if not period > 0:
+        raise CaseError(f"the period of sa(T) must be a positive time, got {match.group('period')!r}",
+                        source="--im")
+    shown, damping = f"{period:g} s", f"{100 * intensity.DAMPING:g} %"
+    return IntensityMeasure(f"sa({shown})", "acceleration", "m/s^2",
+                            f"pseudo-spectral acceleration of the horizontal record at T = {shown}, "
+                            f"{damping} damping", f"Sa({shown}, {damping})", "g", STANDARD_GRAVITY, period)
+
+
+def parse_levels(text: str, im: IntensityMeasure) -> sw.Axis:
+    """Read ``--levels`` like a sweep axis (``0.1g:1.5g:0.1g`` or a comma list, units as in case
+    files, decimal ranges), in the unit kind of ``im``; positive and increasing.
+
+    Raises
+    ------
+    CaseError
+        Naming ``--levels``.
+    """
+    kind = sw.AxisKind("level", "--levels", im.kind, "", f"intensity level: {im.long_name}", im.units,
+                       im.axis_label(), im.display_scale)
+    axis = sw.parse_axis("level", text, kind=kind)
+    values = np.asarray(axis.values)
+    if not (values > 0).all():
+        raise CaseError(f"the levels must be positive, got {text!r}", source="--levels")
+    if not (np.diff(values) > 0).all():
+        raise CaseError(f"give the levels in increasing order, got {text!r}", source="--levels")
+    return axis
+
+
+# --------------------------------------------------------------------------------------------------
+# Damage states
+# --------------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class DamageState:
+    """A damage state: a response quantity above a threshold (or overturning).
+
+    Attributes
+    ----------
+    name : str
+        As given, without spaces (``overturn``, ``rotation>0.5alpha``, ``slip>50mm``).
+    quantity : str
+        The result variable compared: ``overturned``, ``max_rotation_ratio`` (max |rotation| /
+        alpha), ``max_rotation``, ``max_slip`` or ``residual_slip`` (its absolute value).
+    threshold : float
+        [SI, or a fraction of alpha] exceeded when the quantity is above it.
+    long_name : str
+        In words.
+    """
+
+    name: str
+    quantity: str
+    threshold: float
+    long_name: str
+
+
+OVERTURN = DamageState("overturn", "overturned", 0.5, "overturning")
+_DAMAGE = re.compile(r"^(?P<what>rotation|slip|residual)>(?P<value>.+)$")
+_DAMAGE_EXAMPLES = "'rotation>0.5alpha', 'rotation>10deg', 'slip>50mm' or 'residual>10mm'"
+
+
+def parse_damage(text: str) -> DamageState:
+    """Read a ``--damage`` state: ``overturn``, ``rotation>0.5alpha``, ``rotation>10deg``,
+    ``slip>50mm`` or ``residual>10mm`` (a length or an angle needs its unit).
+
+    Raises
+    ------
+    CaseError
+        Naming ``--damage`` and the text.
+    """
+    compact = "".join(str(text).split())
+    if compact.lower() in ("overturn", "overturning", "overturned"):
+        return OVERTURN
+    match = _DAMAGE.match(compact.lower())
+    if match is None:
+        raise CaseError(f"cannot read {text!r} as a damage state; expected 'overturn', {_DAMAGE_EXAMPLES}",
+                        source="--damage")
+    what, value = match.group("what"), compact[len(match.group("what")) + 1:]
+    if what == "rotation" and value.lower().endswith("alpha"):
+        number = value[:-len("alpha")].rstrip("*") or "1"
+        ratio = parse_quantity(number, "dimensionless", source="--damage")
+        _positive(ratio, text)
+        return DamageState(compact, "max_rotation_ratio", ratio, f"max |rotation| > {ratio:g} alpha")
+    kind = "angle" if what == "rotation" else "length"
+    if re.fullmatch(r"[-+]?[\d.]+(?:[eE][-+]?\d+)?", value):
+        unit = "10deg" if kind == "angle" else "50mm"
+        raise CaseError(f"{text!r}: give the threshold's unit (e.g. {what}>{unit})", source="--damage")
+    threshold = parse_quantity(value, kind, source="--damage")
+    _positive(threshold, text)
+    if what == "rotation":
+        return DamageState(compact, "max_rotation", threshold,
+                           f"max |rotation| > {threshold:g} rad ({math.degrees(threshold):g} deg)")
+    if what == "slip":
+        return DamageState(compact, "max_slip", threshold, f"max |slip| > {threshold * 1000:g} mm")
+    return DamageState(compact, "residual_slip", threshold, f"|residual slip| > {threshold * 1000:g} mm")
+
+
+def _positive(value: float, text: str) -> None:
+    if not value > 0:
+        raise CaseError(f"{text!r}: the threshold must be positive", source="--damage")
+
+
+def damage_states(texts=()) -> list[DamageState]:
+    """Overturning, then the states of ``texts`` (`parse_damage`), each once."""
+    states = [OVERTURN]
+    for text in texts:
+        state = parse_damage(text)
+        if state.name in [s.name for s in states]:
+            raise CaseError(f"{text!r} is given twice (overturning is always included)", source="--damage")
+        states.append(state)
+    return states
+
+
+def exceedances(variables: dict, alpha: np.ndarray, states) -> np.ndarray:
+    """``int8[records, levels, states]``: 1 the run exceeds the state, 0 it does not, -1 it left the
+    model (status flight or painleve; not used in the fits). ``variables`` are the per-run results
+    (`sweep.sweep_variables`), ``alpha`` [rad] each run's block angle."""
+    overturned = variables["overturned"][0].astype(bool)
+    values = {"max_rotation": variables["max_rotation"][0], "max_slip": variables["max_slip"][0],
+              "residual_slip": np.abs(variables["residual_slip"][0]),
+              "max_rotation_ratio": variables["max_rotation"][0] / alpha}
+    out = np.empty(overturned.shape + (len(states),), dtype=np.int8)
+    for i, state in enumerate(states):
+        exceeded = overturned if state.quantity == "overturned" else overturned | (values[state.quantity]
+                                                                                  > state.threshold)
+        out[..., i] = exceeded
+    out[variables["status"][0] != K.STATUS_OK] = -1
+    return out
+
+
+# --------------------------------------------------------------------------------------------------
+# Suites
+# --------------------------------------------------------------------------------------------------
+
+
+def suite_from(spec, *, units: str | None = None) -> Suite:
+    """The suite of ``--suite``: a suite file (YAML, `case.load_suite`), a folder of horizontal
+    records (every file but hidden ones and documentation, :data:`NOT_RECORDS`), or a glob pattern
+    of them (quoted on the command line). Records are named by their file name without extension.
+
+    Parameters
+    ----------
+    spec : str or Path
+    units : str, optional
+        The acceleration unit of a folder's or a glob's files that do not state theirs (``--units``).
+
+    Raises
+    ------
+    CaseError
+        Naming ``--suite`` (or the suite file): nothing found, no record in a folder, two files of
+        one name, ``--units`` with a suite file.
+    """
+    text = str(spec)
+    path = Path(text).expanduser()
+    if units is not None:
+        unit_factor(units, "acceleration", source="--units")
+    if path.is_file() and path.suffix.lower() in (".yaml", ".yml"):
+        if units is not None:
+            raise CaseError("applies to a folder or a glob of records; a suite file gives each "
+                            "record's units: in its entries", source="--units")
+        return load_suite(path)
+    if path.is_dir():
+        files = sorted(p for p in path.iterdir() if p.is_file() and not p.name.startswith(".")
+                       and not p.name.lower().endswith(NOT_RECORDS))
+        if not files:
+            raise CaseError("the folder holds no record file", source=text)
+    elif any(c in text for c in "*?[") and not path.exists():
+        files = sorted(Path(p) for p in glob.glob(os.path.expanduser(text)) if Path(p).is_file())
+        if not files:
+            raise CaseError(f"no file matches {text!r}", source="--suite")
+    elif path.is_file():
+        raise CaseError("expected a suite file (.yaml), a folder of records or a quoted glob of them "
+                        "(like 'records/*.csv')", source=text)
+    else:
+        raise CaseError("not found: expected a suite file (.yaml), a folder of records or a quoted "
+                        "glob of them (like 'records/*.csv')", source=text)
+    entries, seen = [], {}
+    for p in files:
+        name = p.stem
+        if name in seen:
+            raise CaseError(f"{seen[name].name} and {p.name} would both be named {name!r}; list them in "
+                            "a suite file with a name each", source=text)
+        seen[name] = p
+        entries.append(SuiteEntry(name=name, horizontal=RecordSpec(file=str(p.absolute()), units=units)))
+    return Suite(entries=tuple(entries), source=text, base_dir=None,
+                 text="\n".join(str(p) for p in files))
+
+
+# --------------------------------------------------------------------------------------------------
+# The plan: a sweep over records and levels
+# --------------------------------------------------------------------------------------------------
+
+
+@dataclass
+class FragilityPlan:
+    """Every run of a fragility analysis, not computed yet.
+
+    Attributes
+    ----------
+    plan : sweep.Plan
+        The runs as a sweep over the axes ``record`` and ``level`` (flat index
+        ``record * n_levels + level``), its records concatenated in ``base``.
+    suite : Suite
+    im : IntensityMeasure
+    levels : sweep.Axis
+        The levels [SI of the IM], increasing.
+    record_cases : list of Case
+        Each record's case: the case file with the record in ``ground`` (files as resolved paths)
+        and no scale; `point_case` adds the factor.
+    measures : dict
+        Per record (float64[records]): ``pga`` [m/s^2], ``pgv`` [m/s], ``pgv_pga`` [s], ``im``
+        (the chosen measure) [SI], ``dt`` [s], ``duration`` [s] (samples x dt).
+    files : list of dict
+        Per record: ``horizontal`` and ``vertical`` file names and ``*_sha256`` ("" when absent).
+    vertical_factor : float
+        The case's ``ground.scale.vertical_factor``.
+    """
+
+    plan: sw.Plan
+    suite: Suite
+    im: IntensityMeasure
+    levels: sw.Axis
+    record_cases: list
+    measures: dict
+    files: list
+    vertical_factor: float
+
+    @property
+    def names(self) -> list[str]:
+        return [e.name for e in self.suite.entries]
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        return self.plan.shape
+
+    def describe(self) -> str:
+        """``18 records x 15 levels of PGA = 270 runs``."""
+        return _describe(*self.shape, self.im.label)
+
+
+def _describe(records: int, levels: int, label: str) -> str:
+    def plural(k, word):
+        return f"{k} {word}{'s' if k != 1 else ''}"
+
+    return f"{plural(records, 'record')} x {plural(levels, 'level')} of {label} = {plural(records * levels, 'run')}"
+
+
+def plan_fragility(case: Case, suite: Suite, im: IntensityMeasure, levels: sw.Axis, *,
+                   records_dir: Path | None = None, chunk_size: int | None = None) -> FragilityPlan:
+    """Read the suite's records, measure them, and build every run's kernel inputs.
+
+    Parameters
+    ----------
+    case : Case
+        The block, contact, solver and ``ground.tail`` (its records are replaced by the suite's).
+    suite : Suite
+    im : IntensityMeasure
+    levels : sweep.Axis
+        From `parse_levels`.
+    records_dir : Path, optional
+        Where records are looked for after the suite file's folder (`records.records_dir`).
+    chunk_size : int, optional
+        Runs per chunk (default `sweep.default_chunk_size`).
+
+    Raises
+    ------
+    CaseError
+        The case does not use the kernel or gives ``ground.scale.pga_vertical``; a record entry is
+        invalid for the case (its step finer than ``solver.dt`` allows, too long); a record's
+        measure is zero; too many runs.
+    RecordError
+        A record cannot be found or read (naming the suite file and the entry).
+    """
+    if case.solver.method != "kernel":
+        raise CaseError(f"a fragility analysis runs the compiled kernel; got method {case.solver.method!r}",
+                        source=case.source, field="solver.method")
+    if case.ground.scale.pga_vertical is not None:
+        raise CaseError("a fragility analysis scales each vertical record by its horizontal's factor; "
+                        "remove pga_vertical (vertical_factor may stay)", source=case.source,
+                        field="ground.scale.pga_vertical")
+    n_records, n_levels = len(suite.entries), len(levels)
+    n = n_records * n_levels
+    if n > sw.MAX_POINTS:
+        raise CaseError(f"{n_records} records x {n_levels} levels = {n} runs; at most {sw.MAX_POINTS}",
+                        source="--suite/--levels")
+    if chunk_size is not None and (isinstance(chunk_size, bool) or int(chunk_size) < 1):
+        raise CaseError(f"must be a whole number >= 1, got {chunk_size!r}", source="--chunk-size")
+    chunk_size = sw.default_chunk_size(n) if chunk_size is None else int(chunk_size)
+    folder = records_dir if records_dir is not None else rec.records_dir()
+    vertical_factor = float(case.ground.scale.vertical_factor)
+    tan_alpha = case.block.width / case.block.height
+    level_values = np.asarray(levels.values, dtype=np.float64)
+
+    params = np.empty((n, K.N_PARAMS))
+    states = np.empty((n, K.N_STATE))
+    factor_h, factor_v = np.empty(n), np.empty(n)
+    first, count, record_end = np.empty(n, np.int64), np.empty(n, np.int64), np.empty(n)
+    bases, record_cases, files, entries = [], [], [], []
+    measures = {key: np.empty(n_records) for key in ("pga", "pgv", "pgv_pga", "im", "dt", "duration")}
+    offset = 0
+    for r, entry in enumerate(suite.entries):
+        traces, specs, found = _read_entry(suite, r, entry, folder)
+        where = _entry_source(suite, r)
+        ground = rec.combine(traces["horizontal"], traces["vertical"], source=where)
+        changes = {"ground.horizontal": specs["horizontal"], "ground.vertical": specs["vertical"],
+                   "ground.scale": {"vertical_factor": vertical_factor} if specs["vertical"] else {}}
+        try:
+            record_case = case_with(case, changes)
+            check_step(record_case, ground)
+            check_size(record_case, ground, history=False)
+        except CaseError as exc:
+            raise CaseError(f"{exc.message} (with the record {where})", source=exc.source,
+                            field=exc.field) from None
+        record_cases.append(record_case)
+        h, dt = ground.horizontal, ground.dt
+        measures["pga"][r] = intensity.peak_acceleration(h)
+        measures["pgv"][r] = intensity.peak_velocity(h, dt)
+        measures["pgv_pga"][r] = measures["pgv"][r] / measures["pga"][r] if measures["pga"][r] else math.nan
+        measures["im"][r] = value = im.of_record(h, dt, case.gravity, tan_alpha)
+        measures["dt"][r], measures["duration"][r] = dt, h.size * dt
+        if not (math.isfinite(value) and value > 0):
+            raise RecordError(f"its {im.label} is {value:g}: a record without motion cannot be scaled "
+                              "to a level", source=where, field="horizontal")
+        files.append(found)
+        entries.extend({**e, "role": f"{entry.name}.{e['role']}"} for e in ground.files)
+
+        settings = settings_for(record_case, history=False, energy=False)
+        base = ground_array(ground.horizontal, ground.vertical, dt, settings.tail)
+        start = ground.start + case.ground.time_shift
+        rows = slice(r * n_levels, (r + 1) * n_levels)
+        params[rows] = parameters(model_for(record_case), dt, settings, start)
+        states[rows] = initial_state(settings)
+        factors = level_values / value
+        if not np.isfinite(factors).all():
+            raise RecordError(f"its {im.label} ({value:g}) is too small to scale to the levels",
+                              source=where, field="horizontal")
+        factor_h[rows] = factors
+        # records.combine's arithmetic: vertical = (k * vertical_factor) * samples
+        factor_v[rows] = factors * vertical_factor if specs["vertical"] else 1.0
+        first[rows], count[rows] = offset, base.shape[1]
+        record_end[rows] = start + base.shape[1] * dt
+        bases.append(base)
+        offset += base.shape[1]
+    record_kind = sw.AxisKind("record", "--suite", "dimensionless", "", "record of the suite", "1", "record")
+    record_axis = sw.Axis("record", tuple(float(i) for i in range(n_records)),
+                          tuple(e.name for e in suite.entries), suite.source, record_kind)
+    plan = sw.Plan(case=case, axes=[record_axis, levels], mu_kinetic_ratio=None, params=params,
+                   states=states, factor_h=factor_h, factor_v=factor_v,
+                   base=np.ascontiguousarray(np.concatenate(bases, axis=1)), first=first, count=count,
+                   record_end=record_end, step=float(params[:, K.P_H].min()), records=entries,
+                   chunk_size=chunk_size)
+    plan.key = sw.definition_key(plan)
+    return FragilityPlan(plan=plan, suite=suite, im=im, levels=levels, record_cases=record_cases,
+                         measures=measures, files=files, vertical_factor=vertical_factor)
+
+
+def _entry_source(suite: Suite, r: int) -> str:
+    """How messages name a suite's record ``r``."""
+    entry = suite.entries[r]
+    if suite.base_dir is None:                  # a folder or a glob: the file names itself
+        return entry.horizontal.file
+    return f"{suite.source}: records[{r}] ({entry.name})"
+
+
+def _read_entry(suite: Suite, r: int, entry: SuiteEntry, folder: Path):
+    """A suite entry's records: traces by role, their specs for `case.case_with` (files as found)
+    and their file names and checksums."""
+    traces, specs, found = {}, {}, {}
+    for role in ("horizontal", "vertical"):
+        spec = getattr(entry, role)
+        found[role], found[f"{role}_sha256"] = "", ""
+        if spec is None:
+            traces[role], specs[role] = None, None
+            continue
+        field = f"records[{r}].{role}" if suite.base_dir is not None else None
+        source = suite.source if suite.base_dir is not None else None
+        path = rec.resolve_record_path(spec.file, case_dir=suite.base_dir, records_dir=folder,
+                                       source=source, field=f"{field}.file" if field else None)
+        try:
+            trace = rec.read_record(path, format=spec.format, units=spec.units,
+                                    time_column=spec.time_column, column=spec.column, dt=spec.dt,
+                                    skip_lines=spec.skip_lines, source=source, field=field)
+        except RecordError as exc:
+            if suite.base_dir is None and spec.units is None and "units" in str(exc):
+                raise RecordError(f"{exc.message} (for a folder or a glob of records: --units)",
+                                  source=exc.source, field=exc.field) from None
+            raise
+        traces[role] = trace
+        specs[role] = {k: v for k, v in vars(spec).items() if v is not None and k != "file"}
+        specs[role]["file"] = str(path.absolute())
+        meta = dict(trace.stats.get("rockslide", {}))
+        found[role] = path.name
+        found[f"{role}_sha256"] = str(meta.get("sha256", ""))
+    return traces, specs, found
+
+
+def point_case(fplan: FragilityPlan, record: int, level: int) -> Case:
+    """The case file of one run, as a user would give it to ``rockslide run``: the record's case
+    (`FragilityPlan.record_cases`) with ``ground.scale.factor`` = the run's factor."""
+    factor = float(fplan.plan.factor_h[record * len(fplan.levels) + level])
+    return case_with(fplan.record_cases[record], {"ground.scale.factor": factor})
+
+
+# --------------------------------------------------------------------------------------------------
+# Fits
+# --------------------------------------------------------------------------------------------------
+
+
+@dataclass
+class StateFit:
+    """The fits of one damage state (SI units of the IM; None where there is no fit).
+
+    Attributes
+    ----------
+    median, beta : float or None
+        The maximum-likelihood fit.
+    median_ci, beta_ci : tuple of float or None
+        Their bootstrap confidence intervals (:data:`CONFIDENCE`).
+    note : str
+        Why there is no fit ("" when there is).
+    resamples : int
+        Bootstrap resamples drawn (0: no intervals).
+    resamples_fitted : int
+        Of them, those that supported a maximum-likelihood fit (the intervals are theirs).
+    moments_median, moments_beta : float or None
+        The method of moments on the first-exceedance levels.
+    moments_median_ci, moments_beta_ci : tuple of float or None
+    moments_note : str
+    n_runs, n_outside_model, n_exceeded : int
+    n_censored : int
+        Records that never exceed the state up to the highest level.
+    samples : numpy.ndarray
+        ``float64[k, 2]``: the (median, beta) of the fitted resamples (for the figure's band).
+    """
+
+    median: float | None = None
+    beta: float | None = None
+    median_ci: tuple | None = None
+    beta_ci: tuple | None = None
+    note: str = ""
+    resamples: int = 0
+    resamples_fitted: int = 0
+    moments_median: float | None = None
+    moments_beta: float | None = None
+    moments_median_ci: tuple | None = None
+    moments_beta_ci: tuple | None = None
+    moments_note: str = ""
+    n_runs: int = 0
+    n_outside_model: int = 0
+    n_exceeded: int = 0
+    n_censored: int = 0
+    samples: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
+
+
+def stripe_counts(exceeded: np.ndarray):
+    """``(n, z)``: runs inside the model and runs exceeding, per level (the last axis of
+    ``exceeded``), summed over records (the second last axis)."""
+    inside = exceeded >= 0
+    return inside.sum(axis=-2).astype(np.float64), (exceeded == 1).sum(axis=-2).astype(np.float64)
+
+
+def _separation(n: np.ndarray, z: np.ndarray):
+    """Per row of counts ``(..., levels)``: the index of the lowest level with an exceedance and of
+    the highest with a run below the state (-1 when none)."""
+    levels = n.shape[-1]
+    index = np.arange(levels)
+    lowest_exceeding = np.where(z > 0, index, levels).min(axis=-1)
+    highest_surviving = np.where(n - z > 0, index, -1).max(axis=-1)
+    return np.where(lowest_exceeding == levels, -1, lowest_exceeding), highest_surviving
+
+
+def _support_note(levels: np.ndarray, n: np.ndarray, z: np.ndarray, show) -> str:
+    """Why these stripe counts cannot support a fit, or ""."""
+    if n.sum() == 0:
+        return "no run inside the model: no fit"
+    if z.sum() == 0:
+        return "no run exceeds the state: no fit"
+    if z.sum() == n.sum():
+        return "every run exceeds the state: no fit"
+    low, high = _separation(n, z)
+    if high == low:
+        return (f"the runs separate at {show(levels[low])} (every run below it stays below the state, "
+                "every run above it reaches it), so the data cannot fix beta (it tends to 0): no fit")
+    if high < low:
+        return (f"the runs separate between {show(levels[high])} and {show(levels[low])} (no run up to "
+                "the first reaches the state, every run from the second on does), so the data cannot "
+                "fix beta (it tends to 0): no fit; add levels between")
+    return ""
+
+
+def _log_likelihood(a, b, s, n, z):
+    eta = a[:, None] + b[:, None] * s
+    return np.sum(z * log_ndtr(eta) + (n - z) * log_ndtr(-eta), axis=-1)
+
+
+def probit_mle(s: np.ndarray, n: np.ndarray, z: np.ndarray):
+    """Maximum-likelihood probit regression ``P = Phi(a + b s)`` of binomial counts, many at once.
+
+    Parameters
+    ----------
+    s : float64[L]
+        The covariate (``ln`` of the levels).
+    n, z : float64[B, L]
+        Trials and successes of ``B`` data sets. Each must overlap (`_separation`: some success at
+        a level below some failure); otherwise the maximum is at infinity.
+
+    Returns
+    -------
+    a, b : float64[B]
+        The estimates; ``median = exp(-a / b)``, ``beta = 1 / b``.
+    converged : bool[B]
+
+    Notes
+    -----
+    Newton's method on the log-likelihood ``sum z ln Phi(eta) + (n - z) ln Phi(-eta)``, which is
+    concave in ``(a, b)``, with step halving so that it never decreases; started from the
+    weighted least-squares line through the probits of ``(z + 1/2) / (n + 1)``. The derivatives in
+    ``eta`` use the ratios ``phi / Phi`` evaluated through ``log_ndtr`` (no underflow in the tails).
+    """
+    s = np.asarray(s, dtype=np.float64)
+    n = np.atleast_2d(np.asarray(n, dtype=np.float64))
+    z = np.atleast_2d(np.asarray(z, dtype=np.float64))
+    y = ndtri((z + 0.5) / (n + 1.0))
+    w0, w1, w2 = n.sum(-1), (n * s).sum(-1), (n * s * s).sum(-1)
+    y0, y1 = (n * y).sum(-1), (n * s * y).sum(-1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        b = (w0 * y1 - w1 * y0) / (w0 * w2 - w1 * w1)
+        start_ok = np.isfinite(b) & (b > 0)
+        b = np.where(start_ok, b, 2.0)                      # else beta 0.5 about the mean level
+        a = np.where(start_ok, (y0 - b * w1) / w0, -b * w1 / w0)
+    ll = _log_likelihood(a, b, s, n, z)
+    converged = np.zeros(a.shape, dtype=bool)
+    log_phi_const = 0.5 * math.log(2.0 * math.pi)
+    for _ in range(FIT_ITERATIONS):
+        eta = a[:, None] + b[:, None] * s
+        log_phi = -0.5 * eta * eta - log_phi_const
+        up = np.exp(log_phi - log_ndtr(eta))              # phi / Phi
+        down = np.exp(log_phi - log_ndtr(-eta))           # phi / (1 - Phi)
+        d1 = z * up - (n - z) * down                      # d ll / d eta
+        d2 = z * up * (eta + up) + (n - z) * down * (down - eta)   # -d2 ll / d eta2 >= 0
+        g0, g1 = d1.sum(-1), (d1 * s).sum(-1)
+        h00, h01, h11 = d2.sum(-1), (d2 * s).sum(-1), (d2 * s * s).sum(-1)
+        det = h00 * h11 - h01 * h01
+        with np.errstate(divide="ignore", invalid="ignore"):
+            da = np.where(converged, 0.0, (h11 * g0 - h01 * g1) / det)
+            db = np.where(converged, 0.0, (h00 * g1 - h01 * g0) / det)
+        da, db = np.nan_to_num(da), np.nan_to_num(db)
+        t = np.ones_like(a)
+        for _ in range(60):
+            trial = _log_likelihood(a + t * da, b + t * db, s, n, z)
+            worse = ~(trial >= ll - 1e-13 * np.abs(ll))
+            if not worse.any():
+                break
+            t = np.where(worse, 0.5 * t, t)
+        a, b, ll = a + t * da, b + t * db, np.where(np.isfinite(trial), trial, ll)
+        converged |= (np.abs(t * da) <= FIT_TOLERANCE * (1.0 + np.abs(a))) & \
+                     (np.abs(t * db) <= FIT_TOLERANCE * (1.0 + np.abs(b)))
+        if converged.all():
+            break
+    return a, b, converged
+
+
+def fit_state(levels, exceeded: np.ndarray, *, resamples: int = BOOTSTRAP_RESAMPLES,
+              seed: int = BOOTSTRAP_SEED, show=None) -> StateFit:
+    """The fits of one damage state.
+
+    Parameters
+    ----------
+    levels : array_like
+        float64[L], increasing [SI of the IM].
+    exceeded : numpy.ndarray
+        int8[R, L]: 1 exceeds, 0 does not, -1 outside the model (`exceedances`).
+    resamples : int
+        Bootstrap resamples of the records (0: no intervals).
+    seed : int
+        Seed of the resampling.
+    show : callable, optional
+        Formats a level for the notes (default ``{:g}``).
+
+    Returns
+    -------
+    StateFit
+    """
+    levels = np.asarray(levels, dtype=np.float64)
+    exceeded = np.asarray(exceeded)
+    show = show or (lambda x: f"{x:g}")
+    s = np.log(levels)
+    n, z = stripe_counts(exceeded)
+    out = StateFit(n_runs=int(exceeded.size), n_outside_model=int((exceeded < 0).sum()),
+                   n_exceeded=int((exceeded == 1).sum()), resamples=int(resamples))
+    out.note = _support_note(levels, n, z, show)
+    if not out.note:
+        a, b, converged = probit_mle(s, n[None, :], z[None, :])
+        if not converged[0]:                                 # pragma: no cover - concave, overlapping data
+            out.note = "the maximum-likelihood fit did not converge: no fit"
+        elif not b[0] > 0:
+            out.note = "the fitted probability falls as the intensity rises: no fit"
+        else:
+            out.median, out.beta = float(math.exp(-a[0] / b[0])), float(1.0 / b[0])
+    capacity, out.n_censored, out.moments_note = _first_exceedance(levels, exceeded, show)
+    if capacity is not None:
+        logs = np.log(capacity)
+        out.moments_median, out.moments_beta = float(np.exp(logs.mean())), float(logs.std(ddof=1))
+    if resamples > 0 and (out.median is not None or out.moments_median is not None):
+        _bootstrap(out, s, exceeded, capacity, resamples, seed)
+    return out
+
+
+def _first_exceedance(levels, exceeded, show):
+    """Each record's first exceeding level (None when some never exceed), the number that never
+    do, and why there are no moments ("" when there are)."""
+    hits = exceeded == 1
+    censored = int((~hits.any(axis=1)).sum())
+    if censored:
+        return None, censored, (f"{censored} of {hits.shape[0]} records never exceed the state up to "
+                                f"{show(levels[-1])}: no moments (they need every record's first "
+                                "exceedance)")
+    capacity = levels[hits.argmax(axis=1)]
+    if capacity.size < 2:
+        return None, 0, "one record: no moments"
+    return capacity, 0, ""
+
+
+def _bootstrap(out: StateFit, s, exceeded, capacity, resamples, seed) -> None:
+    """Percentile intervals of both fits over resamples of the records."""
+    rng = np.random.default_rng(seed)
+    records = exceeded.shape[0]
+    picks = rng.integers(0, records, size=(resamples, records))
+    weights = np.zeros((resamples, records))
+    np.add.at(weights, (np.repeat(np.arange(resamples), records), picks.ravel()), 1.0)
+    inside = (exceeded >= 0).astype(np.float64)
+    hits = (exceeded == 1).astype(np.float64)
+    n, z = weights @ inside, weights @ hits
+    tails = (50.0 * (1.0 - CONFIDENCE), 100.0 - 50.0 * (1.0 - CONFIDENCE))
+    if out.median is not None:
+        low, high = _separation(n, z)
+        ok = (low >= 0) & (high > low)
+        a, b, converged = probit_mle(s, n[ok], z[ok])
+        good = converged & (b > 0)
+        samples = np.column_stack([np.exp(-a[good] / b[good]), 1.0 / b[good]])
+        out.samples, out.resamples_fitted = samples, int(good.sum())
+        if good.sum() >= 2:
+            out.median_ci = tuple(float(v) for v in np.percentile(samples[:, 0], tails))
+            out.beta_ci = tuple(float(v) for v in np.percentile(samples[:, 1], tails))
+    if capacity is not None:
+        logs = np.log(capacity)[picks]
+        medians, betas = np.exp(logs.mean(axis=1)), logs.std(axis=1, ddof=1)
+        out.moments_median_ci = tuple(float(v) for v in np.percentile(medians, tails))
+        out.moments_beta_ci = tuple(float(v) for v in np.percentile(betas, tails))
+
+
+def fragility(x, median: float, beta: float) -> np.ndarray:
+    """``Phi(ln(x / median) / beta)``: the probability of reaching the state at intensity ``x``."""
+    return ndtr(np.log(np.asarray(x, dtype=np.float64) / median) / beta)
+
+
+# --------------------------------------------------------------------------------------------------
+# The analysis, its file, its figure and its JSON
+# --------------------------------------------------------------------------------------------------
+
+
+@dataclass
+class Analysis:
+    """Everything computed: per-run results, exceedances and fits.
+
+    Attributes
+    ----------
+    variables : dict
+        Per run (`sweep.sweep_variables`, plus ``max_rotation_ratio`` and ``scale_factor``):
+        ``name -> (array[records, levels], attributes)``.
+    exceeded : numpy.ndarray
+        int8[records, levels, states] (`exceedances`).
+    states : list of DamageState
+    fits : list of StateFit
+        One per state.
+    """
+
+    variables: dict
+    exceeded: np.ndarray
+    states: list
+    fits: list
+
+
+def analyse(fplan: FragilityPlan, final_states: np.ndarray, states, *, resamples: int = BOOTSTRAP_RESAMPLES,
+            seed: int = BOOTSTRAP_SEED) -> Analysis:
+    """The results of every run (from the kernel's final states), the exceedances and the fits."""
+    plan = fplan.plan
+    variables = sw.sweep_variables(plan, final_states)
+    alpha = plan.params[:, K.P_ALPHA].reshape(plan.shape)
+    variables["max_rotation_ratio"] = (variables["max_rotation"][0] / alpha,
+                                       {"units": "1", "long_name": "largest rotation |phi| / alpha"})
+    variables["scale_factor"] = (plan.factor_h.reshape(plan.shape).copy(),
+                                 {"units": "1", "long_name": "factor on the records (horizontal; the "
+                                  f"vertical's is this times {fplan.vertical_factor:g})"})
+    exceeded = exceedances(variables, alpha, states)
+    levels = np.asarray(fplan.levels.values)
+    fits = [fit_state(levels, exceeded[..., i], resamples=resamples, seed=seed, show=fplan.im.show)
+            for i in range(len(states))]
+    return Analysis(variables=variables, exceeded=exceeded, states=list(states), fits=fits)
+
+
+_FIT_FIELDS = (("median", "m"), ("beta", "b"), ("moments_median", "m"), ("moments_beta", "b"))
+
+
+def dataset(fplan: FragilityPlan, analysis: Analysis, command_line: str = "") -> tuple[list, dict, dict]:
+    """``(coords, variables, attrs)`` of ``OUT/NAME.fragility.h5`` (`results.write_dataset`)."""
+    im, plan = fplan.im, fplan.plan
+    levels = np.asarray(fplan.levels.values, dtype=np.float64)
+    coords = [
+        ("record", np.array(fplan.names, dtype=object), {"long_name": "record of the suite, in its order"}),
+        ("level", levels, {"units": im.units, "long_name": f"intensity level: {im.long_name}",
+                           "intensity_measure": im.name, "given_as": fplan.levels.spec}),
+        ("damage_state", np.array([s.name for s in analysis.states], dtype=object),
+         {"long_name": "damage state"}),
+    ]
+    run = ("record", "level")
+    variables = {name: (run, values, attrs) for name, (values, attrs) in analysis.variables.items()}
+    variables["exceeded"] = (("record", "level", "damage_state"), analysis.exceeded,
+                             {"units": "1", "long_name": "the run reached the damage state",
+                              "flag_values": np.array([-1, 0, 1], dtype=np.int8),
+                              "flag_meanings": "outside_the_model not_exceeded exceeded"})
+    n, z = stripe_counts(np.moveaxis(analysis.exceeded, -1, 0))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        fraction = np.where(n > 0, z / n, np.nan)
+    variables["fraction_exceeded"] = (("damage_state", "level"), fraction,
+                                      {"units": "1", "long_name": "fraction of the runs inside the model "
+                                       "that reach the state (NaN: none inside)"})
+    per_state = ("damage_state",)
+    variables["definition"] = (per_state, np.array([s.long_name for s in analysis.states], dtype=object),
+                               {"long_name": "what reaching the state means (an overturned block reaches "
+                                "every state)"})
+    units = {"m": im.units, "b": "1"}
+    words = {"median": "median of the maximum-likelihood lognormal fit",
+             "beta": "logarithmic standard deviation of the maximum-likelihood lognormal fit",
+             "moments_median": "median by the method of moments on the first-exceedance levels",
+             "moments_beta": "logarithmic standard deviation by the method of moments"}
+    for name, unit in _FIT_FIELDS:
+        values = np.array([_nan(getattr(f, name)) for f in analysis.fits])
+        variables[name] = (per_state, values, {"units": units[unit], "long_name": f"{words[name]} (NaN: "
+                                               "no fit, see fit_note)"})
+        for side, i in (("lower", 0), ("upper", 1)):
+            bounds = np.array([_nan(None if getattr(f, f"{name}_ci") is None else getattr(f, f"{name}_ci")[i])
+                               for f in analysis.fits])
+            variables[f"{name}_{side}"] = (per_state, bounds, {
+                "units": units[unit], "long_name": f"{side} bound of the {CONFIDENCE:.0%} bootstrap "
+                f"interval of {name} (NaN: none)"})
+    for name, text in (("note", "fit_note"), ("moments_note", "moments_note")):
+        variables[text] = (per_state, np.array([getattr(f, name) for f in analysis.fits], dtype=object),
+                           {"long_name": "why there is no fit (empty: there is)"})
+    for name, text in (("n_runs", "runs"), ("n_outside_model", "runs outside the model (flight or "
+                                                               "painleve; not in the fits)"),
+                       ("n_exceeded", "runs that reach the state"),
+                       ("n_censored", "records that never reach the state up to the highest level"),
+                       ("resamples_fitted", "bootstrap resamples that support a fit")):
+        variables[name] = (per_state, np.array([getattr(f, name) for f in analysis.fits], dtype=np.int32),
+                           {"units": "1", "long_name": text})
+    m = fplan.measures
+    per_record = ("record",)
+    for key, unit, text in (("pga", "m/s^2", "peak horizontal ground acceleration"),
+                            ("pgv", "m/s", "peak horizontal ground velocity (baseline-corrected)"),
+                            ("pgv_pga", "s", "PGV / PGA"),
+                            ("im", im.units, f"intensity measure: {im.long_name}"),
+                            ("dt", "s", "sampling step"), ("duration", "s", "samples x sampling step")):
+        variables[f"record_{key}"] = (per_record, m[key], {"units": unit, "long_name": f"{text} of the "
+                                                            "record as read (unscaled)"})
+    for key in ("horizontal", "vertical"):
+        for name, text in ((f"{key}_file", "file name"), (f"{key}_sha256", "SHA-256 of the file")):
+            values = np.array([f[name.replace("_file", "")] for f in fplan.files], dtype=object)
+            variables[name] = (per_record, values, {"long_name": f"{key} record's {text} (empty: none)"})
+    attrs = {key: value for key, value in sw.root_attributes(plan, command_line).items()
+             if not key.startswith("record_") and key not in ("sweep_key", "mu_kinetic_ratio")}
+    attrs.update({
+        "title": f"rockslide fragility of {plan.case.name}: {fplan.describe()}",
+        "suite": str(fplan.suite.source),
+        "suite_text": fplan.suite.text,
+        "intensity_measure": im.name,
+        "intensity_measure_units": im.units,
+        "intensity_measure_long_name": im.long_name,
+        "intensity_measure_label": im.label,
+        "intensity_measure_display_unit": im.display_unit,
+        "intensity_measure_display_scale": im.display_scale,
+        "fit_method": "maximum likelihood over the stripes (binomial likelihood, Baker 2015), probit "
+                      "regression on ln(level); method of moments on the first-exceedance levels",
+        "bootstrap_resamples": analysis.fits[0].resamples if analysis.fits else 0,
+        "bootstrap_seed": BOOTSTRAP_SEED,
+        "confidence_level": CONFIDENCE,
+        "fragility_key": plan.key,
+        "vertical_factor": fplan.vertical_factor,
+    })
+    return coords, variables, attrs
+
+
+def _nan(value) -> float:
+    return math.nan if value is None else float(value)
+
+
+def json_summary(fplan: FragilityPlan, analysis: Analysis) -> dict:
+    """The ``--json`` object (SI units; null where there is no fit)."""
+    im = fplan.im
+    n, z = stripe_counts(np.moveaxis(analysis.exceeded, -1, 0))
+    out = {}
+    for state, fit, ns, zs in zip(analysis.states, analysis.fits, n, z, strict=True):
+        out[state.name] = {
+            "definition": state.long_name,
+            "median": fit.median, "beta": fit.beta,
+            "median_ci": _pair(fit.median_ci), "beta_ci": _pair(fit.beta_ci),
+            "n_runs": fit.n_runs, "n_outside_model": fit.n_outside_model, "n_exceeded": fit.n_exceeded,
+            "note": fit.note or None,
+            "resamples_fitted": fit.resamples_fitted,
+            "moments": {"median": fit.moments_median, "beta": fit.moments_beta,
+                        "median_ci": _pair(fit.moments_median_ci), "beta_ci": _pair(fit.moments_beta_ci),
+                        "n_censored": fit.n_censored, "note": fit.moments_note or None},
+            "fraction_exceeded": [None if k == 0 else float(x / k) for x, k in zip(zs, ns, strict=True)],
+        }
+    status = analysis.variables["status"][0]
+    return {
+        "name": fplan.plan.case.name,
+        "intensity_measure": {"name": im.name, "units": im.units, "long_name": im.long_name},
+        "levels": [float(v) for v in fplan.levels.values],
+        "records": fplan.names,
+        "damage_states": out,
+        "n_runs": int(status.size),
+        "n_outside_model": int((status != K.STATUS_OK).sum()),
+        "bootstrap": {"resamples": analysis.fits[0].resamples if analysis.fits else 0, "seed": BOOTSTRAP_SEED,
+                      "confidence": CONFIDENCE},
+    }
+
+
+def _pair(pair):
+    return None if pair is None else [float(pair[0]), float(pair[1])]
+
+
+def figure(fplan: FragilityPlan, analysis: Analysis):
+    """The PNG: fitted curves, the stripes' observed fractions and the confidence bands."""
+    title = f"{fplan.plan.case.name}: {fplan.describe()}"
+    return _figure(np.asarray(fplan.levels.values), analysis.exceeded, analysis.states, analysis.fits,
+                   fplan.im, title)
+
+
+def _figure(levels, exceeded, states, fits, im: IntensityMeasure, title: str):
+    grid = np.linspace(levels[-1] * 1e-3, levels[-1] * 1.1, 300)
+    lower_tail, upper_tail = 50.0 * (1.0 - CONFIDENCE), 100.0 - 50.0 * (1.0 - CONFIDENCE)
+    curves = []
+    for i, (state, fit) in enumerate(zip(states, fits, strict=True)):
+        n, z = stripe_counts(exceeded[..., i])
+        with np.errstate(invalid="ignore", divide="ignore"):
+            fraction = np.where(n > 0, z / n, np.nan)
+        curve = {"label": _legend(state, fit, im), "fraction": fraction}
+        if fit.median is not None:
+            curve["fitted"] = fragility(grid, fit.median, fit.beta)
+        if fit.moments_median is not None and fit.moments_beta > 0:
+            curve["moments"] = fragility(grid, fit.moments_median, fit.moments_beta)
+        if fit.samples.shape[0] >= 2:
+            band = fragility(grid[None, :], fit.samples[:, :1], fit.samples[:, 1:])
+            curve["band"] = np.percentile(band, [lower_tail, upper_tail], axis=0)
+        curves.append(curve)
+    return fragility_figure(levels / im.display_scale, grid / im.display_scale, curves, xlabel=im.axis_label(),
+                            confidence=CONFIDENCE, title=title)
+
+
+def describe_fit(state: DamageState, fit: StateFit, im: IntensityMeasure) -> str:
+    """One line on a state's fits (``rockslide fragility``'s summary)."""
+    counts = f"{fit.n_exceeded} of {fit.n_runs - fit.n_outside_model} runs reach it"
+    if fit.median is None:
+        line = f"{state.name}: {fit.note}"
+    else:
+        line = _legend(state, fit, im)
+        if fit.resamples and fit.resamples_fitted < fit.resamples:
+            line += f" ({fit.resamples_fitted} of {fit.resamples} resamples fitted)"
+    if fit.moments_median is not None:
+        line += f"; moments: median {im.show(fit.moments_median)}, β {fit.moments_beta:.2f}"
+    return f"{line}; {counts}"
+
+
+def _legend(state: DamageState, fit: StateFit, im: IntensityMeasure) -> str:
+    """``overturn: median 0.62 [0.55, 0.71] g, β 0.31 [0.22, 0.40]`` (with the confidence
+    intervals), or why there is no fit."""
+    if fit.median is None:
+        return f"{state.name}: {fit.note}"
+
+    def interval(pair, fmt):
+        return "" if pair is None else f" [{fmt(pair[0])}, {fmt(pair[1])}]"
+
+    unit = f" {im.display_unit}" if im.display_unit else ""
+    return (f"{state.name}: median {im.number(fit.median)}{interval(fit.median_ci, im.number)}{unit}, "
+            f"β {fit.beta:.2f}{interval(fit.beta_ci, lambda b: f'{b:.2f}')}")
+
+
+def stored_figure(stored) -> object:
+    """The same figure from a fragility file read back (`results.read_dataset`), for ``rockslide
+    plot``: the fits are recomputed from the stored exceedances (same resamples, same seed)."""
+    attrs = stored.attrs
+    coords = {name: values for name, values, _ in stored.coords}
+    variables = stored.variables
+    levels = np.asarray(coords["level"], dtype=np.float64)
+    exceeded = np.asarray(variables["exceeded"][1])
+    names = [str(v) for v in coords["damage_state"]]
+    definitions = [str(v) for v in variables["definition"][1]]
+    states = [DamageState(n, "", 0.0, d) for n, d in zip(names, definitions, strict=True)]
+    im = IntensityMeasure(str(attrs.get("intensity_measure", "")), "", str(attrs.get("intensity_measure_units", "")),
+                          str(attrs.get("intensity_measure_long_name", "")),
+                          str(attrs.get("intensity_measure_label", "IM")),
+                          str(attrs.get("intensity_measure_display_unit", "")),
+                          float(attrs.get("intensity_measure_display_scale", 1.0)))
+    resamples = int(attrs.get("bootstrap_resamples", BOOTSTRAP_RESAMPLES))
+    seed = int(attrs.get("bootstrap_seed", BOOTSTRAP_SEED))
+    fits = [fit_state(levels, exceeded[..., i], resamples=resamples, seed=seed, show=im.show)
+            for i in range(len(states))]
+    title = f"{attrs.get('name', 'fragility')}: {_describe(*exceeded.shape[:2], im.label)}"
+    return _figure(levels, exceeded, states, fits, im, title)
