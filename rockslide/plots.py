@@ -205,7 +205,9 @@ def response_figure(result, *, title: str = "", time_shift: float = 0.0,
     if window:
         zax = axes[1]
         _response_panel(zax, result, shift, (window[0] - shift, window[1] - shift), label="zoom")
-        zax.set_title(f"magnified: {window[0]:.2f} to {window[1]:.2f} s", loc="left", fontsize=10)
+        # round first: a pulse's ground starts a sample before 0 (-0.00 otherwise)
+        zax.set_title(f"magnified: {round(window[0], 2) + 0.0:.2f} to {window[1]:.2f} s", loc="left",
+                      fontsize=10)
     _ground_panel(ground, result, shift, (t0, t1))
     ground.set_label("ground")
     ground.set_xlim(t0 + shift, t1 + shift)
