@@ -326,7 +326,7 @@ def _axis_option(name: str, kind: str, what: str, example: str):
         return value
 
     units = ""
-    if kind == "acceleration":
+    if kind in ("acceleration", "time"):
         units = " Values may carry units as in case files (one unit for a range)."
     return click.option(f"--{name.replace('_', '-')}", name, default=None, metavar="SPEC", callback=remember,
                         help=f"{what}: START:STOP:STEP or a comma list, e.g. {example}.{units}")
@@ -346,6 +346,12 @@ def _axis_option(name: str, kind: str, what: str, example: str):
 @_axis_option("slenderness", "dimensionless", "Width / height of the block (the height kept)",
               "0.3:0.6:0.05")
 @_axis_option("gravity", "acceleration", "Gravitational acceleration (gravity)", "9.8,9.80665")
+@_axis_option("amplitude", "acceleration", "Amplitude of the horizontal pulse of a pulse case "
+              "(ground.horizontal.amplitude)", "0.2g:3g:0.1g")
+@_axis_option("period", "time", "Period of the horizontal pulse (ground.horizontal.period); with "
+              "--amplitude, an overturning spectrum", "0.1:1:0.05")
+@_axis_option("duration", "time", "Duration of a rectangular or half-sine horizontal pulse "
+              "(ground.horizontal.duration)", "0.05:0.5:0.01")
 @click.option("--mu-kinetic-ratio", type=float, default=None, metavar="R",
               help="mu_kinetic = R * mu_static for --mu (default: the case's ratio).")
 @records_dir_option
@@ -362,19 +368,23 @@ def _axis_option(name: str, kind: str, what: str, example: str):
               help="Cases per chunk (default: about 1/100 of the grid, 4 to 256). Part of the sweep's "
                    "definition: a different size does not resume an interrupted run.")
 @click.option("--no-progress", is_flag=True, help="No progress bar on stderr.")
-def sweep(case_file, mu, pga, vertical_factor, restitution, slenderness, gravity, mu_kinetic_ratio,
-          records_dir, out_dir, overwrite, no_plot, workers, scheduler, chunk_size, no_progress):
-    """Grid of cases over friction, intensity, vertical factor, restitution, slenderness or gravity:
-    CASE_FILE (YAML) -> OUT/NAME.sweep.h5 and OUT/NAME.sweep.png.
+def sweep(case_file, mu, pga, vertical_factor, restitution, slenderness, gravity, amplitude, period, duration,
+          mu_kinetic_ratio, records_dir, out_dir, overwrite, no_plot, workers, scheduler, chunk_size,
+          no_progress):
+    """Grid of cases over friction, intensity, vertical factor, restitution, slenderness or gravity,
+    or over a pulse's amplitude and period or duration: CASE_FILE (YAML) -> OUT/NAME.sweep.h5 and
+    OUT/NAME.sweep.png.
 
     Every point is the case file with the axis values replaced (and validated as a case file), run
     with the compiled kernel on all cores (or a dask cluster), without history. Dimension i of the
     result is the i-th axis option given. Finished chunks are kept in OUT/.NAME.sweep.chunks: after
-    Ctrl-C or a crash, the same command resumes where it stopped.
+    Ctrl-C or a crash, the same command resumes where it stopped. --amplitude with --period (or
+    --duration) of a pulse case draws an overturning spectrum.
 
     \b
     Example:
         rockslide sweep configs/example.yaml --mu 0.30:0.70:0.01 --pga 100gal:1000gal:25gal
+        rockslide sweep configs/spectrum-one-sine.yaml --amplitude 0.225g:2.5g:0.05g --period 0.14:1.7:0.04
     """
     from tqdm import tqdm
 

@@ -1,5 +1,5 @@
 """Analytic pulses as ground motion: their shapes and sampling (`rockslide.pulses`), case files,
-`rockslide run`.
+`rockslide run`, `rockslide sweep` over amplitude and period (overturning spectra) and their figure.
 
 The closed-form checks of the response are in tests/test_pulse_closed_forms.py; the bad inputs in
 tests/test_bad_input.py.
@@ -15,9 +15,12 @@ import pytest
 from click.testing import CliRunner
 
 from rockslide import pulses, results, runner
+from rockslide import sweep as sw
 from rockslide.case import Pulse, case_to_dict, case_with, parse_case
 from rockslide.cli import main
+from rockslide.core import batch
 from rockslide.core.simulate import ground_array, ground_series
+from rockslide.plots import SPECTRUM_CATEGORIES, spectrum_category, spectrum_figure
 
 EPS = pulses.INTERPOLATION_TOLERANCE
 
@@ -181,3 +184,119 @@ def test_run_writes_the_pulses_with_their_jumps(tmp_path):
     summary = results.read_result(tmp_path / "pulse.h5").result.summary
     assert (summary.max_rotation, summary.impacts) == (result.summary.max_rotation, result.summary.impacts)
     assert (tmp_path / "pulse.png").is_file()
+
+
+# ------------------------------------------------------------------------------------------------
+# Sweeps: overturning spectra
+# ------------------------------------------------------------------------------------------------
+
+SPECTRUM_CASE = """\
+name: spectrum
+block:   {height: 1.0 m, width: 0.25 m, mass: 100 kg}
+contact: {mu_static: 0.7, restitution: 0.912}
+ground:
+  horizontal: {pulse: one-sine, amplitude: 1 g, period: 0.5 s}
+  tail: 3 s
+"""
+
+
+@pytest.fixture(scope="module")
+def spectrum(tmp_path_factory):
+    """A small overturning spectrum through the command line: 4 amplitudes x 3 periods (three
+    records of different sampling steps in one batch)."""
+    folder = tmp_path_factory.mktemp("spectrum")
+    (folder / "spectrum.yaml").write_text(SPECTRUM_CASE)
+    done = CliRunner().invoke(main, ["sweep", str(folder / "spectrum.yaml"), "--amplitude", "0.5g,1g,1.5g,2.2g",
+                                     "--period", "0.12,0.6,1.5", "--out-dir", str(folder), "--no-progress"])
+    assert done.exit_code == 0, done.output
+    return folder
+
+
+def test_spectrum_points_equal_rockslide_run(spectrum):
+    """Every point of the grid equals `rockslide run` of the case with its amplitude and period,
+    to the last bit: the amplitude is the scale factor of the pulse sampled at amplitude 1, as run
+    multiplies it. The sweep records how each overturning came about."""
+    stored = results.read_sweep(spectrum / "spectrum.sweep.h5")
+    (_, amplitudes, _), (_, periods, _) = stored.coords
+    case = parse_case(SPECTRUM_CASE)
+    modes = set()
+    for i, a in enumerate(amplitudes):
+        for j, period in enumerate(periods):
+            point = case_with(case, {"ground.horizontal.amplitude": f"{float(a)!r} m/s^2",
+                                     "ground.horizontal.period": f"{float(period)!r} s"})
+            summary = runner.run_case(point, history=False)[1].summary
+            value = {name: stored.variables[name][0][i, j] for name in stored.variables}
+            assert value["overturned"] == summary.overturned
+            assert value["max_rotation"] == summary.max_rotation and value["impacts"] == summary.impacts
+            assert value["end_time"] == summary.end_time
+            expected = 0 if not summary.overturned else (1 if summary.impacts == 0 else 2)
+            assert value["overturn_mode"] == expected
+            modes.add(expected)
+    assert modes == {0, 1, 2}
+
+
+def test_spectrum_file_and_figure(spectrum):
+    """The file carries the spectrum's scales (p, g tan(alpha), ...) and the figure is the
+    dimensionless spectrum; `rockslide plot` draws it again from the file alone."""
+    stored = results.read_sweep(spectrum / "spectrum.sweep.h5")
+    p = math.sqrt(0.75 * 9.80665 / math.hypot(0.125, 0.5))
+    assert stored.attrs["spectrum_rocking_frequency"] == pytest.approx(p, rel=1e-15)
+    assert stored.attrs["spectrum_liftoff_acceleration"] == pytest.approx(0.25 * 9.80665, rel=1e-15)
+    assert stored.attrs["spectrum_pulse"] == "one-sine"
+    figure = sw.stored_figure(stored)
+    regions = next(ax for ax in figure.axes if ax.get_label() == "regions")
+    assert "ω_p / p" in regions.get_xlabel() and "a_p / (g tan α)" in regions.get_ylabel()
+    lines = [line.get_label() for line in figure.legends[0].get_lines()]
+    assert any("small-angle theory" in label for label in lines)
+    done = CliRunner().invoke(main, ["plot", str(spectrum / "spectrum.sweep.h5"), "-o", str(spectrum / "again.png")])
+    assert done.exit_code == 0 and (spectrum / "again.png").stat().st_size > 10_000
+
+
+def test_duration_sweep_of_a_rectangular_pulse(tmp_path):
+    """``--duration`` on a rectangular pulse: the points straddling the critical duration of
+    tests/test_pulse_closed_forms.py fall on both sides of it."""
+    from test_pulse_closed_forms import critical_duration
+
+    text = SPECTRUM_CASE.replace("{pulse: one-sine, amplitude: 1 g, period: 0.5 s}",
+                                 "{pulse: rectangular, amplitude: 0.5 g, duration: 0.2 s}")
+    case = parse_case(text, source="rect.yaml")
+    R, alpha = math.hypot(0.125, 0.5), math.atan(0.25)
+    td = critical_duration(0.5 * 9.80665, alpha, R)
+    axes = [sw.parse_axis("duration", f"{0.999 * td!r},{1.001 * td!r}")]
+    plan = sw.plan_sweep(case, axes)
+    states = batch.compute(plan.params, plan.states, plan.base, plan.first, plan.count, plan.factor_h,
+                           plan.factor_v)
+    variables = sw.sweep_variables(plan, states)
+    np.testing.assert_array_equal(variables["overturn_mode"][0], [0, 1])
+
+
+@pytest.mark.parametrize("case, axis, message", [
+    ("configs/example.yaml", ["--amplitude", "1g"],
+     "--amplitude: applies to a case whose ground.horizontal is a pulse"),
+    ("spectrum", ["--pga", "500gal"], "--pga: scales record files; a pulse is scaled by its amplitude"),
+    ("spectrum", ["--duration", "0.2"], "--duration: ground.horizontal.duration: a one-sine pulse takes period"),
+])
+def test_pulse_axes_on_the_wrong_case(tmp_path, case, axis, message):
+    from conftest import REPO
+
+    path = REPO / case if case.endswith(".yaml") else tmp_path / "spectrum.yaml"
+    if not case.endswith(".yaml"):
+        path.write_text(SPECTRUM_CASE)
+    done = CliRunner().invoke(main, ["sweep", str(path), *axis, "--out-dir", str(tmp_path), "--no-progress",
+                                     "--records-dir", str(REPO / "records")])
+    assert done.exit_code == 2 and message in done.stderr, done.stderr
+
+
+def test_spectrum_categories_and_figure_shapes():
+    """Precedence of the regions: outside the model, overturned (without / after impact), rocking
+    (lifted off, slipping or not), sliding (upright slip only), no liftoff."""
+    overturned = np.array([0, 0, 0, 0, 1, 1, 1])
+    status = np.array([0, 0, 0, 0, 0, 0, 1])
+    modes = np.array([0, 1, 2, 5, 2, 2, 2])
+    impacts = np.array([0, 0, 3, 1, 0, 2, 0])
+    codes = spectrum_category(overturned, status, modes, impacts)
+    assert [SPECTRUM_CATEGORIES[c] for c in codes] == [
+        "no liftoff", "sliding", "rocking", "rocking", "overturning without impact", "overturning with impact",
+        "outside the model"]
+    with pytest.raises(ValueError, match="expected maps of shape"):
+        spectrum_figure([1.0, 2.0], [1.0], np.zeros((2, 2)), np.zeros((2, 2)))
