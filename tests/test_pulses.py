@@ -13,6 +13,7 @@ import h5py
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from conftest import REPO
 
 from rockslide import pulses, results, runner
 from rockslide import sweep as sw
@@ -190,14 +191,9 @@ def test_run_writes_the_pulses_with_their_jumps(tmp_path):
 # Sweeps: overturning spectra
 # ------------------------------------------------------------------------------------------------
 
-SPECTRUM_CASE = """\
-name: spectrum
-block:   {height: 1.0 m, width: 0.25 m, mass: 100 kg}
-contact: {mu_static: 0.7, restitution: 0.912}
-ground:
-  horizontal: {pulse: one-sine, amplitude: 1 g, period: 0.5 s}
-  tail: 3 s
-"""
+#: The shipped spectrum case (make spectrum), named "spectrum".
+SPECTRUM_CASE = (REPO / "configs" / "spectrum-one-sine.yaml").read_text().replace(
+    "name: spectrum-one-sine", "name: spectrum")
 
 
 @pytest.fixture(scope="module")
@@ -257,8 +253,9 @@ def test_duration_sweep_of_a_rectangular_pulse(tmp_path):
     tests/test_pulse_closed_forms.py fall on both sides of it."""
     from test_pulse_closed_forms import critical_duration
 
-    text = SPECTRUM_CASE.replace("{pulse: one-sine, amplitude: 1 g, period: 0.5 s}",
+    text = SPECTRUM_CASE.replace("{pulse: one-sine, amplitude: 1.0 g, period: 0.5 s}",
                                  "{pulse: rectangular, amplitude: 0.5 g, duration: 0.2 s}")
+    assert "rectangular" in text
     case = parse_case(text, source="rect.yaml")
     R, alpha = math.hypot(0.125, 0.5), math.atan(0.25)
     td = critical_duration(0.5 * 9.80665, alpha, R)
@@ -277,8 +274,6 @@ def test_duration_sweep_of_a_rectangular_pulse(tmp_path):
     ("spectrum", ["--duration", "0.2"], "--duration: ground.horizontal.duration: a one-sine pulse takes period"),
 ])
 def test_pulse_axes_on_the_wrong_case(tmp_path, case, axis, message):
-    from conftest import REPO
-
     path = REPO / case if case.endswith(".yaml") else tmp_path / "spectrum.yaml"
     if not case.endswith(".yaml"):
         path.write_text(SPECTRUM_CASE)
