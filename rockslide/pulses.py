@@ -4,7 +4,7 @@ A pulse is a ground motion defined by a formula instead of a record file (`Pulse
 ``ground.horizontal: {pulse: one-sine, amplitude: 0.5 g, period: 0.4 s}``). Near-fault records are
 pulse-like, and the rocking literature reads a block's safety off its response to pulses
 (Housner 1963; Zhang and Makris 2001). Every shape starts at ``t = 0`` and is zero after its
-length ``L``; ``s = t / L`` below. With ``A`` the amplitude:
+length ``L``. With ``A`` the amplitude:
 
 ============== =========== ============================================ ==============================
 shape          parameter   acceleration on ``0 <= t <= L``              length ``L``, frequency ``w_p``
@@ -32,9 +32,9 @@ the largest that keeps it within `INTERPOLATION_TOLERANCE` (one part per million
 amplitude, ``D <= sqrt(8e-6 A / max|a''|)`` (``max|a''| = A w_p^2`` for the sines,
 ``6 A (pi / T)^2`` for the Ricker wavelet), and no larger than the solver's step. At the default
 0.1 ms step this costs nothing for ``w_p <= 28 rad/s`` (sine periods from 0.22 s up) and samples
-shorter pulses more finely. The response's error from it is of the same relative size (2e-6 on
-Newmark's slip under a half-sine, `tests/test_pulses.py`), far below the resolution of any
-spectrum and of the closed-form checks' tolerances. Two pulses (horizontal and vertical) share
+shorter pulses more finely. The response's error from it is of the same relative size (up to
+1.6e-6 on Newmark's slip under a half-sine, `tests/test_pulse_closed_forms.py`), far below the
+resolution of any spectrum. Two pulses (horizontal and vertical) share
 one grid: the ratio of their lengths must be a fraction with a denominator of at most
 `MAX_DENOMINATOR`.
 
