@@ -8,7 +8,7 @@ endif
 RECORDS ?= $(if $(wildcard ../shared/records/*),../shared/records,records)
 export ROCKSLIDE_RECORDS := $(abspath $(RECORDS))
 
-.PHONY: help install test test-fast check lint bench table1 example records clean
+.PHONY: help install test test-fast check lint bench table1 example spectrum records clean
 
 help:
 	@echo "make install   install rockslide with its test tools (pip install -e '.[test]')"
@@ -18,6 +18,7 @@ help:
 	@echo "make bench     speed and accuracy benchmarks -> results/bench.md, bench_sweep.md, bench_fragility.md, work_precision.png"
 	@echo "make table1    the paper's Table 1 and Figures 5-10 -> results/ (needs the paper's records)"
 	@echo "make example   run configs/example.yaml"
+	@echo "make spectrum  an overturning spectrum under one-sine pulses -> results/spectrum.png"
 	@echo "make records   regenerate the synthetic records shipped in records/"
 
 install:
@@ -45,6 +46,11 @@ table1:
 
 example:
 	$(PYTHON) -m rockslide run configs/example.yaml --overwrite
+
+spectrum:
+	$(PYTHON) -m rockslide.cli sweep configs/spectrum-one-sine.yaml --amplitude 0.225g:2.5g:0.05g \
+		--period 0.14:1.7:0.04 --out-dir out --overwrite --no-plot
+	$(PYTHON) -m rockslide.cli plot out/spectrum-one-sine.sweep.h5 -o results/spectrum.png
 
 records:
 	$(PYTHON) records/make_example_records.py

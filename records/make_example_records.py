@@ -11,20 +11,10 @@ of the synthetic suite in `suite-synthetic/` (listed by `suite-synthetic.yaml`).
 
 from pathlib import Path
 
-from rockslide.example import write_records
-from rockslide.records import write_at2
-from rockslide.synthetic import SUITE, suite_pair
+from rockslide.example import write_records, write_suite_records
 
 HERE = Path(__file__).resolve().parent
 
 if __name__ == "__main__":
     print("wrote", " and ".join(str(p) for p in write_records(HERE)))
-    folder = HERE / "suite-synthetic"
-    folder.mkdir(exist_ok=True)
-    for name, (seed, *_) in SUITE.items():
-        horizontal, vertical = suite_pair(name)
-        write_at2(folder / f"{name}_h.at2", horizontal, 0.01,
-                  title=f"rockslide synthetic suite record {name}, seed {seed}", component="horizontal")
-        write_at2(folder / f"{name}_v.at2", vertical, 0.01,
-                  title=f"rockslide synthetic suite record {name}, seed {seed + 100}", component="vertical")
-    print("wrote", len(SUITE), "pairs in", folder)
+    print("wrote", len(write_suite_records(HERE)), "records in", HERE / "suite-synthetic")

@@ -32,6 +32,7 @@ from pathlib import Path
 import yaml
 
 from .errors import CaseError
+from .pulses import SHAPES, Pulse, common_intervals
 from .units import SI_UNITS, STANDARD_GRAVITY, UNIT_REQUIRED, UNITS, parse_quantity, unit_factor, written_unit
 
 __all__ = [
@@ -42,6 +43,7 @@ __all__ = [
     "Ground",
     "Initial",
     "Output",
+    "Pulse",
     "RecordSpec",
     "Scale",
     "Solver",
@@ -173,22 +175,24 @@ class Scale:
 
 @dataclass(frozen=True)
 class Ground:
-    """The ground motion: one or two records, their scaling and timing.
+    """The ground motion: one or two records (files or analytic pulses), their scaling and timing.
 
     Parameters
     ----------
-    horizontal, vertical : RecordSpec or None
-        The records; without either, the ground is still and ``tail`` is a free vibration.
+    horizontal, vertical : RecordSpec, Pulse or None
+        The records; without either, the ground is still and ``tail`` is a free vibration. Both are
+        files or both are pulses (:class:`~rockslide.pulses.Pulse`: a pulse has its own amplitude and
+        is not scaled).
     scale : Scale
-        Scaling of the records.
+        Scaling of the record files.
     tail : float
         Free-vibration time appended after the record ends [s], >= 0.
     time_shift : float
         Time shift applied to the records [s] (see :mod:`rockslide.records`).
     """
 
-    horizontal: RecordSpec | None
-    vertical: RecordSpec | None
+    horizontal: RecordSpec | Pulse | None
+    vertical: RecordSpec | Pulse | None
     scale: Scale
     tail: float = 0.0
     time_shift: float = 0.0
@@ -297,7 +301,8 @@ _NAME_RE = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]*")
 
 # Types that are not a quantity kind (those are the keys of units.UNITS):
 #   mapping      a section; its keys in "keys"
-#   record       a record spec: a file name or a mapping with the keys in "keys"
+#   record       a record: a file name, a mapping with the file keys (_FILE_KEYS) or a mapping with
+#                the pulse keys (_PULSE_KEYS); "keys" holds both
 #   name         a string matching NAME_PATTERN
 #   string       a non-empty string
 #   choice       one of the strings in "choices"
@@ -321,9 +326,9 @@ def _key(type_: str, doc: str, *, required: bool = False, default=None, bounds=(
     return spec
 
 
-_RECORD_KEYS = {
-    "file": _key("string", "accelerogram file; a relative name resolves against the case file's "
-                 "folder first", required=True),
+_FILE_KEYS = {
+    "file": _key("string", "accelerogram file (or, instead, 'pulse'); a relative name resolves "
+                 "against the case file's folder first", required=True),
     "format": _key("string", "file format (default: detected from the file)"),
     "units": _key("accel_unit", "acceleration unit of the values, e.g. 'g', 'gal', 'm/s^2' "
                   "(default: from the file)"),
@@ -333,6 +338,18 @@ _RECORD_KEYS = {
                bounds=[(">", 0.0)]),
     "skip_lines": _key("count", "lines to skip before the data", default=0),
 }
+
+_PULSE_KEYS = {
+    "pulse": _key("choice", "an analytic pulse instead of a file: " + ", ".join(SHAPES), required=True,
+                  choices=list(SHAPES)),
+    "amplitude": _key("acceleration", "the pulse's peak acceleration (signed), e.g. '0.5 g'", required=True),
+    "duration": _key("time", "length of a rectangular or half-sine pulse", bounds=[(">", 0.0)]),
+    "period": _key("time", "period of a one-sine, cycloidal or ricker pulse", bounds=[(">", 0.0)]),
+    "cycles": _key("count", "number of cycles of a cycloidal pulse", default=1),
+}
+
+#: A record's keys: a file's, then a pulse's (one or the other is given).
+_RECORD_KEYS = {**_FILE_KEYS, **_PULSE_KEYS}
 
 CASE_KEYS: dict[str, dict] = {
     "name": _key("name", "case name, used in output file names: letters, digits, '.', '_', '-'",
@@ -355,10 +372,11 @@ CASE_KEYS: dict[str, dict] = {
     "ground": _key("mapping", "ground motion: horizontal and/or vertical records, or none for a free "
                    "vibration over tail", required=True,
                    keys={
-        "horizontal": _key("record", "horizontal record: a file name or a mapping",
+        "horizontal": _key("record", "horizontal record: a file name, or a mapping with file or pulse",
                            keys=_RECORD_KEYS),
-        "vertical": _key("record", "vertical record: a file name or a mapping", keys=_RECORD_KEYS),
-        "scale": _key("mapping", "scaling of the records", keys={
+        "vertical": _key("record", "vertical record: a file name, or a mapping with file or pulse",
+                         keys=_RECORD_KEYS),
+        "scale": _key("mapping", "scaling of the record files", keys={
             "pga_horizontal": _key("acceleration", "scale the horizontal record to this peak "
                                    "acceleration (exclusive with factor)", bounds=[(">", 0.0)]),
             "factor": _key("dimensionless", "multiply the records by this factor (exclusive with "
@@ -703,12 +721,7 @@ def _read_value(value, spec: dict, path: str, ctx: _Ctx):
     if kind == "mapping":
         return _read_mapping(value, spec["keys"], path, ctx, "a mapping")
     if kind == "record":
-        if isinstance(value, str):
-            value = {"file": value}
-        elif not isinstance(value, Mapping):
-            ctx.fail(path, f"expected a file name or a mapping (keys: {', '.join(spec['keys'])}), "
-                     f"got {_show(value)}")
-        return _read_mapping(value, spec["keys"], path, ctx, "a file name or a mapping")
+        return _read_record(value, path, ctx)
     if kind in UNITS:
         return _read_quantity(value, spec, path, ctx)
     if kind == "name":
@@ -751,6 +764,47 @@ def _read_value(value, spec: dict, path: str, ctx: _Ctx):
                      f"got {_show(value)}")
         return value
     raise AssertionError(f"schema error: unknown type {kind!r} at {path}")  # pragma: no cover
+
+
+def _read_record(value, path: str, ctx: _Ctx) -> dict:
+    """A record: a file name, a mapping with ``file`` (`_FILE_KEYS`) or one with ``pulse``
+    (`_PULSE_KEYS`); a key of the other kind is named as such."""
+    if isinstance(value, str):
+        value = {"file": value}
+    elif not isinstance(value, Mapping):
+        ctx.fail(path, f"expected a file name or a mapping with file (keys: {', '.join(_FILE_KEYS)}) or "
+                 f"pulse (keys: {', '.join(_PULSE_KEYS)}), got {_show(value)}")
+    pulse = value.get("pulse") is not None
+    keys, other = (_PULSE_KEYS, _FILE_KEYS) if pulse else (_FILE_KEYS, _PULSE_KEYS)
+    for key, item in value.items():
+        if key in other and item is not None:
+            if pulse:
+                ctx.fail(f"{path}.{key}", "is a key of a record file, not of a pulse (a pulse takes: "
+                         f"{', '.join(_PULSE_KEYS)}); give either file or pulse")
+            ctx.fail(f"{path}.{key}", f"is a key of a pulse; give 'pulse' too (one of: {', '.join(SHAPES)}), "
+                     f"or the keys of a record file: {', '.join(_FILE_KEYS)}")
+    data = _read_mapping({k: v for k, v in value.items() if k not in other}, keys, path, ctx,
+                         "a pulse" if pulse else "a file name or a mapping")
+    if pulse:
+        _check_pulse(data, path, ctx)
+    return data
+
+
+def _check_pulse(data: dict, path: str, ctx: _Ctx) -> None:
+    """The keys a pulse's shape takes (`pulses.SHAPES`): its duration or its period, and cycles."""
+    name = data["pulse"]
+    shape = SHAPES[name]
+    wanted = shape.parameter
+    unwanted = "period" if wanted == "duration" else "duration"
+    if data[unwanted] is not None:
+        ctx.fail(f"{path}.{unwanted}", f"a {name} pulse takes {wanted}, not {unwanted}")
+    if data[wanted] is None:
+        ctx.fail(f"{path}.{wanted}", f"missing: a {name} pulse needs its {wanted} [s]")
+    if data["cycles"] < 1:
+        ctx.fail(f"{path}.cycles", f"must be at least 1, got {data['cycles']}")
+    if data["cycles"] != 1 and not shape.cycles:
+        ctx.fail(f"{path}.cycles", f"only the cycloidal pulses (cycloidal-a, cycloidal-b) take cycles; "
+                 f"a {name} pulse has none, got {data['cycles']}")
 
 
 _OPS = {
@@ -810,6 +864,7 @@ def _cross_checks(raw: dict, ctx: _Ctx) -> None:
         ctx.fail("ground", "needs a record (ground.horizontal or ground.vertical: a file name or a "
                  "mapping with 'file'), or, for a free vibration without record, a ground.tail "
                  "(e.g. 'tail: 5 s') and initial conditions")
+    _pulse_checks(ground, ctx)
     if scale["pga_horizontal"] is not None and scale["factor"] is not None:
         ctx.fail("ground.scale", f"pga_horizontal ({_with_unit(scale['pga_horizontal'], 'm/s^2')}) "
                  f"and factor ({_num(scale['factor'])}) are exclusive: give one of them")
@@ -840,6 +895,32 @@ def _cross_checks(raw: dict, ctx: _Ctx) -> None:
                      f" got {_with_unit(interval, 's')} ({_num(ratio)} steps)")
 
 
+def _pulse_checks(ground: dict, ctx: _Ctx) -> None:
+    """Pulses and files do not mix (a pulse has no sampling step to share with a file), pulses are
+    not scaled (the amplitude is the scale), and two pulses need a common sampling step."""
+    roles = [r for r in ("horizontal", "vertical") if ground[r] is not None]
+    pulses = {r: Pulse(**ground[r]) for r in roles if "pulse" in ground[r]}
+    if not pulses:
+        return
+    if len(pulses) != len(roles):
+        file_role = next(r for r in roles if r not in pulses)
+        pulse_role = next(iter(pulses))
+        ctx.fail(f"ground.{file_role}", f"is a record file while ground.{pulse_role} is a pulse: give "
+                 "both as pulses or both as files")
+    scale = ground["scale"]
+    given = [k for k in ("pga_horizontal", "factor", "pga_vertical") if scale[k] is not None]
+    if scale["vertical_factor"] != 1.0:
+        given.append("vertical_factor")
+    if given:
+        ctx.fail(f"ground.scale.{given[0]}", "scales record files; a pulse is scaled by its amplitude "
+                 f"(ground.{next(iter(pulses))}.amplitude)")
+    if len(pulses) == 2:
+        try:
+            common_intervals([p.length for p in pulses.values()])
+        except ValueError as exc:
+            ctx.fail("ground.vertical", f"the horizontal and vertical pulses do not share a sampling grid: {exc}")
+
+
 def _build(data, *, source: str, base_dir: Path | None, text: str, si_numbers: bool = False) -> Case:
     ctx = _Ctx(source, si_numbers)
     if data is None:
@@ -850,7 +931,7 @@ def _build(data, *, source: str, base_dir: Path | None, text: str, si_numbers: b
     raw = _read_mapping(data, CASE_KEYS, "", ctx, "a mapping")
     _cross_checks(raw, ctx)
     ground = raw["ground"]
-    records = {k: None if ground[k] is None else RecordSpec(**ground[k])
+    records = {k: None if ground[k] is None else (Pulse if "pulse" in ground[k] else RecordSpec)(**ground[k])
                for k in ("horizontal", "vertical")}
     sections = {path: cls(**_at(raw, path)) for path, cls in _SECTIONS.items()}
     return Case(

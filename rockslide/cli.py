@@ -351,7 +351,9 @@ def table1(records_dir, configs, out, old_out):
 def example(folder, overwrite):
     """Write the shipped example into FOLDER (default: ./example): example.yaml, the paper's block on
     the project's own synthetic records, and those two records (synthetic_kt_h.at2,
-    synthetic_kt_v.at2), so that the examples of every command's --help work anywhere.
+    synthetic_kt_v.at2); suite-synthetic.yaml, a suite of six synthetic record pairs (in
+    suite-synthetic/) for 'rockslide fragility'; spectrum-one-sine.yaml, a block under a one-sine
+    pulse for overturning spectra. The examples of every command's --help work anywhere after it.
 
     \b
     Example:
@@ -422,6 +424,8 @@ def _axis_option(name: str, kind: str, what: str, example: str):
     units = ""
     if kind == "acceleration":
         units = " Values need a unit (g, gal, cm/s^2, m/s^2) as in case files; one unit for a range."
+    elif kind == "time":
+        units = " Values may carry units as in case files (one unit for a range)."
     return click.option(f"--{name.replace('_', '-')}", name, default=None, metavar="SPEC", callback=remember,
                         help=f"{what}: START:STOP:STEP or a comma list, e.g. {example}.{units}")
 
@@ -440,6 +444,12 @@ def _axis_option(name: str, kind: str, what: str, example: str):
 @_axis_option("slenderness", "dimensionless", "Width / height of the block (the height kept)",
               "0.3:0.6:0.05")
 @_axis_option("gravity", "acceleration", "Gravitational acceleration (gravity)", "9.8m/s^2,9.80665m/s^2")
+@_axis_option("amplitude", "acceleration", "Amplitude of the horizontal pulse of a pulse case "
+              "(ground.horizontal.amplitude)", "0.2g:3g:0.1g")
+@_axis_option("period", "time", "Period of the horizontal pulse (ground.horizontal.period); with "
+              "--amplitude, an overturning spectrum", "0.1:1:0.05")
+@_axis_option("duration", "time", "Duration of a rectangular or half-sine horizontal pulse "
+              "(ground.horizontal.duration)", "0.05:0.5:0.01")
 @click.option("--mu-kinetic-ratio", type=float, default=None, metavar="R",
               help="mu_kinetic = R * mu_static for --mu (default: the case's ratio).")
 @records_dir_option
@@ -458,19 +468,23 @@ def _axis_option(name: str, kind: str, what: str, example: str):
 @click.option("--no-progress", is_flag=True,
               help="No progress bar on stderr (there is none anyway when stderr is not a terminal).")
 @dpi_option("PNG maps")
-def sweep(case_file, mu, pga, vertical_factor, restitution, slenderness, gravity, mu_kinetic_ratio,
-          records_dir, out_dir, overwrite, no_plot, workers, scheduler, chunk_size, no_progress, dpi):
-    """Grid of cases over friction, intensity, vertical factor, restitution, slenderness or gravity:
-    CASE_FILE (YAML) -> OUT/NAME.sweep.h5 and OUT/NAME.sweep.png.
+def sweep(case_file, mu, pga, vertical_factor, restitution, slenderness, gravity, amplitude, period, duration,
+          mu_kinetic_ratio, records_dir, out_dir, overwrite, no_plot, workers, scheduler, chunk_size,
+          no_progress, dpi):
+    """Grid of cases over friction, intensity, vertical factor, restitution, slenderness or gravity,
+    or over a pulse's amplitude and period or duration: CASE_FILE (YAML) -> OUT/NAME.sweep.h5 and
+    OUT/NAME.sweep.png.
 
     Every point is the case file with the axis values replaced (and validated as a case file), run
     with the compiled kernel on all cores (or a dask cluster), without history. Dimension i of the
     result is the i-th axis option given. Finished chunks are kept in OUT/.NAME.sweep.chunks: after
-    Ctrl-C or a crash, the same command resumes where it stopped.
+    Ctrl-C or a crash, the same command resumes where it stopped. --amplitude with --period (or
+    --duration) of a pulse case draws an overturning spectrum.
 
     \b
     Example:
         rockslide sweep example/example.yaml --mu 0.30:0.70:0.01 --pga 100gal:1000gal:25gal
+        rockslide sweep example/spectrum-one-sine.yaml --amplitude 0.25g:2.5g:0.25g --period 0.2:1.6:0.2
     """
     from . import records, results
     from . import sweep as sw
@@ -558,9 +572,9 @@ def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, 
 
     \b
     Example:
-        rockslide fragility configs/example.yaml --suite records/suite-synthetic.yaml --levels 0.1g:1.5g:0.1g
-        rockslide fragility configs/example.yaml --suite ../shared/records/suite-slammer --units g \\
-            --im 'sa(0.3s)' --levels 0.25g:4g:0.25g --damage 'rotation>0.5alpha' --damage 'slip>50mm' --json
+        rockslide fragility example/example.yaml --suite example/suite-synthetic.yaml --levels 0.1g:1.5g:0.1g
+        rockslide fragility example/example.yaml --suite example/suite-synthetic.yaml --json \\
+            --im 'sa(0.3s)' --levels 0.25g:3g:0.25g --damage 'rotation>0.5alpha' --damage 'slip>50mm'
     """
     from . import fragility as fr
     from . import records, results

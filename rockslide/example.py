@@ -1,6 +1,10 @@
 """The shipped example, for a new user anywhere (``rockslide example``): its case file (package data,
 ``rockslide/example.yaml``) and its two synthetic records, made by `synthetic.example_pair`
-exactly as ``records/make_example_records.py`` makes the copies in the repository."""
+exactly as ``records/make_example_records.py`` makes the copies in the repository; the synthetic
+record suite (``suite-synthetic.yaml`` and its records, `synthetic.suite_pair`) for
+``rockslide fragility``; and a pulse case (``spectrum-one-sine.yaml``) for overturning spectra.
+The YAML files are package data, identical to the repository's ``configs/example.yaml``,
+``records/suite-synthetic.yaml`` and ``configs/spectrum-one-sine.yaml`` (a test says so)."""
 
 from __future__ import annotations
 
@@ -9,17 +13,20 @@ from pathlib import Path
 
 from .files import atomic_write, check_destination
 from .records import write_at2
-from .synthetic import example_pair
+from .synthetic import SUITE, example_pair, suite_pair
 
 CASE_FILE = "example.yaml"
+SUITE_FILE = "suite-synthetic.yaml"
+SPECTRUM_FILE = "spectrum-one-sine.yaml"
 #: The example's records: file name, seed (in the title), component.
 RECORDS = (("synthetic_kt_h.at2", 1995, "horizontal"), ("synthetic_kt_v.at2", 1996, "vertical"))
 RECORD_DT = 0.01   # [s]
 
 
-def case_text() -> str:
-    """The example's case file (its records named as files beside it)."""
-    return resources.files("rockslide").joinpath(CASE_FILE).read_text(encoding="utf-8")
+def case_text(name: str = CASE_FILE) -> str:
+    """A shipped YAML file: the example's case file (its records named as files beside it), the
+    suite file or the spectrum case."""
+    return resources.files("rockslide").joinpath(name).read_text(encoding="utf-8")
 
 
 def write_records(folder) -> list[Path]:
@@ -32,9 +39,28 @@ def write_records(folder) -> list[Path]:
     return paths
 
 
+def suite_record_names() -> list[str]:
+    """The synthetic suite's record files, relative to the suite file's folder."""
+    return [f"suite-synthetic/{name}_{part}.at2" for name in SUITE for part in ("h", "v")]
+
+
+def write_suite_records(folder) -> list[Path]:
+    """Write the synthetic suite's records into ``folder/suite-synthetic`` (replacing them)."""
+    records = Path(folder) / "suite-synthetic"
+    records.mkdir(parents=True, exist_ok=True)
+    paths = []
+    for name, (seed, *_) in SUITE.items():
+        for values, part, component, record_seed in zip(suite_pair(name), ("h", "v"), ("horizontal", "vertical"),
+                                                        (seed, seed + 100), strict=True):
+            paths.append(write_at2(records / f"{name}_{part}.at2", values, RECORD_DT, component=component,
+                                   title=f"rockslide synthetic suite record {name}, seed {record_seed}"))
+    return paths
+
+
 def write_example(folder, *, overwrite: bool = False) -> list[Path]:
-    """Write ``folder/example.yaml`` and its records; nothing is written if one of the three exists
-    and ``overwrite`` is false.
+    """Write ``folder/example.yaml`` and its records, ``folder/suite-synthetic.yaml`` and its
+    records, and ``folder/spectrum-one-sine.yaml``; nothing is written if one of them exists and
+    ``overwrite`` is false.
 
     Raises
     ------
@@ -42,9 +68,11 @@ def write_example(folder, *, overwrite: bool = False) -> list[Path]:
         A file exists (without ``overwrite``), or the folder cannot be created or written.
     """
     folder = Path(folder)
-    names = [CASE_FILE] + [name for name, _, _ in RECORDS]
+    texts = (CASE_FILE, SUITE_FILE, SPECTRUM_FILE)
+    names = [*texts, *(name for name, _, _ in RECORDS), *suite_record_names()]
     for name in names:
         check_destination(folder / name, overwrite=overwrite, example="example/example.yaml")
-    with atomic_write(folder / CASE_FILE, overwrite=overwrite, mode="w", what="case file") as handle:
-        handle.write(case_text())
-    return [folder / CASE_FILE] + write_records(folder)
+    for name in texts:
+        with atomic_write(folder / name, overwrite=overwrite, mode="w", what="case file") as handle:
+            handle.write(case_text(name))
+    return [folder / name for name in texts] + write_records(folder) + write_suite_records(folder)

@@ -277,7 +277,9 @@ def response_figure(result, *, title: str = "", time_shift: float = 0.0,
     if window:
         zax = axes[1]
         _response_panel(zax, result, shift, (window[0] - shift, window[1] - shift), label="zoom")
-        zax.set_title(f"magnified: {window[0]:.2f} to {window[1]:.2f} s", loc="left", fontsize=10)
+        # round first: a pulse's ground starts a sample before 0 (-0.00 otherwise)
+        zax.set_title(f"magnified: {round(window[0], 2) + 0.0:.2f} to {window[1]:.2f} s", loc="left",
+                      fontsize=10)
     _ground_panel(ground, result, shift, (t0, t1))
     ground.set_label("ground")
     ground.set_xlim(t0 + shift, t1 + shift)
@@ -837,6 +839,112 @@ def fragility_figure(levels, grid, curves, *, xlabel: str, confidence: float, ti
 
 
 # --------------------------------------------------------------------------------------------------
+# Overturning spectra
+# --------------------------------------------------------------------------------------------------
+
+#: The regions of an overturning spectrum, codes 0 to 5 (`spectrum_category`).
+SPECTRUM_CATEGORIES = ("no liftoff", "sliding", "rocking", "overturning with impact",
+                       "overturning without impact", "outside the model")
+SPECTRUM_COLOURS = ("#ffffff", "#f5c07a", "#9fd39a", "#8c6bb1", "#3a3a3a", "#d9534f")
+THEORY_COLOURS = ("#1f4e9c", "#e6550d", "#000000")
+
+
+def spectrum_category(overturned, status, modes, impacts) -> np.ndarray:
+    """The region of each point of an overturning spectrum (codes index `SPECTRUM_CATEGORIES`).
+
+    Precedence: outside the model (``status != 0``); overturned, without or with an impact before
+    (``impacts``: the run stops at overturning); rocking if the block lifted off (``modes`` bits 2
+    or 4, slipping or not); sliding if it slipped upright only (bit 1); else no liftoff.
+    """
+    modes = np.asarray(modes).astype(np.int64)
+    out = np.zeros(modes.shape, dtype=np.int8)
+    out[(modes & 1) != 0] = 1
+    out[(modes & 6) != 0] = 2
+    over = np.asarray(overturned).astype(bool)
+    after_impact = np.asarray(impacts) > 0
+    out[over & after_impact] = 3
+    out[over & ~after_impact] = 4
+    out[np.asarray(status) != 0] = 5
+    return out
+
+
+def spectrum_figure(frequency, amplitude, category, rotation, curves=(), *, xlabel: str = "ω_p / p",
+                    ylabel: str = "a_p / (g tan α)", title: str = "") -> Figure:
+    """An overturning spectrum: the regions of `spectrum_category` in the plane of pulse frequency
+    over ``p`` (across) and amplitude over ``g tan(alpha)`` (up), and the largest rotation of the
+    standing blocks over ``alpha``, with theoretical curves drawn over both.
+
+    Parameters
+    ----------
+    frequency : float array (nx,)
+        ``w_p / p`` of each column (any order).
+    amplitude : float array (ny,)
+        ``a_p / (g tan(alpha))`` of each row (any order).
+    category : int array (ny, nx)
+        `spectrum_category` codes.
+    rotation : float array (ny, nx)
+        Largest rotation over ``alpha`` [-].
+    curves : sequence of (label, x, y)
+        Theory: ``x`` None draws the horizontal line ``y``; else the curve through ``(x, y)`` (NaN
+        where the theory has no value).
+    xlabel, ylabel, title : str
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Axes labelled ``"regions"`` and ``"rotation"``.
+    """
+    from matplotlib.colors import BoundaryNorm, ListedColormap, LogNorm
+
+    x = np.asarray(frequency, dtype=float)
+    y = np.asarray(amplitude, dtype=float)
+    category = np.asarray(category)
+    rotation = np.asarray(rotation, dtype=float)
+    if category.shape != (y.size, x.size) or rotation.shape != category.shape:
+        raise ValueError(f"expected maps of shape ({y.size}, {x.size}), got {category.shape} and "
+                         f"{rotation.shape}")
+    xo, yo = np.argsort(x), np.argsort(y)
+    x_edges, y_edges = _cell_edges(x[xo]), _cell_edges(y[yo])
+    category = category[np.ix_(yo, xo)]
+    rotation = rotation[np.ix_(yo, xo)]
+    standing = category < 3
+    cmap = ListedColormap(SPECTRUM_COLOURS)
+    norm = BoundaryNorm(np.arange(len(SPECTRUM_CATEGORIES) + 1) - 0.5, cmap.N)
+    shown = np.ma.masked_where(~(standing & (rotation > 0)), rotation)
+    low = float(shown.min()) if shown.count() else 1e-3
+    rot_norm = LogNorm(vmin=max(1e-4, min(low, 0.5)), vmax=1.0)
+
+    fig = Figure(figsize=(14.0, 6.2), dpi=DPI, layout="constrained")
+    regions, rotated = fig.subplots(1, 2)
+    regions.pcolormesh(x_edges, y_edges, category, cmap=cmap, norm=norm, shading="flat")
+    regions.set_label("regions")
+    mesh = rotated.pcolormesh(x_edges, y_edges, shown, cmap=_with_bad("viridis"), norm=rot_norm,
+                              shading="flat")
+    rotated.set_label("rotation")
+    fig.colorbar(mesh, ax=rotated, label="largest rotation / α (standing blocks)")
+    _outline(rotated, x_edges, y_edges, ~standing)
+    handles = [Patch(facecolor=c, edgecolor="0.4", label=n)
+               for n, c in zip(SPECTRUM_CATEGORIES, SPECTRUM_COLOURS, strict=True)]
+    for (label, cx, cy), colour in zip(curves, THEORY_COLOURS, strict=False):
+        for ax in (regions, rotated):
+            if cx is None:
+                ax.axhline(cy, color=colour, lw=1.6, ls="--")
+            else:
+                ax.plot(cx, cy, color=colour, lw=2.0)
+        handles.append(Line2D([], [], color=colour, lw=2.0, ls="--" if cx is None else "-", label=label))
+    for ax, name in ((regions, "regions"), (rotated, "largest rotation of the standing blocks")):
+        ax.set_xlim(x_edges[0], x_edges[-1])
+        ax.set_ylim(y_edges[0], y_edges[-1])
+        ax.set_xlabel(xlabel)
+        ax.set_ylabel(ylabel)
+        ax.set_title(name, loc="left", fontsize=10)
+    fig.legend(handles=handles, loc="outside lower center", ncols=4, frameon=False, fontsize=9)
+    if title:
+        fig.suptitle(title, fontsize=12)
+    return fig
+
+
+# --------------------------------------------------------------------------------------------------
 # Saving
 # --------------------------------------------------------------------------------------------------
 
@@ -866,4 +974,5 @@ def save_figure(fig: Figure, path, *, overwrite: bool = False, dpi: float | None
 
 
 __all__ = ["response_figure", "save_figure", "zoom_window", "state_segments", "sweep_figure",
-           "sweep_category", "SWEEP_CATEGORIES", "fragility_figure"]
+           "sweep_category", "SWEEP_CATEGORIES", "fragility_figure", "spectrum_figure", "spectrum_category",
+           "SPECTRUM_CATEGORIES"]

@@ -1,8 +1,9 @@
 """Case -> records -> checks -> simulation: the one orchestrator behind `run`, `sweep` and `table1`.
 
-It reads the records a case names (`records.py`), scales and aligns them, checks what can only be
-checked with the records at hand (the step against the record's sampling, flight before the run),
-builds the `Model` and `Settings` of the pure core and calls `simulate` (or the reference solver).
+It reads the records a case names (`records.py`), scales and aligns them, or samples its analytic
+pulses (`pulses.py`), checks what can only be checked with the ground motion at hand (the step
+against the record's sampling, flight before the run), builds the `Model` and `Settings` of the
+pure core and calls `simulate` (or the reference solver).
 """
 
 from __future__ import annotations
@@ -13,10 +14,12 @@ from pathlib import Path
 
 import numpy as np
 
+from . import pulses
 from . import records as rec
 from .case import Case
 from .core.simulate import Model, Result, Settings, simulate, substeps
 from .errors import CaseError, RecordError
+from .pulses import Pulse
 
 
 @dataclass(frozen=True)
@@ -30,8 +33,11 @@ class Prepared:
 
 
 def load_ground(case: Case, records_dir: Path | None = None) -> rec.GroundMotion:
-    """Read, scale and align the case's records (``ground.horizontal`` and ``ground.vertical``);
-    without either, the still ground sampled at ``solver.dt`` (a free vibration over ``ground.tail``)."""
+    """Read, scale and align the case's records (``ground.horizontal`` and ``ground.vertical``), or
+    sample its pulses (`pulse_ground`); without either, the still ground sampled at ``solver.dt`` (a
+    free vibration over ``ground.tail``)."""
+    if is_pulse_case(case):
+        return pulse_ground(case)
     folder = records_dir if records_dir is not None else rec.records_dir()
     traces = {}
     for role in ("horizontal", "vertical"):
@@ -58,6 +64,46 @@ def load_ground(case: Case, records_dir: Path | None = None) -> rec.GroundMotion
         raise RecordError(exc.message, source=exc.source, field=f"ground.scale.{exc.field}") from None
 
 
+def is_pulse_case(case: Case) -> bool:
+    """Whether the case's ground motion is analytic pulses (`case.py` does not mix them with files)."""
+    return any(isinstance(r, Pulse) for r in (case.ground.horizontal, case.ground.vertical))
+
+
+def unit_pulses(case: Case) -> pulses.Sampled:
+    """The case's pulses at amplitude 1 on their common grid (`pulses.sample`, at most
+    ``solver.dt`` apart).
+
+    Raises
+    ------
+    CaseError
+        The grid would need more than `MAX_GROUND_SAMPLES` samples (checked before sampling).
+    """
+    h, v = case.ground.horizontal, case.ground.vertical
+    n, dt = pulses.grid(h, v, case.solver.dt)
+    if n + 2 > MAX_GROUND_SAMPLES:
+        role = "horizontal" if h is not None and (v is None or h.length >= v.length) else "vertical"
+        pulse = getattr(case.ground, role)
+        key = pulses.SHAPES[pulse.pulse].parameter
+        raise CaseError(f"a {pulse.pulse} pulse of {pulse.length:g} s sampled every {dt:.3g} s needs {n:.3g} "
+                        f"samples; expected at most {MAX_GROUND_SAMPLES:.0e}", source=case.source,
+                        field=f"ground.{role}.{key}")
+    return pulses.sample(h, v, case.solver.dt)
+
+
+def pulse_ground(case: Case, unit: pulses.Sampled | None = None) -> rec.GroundMotion:
+    """The case's pulses as applied: each pulse at amplitude 1 (`unit_pulses`, or ``unit`` given)
+    times its amplitude, which is its scale factor (as a record's factor)."""
+    start, dt, h, v = unit_pulses(case) if unit is None else unit
+    factors = [1.0 if p is None else float(p.amplitude) for p in (case.ground.horizontal, case.ground.vertical)]
+    arrays = []
+    for factor, values in zip(factors, (h, v), strict=True):
+        scaled = factor * values
+        scaled.setflags(write=False)
+        arrays.append(scaled)
+    return rec.GroundMotion(dt=dt, start=start, horizontal=arrays[0], vertical=arrays[1],
+                            horizontal_factor=factors[0], vertical_factor=factors[1], files=())
+
+
 def model_for(case: Case) -> Model:
     return Model.from_block(case.block.height, case.block.width, case.contact.mu_static,
                             case.contact.mu_kinetic, case.contact.restitution, case.gravity,
@@ -82,17 +128,24 @@ def check_against_ground(case: Case, ground: rec.GroundMotion) -> None:
     if ground.vertical.size:
         lowest = float(np.min(ground.vertical))
         if case.gravity + lowest <= 0.0:
-            i = int(np.argmin(ground.vertical))
+            # samples (n,), or interval end values (2, n): the end of interval k is sample k + 1
+            if ground.vertical.ndim == 2:
+                row, k = np.unravel_index(int(np.argmin(ground.vertical)), ground.vertical.shape)
+            else:
+                row, k = 0, int(np.argmin(ground.vertical))
+            pulse = isinstance(case.ground.vertical, Pulse)
             raise CaseError(
                 f"the scaled vertical acceleration reaches {lowest / 0.01:.1f} gal at "
-                f"t = {ground.start + i * ground.dt:.3f} s, so g + av = {case.gravity + lowest:.3f} m/s^2 "
-                f"<= 0 (the block would fly, outside the model); lower ground.scale",
-                source=case.source, field="ground.scale")
+                f"t = {ground.start + (k + row) * ground.dt:.3f} s, so g + av = {case.gravity + lowest:.3f} m/s^2 "
+                f"<= 0 (the block would fly, outside the model); lower "
+                f"{'ground.vertical.amplitude' if pulse else 'ground.scale'}",
+                source=case.source, field="ground.vertical.amplitude" if pulse else "ground.scale")
 
 
 def check_step(case: Case, ground: rec.GroundMotion) -> None:
-    """The case's ``solver.dt`` is not coarser than the record's sampling step."""
-    if case.solver.dt > ground.dt * (1.0 + 1e-9):
+    """The case's ``solver.dt`` is not coarser than the record's sampling step (a pulse is sampled
+    at most ``solver.dt`` apart, `pulses.sample`)."""
+    if case.solver.dt > ground.dt * (1.0 + 1e-9) and not is_pulse_case(case):
         raise CaseError(f"dt = {case.solver.dt:g} s is larger than the record's sampling step "
                         f"{ground.dt:g} s; expected dt <= {ground.dt:g} s",
                         source=case.source, field="solver.dt")
@@ -109,9 +162,11 @@ def check_size(case: Case, ground: rec.GroundMotion, *, history: bool = True) ->
     """Refuse a tail, step or output interval that would need absurd memory, time or disk."""
     dt_record, tail, dt = ground.dt, case.ground.tail, case.solver.dt
     n_tail = math.ceil(tail / dt_record - 1e-9) if tail > 0 else 0
-    samples = ground.horizontal.size + n_tail
+    # samples (n,), or interval end values (2, n) of a pulse: n intervals, n + 1 samples
+    given = ground.horizontal.shape[-1] + (1 if ground.horizontal.ndim == 2 else 0)
+    samples = given + n_tail
     if samples > MAX_GROUND_SAMPLES:
-        longest = (MAX_GROUND_SAMPLES - ground.horizontal.size) * dt_record
+        longest = (MAX_GROUND_SAMPLES - given) * dt_record
         raise CaseError(f"a tail of {tail:g} s adds {n_tail:.3g} samples at the record's step "
                         f"{dt_record:g} s; expected at most {MAX_GROUND_SAMPLES:.0e} samples in all "
                         f"(a tail of at most {longest:.6g} s)", source=case.source, field="ground.tail")
@@ -167,8 +222,9 @@ def record_entries(prepared: Prepared) -> list[dict]:
     return out
 
 
-__all__ = ["Prepared", "load_ground", "model_for", "settings_for", "check_against_ground", "check_step", "check_size",
-           "prepare", "simulate_prepared", "run_case", "record_entries", "start_time", "verdict_robustness"]
+__all__ = ["Prepared", "load_ground", "is_pulse_case", "unit_pulses", "pulse_ground", "model_for",
+           "settings_for", "check_against_ground", "check_step", "check_size", "prepare", "simulate_prepared",
+           "run_case", "record_entries", "start_time", "verdict_robustness"]
 
 
 ROBUSTNESS_VARIANTS = (("dt/2", 0.5, 1.0), ("mu-1%", 1.0, 0.99), ("mu+1%", 1.0, 1.01))

@@ -1,8 +1,10 @@
 """Parameter sweeps: one case file, a grid of values, one compiled batch (``rockslide sweep``).
 
 A sweep replaces a few values of a case file by every combination of its axes (:data:`AXES`:
-``--mu``, ``--pga``, ``--vertical-factor``, ``--restitution``, ``--slenderness``, ``--gravity``)
-and computes every point with the batch kernel (`batch`), without history or event log.
+``--mu``, ``--pga``, ``--vertical-factor``, ``--restitution``, ``--slenderness``, ``--gravity``,
+and for a case whose ground motion is analytic pulses ``--amplitude``, ``--period`` and
+``--duration`` of the horizontal pulse) and computes every point with the batch kernel (`batch`),
+without history or event log.
 
 - **Axes.** ``start:stop:step`` (the stop is included when it falls on the grid, within 1e-9 of a
   step) or a comma list; values take units as in case files (``100gal:1000gal:25gal``; a unit on
@@ -23,6 +25,12 @@ and computes every point with the batch kernel (`batch`), without history or eve
   `simulate.initial_state`, and the batch kernel multiplies the unscaled samples by the factors as
   `records.combine` does. A sweep point and ``rockslide run`` on the same case give identical
   numbers.
+- **Pulses.** A pulse case's points hold one record per distinct pulse (shape, period or
+  duration: `runner.unit_pulses`, sampled at amplitude 1, each with its own sampling step and
+  start), and the amplitudes are the scale factors, exactly as ``rockslide run`` multiplies them.
+  A sweep over ``--amplitude`` and ``--period`` (or ``--duration``) is an overturning spectrum: its
+  figure is drawn in the dimensionless plane of the literature (`spectrum_scales`,
+  `plots.spectrum_figure`).
 - **Chunks.** The grid is cut into chunks of ``chunk_size`` cases, chunk ``c`` holding the flat
   indices ``c, c + n_chunks, c + 2 n_chunks, ...`` (a mix of cheap and costly cases in each).
   Each finished chunk is saved at once (`ChunkStore`: ``.NAME.sweep.chunks/KEY/chunk-NNNNNN.npz``
@@ -45,7 +53,7 @@ import math
 import re
 import shutil
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from decimal import Decimal, InvalidOperation
 from pathlib import Path
 
@@ -60,12 +68,21 @@ from .core.physics import OVERTURNED
 from .core.simulate import ground_array, initial_state, parameters
 from .errors import CaseError, OutputError
 from .files import atomic_write
-from .plots import sweep_category, sweep_figure
-from .runner import check_against_ground, check_size, model_for, settings_for
-from .units import UNIT_REQUIRED, parse_quantity
+from .plots import spectrum_category, spectrum_figure, sweep_category, sweep_figure
+from .pulses import Pulse, linear_overturning_ratio
+from .runner import (
+    check_against_ground,
+    check_size,
+    is_pulse_case,
+    model_for,
+    pulse_ground,
+    settings_for,
+    unit_pulses,
+)
+from .units import STANDARD_GRAVITY, UNIT_REQUIRED, parse_quantity
 
 __all__ = ["AXES", "AxisKind", "Axis", "Plan", "ChunkStore", "parse_axis", "plan_sweep",
-           "definition_key", "compute", "collect", "sweep_variables", "MAX_POINTS"]
+           "definition_key", "compute", "collect", "sweep_variables", "spectrum_scales", "MAX_POINTS"]
 
 #: Largest grid (number of cases) a sweep accepts.
 MAX_POINTS = 1_000_000
@@ -126,7 +143,17 @@ AXES: dict[str, AxisKind] = {a.name: a for a in (
              "slenderness: width / height (the height kept)", "1", "width / height (b/h)"),
     AxisKind("gravity", "--gravity", "acceleration", "gravity", "gravitational acceleration",
              "m/s^2", "gravity g [m/s²]"),
+    AxisKind("amplitude", "--amplitude", "acceleration", "ground.horizontal.amplitude",
+             "amplitude of the horizontal pulse", "m/s^2", "pulse amplitude a_p [g]", STANDARD_GRAVITY),
+    AxisKind("period", "--period", "time", "ground.horizontal.period", "period of the horizontal pulse",
+             "s", "pulse period T_p [s]"),
+    AxisKind("duration", "--duration", "time", "ground.horizontal.duration",
+             "duration of the horizontal pulse", "s", "pulse duration t_d [s]"),
 )}
+#: The axes that change the horizontal pulse of a pulse case (and only there).
+PULSE_AXES = ("amplitude", "period", "duration")
+#: The axes that scale record files (a pulse is scaled by its amplitude).
+RECORD_SCALE_AXES = ("pga", "vertical_factor")
 
 
 @dataclass(frozen=True)
@@ -225,8 +252,8 @@ def _split(option: str, kind: str, piece: str) -> tuple[Decimal, str]:
     match = _PIECE.match(piece)
     if not match:
         what = "a number" if kind == "dimensionless" else "a number with an optional unit"
-        raise CaseError(f"cannot read {piece.strip()!r} as {what} (like "
-                        f"{'0.5' if kind == 'dimensionless' else '800gal'})", source=option)
+        example = {"dimensionless": "0.5", "time": "0.4s"}.get(kind, "800gal")
+        raise CaseError(f"cannot read {piece.strip()!r} as {what} (like {example})", source=option)
     number, unit = match.group(1), match.group(2)
     if unit:
         parse_quantity(f"1 {unit}", kind, source=option)     # an unknown unit fails here
@@ -324,7 +351,7 @@ class Plan:
         [s] time of each point's last ground sample (tail included): the end of a run that ends
         standing.
     step : float
-        [s] integration step.
+        [s] integration step (the smallest, when the records' sampling steps differ).
     records : list of dict
         The records' file names and checksums.
     chunk_size : int
@@ -431,6 +458,16 @@ def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = N
     if chunk_size is not None and (isinstance(chunk_size, bool) or int(chunk_size) < 1):
         raise CaseError(f"must be a whole number >= 1, got {chunk_size!r}", source="--chunk-size")
     chunk_size = default_chunk_size(n) if chunk_size is None else int(chunk_size)
+    pulses = is_pulse_case(case)
+    for axis in axes:
+        if axis.name in PULSE_AXES and not isinstance(case.ground.horizontal, Pulse):
+            raise CaseError("applies to a case whose ground.horizontal is a pulse ({pulse: ..., amplitude: "
+                            "...}); a record file is scaled with --pga", source=axis.kind.option)
+        if axis.name in RECORD_SCALE_AXES and pulses:
+            raise CaseError("scales record files; a pulse is scaled by its amplitude (--amplitude)",
+                            source=axis.kind.option)
+    if pulses:
+        return _plan_pulses(case, axes, ratio, chunk_size, n)
 
     traces, entries = _read_traces(case, records_dir)
     unscaled = rec.combine(traces["horizontal"], traces["vertical"], source=case.source,
@@ -449,14 +486,7 @@ def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = N
     factors: dict[tuple, tuple[float, float]] = {}     # scale section -> (kh, kv)
     checked: set[tuple] = set()                         # (scale section, gravity) checked
     grounds: dict[tuple, rec.GroundMotion] = {}         # a few scaled records, for the checks
-    for i, combo in enumerate(itertools.product(*(range(len(a)) for a in axes))):
-        changes = {}
-        for axis, j in zip(axes, combo, strict=True):
-            changes.update(axis_changes(axis.name, axis.values[j], case, ratio))
-        try:
-            point = case_with(case, changes)
-        except CaseError as exc:
-            raise _point_error(exc, axes, combo) from None
+    for i, combo, point in _points(case, axes, ratio):
         s = point.ground.scale
         scale = (s.pga_horizontal, s.factor, s.pga_vertical, s.vertical_factor)
         if (scale, point.gravity) not in checked:
@@ -482,6 +512,65 @@ def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = N
                 factor_h=factor_h, factor_v=factor_v, base=base, first=np.zeros(n, dtype=np.int64),
                 count=np.full(n, base.shape[1], dtype=np.int64), record_end=np.full(n, record_end),
                 step=float(params[0, K.P_H]), records=entries, chunk_size=chunk_size)
+    plan.key = definition_key(plan)
+    return plan
+
+
+def _points(case: Case, axes, ratio):
+    """Every point of the grid in flat C order: ``(index, combo, case)``, validated by `case_with`
+    (a bad point is a CaseError naming the options responsible)."""
+    for i, combo in enumerate(itertools.product(*(range(len(a)) for a in axes))):
+        changes = {}
+        for axis, j in zip(axes, combo, strict=True):
+            changes.update(axis_changes(axis.name, axis.values[j], case, ratio))
+        try:
+            point = case_with(case, changes)
+        except CaseError as exc:
+            raise _point_error(exc, axes, combo) from None
+        yield i, combo, point
+
+
+def _plan_pulses(case: Case, axes, ratio, chunk_size: int, n: int) -> Plan:
+    """`plan_sweep` for a case whose ground motion is analytic pulses: one record per distinct
+    pulse shape and length (the amplitudes are the scale factors, as `runner.pulse_ground` applies
+    them), each with its own sampling step and start."""
+    params = np.empty((n, K.N_PARAMS))
+    states = np.empty((n, K.N_STATE))
+    factor_h, factor_v, record_end = np.empty(n), np.empty(n), np.empty(n)
+    first, count = np.empty(n, dtype=np.int64), np.empty(n, dtype=np.int64)
+    records: dict[tuple, tuple] = {}          # (pulses at amplitude 1, dt, tail) -> (first, count, unit)
+    pieces = []
+    checked: set[tuple] = set()
+    for i, combo, point in _points(case, axes, ratio):
+        h, v = point.ground.horizontal, point.ground.vertical
+        shape = tuple(None if p is None else replace(p, amplitude=1.0) for p in (h, v))
+        key = (shape, point.solver.dt, point.ground.tail)
+        try:
+            if key not in records:
+                unit = unit_pulses(point)
+                check_size(point, pulse_ground(point, unit), history=False)
+                piece = ground_array(unit.horizontal, unit.vertical, unit.dt, point.ground.tail)
+                records[key] = (sum(p.shape[1] for p in pieces), piece.shape[1], unit)
+                pieces.append(piece)
+            offset, length, unit = records[key]
+            vertical = (key, None if v is None else v.amplitude, point.gravity)
+            if vertical not in checked:               # flight: g + av > 0 (the vertical pulse)
+                check_against_ground(point, pulse_ground(point, unit))
+                checked.add(vertical)
+        except CaseError as exc:
+            raise _point_error(exc, axes, combo) from None
+        point_settings = settings_for(point, history=False, energy=False)
+        start = unit.start + point.ground.time_shift
+        params[i] = parameters(model_for(point), unit.dt, point_settings, start)
+        states[i] = initial_state(point_settings)
+        factor_h[i] = 1.0 if h is None else h.amplitude
+        factor_v[i] = 1.0 if v is None else v.amplitude
+        first[i], count[i] = offset, length
+        record_end[i] = start + length * unit.dt
+    plan = Plan(case=case, axes=list(axes), mu_kinetic_ratio=ratio, params=params, states=states,
+                factor_h=factor_h, factor_v=factor_v, base=np.concatenate(pieces, axis=1), first=first,
+                count=count, record_end=record_end, step=float(params[:, K.P_H].min()), records=[],
+                chunk_size=chunk_size)
     plan.key = definition_key(plan)
     return plan
 
@@ -521,7 +610,8 @@ def _point_error(exc: CaseError, axes, combo) -> CaseError:
 
 def _key_root(axis: str) -> str:
     return {"mu": "contact.mu", "pga": "ground.scale", "vertical_factor": "ground.scale",
-            "slenderness": "block"}.get(axis, AXES[axis].key)
+            "slenderness": "block", "amplitude": "ground.horizontal", "period": "ground.horizontal",
+            "duration": "ground.horizontal"}.get(axis, AXES[axis].key)
 
 
 def definition_key(plan: Plan) -> str:
@@ -854,6 +944,12 @@ def sweep_variables(plan: Plan, states: np.ndarray) -> dict:
                           {"units": "m", "long_name": "slip displacement x at the end"}),
         "impacts": (grid(st[:, K.S_IMPACTS], np.int32),
                     {"units": "1", "long_name": "number of rocking impacts"}),
+        # the run stops at overturning, so the impacts counted are those before it
+        "overturn_mode": (grid(np.where(overturned, np.where(st[:, K.S_IMPACTS] > 0, 2, 1), 0), np.int8),
+                          {"units": "1", "long_name": "how the block overturned: without any impact "
+                           "before, or after one or more impacts (0: standing)",
+                           "flag_values": np.array([0, 1, 2], dtype=np.int8),
+                           "flag_meanings": "standing without_impact after_impact"}),
         "status": (grid(status, np.int8),
                    {"units": "1", "long_name": "ok, or where the computation left the model",
                     **STATUS_FLAGS}),
@@ -889,7 +985,8 @@ def coordinates(plan: Plan) -> list:
 
 
 def root_attributes(plan: Plan, command_line: str) -> dict:
-    """Root attributes of the result file: provenance of the sweep."""
+    """Root attributes of the result file: provenance of the sweep, and the scales of an
+    overturning spectrum (`spectrum_scales`, as ``spectrum_*``)."""
     attrs = {
         "title": f"rockslide sweep of {plan.case.name}: {plan.describe()}",
         "name": plan.case.name,
@@ -906,7 +1003,40 @@ def root_attributes(plan: Plan, command_line: str) -> dict:
     for entry in plan.records:
         attrs[f"record_{entry['role']}"] = entry["path"]
         attrs[f"record_{entry['role']}_sha256"] = entry["sha256"]
+    scales = spectrum_scales(plan)
+    for key, value in (scales or {}).items():
+        attrs[f"spectrum_{key}"] = value
     return attrs
+
+
+#: Each pair of axes that makes an overturning spectrum (amplitude against frequency).
+SPECTRUM_AXES = ({"amplitude", "period"}, {"amplitude", "duration"})
+
+
+def spectrum_scales(plan: Plan) -> dict | None:
+    """The scales of an overturning spectrum, or None when the sweep is not one.
+
+    A sweep is an overturning spectrum when its two axes are ``--amplitude`` and ``--period`` (or
+    ``--duration``) of the horizontal pulse. Its figure is drawn in the literature's dimensionless
+    plane: ``a_p / (g tan(alpha))`` against ``w_p / p`` (Housner 1963; Zhang and Makris 2001).
+
+    Returns
+    -------
+    dict
+        ``rocking_frequency`` ``p = sqrt(3 g / (4 R))`` [rad/s], ``liftoff_acceleration``
+        ``g tan(alpha)`` [m/s^2], ``slip_acceleration`` ``mu g`` [m/s^2] (both thresholds of
+        eqs. 6 and 11 at rest), ``alpha`` [rad], ``pulse`` (the shape), ``cycles``, and
+        ``vertical`` (1 when a vertical pulse acts too, which the small-angle theory leaves out).
+    """
+    if {a.name for a in plan.axes} not in SPECTRUM_AXES or len(plan.axes) != 2:
+        return None
+    case = plan.case
+    _, alpha, p2 = model_for(case).constants
+    return {"rocking_frequency": math.sqrt(p2), "alpha": alpha,
+            "liftoff_acceleration": case.gravity * case.block.width / case.block.height,
+            "slip_acceleration": case.gravity * case.contact.mu_static,
+            "pulse": case.ground.horizontal.pulse, "cycles": int(case.ground.horizontal.cycles),
+            "vertical": int(case.ground.vertical is not None)}
 
 
 def categories(variables: dict) -> np.ndarray:
@@ -915,18 +1045,69 @@ def categories(variables: dict) -> np.ndarray:
 
 
 def figure(plan: Plan, variables: dict):
-    """The PNG maps of a sweep (`plots.sweep_figure`): axes in their display units (gal for
-    accelerations given as PGA), categories from `categories`."""
-    return _maps([(a.kind.name, a.values) for a in plan.axes], variables,
-                 f"{plan.case.name}: {plan.describe()}")
+    """The PNG of a sweep: an overturning spectrum (`spectrum_scales`), else the maps of
+    `plots.sweep_figure` with the axes in their display units (gal for accelerations given as
+    PGA) and categories from `categories`."""
+    axes = [(a.kind.name, a.values) for a in plan.axes]
+    title = f"{plan.case.name}: {plan.describe()}"
+    scales = spectrum_scales(plan)
+    if scales is not None:
+        return _spectrum(axes, variables, scales, title)
+    return _maps(axes, variables, title)
 
 
 def stored_figure(stored) -> object:
-    """The same maps from a sweep file read back (`results.read_sweep`), for ``rockslide plot``."""
+    """The same figure from a sweep file read back (`results.read_sweep`), for ``rockslide plot``."""
     shape = " x ".join(f"{len(values)} {name}" for name, values, _ in stored.coords)
-    return _maps([(name, values) for name, values, _ in stored.coords], stored.variables,
-                 f"{stored.attrs.get('name', 'sweep')}: {shape} = "
-                 f"{int(np.prod([len(v) for _, v, _ in stored.coords]))} cases")
+    axes = [(name, values) for name, values, _ in stored.coords]
+    title = (f"{stored.attrs.get('name', 'sweep')}: {shape} = "
+             f"{int(np.prod([len(v) for _, v, _ in stored.coords]))} cases")
+    scales = {key[len("spectrum_"):]: value for key, value in stored.attrs.items()
+              if key.startswith("spectrum_")}
+    if scales:
+        return _spectrum(axes, variables=stored.variables, scales=scales, title=title)
+    return _maps(axes, stored.variables, title)
+
+
+#: Points of the small-angle theory's curve drawn over a spectrum.
+THEORY_POINTS = 40
+
+
+def _spectrum(axes, variables: dict, scales: dict, title: str):
+    """`plots.spectrum_figure` of a two-axis pulse sweep: amplitude over ``g tan(alpha)`` up the
+    page, pulse frequency over ``p`` across, the categories of `plots.spectrum_category`, and
+    the theory's curves where they exist: the thresholds of liftoff and slip at rest (exact), and
+    the small-angle boundary of overturning without impact (`pulses.linear_overturning_ratio`;
+    without a vertical pulse)."""
+    names = [name for name, _ in axes]
+    a = names.index("amplitude")
+    other = 1 - a
+    pulse = Pulse(str(scales["pulse"]), 1.0, cycles=int(scales["cycles"]))
+    p = float(scales["rocking_frequency"])
+    lift, slip = float(scales["liftoff_acceleration"]), float(scales["slip_acceleration"])
+    period_or_duration = np.asarray(axes[other][1], dtype=float)
+    frequency = np.array([replace(pulse, **{names[other]: t}).frequency for t in period_or_duration]) / p
+    amplitude = np.asarray(axes[a][1], dtype=float) / lift
+
+    def grid(name):                                   # [amplitude, frequency]
+        values = np.asarray(variables[name][0])
+        return values if a == 0 else values.T
+
+    category = spectrum_category(grid("overturned"), grid("status"), grid("modes"), grid("impacts"))
+    rotation = grid("max_rotation") / float(scales["alpha"])
+    curves = []
+    if slip < lift:
+        curves.append((f"slip starts at rest: a_p = μ g ({slip / lift:.3g} g tan α)", None, slip / lift))
+    else:
+        curves.append(("liftoff: a_p = g tan α", None, 1.0))
+    if not int(scales["vertical"]) and frequency.size > 1:
+        betas = np.geomspace(frequency.min(), frequency.max(), THEORY_POINTS)
+        ratios = np.array([linear_overturning_ratio(pulse, b) for b in betas])
+        curves.append(("overturning without impact, small-angle theory", betas, ratios))
+    return spectrum_figure(frequency, amplitude, category, rotation, curves,
+                           xlabel=f"ω_p / p   (p = {p:.3g} rad/s)",
+                           ylabel=f"a_p / (g tan α)   (g tan α = {lift / STANDARD_GRAVITY:.3g} g)",
+                           title=f"{title}: {pulse.pulse} pulse")
 
 
 def _maps(axes, variables: dict, title: str):

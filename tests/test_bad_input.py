@@ -80,6 +80,17 @@ def horizontal_only(spec, **changes) -> str:
     return case_text({"ground.horizontal": spec, "ground.vertical": DROP, **changes})
 
 
+PULSE = {"pulse": "rectangular", "amplitude": "0.5 g", "duration": "0.2 s"}
+
+
+def pulse_only(pulse_changes, **changes) -> str:
+    """A case whose only ground motion is a horizontal pulse (`PULSE` with keys changed, DROP removes
+    one) and no scaling."""
+    spec = {**PULSE, **pulse_changes}
+    spec = {k: v for k, v in spec.items() if v is not DROP}
+    return horizontal_only(spec, **{"ground.scale": DROP, **QUICK, **changes})
+
+
 def at2_text(values_g, *, dt="0.0100", npts=None, units_line="ACCELERATION TIME SERIES IN UNITS OF G",
              line4=None) -> str:
     """A PEER AT2 file: 4 header lines, then 5 values per line."""
@@ -372,6 +383,42 @@ BAD_INPUTS = [
     bad_case("records-different-start", case_text({"ground.vertical": {"file": "v.csv", "units": "g"}}),
              ["case.yaml: horizontal", "start at different times (0.0 s and 1.0 s)"],
              files={"v.csv": column_text(sine(n=2001)[0] + 1.0, sine(n=2001)[1])}),
+    # -- analytic pulses ---------------------------------------------------------------------------------
+    bad_case("pulse-missing-amplitude", pulse_only({"amplitude": DROP}),
+             ["case.yaml: ground.horizontal.amplitude: missing required key", "peak acceleration"]),
+    bad_case("pulse-unknown-shape", pulse_only({"pulse": "square"}),
+             ["ground.horizontal.pulse: expected one of 'rectangular', 'half-sine'", "'ricker'"]),
+    bad_case("pulse-period-for-duration", pulse_only({"period": "0.5 s"}),
+             ["ground.horizontal.period: a rectangular pulse takes duration, not period"]),
+    bad_case("pulse-missing-period", pulse_only({"pulse": "one-sine", "duration": DROP}),
+             ["ground.horizontal.period: missing: a one-sine pulse needs its period [s]"]),
+    bad_case("pulse-negative-duration", pulse_only({"duration": "-0.2 s"}),
+             ["ground.horizontal.duration: must be greater than 0 s"]),
+    bad_case("pulse-cycles-of-a-sine", pulse_only({"pulse": "half-sine", "cycles": 2}),
+             ["ground.horizontal.cycles: only the cycloidal pulses", "a half-sine pulse has none"]),
+    bad_case("pulse-no-cycles", pulse_only({"pulse": "cycloidal-a", "duration": DROP, "period": "0.4 s",
+                                            "cycles": 0}),
+             ["ground.horizontal.cycles: must be at least 1, got 0"]),
+    bad_case("pulse-amplitude-length", pulse_only({"amplitude": "0.5 m"}),
+             ["ground.horizontal.amplitude: unknown acceleration unit 'm'"]),
+    bad_case("pulse-with-file-key", pulse_only({"units": "g"}),
+             ["ground.horizontal.units: is a key of a record file, not of a pulse", "give either file or pulse"]),
+    bad_case("pulse-key-on-a-file", horizontal_only({"file": "synthetic_kt_h.at2", "amplitude": "0.5 g"}),
+             ["ground.horizontal.amplitude: is a key of a pulse; give 'pulse' too"]),
+    bad_case("pulse-and-file", pulse_only({}, **{"ground.vertical": "synthetic_kt_v.at2"}),
+             ["ground.vertical: is a record file while ground.horizontal is a pulse"]),
+    bad_case("pulse-scaled", pulse_only({}, **{"ground.scale": {"factor": 2}}),
+             ["ground.scale.factor: scales record files", "ground.horizontal.amplitude"]),
+    bad_case("pulses-without-common-grid",
+             pulse_only({}, **{"ground.vertical": {"pulse": "one-sine", "amplitude": "0.1 g",
+                                                   "period": "0.1414213562 s"}}),
+             ["ground.vertical: the horizontal and vertical pulses do not share a sampling grid",
+              "no common sampling step"]),
+    bad_case("pulse-vertical-flies", pulse_only({}, **{"ground.vertical": {"pulse": "half-sine",
+                                                                           "amplitude": "-1.2 g",
+                                                                           "duration": "0.2 s"}}),
+             ["case.yaml: ground.vertical.amplitude: the scaled vertical acceleration reaches -1176.8 gal",
+              "lower ground.vertical.amplitude"]),
     # -- options and outputs -----------------------------------------------------------------------------
     pytest.param({"case.yaml": case_text(), "out/example.h5": "previous result"}, RUN,
                  ["out/example.h5 exists (use --overwrite to replace it)"], id="output-exists"),

@@ -20,6 +20,7 @@ from rockslide.case import (
     Ground,
     Initial,
     Output,
+    Pulse,
     RecordSpec,
     Scale,
     Solver,
@@ -248,8 +249,10 @@ class TestSchema:
             assert set(defaults) == set(keys)
             for name, spec in keys.items():
                 assert spec["default"] == defaults[name], f"{section}.{name}"
-        record_keys = CASE_KEYS["ground"]["keys"]["horizontal"]["keys"]
-        assert [f.name for f in dataclasses.fields(RecordSpec)] == list(record_keys)
+        record_keys = list(CASE_KEYS["ground"]["keys"]["horizontal"]["keys"])    # a file's, then a pulse's
+        file_keys = [f.name for f in dataclasses.fields(RecordSpec)]
+        pulse_keys = [f.name for f in dataclasses.fields(Pulse)]
+        assert file_keys + pulse_keys == record_keys
         assert {f.name for f in dataclasses.fields(Block)} == set(CASE_KEYS["block"]["keys"])
         assert {f.name for f in dataclasses.fields(Contact)} == set(CASE_KEYS["contact"]["keys"])
         assert {f.name for f in dataclasses.fields(Ground)} == set(CASE_KEYS["ground"]["keys"])

@@ -162,8 +162,13 @@ def test_rockslide_example_writes_the_shipped_example(tmp_path):
     (apart from where its records are); an existing example is kept without --overwrite."""
     result = invoke("example", tmp_path / "ex")
     assert result.exit_code == 0, result.output
-    for name in ("synthetic_kt_h.at2", "synthetic_kt_v.at2"):
+    written = sorted(p.relative_to(tmp_path / "ex").as_posix() for p in (tmp_path / "ex").rglob("*.at2"))
+    assert len(written) == 14
+    for name in written:            # the example's two records and the synthetic suite's twelve
         assert (tmp_path / "ex" / name).read_bytes() == (RECORDS / name).read_bytes(), name
+    for name, repository in (("suite-synthetic.yaml", RECORDS / "suite-synthetic.yaml"),
+                             ("spectrum-one-sine.yaml", REPO / "configs" / "spectrum-one-sine.yaml")):
+        assert (tmp_path / "ex" / name).read_bytes() == repository.read_bytes(), name
     packaged, shipped = case_to_dict(load_case(tmp_path / "ex" / "example.yaml")), case_to_dict(load_case(EXAMPLE))
     for role in ("horizontal", "vertical"):
         assert Path(shipped["ground"][role].pop("file")).name == packaged["ground"][role].pop("file")
@@ -179,7 +184,7 @@ def help_examples() -> list[tuple[str, list[str]]]:
     out = []
     for name in [None, *sorted(main.commands)]:
         text = invoke(*([name] if name else []), "--help").stdout
-        block = text.split("Example:", 1)[1].split("\n\n", 1)[0]
+        block = text.split("Example:", 1)[1].split("\n\n", 1)[0].replace("\\\n", " ")   # continued lines
         out += [(name or "rockslide", shlex.split(line)) for line in block.strip().splitlines()]
     return out
 
@@ -193,18 +198,19 @@ def test_every_help_example_works_outside_the_checkout(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     monkeypatch.delenv("ROCKSLIDE_RECORDS", raising=False)
     examples = help_examples()
-    order = {"rockslide": 0, "example": 0, "run": 1, "sweep": 2}
+    order = {"rockslide": 0, "example": 0, "run": 1, "sweep": 2, "fragility": 2}
     done = set()
     for _, words in sorted(examples, key=lambda e: order.get(e[1][1], 3)):
         assert words[0] == "rockslide", words
         if words[1] == "table1" or tuple(words) in done:
             continue
         done.add(tuple(words))
-        again = ["--overwrite"] if words[1] in {"example", "run", "sweep", "criteria"} else []  # seen twice
-        coarse = ["--dpi", "40"] if words[1] in {"run", "sweep", "criteria", "plot"} else []   # for speed
+        again = ["--overwrite"] if words[1] in {"example", "run", "sweep", "fragility", "criteria"} else []
+        coarse = ["--dpi", "40"] if words[1] in {"run", "sweep", "fragility", "criteria", "plot"} else []
         result = invoke(*words[1:], *again, *coarse)
         assert result.exit_code == 0, (words, result.output)
-    assert {w[1] for _, w in examples} >= {"example", "run", "plot", "info", "sweep", "criteria", "table1"}
+    assert {w[1] for _, w in examples} >= {"example", "run", "plot", "info", "sweep", "fragility", "criteria",
+                                          "table1"}
     assert (tmp_path / "out" / "example-impact.pdf").read_bytes()[:5] == b"%PDF-"
     assert (tmp_path / "out" / "example.sweep.png").is_file() and (tmp_path / "criteria.png").is_file()
 
