@@ -258,6 +258,21 @@ def test_impact_loss_is_the_sum_of_per_impact_losses_each_non_negative(mu, e, ro
 RAMP_SLOPES = [5.0, -7.3, 12.0, -30.0]
 
 
+@pytest.mark.parametrize("mode", MODES)
+@pytest.mark.parametrize("sign", [1.0, -1.0])
+def test_a_peak_exactly_at_the_liftoff_threshold_does_not_lift_off(mode, sign):
+    """Eq. 6 is strict: a record whose peak is exactly tan(alpha) g (b/h = 0.5: 0.5 g is exact in
+    binary) touches the threshold without passing it, and the block stays at rest. (v0.1 took the
+    touch at the end of the rising interval for a crossing: liftoff and liftoff-end at one instant.)
+    A peak one ulp above lifts it off."""
+    model = Model.from_block(0.2, 0.1, 10.0, 10.0, 0.8)
+    peak = 0.5 * G0
+    for value, lifts in ((peak, False), (np.nextafter(peak, np.inf), True)):
+        ah = sign * np.array([0.0, 0.3 * G0, value, 0.2 * G0, 0.0])
+        result = simulate(model, 0.01, ah, np.zeros(ah.size), Settings(events=mode, tail=0.1))
+        assert ("ROCK" in result.summary.states_seen) == lifts, (value, result.events)
+
+
 @pytest.mark.parametrize("k", RAMP_SLOPES)
 @pytest.mark.parametrize("av", [0.0, 2.5, -3.0])
 @pytest.mark.parametrize("kind", ["liftoff", "slip"])

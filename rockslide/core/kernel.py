@@ -540,15 +540,16 @@ def settle(st, p, t, ah, av, events, gv, kinds, y):
 @njit(cache=True)
 def first_negative(A, B, tau, tau_end):
     """First local time in ``[tau, tau_end]`` at which ``A + B t`` is negative (its zero crossing),
-    or ``inf``."""
+    or ``inf``. A linear margin is negative somewhere on the interval only if it is at one of its
+    ends, so one that falls to exactly 0 at ``tau_end`` (a record's peak exactly at a threshold)
+    does not cross: the conditions of model.md's table are strict."""
     if A + B * tau < 0.0:
         return tau
-    if B < 0.0:
+    if B < 0.0 and A + B * tau_end < 0.0:
         r = -A / B
         if r < tau:
             r = tau
-        if r <= tau_end:
-            return r
+        return r if r <= tau_end else tau_end
     return math.inf
 
 
