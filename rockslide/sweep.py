@@ -37,12 +37,15 @@ and computes every point with the batch kernel (`batch`), without history or eve
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import itertools
 import json
 import math
+import os
 import re
 import shutil
+import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from decimal import Decimal, InvalidOperation
@@ -50,7 +53,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import __version__
+from . import __version__, interrupts
 from . import records as rec
 from .case import Case, case_with
 from .core import batch
@@ -58,10 +61,21 @@ from .core import kernel as K
 from .core.physics import OVERTURNED
 from .core.simulate import extend_with_tail, initial_state, parameters
 from .errors import CaseError, OutputError, RecordError
-from .files import atomic_write
+from .files import atomic_write, remove_stale_temporaries
 from .plots import sweep_category, sweep_figure
-from .runner import check_against_ground, check_size, model_for, settings_for
-from .units import parse_quantity
+from .runner import (
+    ABSURD_ACCELERATION_IN_G,
+    STEPS_PER_SECOND,
+    RunWarning,
+    absurd_acceleration,
+    check_against_ground,
+    check_parameters,
+    check_size,
+    model_for,
+    settings_for,
+    step_warning,
+)
+from .units import STANDARD_GRAVITY, parse_quantity
 
 __all__ = ["AXES", "AxisKind", "Axis", "Plan", "ChunkStore", "parse_axis", "plan_sweep",
            "definition_key", "compute", "collect", "sweep_variables", "MAX_POINTS"]
@@ -73,6 +87,8 @@ CHUNKS_WANTED = 100
 MIN_CHUNK, MAX_CHUNK = 4, 256
 #: A local parallel call gets at least this many cases per thread (whole chunks).
 CASES_PER_THREAD = 32
+#: Points validated between two checks for Ctrl-C (and two calls of the planning's progress).
+PLAN_BATCH = 2000
 #: Ranges include their stop when it is within this fraction of a step of the grid.
 RANGE_TOLERANCE = 1e-9
 
@@ -355,6 +371,11 @@ class Plan:
         """Flat grid indices of chunk ``chunk``: ``chunk, chunk + n_chunks, ...``."""
         return np.arange(chunk, self.n_cases, self.n_chunks, dtype=np.int64)
 
+    @property
+    def steps_per_case(self) -> int:
+        """Integration steps of a case that runs to the end of the record and tail."""
+        return (self.base_h.size - 1) * int(self.params[0, K.P_N_SUB])
+
     def describe(self) -> str:
         """``41 mu x 37 pga = 1517 cases``."""
         dims = " x ".join(f"{len(a)} {a.name}" for a in self.axes)
@@ -367,7 +388,8 @@ def default_chunk_size(n_cases: int) -> int:
 
 
 def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = None,
-               mu_kinetic_ratio: float | None = None, chunk_size: int | None = None) -> Plan:
+               mu_kinetic_ratio: float | None = None, chunk_size: int | None = None,
+               progress: Callable[[int], None] | None = None) -> Plan:
     """Validate every point of the grid and build its kernel inputs.
 
     Parameters
@@ -382,6 +404,9 @@ def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = N
         ``mu_kinetic / mu_static`` for ``--mu`` (default: the case's).
     chunk_size : int, optional
         Cases per chunk (default `default_chunk_size`).
+    progress : callable, optional
+        Called with the number of points validated, every few thousand points (a large grid takes
+        minutes to validate).
 
     Returns
     -------
@@ -435,13 +460,19 @@ def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = N
     factor_v = np.empty(n)
     factors: dict[tuple, tuple[float, float]] = {}     # scale section -> (kh, kv)
     checked: set[tuple] = set()                         # (scale section, gravity) checked
+    highest = (0.0, None)                               # the largest scaled peak, at this point
     grounds: dict[tuple, rec.GroundMotion] = {}         # a few scaled records, for the checks
     for i, combo in enumerate(itertools.product(*(range(len(a)) for a in axes))):
         changes = {}
         for axis, j in zip(axes, combo, strict=True):
             changes.update(axis_changes(axis.name, axis.values[j], case, ratio))
+        if i % PLAN_BATCH == 0 and i:
+            interrupts.check()
+            if progress is not None:
+                progress(PLAN_BATCH)
         try:
             point = case_with(case, changes)
+            check_parameters(point)
         except CaseError as exc:
             raise _point_error(exc, axes, combo) from None
         s = point.ground.scale
@@ -456,21 +487,44 @@ def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = N
                                              source=case.source)
             ground = grounds[scale]
             try:
-                check_against_ground(point, ground)
+                peak = check_against_ground(point, ground, warn=False)
             except CaseError as exc:
                 raise _point_error(exc, axes, combo) from None
+            if peak > highest[0]:
+                highest = (peak, combo)
             checked.add((scale, point.gravity))
             factors[scale] = (ground.horizontal_factor, ground.vertical_factor)
         point_settings = settings_for(point, history=False, energy=False)
         params[i] = parameters(model_for(point), unscaled.dt, point_settings, start)
         states[i] = initial_state(point_settings)
         factor_h[i], factor_v[i] = factors[scale]
+    if progress is not None:
+        progress(n - (n - 1) // PLAN_BATCH * PLAN_BATCH)
+    _warn_coarse_step(case, axes, params)
+    if highest[0] > ABSURD_ACCELERATION_IN_G * STANDARD_GRAVITY:
+        warnings.warn(f"{absurd_acceleration(case.source, highest[0])} [at {_point_text(axes, highest[1])}]",
+                      RunWarning, stacklevel=2)
     plan = Plan(case=case, axes=axes, mu_kinetic_ratio=ratio, params=params, states=states,
                 factor_h=factor_h, factor_v=factor_v, base_h=np.ascontiguousarray(base_h),
                 base_v=np.ascontiguousarray(base_v), record_end=float(record_end),
                 step=float(params[0, K.P_H]), records=entries, chunk_size=chunk_size)
     plan.key = definition_key(plan)
     return plan
+
+
+def _warn_coarse_step(case: Case, axes, params: np.ndarray) -> None:
+    """`runner.step_warning` for the point with the fastest rocking (the largest ``p dt``)."""
+    p2 = 0.75 * params[:, K.P_G] / params[:, K.P_R]          # p^2 = 3 g / (4 R)
+    i = int(np.argmax(p2))
+    warning = step_warning(case.source, math.sqrt(p2[i]), float(params[i, K.P_H]))
+    if warning:
+        combo = np.unravel_index(i, tuple(len(a) for a in axes))
+        warnings.warn(f"{warning} [at {_point_text(axes, combo)}]", RunWarning, stacklevel=3)
+
+
+def _point_text(axes, combo) -> str:
+    """``--mu 0.5, --pga 800gal``: a point of the grid as given."""
+    return ", ".join(f"{a.kind.option} {a.texts[j]}" for a, j in zip(axes, combo, strict=True))
 
 
 def _read_traces(case: Case, records_dir: Path | None):
@@ -504,8 +558,7 @@ def _point_error(exc: CaseError, axes, combo) -> CaseError:
                                   or _key_root(a.name).startswith(field_name))]
     if not options:
         options = [a.kind.option for a in axes]
-    point = ", ".join(f"{a.kind.option} {a.texts[i]}" for a, i in zip(axes, combo, strict=True))
-    return CaseError(f"{exc.message} [at {point}]", source="/".join(options), field=exc.field)
+    return CaseError(f"{exc.message} [at {_point_text(axes, combo)}]", source="/".join(options), field=exc.field)
 
 
 def _key_root(axis: str) -> str:
@@ -543,15 +596,18 @@ class ChunkStore:
     """Finished chunks of one sweep definition: ``FOLDER/KEY16/chunk-NNNNNN.npz``.
 
     ``FOLDER`` is ``.NAME.sweep.chunks`` beside the result file. Each file holds the chunk's flat
-    indices and final kernel states, and is written to a temporary name then renamed, so a file
-    with the chunk's name is always complete. A file that does not match the plan (another key,
-    other indices, damaged) is ignored and recomputed.
+    indices, final kernel states and a checksum (SHA-256 of the sweep's key, the indices and the
+    states), and is written to a temporary name then renamed, so a file with the chunk's name is
+    always complete. A file that cannot be read (truncated, a flipped byte, not an ``.npz``, a
+    folder) or does not match the plan (another key, other indices, a wrong checksum) counts as
+    missing: it is computed again, and `damaged` says which and why.
     """
 
     def __init__(self, folder: Path, key: str):
         self.root = Path(folder)
         self.key = key
         self.folder = self.root / key[:16]
+        self.damaged: dict[int, str] = {}
 
     @classmethod
     def beside(cls, result_path: Path, key: str) -> ChunkStore:
@@ -564,29 +620,66 @@ class ChunkStore:
         """The file of chunk ``chunk``."""
         return self.folder / f"chunk-{chunk:06d}.npz"
 
+    def checksum(self, indices: np.ndarray, states: np.ndarray) -> str:
+        """SHA-256 of the sweep's key, a chunk's indices and its states (as stored)."""
+        digest = hashlib.sha256(self.key.encode())
+        digest.update(np.ascontiguousarray(indices, dtype=np.int64).tobytes())
+        digest.update(np.ascontiguousarray(states, dtype=np.float64).tobytes())
+        return digest.hexdigest()
+
     def load(self, chunk: int, indices: np.ndarray) -> np.ndarray | None:
-        """The final states of ``chunk`` if a matching file is stored, else None."""
+        """The final states of ``chunk`` if a matching, intact file is stored, else None (and, for a
+        file that exists but cannot be used, the reason in ``damaged[chunk]``)."""
         path = self.path(chunk)
+        if not os.path.lexists(path):
+            return None
         try:
             with np.load(path, allow_pickle=False) as data:
-                if str(data["key"]) != self.key or not np.array_equal(data["indices"], indices):
-                    return None
-                states = np.array(data["states"], dtype=np.float64)
-        except (OSError, KeyError, ValueError, EOFError):
+                key, stored, states, checksum = (data["key"], data["indices"], data["states"],
+                                                 data["checksum"])
+                key, checksum = str(key), str(checksum)
+                stored = np.array(stored)
+                states = np.array(states, dtype=np.float64)
+        except Exception as exc:  # noqa: BLE001 - any way of not being a readable chunk file
+            self.damaged[chunk] = _one_line(exc) or type(exc).__name__
             return None
-        if states.shape != (indices.size, K.N_STATE):
-            return None
-        return states
+        if key != self.key:
+            self.damaged[chunk] = "of another sweep definition"
+        elif not np.array_equal(stored, indices) or states.shape != (indices.size, K.N_STATE):
+            self.damaged[chunk] = "other cases than the plan's"
+        elif checksum != self.checksum(stored, states):
+            self.damaged[chunk] = "its checksum does not match its content"
+        else:
+            self.damaged.pop(chunk, None)
+            return states
+        return None
 
     def save(self, chunk: int, indices: np.ndarray, states: np.ndarray) -> None:
-        """Store a finished chunk (atomically: a temporary file renamed)."""
+        """Store a finished chunk (atomically: a temporary file renamed; whatever was at its name,
+        a damaged file or a folder, is replaced)."""
         try:
             self.folder.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
             raise OutputError(f"cannot create the chunk folder: {exc.strerror or exc}",
                               source=str(self.folder)) from None
-        with atomic_write(self.path(chunk), overwrite=True, per_thread=True, what="chunk") as handle:
-            np.savez(handle, key=np.array(self.key), indices=indices, states=states)
+        path = self.path(chunk)
+        if path.is_dir() and not path.is_symlink():
+            shutil.rmtree(path, ignore_errors=True)
+        indices = np.ascontiguousarray(indices, dtype=np.int64)
+        states = np.ascontiguousarray(states, dtype=np.float64)
+        with atomic_write(path, overwrite=True, per_thread=True, what="chunk", interruptible=False) as handle:
+            np.savez(handle, key=np.array(self.key), indices=indices, states=states,
+                     checksum=np.array(self.checksum(indices, states)))
+        self.damaged.pop(chunk, None)
+
+    def remove_stale_temporaries(self) -> list[Path]:
+        """Delete temporary chunk files of processes that are gone (`files.remove_stale_temporaries`)."""
+        try:
+            names = [p.name for p in self.folder.glob(".chunk-*.tmp")]
+        except OSError:
+            return []
+        finals = {self.folder / (n.split(".npz.")[0][1:] + ".npz") for n in names if ".npz." in n}
+        return remove_stale_temporaries(sorted(finals))
 
     def count(self) -> int:
         """Chunk files stored for this definition."""
@@ -637,9 +730,11 @@ def compute(plan: Plan, store: ChunkStore, chunks: Sequence[int], *, workers: in
     Raises
     ------
     CaseError
-        ``workers`` out of range, or the scheduler cannot be reached or a task fails there.
-    KeyboardInterrupt
-        Propagated; the chunks finished before it are stored.
+        ``workers`` out of range, or the scheduler cannot be reached, is lost, or a task fails
+        there (the chunks finished before are stored).
+    interrupts.Interrupted
+        After Ctrl-C or SIGTERM, checked between chunk groups; the chunks finished before it are
+        stored.
     """
     if scheduler:
         _compute_dask(plan, store, chunks, scheduler, progress)
@@ -647,17 +742,25 @@ def compute(plan: Plan, store: ChunkStore, chunks: Sequence[int], *, workers: in
         _compute_local(plan, store, chunks, workers, progress)
 
 
+def check_workers(workers: int | None) -> None:
+    """Refuse a ``--workers`` outside ``1 ... NUMBA_NUM_THREADS`` (before any planning)."""
+    if workers is None:
+        return
+    import numba
+
+    limit = numba.config.NUMBA_NUM_THREADS
+    if isinstance(workers, bool) or not 1 <= int(workers) <= limit:
+        raise CaseError(f"must be within 1 ... {limit} (the cores numba may use here), got {workers!r}",
+                        source="--workers")
+
+
 def _compute_local(plan, store, chunks, workers, progress):
     """The chunks on numba's threads, a few at a time (at least `CASES_PER_THREAD` cases per
     thread in each parallel call, so that the threads rarely wait for each other's last case),
-    each chunk stored as soon as its call returns."""
+    each chunk stored as soon as its call returns, and Ctrl-C checked after each call."""
     import numba
 
-    if workers is not None:
-        limit = numba.config.NUMBA_NUM_THREADS
-        if isinstance(workers, bool) or not 1 <= int(workers) <= limit:
-            raise CaseError(f"must be within 1 ... {limit} (the cores numba may use here), "
-                            f"got {workers!r}", source="--workers")
+    check_workers(workers)
     previous = numba.get_num_threads()
     try:
         if workers is not None:
@@ -666,6 +769,7 @@ def _compute_local(plan, store, chunks, workers, progress):
         group = max(1, round(CASES_PER_THREAD * threads / plan.chunk_size)) if threads > 1 else 1
         chunks = list(chunks)
         for start in range(0, len(chunks), group):
+            interrupts.check()
             members = [(c, plan.chunk_indices(c)) for c in chunks[start:start + group]]
             indices = np.concatenate([i for _, i in members])
             states = batch.compute(*_chunk_inputs(plan, indices), parallel=True)
@@ -677,6 +781,7 @@ def _compute_local(plan, store, chunks, workers, progress):
                 progress(indices.size)
     finally:
         numba.set_num_threads(previous)
+    interrupts.check()
 
 
 def _chunk_inputs(plan: Plan, indices: np.ndarray):
@@ -684,75 +789,193 @@ def _chunk_inputs(plan: Plan, indices: np.ndarray):
             plan.factor_h[indices], plan.factor_v[indices])
 
 
+#: [s] for the connection to a dask scheduler, and for a lost one to come back.
+SCHEDULER_TIMEOUT = 10.0
+
+
 def _compute_dask(plan, store, chunks, address, progress):
     """One task per chunk on the cluster (`batch.compute`, serial in the task); each chunk is
-    stored as its result arrives."""
+    stored as its result arrives. One bounded connection attempt (`identify_scheduler`), the
+    cluster's log messages kept off the terminal, Ctrl-C checked while waiting."""
     try:
         import distributed
     except ImportError:  # pragma: no cover - a declared dependency
         raise CaseError("needs dask.distributed (pip install 'dask[distributed]')",
                         source="--scheduler") from None
-    _probe(address)
-    try:
-        client = distributed.Client(address, timeout="20s", set_as_default=False)
-    except (OSError, TimeoutError, ValueError) as exc:
-        raise CaseError(f"cannot connect to the dask scheduler at {address!r}: "
-                        f"{_one_line(exc)}", source="--scheduler") from None
-    futures = {}
-    try:
-        base = client.scatter([plan.base_h, plan.base_v], broadcast=True)
-        for chunk in chunks:
-            indices = plan.chunk_indices(chunk)
-            p, s, _, _, kh, kv = _chunk_inputs(plan, indices)
-            future = client.submit(batch.compute, p, s, base[0], base[1], kh, kv, parallel=False,
-                                   pure=False)
-            futures[future] = (chunk, indices)
-        for future in distributed.as_completed(list(futures), loop=client.loop):
+    address = scheduler_address(address)
+    with _quiet_logs("distributed", "tornado", "asyncio"):
+        identify_scheduler(address)
+        try:
+            client = distributed.Client(address, timeout=f"{SCHEDULER_TIMEOUT:g}s", set_as_default=False)
+        except (OSError, TimeoutError, ValueError) as exc:
+            raise CaseError(f"cannot connect to the dask scheduler at {address}: {_one_line(exc)}",
+                            source="--scheduler") from None
+        futures = {}
+        try:
+            base = client.scatter([plan.base_h, plan.base_v], broadcast=True)
+            for chunk in chunks:
+                indices = plan.chunk_indices(chunk)
+                p, s, _, _, kh, kv = _chunk_inputs(plan, indices)
+                future = client.submit(batch.compute, p, s, base[0], base[1], kh, kv, parallel=False,
+                                       pure=False)
+                futures[future] = (chunk, indices)
+            _collect_futures(client, futures, store, address, progress)
+        finally:
+            with contextlib.suppress(Exception):
+                if futures:
+                    client.cancel(list(futures))
+            with contextlib.suppress(Exception):
+                client.close(timeout=2)
+
+
+def _collect_futures(client, futures: dict, store: ChunkStore, address: str, progress) -> None:
+    """Store each chunk as its task finishes; Ctrl-C and a lost scheduler are noticed within a
+    fraction of a second and `SCHEDULER_TIMEOUT` respectively."""
+    import time
+
+    lost_since = None
+    while futures:
+        interrupts.check()
+        finished = [f for f in futures if f.status in ("finished", "error", "cancelled", "lost")]
+        for future in finished:
             chunk, indices = futures.pop(future)
+            if future.status != "finished":
+                if future.status == "error":
+                    exc = future.exception()
+                    raise CaseError(f"a task failed on the cluster: {type(exc).__name__}: {_one_line(exc)} "
+                                    "(are rockslide and its dependencies installed on the workers?)",
+                                    source="--scheduler")
+                raise _lost(address, store)
             try:
-                states = future.result()
-            except Exception as exc:  # noqa: BLE001 - a task's error, reported in one line
-                raise CaseError(f"a task failed on the cluster: {type(exc).__name__}: "
-                                f"{_one_line(exc)} (are rockslide and its dependencies installed "
-                                "on the workers?)", source="--scheduler") from None
-            store.save(chunk, indices, np.asarray(states, dtype=np.float64))
+                states = np.asarray(future.result(timeout=SCHEDULER_TIMEOUT), dtype=np.float64)
+            except Exception:  # noqa: BLE001 - the result could not be fetched: the scheduler is gone
+                raise _lost(address, store) from None
+            store.save(chunk, indices, states)
             if progress is not None:
                 progress(indices.size)
-    finally:
-        try:
-            if futures:
-                client.cancel(list(futures))
-        finally:
-            client.close()
+        if client.status == "running":
+            lost_since = None
+        elif lost_since is None:
+            lost_since = time.monotonic()
+        elif time.monotonic() - lost_since > SCHEDULER_TIMEOUT:
+            raise _lost(address, store)
+        if not finished:
+            time.sleep(0.1)
 
 
-def _probe(address: str) -> None:
-    """Fail fast, in one line, when nothing listens at a ``tcp://host:port`` address (dask itself
-    retries until its timeout)."""
-    import socket
+def _lost(address: str, store: ChunkStore) -> CaseError:
+    return CaseError(f"lost the connection to the dask scheduler at {address}; {store.count()} finished "
+                     f"chunks are kept in {store.folder} and the same command resumes from them",
+                     source="--scheduler")
+
+
+def scheduler_address(address: str) -> str:
+    """``tcp://HOST:PORT`` from ``--scheduler`` (``HOST:PORT`` taken as TCP), or a CaseError.
+
+    Only plain TCP: ``tls://`` needs certificates rockslide takes no options for, and ``inproc://``
+    exists only inside one Python process.
+    """
     from urllib.parse import urlsplit
 
-    if "://" not in address:
-        address = f"tcp://{address}"
-    parts = urlsplit(address)
-    if parts.scheme != "tcp":
-        return
+    text = str(address).strip()
+    if "://" not in text:
+        text = f"tcp://{text}"
+    scheme = text.split("://", 1)[0].lower()
+    if scheme != "tcp":
+        raise CaseError(f"{scheme}:// addresses are not supported; expected tcp://HOST:PORT (a scheduler "
+                        "started with 'dask scheduler'; for TLS, reach it through an SSH tunnel)",
+                        source="--scheduler")
     try:
+        parts = urlsplit(text)
         host, port = parts.hostname, parts.port
     except ValueError:
         host = port = None
     if not host or not port:
-        raise CaseError(f"expected an address like tcp://HOST:PORT, got {address!r}",
+        raise CaseError(f"expected an address like tcp://HOST:PORT, got {_shown(address)}",
                         source="--scheduler")
+    return text
+
+
+def identify_scheduler(address: str, timeout: float | None = None) -> dict:
+    """Ask ``address`` who it is, within ``timeout`` seconds in all (default
+    :data:`SCHEDULER_TIMEOUT`): a dask scheduler answers the ``identity`` request; anything else
+    (nothing listening, an HTTP server) is a CaseError."""
+    timeout = SCHEDULER_TIMEOUT if timeout is None else timeout
+    import asyncio
+    import socket
+    from urllib.parse import urlsplit
+
+    from distributed.comm import connect
+
+    parts = urlsplit(address)
     try:
-        socket.create_connection((host, port), timeout=10).close()
-    except OSError as exc:
+        socket.create_connection((parts.hostname, parts.port), timeout=timeout).close()
+    except OSError as exc:       # refused, unreachable: at once (dask itself retries until its timeout)
         raise CaseError(f"cannot connect to the dask scheduler at {address}: "
                         f"{exc.strerror or _one_line(exc)}", source="--scheduler") from None
+
+    async def ask():
+        comm = await connect(address, timeout=timeout)
+        try:
+            await comm.write({"op": "identity", "reply": True})
+            return await comm.read()
+        finally:
+            comm.abort()
+
+    try:
+        reply = asyncio.run(asyncio.wait_for(ask(), timeout))
+    except (asyncio.TimeoutError, TimeoutError):
+        raise CaseError(f"no dask scheduler answered at {address} within {timeout:g} s (is something "
+                        "else listening there?)", source="--scheduler") from None
+    except Exception as exc:  # noqa: BLE001 - refused, reset, closed, a bad handshake
+        reason = getattr(exc, "strerror", None) or _one_line(exc)
+        raise CaseError(f"cannot connect to the dask scheduler at {address}: {reason}",
+                        source="--scheduler") from None
+    if not (isinstance(reply, dict) and reply.get("type") == "Scheduler"):
+        raise CaseError(f"{address} answers, but not as a dask scheduler", source="--scheduler")
+    return reply
+
+
+@contextlib.contextmanager
+def _quiet_logs(*prefixes: str):
+    """Keep the log messages of these libraries off the terminal (errors are reported in one line)."""
+    import logging
+
+    names = [n for n in list(logging.root.manager.loggerDict) if n.split(".")[0] in prefixes]
+    loggers = [logging.getLogger(n) for n in {*names, *prefixes}]
+    levels = [logger.level for logger in loggers]
+    for logger in loggers:
+        logger.setLevel(logging.CRITICAL + 1)
+    try:
+        yield
+    finally:
+        for logger, level in zip(loggers, levels, strict=True):
+            logger.setLevel(level)
+
+
+def _shown(text: str, limit: int = 80) -> str:
+    text = repr(str(text))
+    return text if len(text) <= limit else text[:limit - 4] + "...'"
 
 
 def _one_line(exc: BaseException) -> str:
     return " ".join(str(exc).split()) or type(exc).__name__
+
+
+def work_estimate(plan: Plan, n_cases: int, *, workers: int | None = None) -> float:
+    """An upper estimate [s] of the time ``n_cases`` cases of ``plan`` take on this machine's
+    threads (every case moving until the end; cases at rest go about 3000 times faster)."""
+    import numba
+
+    threads = workers or numba.config.NUMBA_NUM_THREADS
+    return n_cases * plan.steps_per_case / (STEPS_PER_SECOND * threads)
+
+
+def bytes_needed(plan: Plan, n_chunks: int) -> int:
+    """Bytes on disk for ``n_chunks`` more chunk files and the result file (both uncompressed)."""
+    per_case_chunk = (K.N_STATE + 1) * 8
+    per_case_result = 8 * 9 + 4 + 5          # nine float64, one int32, five int8 variables
+    return n_chunks * plan.chunk_size * per_case_chunk + plan.n_cases * per_case_result + 2**16
 
 
 def missing_chunks(plan: Plan, store: ChunkStore) -> list[int]:
