@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import json
 import math
+import signal
 import sys
 import time
 import warnings
@@ -83,7 +84,7 @@ class RockslideGroup(click.Group):
             except KeyboardInterrupt as exc:
                 if debug:
                     raise
-                stopped = exc if isinstance(exc, interrupts.Interrupted) else interrupts.Interrupted(2)
+                stopped = exc if isinstance(exc, interrupts.Interrupted) else interrupts.Interrupted(signal.SIGINT)
                 click.echo(f"rockslide: {stopped.word} (no partial result was written)", err=True)
                 ctx.exit(stopped.exit_code)
             except (click.exceptions.ClickException, click.exceptions.Exit, click.exceptions.Abort):
@@ -91,6 +92,9 @@ class RockslideGroup(click.Group):
             except Exception as exc:  # noqa: BLE001 - anything else is a bug or a system failure
                 if debug:
                     raise
+                if isinstance(exc, ValueError) and "embedded null" in str(exc):   # only from the API
+                    click.echo("rockslide: error: a file or folder name holds a NUL character (\\x00)", err=True)
+                    ctx.exit(EXIT_USER_ERROR)
                 click.echo(one_line(f"rockslide: {_unexpected(exc)} (run again with --debug for the "
                                     "traceback)"), err=True)
                 ctx.exit(EXIT_INTERNAL_ERROR)
@@ -466,6 +470,9 @@ def sweep(case_file, mu, pga, vertical_factor, restitution, slenderness, gravity
     finishing = _result_set(h5_path, png_path, overwrite=overwrite, no_plot=no_plot, example="out/case.sweep",
                             leftovers=sw.ChunkStore.beside(h5_path, "").root.exists())
     n_points = math.prod(len(a) for a in axes) if axes else 0
+    if n_points * sw.PLAN_SECONDS_PER_POINT > 10:
+        click.echo(f"sweep {case.name}: checking the {n_points} points of the grid first (about "
+                   f"{duration_text(n_points * sw.PLAN_SECONDS_PER_POINT)})")
     with tqdm(total=n_points, unit="case", file=sys.stderr, desc=f"{case.name}: checking",
               disable=no_progress or n_points < 10 * sw.PLAN_BATCH or not sys.stderr.isatty(),
               dynamic_ncols=True, leave=False) as bar:
@@ -489,10 +496,9 @@ def sweep(case_file, mu, pga, vertical_factor, restitution, slenderness, gravity
     click.echo(f"sweep {case.name}: {plan.describe()} in {plan.n_chunks} chunks, {where}")
     if reused:
         click.echo(f"  reused {reused} of {plan.n_chunks} chunks ({reused_cases} cases) from {store.folder}")
-    estimate = sw.work_estimate(plan, plan.n_cases - reused_cases, workers=workers)
-    if estimate > 60 and not scheduler:
-        click.echo(f"  up to about {duration_text(estimate)} of computing ({plan.steps_per_case:.3g} "
-                   "integration steps per case)")
+    if sw.work_estimate(plan, plan.n_cases - reused_cases, workers=workers) > 60:
+        click.echo(f"  up to {plan.steps_per_case:.3g} integration steps per case (far fewer for cases at "
+                   "rest or overturned): the progress bar shows the time left")
     files.require_free_space(folder, sw.bytes_needed(plan, len(missing)), "the sweep")
     show_warnings()
     if not scheduler and missing:

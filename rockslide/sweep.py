@@ -89,6 +89,9 @@ MIN_CHUNK, MAX_CHUNK = 4, 256
 CASES_PER_THREAD = 32
 #: Points validated between two checks for Ctrl-C (and two calls of the planning's progress).
 PLAN_BATCH = 2000
+#: [s] Time to validate one point of a grid (`plan_sweep`; 0.27 ms measured on 2 cores), to say how
+#: long the checks of a large grid take before they start.
+PLAN_SECONDS_PER_POINT = 3e-4
 #: Ranges include their stop when it is within this fraction of a step of the grid.
 RANGE_TOLERANCE = 1e-9
 
