@@ -9,11 +9,14 @@ naming the file.
 from __future__ import annotations
 
 import os
+import shutil
 from pathlib import Path
 
 import pytest
 
 REPO = Path(__file__).resolve().parents[1]
+#: The synthetic records shipped in records/ (made by records/make_example_records.py).
+SHIPPED = ("synthetic_kt_h.at2", "synthetic_kt_v.at2")
 
 
 def real_records_dir() -> Path | None:
@@ -41,3 +44,14 @@ def records_dir_real() -> Path:
     if folder is None:
         pytest.skip("needs the paper's records: set ROCKSLIDE_RECORDS or place them in ../shared/records")
     return folder
+
+
+@pytest.fixture
+def ws(tmp_path, monkeypatch):
+    """A working folder with copies of the shipped synthetic records, made the current folder (and
+    no $ROCKSLIDE_RECORDS: everything offline)."""
+    for name in SHIPPED:
+        shutil.copy(REPO / "records" / name, tmp_path / name)
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.delenv("ROCKSLIDE_RECORDS", raising=False)
+    return tmp_path
