@@ -441,14 +441,14 @@ def load_case(path) -> Case:
     p = Path(path)
     source = str(path)
     try:
-        size = p.stat().st_size if p.is_file() else 0
-    except OSError:
-        size = 0
-    if size > MAX_CASE_BYTES:
-        raise CaseError(f"the case file has {size} bytes; expected at most {MAX_CASE_BYTES} (a case file "
-                        "is a page of YAML)", source=source)
-    try:
-        text = p.read_text(encoding="utf-8")
+        with open(p, "rb") as handle:          # at most one byte too many, even from a device
+            raw = handle.read(MAX_CASE_BYTES + 1)
+        if len(raw) > MAX_CASE_BYTES:
+            size = p.stat().st_size if p.is_file() else 0
+            given = f"{size} bytes" if size > MAX_CASE_BYTES else f"more than {MAX_CASE_BYTES} bytes"
+            raise CaseError(f"the case file has {given}; expected at most {MAX_CASE_BYTES} (a case file is "
+                            "a page of YAML)", source=source)
+        text = raw.decode("utf-8").replace("\r\n", "\n").replace("\r", "\n")   # as read_text() reads
     except FileNotFoundError:
         raise CaseError("case file not found", source=source) from None
     except IsADirectoryError:

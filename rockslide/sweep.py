@@ -906,6 +906,7 @@ def identify_scheduler(address: str, timeout: float | None = None) -> dict:
     timeout = SCHEDULER_TIMEOUT if timeout is None else timeout
     import asyncio
     import socket
+    from concurrent.futures import ThreadPoolExecutor
     from urllib.parse import urlsplit
 
     from distributed.comm import connect
@@ -926,7 +927,8 @@ def identify_scheduler(address: str, timeout: float | None = None) -> dict:
             comm.abort()
 
     try:
-        reply = asyncio.run(asyncio.wait_for(ask(), timeout))
+        with ThreadPoolExecutor(1) as pool:         # its own event loop, even under a running one
+            reply = pool.submit(asyncio.run, asyncio.wait_for(ask(), timeout)).result()
     except (asyncio.TimeoutError, TimeoutError):
         raise CaseError(f"no dask scheduler answered at {address} within {timeout:g} s (is something "
                         "else listening there?)", source="--scheduler") from None
