@@ -518,7 +518,9 @@ def _race(folder: str, tag: str, start, results_queue) -> None:
 @posix
 def test_concurrent_publications_have_one_winner_and_no_mixed_pair(tmp_path):
     """20 rounds of two processes publishing a pair of files under the same names at the same
-    instant: exactly one wins each round, the other is refused, and both files are the winner's."""
+    instant (the publication `run` and `sweep` end with): exactly one wins each round, the other is
+    refused, and both files are the winner's. (Two whole runs started together rarely meet in the
+    window between a check and a rename: 6 of 40 pairs did; the barrier here meets it every round.)"""
     context = multiprocessing.get_context("fork")
     for round_ in range(20):
         folder = tmp_path / str(round_)
@@ -536,24 +538,6 @@ def test_concurrent_publications_have_one_winner_and_no_mixed_pair(tmp_path):
         assert len(winners) == 1 and set(outcomes.values()) == {"won", "OutputError"}, outcomes
         assert {(folder / n).read_text() for n in ("same.h5", "same.png")} == set(winners)
         assert sorted(os.listdir(folder)) == ["same.h5", "same.png"]
-
-
-@posix
-def test_two_runs_started_at_once_never_both_write(ws):
-    """Two cases of the same name, two processes started together, no --overwrite: one writes, the
-    other is refused (both said 'wrote' before), and the files are the winner's."""
-    (ws / "a.yaml").write_text(case_text(QUICK))
-    (ws / "b.yaml").write_text(case_text({**QUICK, "contact.restitution": 0.7}))
-    runner.run_case(load_case(ws / "a.yaml"), ws, history=False)     # the kernel is compiled and cached
-    procs = [cli_subprocess(["run", f"{tag}.yaml", "--no-plot"], ws) for tag in "ab"]
-    outcomes = [p.communicate(timeout=300) + (p.returncode,) for p in procs]
-    codes = sorted(code for _, _, code in outcomes)
-    assert codes == [0, 2], outcomes
-    loser = next(err for _, err, code in outcomes if code == 2)
-    assert loser.splitlines() == ["rockslide: error: out/example.h5 exists (use --overwrite to replace it)"]
-    winner = "ab"[[code for _, _, code in outcomes].index(0)]
-    assert results.read_result(ws / "out" / "example.h5").case_text == (ws / f"{winner}.yaml").read_text()
-    assert listing(ws / "out") == ["example.h5"]
 
 
 # --------------------------------------------------------------------------------------------------
