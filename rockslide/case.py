@@ -297,6 +297,9 @@ class Case:
 SI_UNIT: dict[str, str] = SI_UNITS
 
 NAME_PATTERN = r"^[A-Za-z0-9][A-Za-z0-9._-]*$"
+#: Longest case name: ``.NAME.sweep.png.<pid>.<thread>.tmp`` must stay within the 255 bytes of a
+#: file name (`files.check_name`).
+MAX_NAME_LENGTH = 200
 _NAME_RE = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]*")
 
 # Types that are not a quantity kind (those are the keys of units.UNITS):
@@ -469,7 +472,14 @@ def _read_text(path: Path, what: str) -> str:
     """The UTF-8 text of a YAML file (a ``what``: "case file", "suite file"), or a CaseError."""
     source = str(path)
     try:
-        return path.read_text(encoding="utf-8")
+        with open(path, "rb") as handle:          # at most one byte too many, even from a device
+            raw = handle.read(MAX_CASE_BYTES + 1)
+        if len(raw) > MAX_CASE_BYTES:
+            size = path.stat().st_size if path.is_file() else 0
+            given = f"{size} bytes" if size > MAX_CASE_BYTES else f"more than {MAX_CASE_BYTES} bytes"
+            raise CaseError(f"the {what} has {given}; expected at most {MAX_CASE_BYTES} (a {what} is "
+                            "a page or two of YAML)", source=source)
+        return raw.decode("utf-8").replace("\r\n", "\n").replace("\r", "\n")   # as read_text() reads
     except FileNotFoundError:
         raise CaseError(f"{what} not found", source=source) from None
     except IsADirectoryError:
@@ -505,8 +515,64 @@ def parse_case(text: str, *, source: str = "<case>", base_dir: Path | None = Non
         On YAML syntax errors (with line and column), object tags, unknown or missing keys, wrong
         types or units, and values out of their physical range.
     """
+    if len(text) > MAX_CASE_BYTES:
+        raise CaseError(f"the case text has {len(text)} characters; expected at most {MAX_CASE_BYTES} "
+                        "(a case file is a page of YAML)", source=source)
     data = _load_yaml(text, source)
     return _build(data, source=source, base_dir=base_dir, text=text)
+
+
+#: Bounds on a case file, checked before its YAML is built (a few hundred bytes of nested aliases
+#: or merge keys expand to billions of nodes). The shipped example is 1 KB, 60 nodes, 4 levels deep.
+MAX_CASE_BYTES = 64 * 1024
+MAX_YAML_NODES = 10_000     # after expanding aliases and merge keys
+MAX_YAML_DEPTH = 20
+
+
+def _check_yaml_size(root, source: str) -> None:
+    """Refuse a composed YAML document that expands beyond :data:`MAX_YAML_NODES` nodes or
+    :data:`MAX_YAML_DEPTH` levels, or whose aliases form a cycle; linear in the composed document
+    (an alias is a shared node, counted once per use without being expanded)."""
+    size: dict[int, int] = {}
+    depth: dict[int, int] = {}
+    stack = [(root, False)]
+    on_path: set[int] = set()
+    while stack:
+        node, children_done = stack.pop()
+        key = id(node)
+        children = _yaml_children(node)
+        if children_done:
+            on_path.discard(key)
+            size[key] = min(1 + sum(size[id(c)] for c in children), MAX_YAML_NODES + 1)
+            depth[key] = 1 + max((depth[id(c)] for c in children), default=0)
+            if size[key] > MAX_YAML_NODES:
+                mark = node.start_mark
+                raise CaseError(f"the YAML expands to more than {MAX_YAML_NODES} values (aliases and "
+                                "merge keys included); a case file is a page of plain data",
+                                source=source, field=f"line {mark.line + 1}, column {mark.column + 1}")
+            if depth[key] > MAX_YAML_DEPTH:
+                mark = node.start_mark
+                raise CaseError(f"the YAML is nested more than {MAX_YAML_DEPTH} levels deep; a case file "
+                                "has sections of keys", source=source,
+                                field=f"line {mark.line + 1}, column {mark.column + 1}")
+            continue
+        if key in size:
+            continue
+        if key in on_path:
+            mark = node.start_mark
+            raise CaseError("invalid YAML: an alias refers to a node that contains it", source=source,
+                            field=f"line {mark.line + 1}, column {mark.column + 1}")
+        on_path.add(key)
+        stack.append((node, True))
+        stack.extend((c, False) for c in children if id(c) not in size)
+
+
+def _yaml_children(node) -> list:
+    if isinstance(node, yaml.SequenceNode):
+        return list(node.value)
+    if isinstance(node, yaml.MappingNode):
+        return [n for pair in node.value for n in pair]
+    return []
 
 
 # How PyYAML's safe constructors fail on explicit tags with bad values (``!!int abc``, ``!!float``).
@@ -535,8 +601,14 @@ class _CaseLoader(yaml.SafeLoader):
 
 
 def _load_yaml(text: str, source: str):
+    loader = None
     try:
-        return yaml.load(text, Loader=_CaseLoader)  # a SafeLoader: plain data only
+        loader = _CaseLoader(text)       # a SafeLoader: plain data only
+        root = loader.get_single_node()
+        if root is None:
+            return None
+        _check_yaml_size(root, source)
+        return loader.construct_document(root)
     except yaml.constructor.ConstructorError as exc:
         problem = _one_line(exc.problem or "")
         if "could not determine a constructor" in problem:
@@ -570,6 +642,9 @@ def _load_yaml(text: str, source: str):
         mark = node.start_mark
         raise CaseError(f"invalid YAML: {node.value!r} is not a valid {tag} value", source=source,
                         field=f"line {mark.line + 1}, column {mark.column + 1}") from None
+    finally:
+        if loader is not None:
+            loader.dispose()
 
 
 def _bad_scalar(text: str):
@@ -728,10 +803,19 @@ def _read_value(value, spec: dict, path: str, ctx: _Ctx):
         if not isinstance(value, str) or not _NAME_RE.fullmatch(value):
             ctx.fail(path, f"expected a name made of letters, digits, '.', '_' and '-', starting with "
                      f"a letter or digit ({NAME_PATTERN}), got {_show(value)}")
+        if len(value) > MAX_NAME_LENGTH:
+            ctx.fail(path, f"expected at most {MAX_NAME_LENGTH} characters (the name is part of the output "
+                     f"files' names), got {len(value)}: {_show(value)}")
+        if value.endswith(".sweep"):
+            ctx.fail(path, f"a name ending in '.sweep' would write the files of the sweep of case "
+                     f"{value[:-len('.sweep')]!r} (NAME.sweep.h5); choose another name")
         return value
     if kind == "string":
         if not isinstance(value, str) or not value.strip():
             ctx.fail(path, f"expected a non-empty string, got {_show(value)}")
+        if not all(c.isprintable() or c in " \t" for c in value):
+            ctx.fail(path, f"expected text without control characters (such as NUL or a line break), "
+                     f"got {_show(value)}")
         return value
     if kind == "choice":
         choices = spec["choices"]

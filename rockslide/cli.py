@@ -2,56 +2,48 @@
 
 Every `RockslideError` (bad case, record, option or output) becomes one line on stderr,
 ``rockslide: error: <file>: <field>: <what is wrong and what is expected>``, and exit code 2, here
-and nowhere else. ``--debug`` shows the traceback instead. Any other exception is a bug: one line
-``rockslide: internal error: ...`` and exit code 1. Ctrl-C exits with 130 and SIGTERM with 143;
-results are written atomically, so an interrupted run leaves the previous result or none.
+and nowhere else; so do click's usage errors. ``--debug`` shows the traceback instead. Any other
+exception is a bug: one line ``rockslide: internal error: ...`` and exit code 1. Messages are one
+readable line: control characters escaped, at most :data:`MESSAGE_LIMIT` characters.
+
+Ctrl-C and SIGTERM only set a flag (`interrupts`), checked between kernel chunks, between sweep
+chunks and before every write; the command then ends with exit code 130 (143) and the previous
+result intact, since results are published only once complete (`files`).
 """
 
 from __future__ import annotations
 
-import contextlib
 import json
 import math
 import signal
 import sys
-import threading
 import time
 import warnings
 from pathlib import Path
 
 import click
 
-from . import __version__
+from . import __version__, interrupts
 from .errors import CaseError, OutputError, RockslideError
 
 EXIT_INTERNAL_ERROR = 1
 EXIT_USER_ERROR = 2
 EXIT_INTERRUPTED = 130
 EXIT_TERMINATED = 143
+#: Longest message printed [characters]; a longer one keeps its start and its end.
+MESSAGE_LIMIT = 400
+#: A single run expected to take longer than this [s] says so before it starts (and shows a
+#: progress bar on a terminal).
+LONG_RUN = 10.0
 
 
-class _Terminated(KeyboardInterrupt):
-    """SIGTERM (``kill``, ``timeout``, batch systems), raised like Ctrl-C so that temporary files go."""
-
-
-@contextlib.contextmanager
-def _sigterm_raises():
-    if threading.current_thread() is not threading.main_thread() or not hasattr(signal, "SIGTERM"):
-        yield
-        return
-
-    def terminate(signum, frame):
-        raise _Terminated()
-
-    previous = signal.signal(signal.SIGTERM, terminate)
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGTERM, previous)
+#: click >= 8.2 raises this (a UsageError) for a group called without a command.
+_NO_ARGS_IS_HELP = getattr(click.exceptions, "NoArgsIsHelpError", ())
 
 
 class RockslideGroup(click.Group):
-    """Turns the one exception family into messages, once; takes ``--debug`` anywhere."""
+    """Turns the one exception family, click's usage errors and signals into messages, once;
+    takes ``--debug`` anywhere."""
 
     def parse_args(self, ctx, args):
         # --debug is the group's option, but a user adds it to the command that failed: move it
@@ -61,31 +53,70 @@ class RockslideGroup(click.Group):
             args = ["--debug"] + [a for a in args[:end] if a != "--debug"] + args[end:]
         return super().parse_args(ctx, args)
 
+    def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True, **extra):
+        if not standalone_mode:
+            return super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
+        try:
+            with interrupts.handling_signals():
+                code = super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
+        except _NO_ARGS_IS_HELP as exc:       # `rockslide` alone: the help, as click shows it
+            exc.show()
+            sys.exit(exc.exit_code)
+        except click.UsageError as exc:
+            words = exc.ctx.command_path.split()[1:] if exc.ctx is not None else []
+            command = " ".join(["rockslide", *words])
+            click.echo(one_line(f"rockslide: error: {command}: {exc.format_message()} "
+                                f"(see '{command} --help')"), err=True)
+            sys.exit(exc.exit_code)
+        except click.ClickException as exc:
+            click.echo(one_line(f"rockslide: error: {exc.format_message()}"), err=True)
+            sys.exit(exc.exit_code)
+        except click.Abort:
+            click.echo("rockslide: interrupted", err=True)
+            sys.exit(EXIT_INTERRUPTED)
+        sys.exit(code if isinstance(code, int) else 0)
+
     def invoke(self, ctx):
         debug = "--debug" in sys.argv[1:] or bool(ctx.params.get("debug"))
-        with warnings.catch_warnings(), _sigterm_raises():
-            warnings.showwarning = _show_warning
+        with warnings.catch_warnings():
+            warnings.showwarning = _hold_warning
+            _held.clear()
             try:
-                return super().invoke(ctx)
+                value = super().invoke(ctx)
+                show_warnings()
+                return value
             except RockslideError as exc:
                 if debug:
                     raise
-                click.echo(f"rockslide: error: {exc}", err=True)
+                click.echo(one_line(f"rockslide: error: {exc}"), err=True)
                 ctx.exit(EXIT_USER_ERROR)
             except KeyboardInterrupt as exc:
                 if debug:
                     raise
-                how = "terminated" if isinstance(exc, _Terminated) else "interrupted"
-                click.echo(f"rockslide: {how} (no partial result was written)", err=True)
-                ctx.exit(EXIT_TERMINATED if isinstance(exc, _Terminated) else EXIT_INTERRUPTED)
+                stopped = exc if isinstance(exc, interrupts.Interrupted) else interrupts.Interrupted(signal.SIGINT)
+                click.echo(f"rockslide: {stopped.word} (no partial result was written)", err=True)
+                ctx.exit(stopped.exit_code)
             except (click.exceptions.ClickException, click.exceptions.Exit, click.exceptions.Abort):
                 raise
             except Exception as exc:  # noqa: BLE001 - anything else is a bug or a system failure
                 if debug:
                     raise
-                click.echo(f"rockslide: {_unexpected(exc)} (run again with --debug for the traceback)",
-                           err=True)
+                if isinstance(exc, ValueError) and "embedded null" in str(exc):   # only from the API
+                    click.echo("rockslide: error: a file or folder name holds a NUL character (\\x00)", err=True)
+                    ctx.exit(EXIT_USER_ERROR)
+                click.echo(one_line(f"rockslide: {_unexpected(exc)} (run again with --debug for the "
+                                    "traceback)"), err=True)
                 ctx.exit(EXIT_INTERNAL_ERROR)
+
+
+def one_line(text: str, limit: int = MESSAGE_LIMIT) -> str:
+    """``text`` as one readable line: control characters escaped (``\\x00``), runs of white space
+    made one space, and at most ``limit`` characters (the middle of a longer text left out)."""
+    text = " ".join("".join(c if c.isprintable() or c in " \t\n" else ascii(c)[1:-1] for c in str(text)).split())
+    if len(text) > limit:
+        tail = limit // 4
+        text = f"{text[:limit - tail - 5]} ... {text[-tail:]}"
+    return text
 
 
 def _unexpected(exc: Exception) -> str:
@@ -103,8 +134,20 @@ def _unexpected(exc: Exception) -> str:
     return f"internal error: {detail}; this is a bug in rockslide, please report it"
 
 
-def _show_warning(message, category, filename, lineno, file=None, line=None):
-    click.echo(f"rockslide: warning: {message}", err=True)
+_held: list[str] = []
+
+
+def _hold_warning(message, category, filename, lineno, file=None, line=None):
+    """Warnings wait until the input is accepted (`show_warnings`): a command that ends in an
+    input error prints that one line only."""
+    _held.append(one_line(f"rockslide: warning: {message}"))
+
+
+def show_warnings() -> None:
+    """Print the warnings held so far (call it when the input is accepted, before the work)."""
+    for line in _held:
+        click.echo(line, err=True)
+    _held.clear()
 
 
 @click.group(cls=RockslideGroup, context_settings={"help_option_names": ["-h", "--help"]})
@@ -143,7 +186,8 @@ def dpi_option(what: str):
               help="Output folder (default: the case's output.dir).")
 @click.option("--json", "as_json", is_flag=True, help="Print the summary as one JSON object on stdout.")
 @click.option("--overwrite", is_flag=True, help="Replace existing results of this case.")
-@click.option("--no-plot", is_flag=True, help="Do not draw the PNG figure.")
+@click.option("--no-plot", is_flag=True, help="Do not draw the PNG figure (with --overwrite, an earlier "
+              "figure of this case is removed: it showed the result replaced).")
 @click.option("--robustness", is_flag=True,
               help="Also rerun at dt/2 and with mu 1 % lower and higher, and say whether the verdict holds.")
 @dpi_option("PNG figure")
@@ -154,34 +198,58 @@ def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, robustness
     Example:
         rockslide run example/example.yaml --json
     """
-    from . import records, results, runner
+    from . import files, records, results, runner
     from .case import load_case
 
     started = time.perf_counter()
     case = load_case(case_file)
-    folder = Path(out_dir) if out_dir is not None else Path(case.output.dir)
+    folder = (Path(out_dir) if out_dir is not None else Path(case.output.dir)).expanduser()
     h5_path = folder / f"{case.name}.h5"
     png_path = folder / f"{case.name}.png"
-    prepared = runner.prepare(case, records.records_dir(records_dir))
-    for path in (h5_path,) if no_plot else (h5_path, png_path):   # input errors first, then outputs
-        results.check_destination(path, overwrite=overwrite)
-    _note_first_compile()
-    with results.ResultWriter(h5_path, overwrite=overwrite) as writer:
-        streamed = prepared.case.solver.method == "kernel"
-        result = runner.simulate_prepared(prepared, on_chunk=writer.append_history if streamed else None)
-        check = runner.verdict_robustness(prepared, result.summary.overturned) if robustness else None
-        extra = {} if check is None else {"verdict_robust": check["holds"],
-                                          "robustness": json.dumps(check["variants"], default=_json_default)}
-        ground = prepared.ground.as_applied()
-        writer.finish(result, name=case.name, case_text=case.text, case=_case_dict(case),
-                      records=runner.record_entries(prepared), extra_attrs=extra, ground=ground)
-    if not no_plot:
-        _draw(results.read_result(h5_path), png_path, overwrite=overwrite, dpi=dpi)
+    prepared = runner.prepare(case, records.records_dir(records_dir))     # input errors first
+    ground = prepared.ground.as_applied()
+    stored = None        # this case's complete result, of which only the figure is missing
+    if _result_set(h5_path, png_path, overwrite=overwrite, no_plot=no_plot):
+        stored = _same_result(case, prepared, h5_path, robustness=robustness)
+    files.remove_stale_temporaries([h5_path, png_path])
+    show_warnings()
+    if stored is None:
+        work = runner.work(prepared, runs=4 if robustness else 1)
+        if work.seconds > LONG_RUN:
+            click.echo(f"rockslide: note: {work.describe()}", err=True)
+        files.warn_free_space(folder, work.rows * results.BYTES_PER_ROW)
+        _note_first_compile()
+        with files.Staging(overwrite=overwrite) as staging:
+            with results.ResultWriter(h5_path, overwrite=overwrite, staging=staging) as writer, \
+                    _RunProgress(case.name, show=work.seconds > LONG_RUN) as progress:
+                streamed = prepared.case.solver.method == "kernel"
+                result = runner.simulate_prepared(prepared, on_chunk=writer.append_history if streamed else None,
+                                                  progress=progress)
+                check = (runner.verdict_robustness(prepared, result.summary.overturned, progress=progress)
+                         if robustness else None)
+                extra = {} if check is None else {
+                    "verdict_robust": check["holds"],
+                    "robustness": json.dumps(results.json_ready(check["variants"]), allow_nan=False)}
+                writer.finish(result, name=case.name, case_text=case.text, case=_case_dict(case),
+                              records=runner.record_entries(prepared), extra_attrs=extra, ground=ground)
+            if not no_plot:
+                _draw(results.read_result(writer.tmp), png_path, overwrite=overwrite, dpi=dpi, staging=staging)
+            staging.publish(remove=[png_path] if no_plot else [])
+        written = f"{h5_path}" + ("" if no_plot else f" and {png_path}")
+    else:
+        with files.Staging(overwrite=False) as staging:
+            _draw(stored, png_path, overwrite=False, dpi=dpi, staging=staging)
+            staging.publish()
+        result = stored.result
+        check = None if not robustness else {
+            "holds": bool(stored.attrs["verdict_robust"]), "overturned": result.summary.overturned,
+            "variants": json.loads(stored.attrs["robustness"])}
+        written = f"{png_path} (the missing figure of the complete {h5_path})"
     elapsed = time.perf_counter() - started
     summary = result.summary
     if as_json:
         payload = {"name": case.name, **results.summary_to_json_dict(summary, result.events),
-                   "ground": ground, "robustness": check,
+                   "ground": ground, "robustness": results.json_ready(check),
                    "files": {"hdf5": str(h5_path), "png": None if no_plot else str(png_path)},
                    "elapsed_s": round(elapsed, 3)}
         click.echo(json.dumps(payload, allow_nan=False, default=_json_default))
@@ -191,7 +259,6 @@ def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, robustness
             flips = [name for name, v in check["variants"].items() if v["overturned"] != summary.overturned]
             click.echo("  verdict robust: holds at dt/2 and mu +-1 %" if check["holds"] else
                        f"  verdict NOT robust (knife edge): flips with {', '.join(flips)}")
-        written = f"{h5_path}" + ("" if no_plot else f" and {png_path}")
         click.echo(f"  wrote {written} in {elapsed:.2f} s")
 
 
@@ -456,7 +523,8 @@ def _axis_option(name: str, kind: str, what: str, example: str):
 @click.option("--out-dir", type=click.Path(file_okay=False, path_type=Path), default=None,
               help="Output folder (default: the case's output.dir).")
 @click.option("--overwrite", is_flag=True, help="Replace an existing result of this sweep.")
-@click.option("--no-plot", is_flag=True, help="Do not draw the PNG maps.")
+@click.option("--no-plot", is_flag=True, help="Do not draw the PNG maps (with --overwrite, earlier maps "
+              "of this sweep are removed).")
 @click.option("--workers", type=int, default=None, metavar="N",
               help="numba threads for a local run (default: all cores).")
 @click.option("--scheduler", default=None, metavar="ADDRESS",
@@ -486,10 +554,13 @@ def sweep(case_file, mu, pga, vertical_factor, restitution, slenderness, gravity
         rockslide sweep example/example.yaml --mu 0.30:0.70:0.01 --pga 100gal:1000gal:25gal
         rockslide sweep example/spectrum-one-sine.yaml --amplitude 0.25g:2.5g:0.25g --period 0.2:1.6:0.2
     """
-    from . import records, results
+    from tqdm import tqdm
+
+    from . import files, records, results
     from . import sweep as sw
     from .case import load_case
     from .plots import save_figure
+    from .runner import duration_text
 
     ctx = click.get_current_context()
     started = time.perf_counter()
@@ -498,22 +569,38 @@ def sweep(case_file, mu, pga, vertical_factor, restitution, slenderness, gravity
     if workers is not None and scheduler:
         raise CaseError("sets the local threads; with --scheduler the cluster's workers compute",
                         source="--workers")
-    folder = Path(out_dir) if out_dir is not None else Path(case.output.dir)
+    sw.check_workers(workers)
+    if scheduler:
+        scheduler = sw.scheduler_address(scheduler)
+    folder = (Path(out_dir) if out_dir is not None else Path(case.output.dir)).expanduser()
     h5_path = folder / f"{case.name}.sweep.h5"
     png_path = folder / f"{case.name}.sweep.png"
-    results.check_destination(h5_path, overwrite=overwrite)
-    if not no_plot and not overwrite and (png_path.exists() or png_path.is_symlink()):
-        raise OutputError(f"{png_path} exists (use --overwrite to replace it)")
-    plan = sw.plan_sweep(case, axes, records_dir=records.records_dir(records_dir),
-                         mu_kinetic_ratio=mu_kinetic_ratio, chunk_size=chunk_size)
+    finishing = _result_set(h5_path, png_path, overwrite=overwrite, no_plot=no_plot, example="out/case.sweep",
+                            leftovers=sw.ChunkStore.beside(h5_path, "").root.exists())
+    n_points = math.prod(len(a) for a in axes) if axes else 0
+    if n_points * sw.PLAN_SECONDS_PER_POINT > 10:
+        click.echo(f"sweep {case.name}: checking the {n_points} points of the grid first (about "
+                   f"{duration_text(n_points * sw.PLAN_SECONDS_PER_POINT)})")
+    with tqdm(total=n_points, unit="case", file=sys.stderr, desc=f"{case.name}: checking",
+              disable=no_progress or n_points < 10 * sw.PLAN_BATCH or not sys.stderr.isatty(),
+              dynamic_ncols=True, leave=False) as bar:
+        plan = sw.plan_sweep(case, axes, records_dir=records.records_dir(records_dir),
+                             mu_kinetic_ratio=mu_kinetic_ratio, chunk_size=chunk_size, progress=bar.update)
+    if finishing:
+        _finish_sweep(plan, sw.ChunkStore.beside(h5_path, plan.key), h5_path, png_path, no_plot=no_plot,
+                      started=started, dpi=dpi)
+        return
+    files.remove_stale_temporaries([h5_path, png_path])
     store, states, n_new, computed = _compute_plan(
         ctx, plan, h5_path, what="sweep", description=plan.describe(), label=case.name, unit="case",
         workers=workers, scheduler=scheduler, no_progress=no_progress)
     variables = sw.sweep_variables(plan, states)
-    results.write_sweep(h5_path, sw.coordinates(plan), variables,
-                        attrs=sw.root_attributes(plan, _command_line(ctx, case_file)), overwrite=overwrite)
-    if not no_plot:
-        save_figure(sw.figure(plan, variables), png_path, overwrite=overwrite, dpi=dpi)
+    with files.Staging(overwrite=overwrite) as staging:
+        results.write_sweep(h5_path, sw.coordinates(plan), variables, overwrite=overwrite, staging=staging,
+                            attrs=sw.root_attributes(plan, _command_line(ctx, case_file)))
+        if not no_plot:
+            save_figure(sw.figure(plan, variables), png_path, overwrite=overwrite, dpi=dpi, staging=staging)
+        staging.publish(remove=[png_path] if no_plot else [])
     store.remove()
     over = int(variables["overturned"][0].sum())
     outside = int((variables["status"][0] != 0).sum())
@@ -576,8 +663,9 @@ def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, 
         rockslide fragility example/example.yaml --suite example/suite-synthetic.yaml --json \\
             --im 'sa(0.3s)' --levels 0.25g:3g:0.25g --damage 'rotation>0.5alpha' --damage 'slip>50mm'
     """
+    from . import files, records, results
     from . import fragility as fr
-    from . import records, results
+    from . import sweep as sw
     from .case import load_case
     from .plots import save_figure
 
@@ -590,25 +678,30 @@ def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, 
     if workers is not None and scheduler:
         raise CaseError("sets the local threads; with --scheduler the cluster's workers compute",
                         source="--workers")
+    sw.check_workers(workers)
+    if scheduler:
+        scheduler = sw.scheduler_address(scheduler)
     suite = fr.suite_from(suite_spec, units=units)
     fplan = fr.plan_fragility(case, suite, im, levels, records_dir=records.records_dir(records_dir),
                               chunk_size=chunk_size)
-    folder = Path(out_dir) if out_dir is not None else Path(case.output.dir)
+    folder = (Path(out_dir) if out_dir is not None else Path(case.output.dir)).expanduser()
     h5_path = folder / f"{case.name}.fragility.h5"
     png_path = folder / f"{case.name}.fragility.png"
-    results.check_destination(h5_path, overwrite=overwrite)              # input errors first, then outputs
-    if not no_plot and not overwrite and (png_path.exists() or png_path.is_symlink()):
-        raise OutputError(f"{png_path} exists (use --overwrite to replace it)")
+    if _result_set(h5_path, png_path, overwrite=overwrite, no_plot=no_plot, example="out/case.fragility"):
+        files.refuse_existing(h5_path, overwrite=False)           # input errors first, then outputs
+    files.remove_stale_temporaries([h5_path, png_path])
     plan = fplan.plan
     store, final_states, n_new, computed = _compute_plan(
         ctx, plan, h5_path, what="fragility", description=fplan.describe(), label=case.name, unit="run",
         workers=workers, scheduler=scheduler, no_progress=no_progress, err=as_json)
     analysis = fr.analyse(fplan, final_states, states, resamples=resamples)
     coords, variables, attrs = fr.dataset(fplan, analysis, _command_line(ctx, case_file))
-    results.write_dataset(h5_path, coords, variables, format=results.FRAGILITY_FORMAT, attrs=attrs,
-                          overwrite=overwrite)
-    if not no_plot:
-        save_figure(fr.figure(fplan, analysis), png_path, overwrite=overwrite, dpi=dpi)
+    with files.Staging(overwrite=overwrite) as staging:
+        results.write_dataset(h5_path, coords, variables, format=results.FRAGILITY_FORMAT, attrs=attrs,
+                              overwrite=overwrite, staging=staging)
+        if not no_plot:
+            save_figure(fr.figure(fplan, analysis), png_path, overwrite=overwrite, dpi=dpi, staging=staging)
+        staging.publish(remove=[png_path] if no_plot else [])
     store.remove()
     elapsed = time.perf_counter() - started
     if as_json:
@@ -630,22 +723,27 @@ def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, 
 def _compute_plan(ctx, plan, h5_path, *, what, description, label, unit, workers, scheduler, no_progress,
                   err=False):
     """Compute what a sweep plan (`sweep.Plan`) still misses, with the chunks kept beside ``h5_path``
-    (`sweep.ChunkStore`): say what is reused, compile the kernel, show a progress bar, and on
-    Ctrl-C keep the finished chunks and exit 130. ``what`` (``sweep``, ``fragility``), ``label``
-    (the case's name) and ``description`` head the messages, which go to stderr with ``err``.
+    (`sweep.ChunkStore`): say what is reused (and which stored chunks cannot be), check the free
+    space, compile the kernel, show a progress bar, and on Ctrl-C or SIGTERM keep the finished chunks
+    and exit 130 or 143. ``what`` (``sweep``, ``fragility``), ``label`` (the case's name) and
+    ``description`` head the messages, which go to stderr with ``err``.
 
     Returns ``(store, final states, cases computed now, seconds computing)``.
     """
     from tqdm import tqdm
 
+    from . import files
     from . import sweep as sw
     from .core import batch
 
     store = sw.ChunkStore.beside(h5_path, plan.key)
+    store.remove_stale_temporaries()
     for other in store.others():
         click.echo(f"  note: {other} holds chunks of another {what} definition (not used; delete it "
                    "to free the space)", err=err)
     missing = sw.missing_chunks(plan, store)
+    for chunk, reason in sorted(store.damaged.items()):
+        click.echo(f"  note: {store.path(chunk)} cannot be used ({reason}); computing it again", err=err)
     reused = plan.n_chunks - len(missing)
     reused_cases = plan.n_cases - sum(plan.chunk_indices(c).size for c in missing)
     where = f"on the dask scheduler {scheduler}" if scheduler else "on this machine"
@@ -653,6 +751,11 @@ def _compute_plan(ctx, plan, h5_path, *, what, description, label, unit, workers
     if reused:
         click.echo(f"  reused {reused} of {plan.n_chunks} chunks ({reused_cases} {unit}s) from {store.folder}",
                    err=err)
+    if sw.work_estimate(plan, plan.n_cases - reused_cases, workers=workers) > 60:
+        click.echo(f"  up to {plan.steps_per_case:.3g} integration steps per {unit} (far fewer for {unit}s at "
+                   "rest or overturned): the progress bar shows the time left", err=err)
+    files.require_free_space(Path(h5_path).parent, sw.bytes_needed(plan, len(missing)), f"the {what}")
+    show_warnings()
     if not scheduler and missing:
         compiling = time.perf_counter()
         batch.warm_up(parallel=True)
@@ -665,15 +768,35 @@ def _compute_plan(ctx, plan, h5_path, *, what, description, label, unit, workers
         with tqdm(total=plan.n_cases, initial=reused_cases, unit=unit, file=sys.stderr,
                   disable=True if no_progress else None, dynamic_ncols=True, desc=label, smoothing=0.1) as bar:
             sw.compute(plan, store, missing, workers=workers, scheduler=scheduler, progress=bar.update)
-    except KeyboardInterrupt as exc:
-        if isinstance(exc, _Terminated):
-            raise
+    except interrupts.Interrupted as exc:
         kept = store.count()
-        click.echo(f"rockslide: interrupted: {kept} of {plan.n_chunks} chunks are kept in {store.folder}; "
+        click.echo(f"rockslide: {exc.word}: {kept} of {plan.n_chunks} chunks are kept in {store.folder}; "
                    "the same command resumes from them", err=True)
-        ctx.exit(EXIT_INTERRUPTED)
+        ctx.exit(exc.exit_code)
     computed = time.perf_counter() - computing
     return store, sw.collect(plan, store), plan.n_cases - reused_cases, computed
+
+
+def _finish_sweep(plan, store, h5_path: Path, png_path: Path, *, no_plot: bool, started: float, dpi=None) -> None:
+    """``NAME.sweep.h5`` exists: if it is this sweep's result (same definition key), draw its
+    missing figure and remove its chunks (a run stopped in its final phase); else refuse."""
+    from . import files, results
+    from .plots import save_figure
+    from .sweep import stored_figure
+
+    try:
+        stored = results.read_sweep(h5_path)
+    except OutputError:
+        stored = None
+    if stored is None or stored.attrs.get("sweep_key") != plan.key:
+        files.refuse_existing(h5_path, overwrite=False)
+    drawn = ""
+    if not no_plot and not (png_path.exists() or png_path.is_symlink()):
+        save_figure(stored_figure(stored), png_path, overwrite=False, dpi=dpi)
+        drawn = f"; drew its missing figure {png_path}"
+    store.remove()
+    click.echo(f"sweep {plan.case.name}: {h5_path} is this sweep's complete result{drawn}; removed its "
+               f"chunks ({time.perf_counter() - started:.1f} s)")
 
 
 def _command_line(ctx, case_file) -> str:
@@ -723,11 +846,94 @@ def _column(value):
     return int(value) if str(value).isdigit() else value
 
 
-def _draw(stored, path, *, overwrite, dpi, time_shift=0.0, zoom="auto", crop="auto"):
+def _draw(stored, path, *, overwrite, dpi=None, time_shift=0.0, zoom="auto", crop="auto", staging=None):
     from .plots import response_figure, save_figure
 
     figure = response_figure(stored.result, title=stored.name, time_shift=time_shift, zoom=zoom, crop=crop)
-    save_figure(figure, path, overwrite=overwrite, dpi=dpi)
+    save_figure(figure, path, overwrite=overwrite, dpi=dpi, staging=staging)
+
+
+def _result_set(h5_path: Path, png_path: Path, *, overwrite: bool, no_plot: bool, leftovers: bool = False,
+                example: str = "out/case") -> bool:
+    """Check the outputs of `run` or `sweep` before the work: a result is the set ``NAME.h5`` and
+    ``NAME.png`` (``NAME.h5`` alone with ``--no-plot``).
+
+    Returns True when, without ``overwrite``, ``NAME.h5`` exists but its set is not complete (the
+    figure is missing, or ``leftovers`` of its run remain): the caller decides whether it is this
+    case's result and finishes it. False when the run is to compute (nothing there, or
+    ``overwrite``).
+
+    Raises
+    ------
+    OutputError
+        Without ``overwrite``: the complete set exists, or a ``NAME.png`` exists without its
+        ``NAME.h5`` (a figure of another result).
+    """
+    from . import files
+
+    files.check_destination(h5_path, overwrite=True, example=f"{example}.h5")
+    files.check_destination(png_path, overwrite=True, example=f"{example}.png")
+    if overwrite:
+        return False
+    if not (h5_path.exists() or h5_path.is_symlink()):
+        files.refuse_existing(png_path, overwrite=False)
+        return False
+    if (no_plot or png_path.exists() or png_path.is_symlink()) and not leftovers:
+        files.refuse_existing(h5_path, overwrite=False)
+    return True
+
+
+def _same_result(case, prepared, h5_path: Path, *, robustness: bool):
+    """The stored result at ``h5_path`` if it is this case's (same case text, same records,
+    robustness if asked), else an OutputError: it exists."""
+    from . import files, results, runner
+
+    try:
+        stored = results.read_result(h5_path)
+    except OutputError:
+        stored = None
+    same = (stored is not None and stored.case_text == case.text
+            and [r.get("sha256") for r in stored.records]
+            == [r.get("sha256") for r in runner.record_entries(prepared)]
+            and (not robustness or "robustness" in stored.attrs))
+    if not same:
+        files.refuse_existing(h5_path, overwrite=False)
+    return stored
+
+
+class _RunProgress:
+    """The ``progress`` callback of a single run: checks for Ctrl-C between kernel chunks and, on
+    a terminal, shows a bar of the simulated time (a new pass, the robustness runs, restarts it)."""
+
+    def __init__(self, name: str, *, show: bool):
+        self.name = name
+        self.show = show and sys.stderr.isatty()
+        self.bar = None
+        self.last = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        if self.bar is not None:
+            self.bar.close()
+        return False
+
+    def __call__(self, reached: float, end: float) -> None:
+        interrupts.check()
+        if not self.show:
+            return
+        from tqdm import tqdm
+
+        if self.bar is None or (self.last is not None and reached < self.last):
+            if self.bar is not None:
+                self.bar.close()
+            self.bar = tqdm(total=round(end - reached, 3), unit="s", file=sys.stderr, desc=self.name,
+                            dynamic_ncols=True, bar_format="{l_bar}{bar}| {n:.0f}/{total:.0f} s simulated "
+                            "[{elapsed}<{remaining}]")
+            self.start = reached
+        self.bar.update(round(reached - self.start, 3) - self.bar.n)
+        self.last = reached
 
 
 def _case_dict(case):

@@ -1,19 +1,39 @@
-"""Output files that are never half-written: check the destination before the work, write to a
-temporary file beside it, sync, and rename it onto the final name.
+"""Output files that are never half-written, never mixed, never clobbered.
 
-A crash, a kill or Ctrl-C therefore leaves the previous file or none. Temporary files are named
-``.NAME.<pid>.tmp`` (with a thread id when threads write at once): they start with ``.`` and end in
-``.tmp``, and a killed process may leave one behind, never a half-written ``NAME``.
+- **Atomic.** A file is written to a temporary file beside it, synced, and renamed onto its name,
+  so a crash, a kill or Ctrl-C leaves the previous file or none. Temporary files are named
+  ``.NAME.<pid>.tmp`` (with a thread id when threads write at once): they start with ``.`` and end
+  in ``.tmp``; a process killed outright may leave one behind, never a half-written ``NAME``, and
+  the next run of the same output removes those of processes that are gone
+  (`remove_stale_temporaries`).
+- **Exclusive.** Without ``overwrite``, a file is published with a hard link that fails if the name
+  exists (not a check followed by a rename), so that of two runs writing the same name at once one
+  wins and the other is refused, whatever the timing. Where the file system has no hard links the
+  check-then-rename remains.
+- **Together.** A result made of several files (``NAME.h5`` and ``NAME.png``) is staged
+  (`Staging`): every file is written to its temporary first, then all are renamed in one short
+  section that signals do not interrupt (`interrupts.critical`) and that other rockslide
+  processes publishing in the same folder wait for (an advisory lock on the folder, POSIX), with
+  stale companions removed in the same section. Ctrl-C or an error before that section leaves the
+  previous set untouched.
 """
 
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
+import re
 import threading
 from pathlib import Path
 
+from . import interrupts
 from .errors import OutputError
+
+#: Longest file name most file systems take [bytes].
+NAME_MAX = 255
+#: Room a temporary name needs beyond its file's name: ``.`` + ``.<pid>.<thread id>.tmp``.
+TEMPORARY_EXTRA = 1 + 1 + 7 + 1 + 20 + 4
 
 
 def check_destination(path, *, overwrite: bool = False, example: str = "out/case.h5") -> Path:
@@ -24,10 +44,11 @@ def check_destination(path, *, overwrite: bool = False, example: str = "out/case
     Raises
     ------
     OutputError
-        ``path`` exists and ``overwrite`` is false, ``path`` is a folder, or its folder cannot be
-        created.
+        ``path`` exists and ``overwrite`` is false, ``path`` is a folder, its name is too long or
+        holds a NUL character, or its folder cannot be created.
     """
     path = Path(path)
+    check_name(path)
     if path.is_dir():
         raise OutputError(f"is a folder; expected a file name such as {example}", source=str(path))
     refuse_existing(path, overwrite)
@@ -43,6 +64,59 @@ def check_destination(path, *, overwrite: bool = False, example: str = "out/case
     return path
 
 
+def check_name(path: Path) -> None:
+    """Refuse a path the file system cannot take: a NUL character, or a name (or one of the
+    folder names) that would be too long once made a temporary name."""
+    text = str(path)
+    if "\x00" in text:
+        raise OutputError("the path holds a NUL character; expected a file or folder name",
+                          source=text.replace("\x00", "\\x00"))
+    for part in path.parts[:-1]:
+        if len(os.fsencode(part)) > NAME_MAX:
+            raise OutputError(f"a folder name of {len(os.fsencode(part))} bytes; file systems take at "
+                              f"most {NAME_MAX}", source=_short(text))
+    longest = NAME_MAX - TEMPORARY_EXTRA
+    if len(os.fsencode(path.name)) > longest:
+        raise OutputError(f"a file name of {len(os.fsencode(path.name))} bytes; expected at most {longest} "
+                          f"(the file system's {NAME_MAX} less room for the temporary name)",
+                          source=_short(text))
+
+
+class OutputWarning(UserWarning):
+    """An output location that may not take the result (little free space)."""
+
+
+def free_space(folder) -> int | None:
+    """Bytes free for this user in ``folder`` (None if it cannot be told)."""
+    import shutil
+
+    try:
+        return shutil.disk_usage(folder).free
+    except OSError:
+        return None
+
+
+def warn_free_space(folder, needed: float) -> None:
+    """Warn when ``folder`` has less free space than ``needed`` bytes (an upper bound of what the
+    result takes before compression); a disk that fills up is still an error at the write."""
+    import warnings
+
+    free = free_space(folder)
+    if free is not None and free < needed:
+        warnings.warn(f"{folder}: {free / 1e6:.3g} MB free, and the result may need up to "
+                      f"{needed / 1e6:.3g} MB (less once compressed); a full disk stops the run with "
+                      "nothing written", OutputWarning, stacklevel=2)
+
+
+def require_free_space(folder, needed: float, what: str) -> None:
+    """Refuse to start when ``folder`` has less free space than ``needed`` bytes (a size known in
+    advance, such as a sweep's)."""
+    free = free_space(folder)
+    if free is not None and free < needed:
+        raise OutputError(f"{free / 1e6:.3g} MB free; {what} needs about {needed / 1e6:.3g} MB; free some "
+                          "space or choose another output folder", source=str(folder))
+
+
 def refuse_existing(path: Path, overwrite: bool) -> None:
     if not overwrite and (path.exists() or path.is_symlink()):
         raise OutputError(f"{path} exists (use --overwrite to replace it)")
@@ -55,37 +129,235 @@ def temporary_path(path, *, per_thread: bool = False) -> Path:
     return path.with_name(f".{path.name}.{os.getpid()}{thread}.tmp")
 
 
-def publish(tmp: Path, path: Path, *, overwrite: bool) -> None:
+def publish(tmp: Path, path: Path, *, overwrite: bool, interruptible: bool = True) -> None:
     """Sync ``tmp`` to disk and rename it onto ``path`` (atomic on POSIX and Windows).
 
-    Raises OutputError (and deletes ``tmp``) if ``path`` appeared meanwhile and ``overwrite`` is false.
+    Raises `interrupts.Interrupted` after Ctrl-C or SIGTERM (unless not ``interruptible``: work
+    to keep, such as a finished sweep chunk), and OutputError if ``path`` exists (or appeared
+    meanwhile) and ``overwrite`` is false; ``tmp`` is deleted in both cases.
     """
+    staging = Staging(overwrite=overwrite)
+    staging.add(tmp, path)
+    staging.publish(interruptible=interruptible)
+
+
+class Staging:
+    """Files written to temporaries and published together (see the module docstring).
+
+    Parameters
+    ----------
+    overwrite : bool
+        Replace existing files; without it a file that exists is an `OutputError` and nothing of
+        the set is published.
+
+    Notes
+    -----
+    ::
+
+        with Staging(overwrite=False) as staging:
+            write(staging.stage(h5_path)); write(staging.stage(png_path))
+            staging.publish(remove=[stale_png])
+
+    Leaving the block without `publish` (an exception, Ctrl-C) deletes the temporary files.
+    """
+
+    def __init__(self, *, overwrite: bool):
+        self.overwrite = overwrite
+        self.items: list[tuple[Path, Path]] = []
+        self.published = False
+
+    def __enter__(self) -> Staging:
+        return self
+
+    def __exit__(self, exc_type, exc, tb) -> bool:
+        if not self.published:
+            self.discard()
+        return False
+
+    def stage(self, path, *, per_thread: bool = False) -> Path:
+        """Register ``path`` and return the temporary file to write it to."""
+        path = Path(path)
+        tmp = temporary_path(path, per_thread=per_thread)
+        self.items.append((tmp, path))
+        return tmp
+
+    def add(self, tmp: Path, path: Path) -> None:
+        """Register an already written temporary file ``tmp`` for ``path``."""
+        self.items.append((Path(tmp), Path(path)))
+
+    def discard(self) -> None:
+        """Delete the temporary files (nothing is published)."""
+        for tmp, _ in self.items:
+            remove_quietly(tmp)
+
+    def publish(self, *, remove=(), interruptible: bool = True) -> list[Path]:
+        """Sync every temporary file, then rename them all onto their names and delete the files in
+        ``remove`` (stale companions of an earlier result), in one section (module docstring).
+
+        Raises
+        ------
+        Interrupted
+            Ctrl-C or SIGTERM came before the section (and ``interruptible``): nothing was
+            published.
+        OutputError
+            A file exists (without ``overwrite``): nothing of the set was published; or a
+            temporary file cannot be synced or renamed.
+        """
+        try:
+            if interruptible:
+                interrupts.check()
+            for tmp, _ in self.items:
+                fsync_file(tmp)
+            folders = sorted({path.parent for _, path in self.items} | {Path(p).parent for p in remove})
+            with interrupts.critical(), _folder_locks(folders):
+                if self.overwrite:
+                    for tmp, path in self.items:
+                        os.replace(tmp, path)
+                    for stale in remove:
+                        remove_quietly(Path(stale))
+                else:
+                    self._link_all()
+        except OSError as exc:
+            raise OutputError(f"cannot publish the file: {exc.strerror or exc}",
+                              source=str(exc.filename or self.items[0][1])) from None
+        finally:
+            self.discard()                      # temporaries left by a failure, or the linked ones
+        self.published = True
+        for folder in {path.parent for _, path in self.items}:
+            fsync_folder(folder)
+        return [path for _, path in self.items]
+
+    def _link_all(self) -> None:
+        """Create every name exclusively (a hard link fails if the name exists); on a name that
+        exists, undo the links made so far and refuse."""
+        done: list[Path] = []
+        for tmp, path in self.items:
+            try:
+                _create_exclusively(tmp, path)
+            except FileExistsError:
+                for made in done:
+                    remove_quietly(made)
+                raise OutputError(f"{path} exists (use --overwrite to replace it)") from None
+            done.append(path)
+
+
+def _create_exclusively(tmp: Path, path: Path) -> None:
+    """Give ``tmp``'s content the name ``path`` unless ``path`` exists (FileExistsError)."""
     try:
-        refuse_existing(path, overwrite)
-        fsync_file(tmp)
-        os.replace(tmp, path)
-    except BaseException:
-        remove_quietly(tmp)
+        os.link(tmp, path)
+        return
+    except FileExistsError:
         raise
-    fsync_folder(path.parent)
+    except OSError as exc:
+        if exc.errno not in (errno.EPERM, errno.EOPNOTSUPP, errno.ENOTSUP, errno.EXDEV, errno.EMLINK,
+                             errno.ENOSYS, errno.EACCES):
+            raise
+    if os.path.lexists(path):                   # no hard links here: check, then rename
+        raise FileExistsError(errno.EEXIST, "File exists", str(path))
+    os.replace(tmp, path)
 
 
 @contextlib.contextmanager
-def atomic_write(path, *, overwrite: bool, mode: str = "wb", per_thread: bool = False, what: str = "file"):
-    """Open a temporary file for writing; on success publish it onto ``path``, on any exception
-    delete it. OSErrors while writing become one-line OutputErrors naming ``path``."""
-    path = Path(path)
-    tmp = temporary_path(path, per_thread=per_thread)
+def _folder_locks(folders):
+    """An advisory exclusive lock on each folder (POSIX ``flock``) while a set is renamed, so that
+    the sets of two rockslide processes are not interleaved; nothing where locks are unavailable."""
     try:
+        import fcntl
+    except ImportError:  # pragma: no cover - Windows
+        yield
+        return
+    fds = []
+    try:
+        for folder in folders:
+            try:
+                fd = os.open(folder, os.O_RDONLY)
+            except OSError:
+                continue
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX)
+            except OSError:
+                os.close(fd)
+                continue
+            fds.append(fd)
+        yield
+    finally:
+        for fd in fds:
+            os.close(fd)                        # closing releases the lock
+
+
+@contextlib.contextmanager
+def atomic_write(path, *, overwrite: bool, mode: str = "wb", per_thread: bool = False, what: str = "file",
+                 staging: Staging | None = None, interruptible: bool = True):
+    """Open a temporary file for writing; on success publish it onto ``path`` (or leave it to
+    ``staging`` to publish with the rest of a set), on any exception delete it. OSErrors while
+    writing become one-line OutputErrors naming ``path``. After Ctrl-C or SIGTERM nothing is
+    written (`interrupts.Interrupted`), unless not ``interruptible`` (work to keep)."""
+    path = Path(path)
+    tmp = staging.stage(path, per_thread=per_thread) if staging is not None else \
+        temporary_path(path, per_thread=per_thread)
+    try:
+        if interruptible:
+            interrupts.check()
         try:
             with open(tmp, mode) as handle:
                 yield handle
         except OSError as exc:
             raise OutputError(f"cannot write the {what}: {exc.strerror or exc}", source=str(path)) from None
-        publish(tmp, path, overwrite=overwrite)
+        if staging is None:
+            publish(tmp, path, overwrite=overwrite, interruptible=interruptible)
     except BaseException:
         remove_quietly(tmp)
         raise
+
+
+_TEMPORARY = re.compile(r"\.(?P<pid>\d+)(?:\.\d+)?\.tmp")     # after ``.NAME``
+
+
+def remove_stale_temporaries(paths) -> list[Path]:
+    """Delete the temporary files of ``paths`` (``.NAME.<pid>[.<thread>].tmp`` beside each) that
+    processes which no longer run have left (a SIGKILL, a power cut), and return them.
+
+    Only files of these names, only of processes that are gone (POSIX; nothing is removed where a
+    process cannot be looked up).
+    """
+    if os.name != "posix":  # pragma: no cover - no harmless way to look a process up
+        return []
+    removed = []
+    for path in paths:
+        path = Path(path)
+        try:
+            candidates = list(path.parent.glob(f".{glob_escape(path.name)}.*.tmp"))
+        except OSError:
+            continue
+        for candidate in candidates:
+            match = _TEMPORARY.fullmatch(candidate.name[len(path.name) + 1:])
+            if not match:
+                continue
+            pid = int(match["pid"])
+            if pid != os.getpid() and not _running(pid):
+                try:
+                    if candidate.is_dir():
+                        continue
+                    os.unlink(candidate)
+                    removed.append(candidate)
+                except OSError:
+                    pass
+    return removed
+
+
+def glob_escape(name: str) -> str:
+    """``name`` with the glob characters ``*?[`` taken literally."""
+    return re.sub(r"([*?\[])", r"[\1]", name)
+
+
+def _running(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:                             # EPERM: it runs, as another user
+        return True
+    return True
 
 
 def remove_quietly(path: Path) -> None:
@@ -116,3 +388,8 @@ def fsync_folder(folder: Path) -> None:
         pass
     finally:
         os.close(fd)
+
+
+def _short(text: str, limit: int = 120) -> str:
+    """A long path shortened in the middle, for messages."""
+    return text if len(text) <= limit else f"{text[:limit // 2 - 2]}...{text[-(limit // 2 - 1):]}"

@@ -949,12 +949,13 @@ def spectrum_figure(frequency, amplitude, category, rotation, curves=(), *, xlab
 # --------------------------------------------------------------------------------------------------
 
 
-def save_figure(fig: Figure, path, *, overwrite: bool = False, dpi: float | None = None) -> Path:
+def save_figure(fig: Figure, path, *, overwrite: bool = False, dpi: float | None = None, staging=None) -> Path:
     """Save ``fig`` to ``path`` atomically (a temporary file in the same folder, then a rename).
 
     The format follows the file name (``.png``, ``.pdf``, ``.svg``...). An existing file is kept
     unless ``overwrite``; the folder is created if missing. ``dpi`` sets the resolution of raster
-    formats (default `DPI`).
+    formats (default `DPI`). With ``staging`` (`files.Staging`) the file is published with the rest
+    of a result's files instead of at once.
 
     Raises
     ------
@@ -968,7 +969,7 @@ def save_figure(fig: Figure, path, *, overwrite: bool = False, dpi: float | None
         raise OutputError(f"unknown figure format {path.suffix or '(none)'!r}; expected one of "
                           + ", ".join(f".{k}" for k in sorted(supported)), source=str(path))
     check_destination(path, overwrite=overwrite, example="out/case.png")
-    with atomic_write(path, overwrite=overwrite, what="figure") as handle:
+    with atomic_write(path, overwrite=overwrite, what="figure", staging=staging) as handle:
         fig.savefig(handle, format=fmt, dpi=DPI if dpi is None else dpi)
     return path
 

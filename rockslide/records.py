@@ -55,6 +55,9 @@ OWN_FORMATS = ("at2", "knet", "column", "values")
 UNSAFE_OBSPY_FORMATS = frozenset({"PICKLE"})
 OBSPY_FORMATS = tuple(sorted(set(ENTRY_POINTS["waveform"]) - UNSAFE_OBSPY_FORMATS))
 
+#: [s] Largest sampling step read: an earthquake's acceleration has its energy at 0.1 to 20 Hz, so a
+#: record needs a step of at most 0.025 s; a step above 1 s is a mistake of unit (ms written as s).
+MAX_SAMPLING_STEP = 1.0
 #: A peak above this [m/s^2] is almost certainly a unit mistake: warn.
 ABSURD_PEAK = 10.0 * STANDARD_GRAVITY
 
@@ -249,6 +252,12 @@ def read_record(path, *, format: str | None = None, units: str | None = None,
     options = _Options(units, time_column, column, _check_dt_option(ctx, dt),
                        _check_skip_lines(ctx, skip_lines))
     kind = _choose_format(ctx, raw, format, options)
+    with np.errstate(over="ignore", invalid="ignore"):    # a non-finite sample is reported in _finish
+        parsed, kind = _parse(ctx, raw, kind, options)
+    return _finish(ctx, parsed, kind, options, hashlib.sha256(raw).hexdigest())
+
+
+def _parse(ctx: _Context, raw: bytes, kind: str, options: _Options) -> tuple[_Parsed, str]:
     if kind == "at2":
         parsed = _read_at2(ctx, _decode(raw), options)
     elif kind == "knet":
@@ -259,7 +268,7 @@ def read_record(path, *, format: str | None = None, units: str | None = None,
         parsed, kind = _read_unrecognised(ctx, raw, options)
     else:
         parsed, kind = _read_obspy(ctx, raw, options, kind)
-    return _finish(ctx, parsed, kind, options, hashlib.sha256(raw).hexdigest())
+    return parsed, kind
 
 
 def record_info(path, **options) -> dict:
@@ -393,6 +402,9 @@ def _finish(ctx: _Context, parsed: _Parsed, kind: str, options: _Options, sha256
     _require_samples(ctx, values.size)
     if not (math.isfinite(parsed.dt) and parsed.dt > 0):
         raise ctx.error(f"dt = {parsed.dt} s; expected a positive sampling step")
+    if parsed.dt > MAX_SAMPLING_STEP:
+        raise ctx.error(f"dt = {parsed.dt:g} s; expected a sampling step of at most {MAX_SAMPLING_STEP:g} s "
+                        "(accelerograms are sampled at 50 to 1000 Hz: is the step in ms?)")
     if options.dt is not None and abs(options.dt - parsed.dt) > 1e-9 * parsed.dt:
         raise ctx.error(f"dt = {options.dt} s was given but the file's step is {parsed.dt} s; "
                         "remove dt or fix it", "dt")
@@ -885,11 +897,14 @@ def combine(horizontal: obspy.Trace | None, vertical: obspy.Trace | None, *,
 
     reference = horizontal if horizontal is not None else vertical
     npts = len(reference.data)
+    with np.errstate(over="ignore", invalid="ignore"):   # an overflow is refused by the run's checks
+        h = None if h is None else k * h
+        v = None if v is None else kv * v
     return GroundMotion(
         dt=float(reference.stats.delta),
         start=_start(reference),
-        horizontal=_frozen(np.zeros(npts) if h is None else k * h),
-        vertical=_frozen(np.zeros(npts) if v is None else kv * v),
+        horizontal=_frozen(np.zeros(npts) if h is None else h),
+        vertical=_frozen(np.zeros(npts) if v is None else v),
         horizontal_factor=1.0 if h is None else k,
         vertical_factor=1.0 if v is None else kv,
         files=tuple(_file_entry(role, trace) for role, trace in

@@ -78,6 +78,7 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import errno
 import importlib.metadata
 import math
 import platform
@@ -90,12 +91,12 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from . import __version__
+from . import __version__, interrupts
 from .core.kernel import HISTORY_COLUMNS
 from .core.physics import STATE_NAMES
 from .core.simulate import EVENT_DTYPE, Result, Summary
 from .errors import OutputError
-from .files import check_destination, publish, remove_quietly, temporary_path
+from .files import Staging, check_destination, publish, remove_quietly, temporary_path
 
 FORMAT = "rockslide-result"
 FORMAT_VERSION = 1
@@ -110,6 +111,9 @@ RECORD_KEYS = ("role", "path", "sha256", "format", "units", "scale_factor")
 #: Packages whose versions are stored as ``<name>_version`` root attributes.
 VERSIONED_PACKAGES = ("rockslide", "python", "numpy", "numba", "h5py", "obspy", "scipy", "matplotlib")
 
+#: Bytes of one history row before compression (five float64 columns and the int8 state): an upper
+#: bound of the size of a result, used to warn when the disk may be too small.
+BYTES_PER_ROW = 5 * 8 + 1
 _CHUNK_ROWS = 16384
 _COMPRESSION = {"compression": "gzip", "compression_opts": 4, "shuffle": True}
 _SUMMARY_SCALARS = ("overturned", "overturn_time", "direction", "fall_start_time", "max_rotation",
@@ -172,6 +176,9 @@ class ResultWriter:
     overwrite : bool
         Replace an existing file. Without it an existing file is an `OutputError`, raised here,
         before any computation.
+    staging : files.Staging, optional
+        Publish the file with the other files of ``staging`` (`files.Staging.publish`) instead of
+        on its own in `finish`.
 
     Notes
     -----
@@ -181,25 +188,20 @@ class ResultWriter:
             result = simulate(model, dt, ah, av, settings, on_chunk=writer.append_history)
             writer.finish(result, name="kobe", case_text=text)
 
-    Nothing appears at ``path`` until `finish` returns. An exception in the ``with`` block
-    (KeyboardInterrupt included) closes and deletes the temporary file and propagates; leaving the
-    block without calling `finish` discards the temporary file as well.
+    Nothing appears at ``path`` until `finish` returns (or ``staging`` publishes). An exception in
+    the ``with`` block (KeyboardInterrupt included) closes and deletes the temporary file and
+    propagates; leaving the block without calling `finish` discards the temporary file as well. A
+    write that fails (a full disk) is an `OutputError` naming the file, and nothing is left behind.
     """
 
-    def __init__(self, path, *, overwrite: bool = False):
+    def __init__(self, path, *, overwrite: bool = False, staging: Staging | None = None):
         self.path = check_destination(path, overwrite=overwrite)
         self.overwrite = overwrite
-        self.tmp = temporary_path(self.path)
+        self.staging = staging
+        self.tmp = staging.stage(self.path) if staging is not None else temporary_path(self.path)
         self._rows = 0
         self._done = False
-        try:
-            with open(self.tmp, "wb"):   # a plain open first: clear messages for unwritable folders
-                pass
-            self._file = h5py.File(self.tmp, "w", track_order=True)
-        except OSError as exc:
-            remove_quietly(self.tmp)
-            raise OutputError(f"cannot write in this folder ({_reason(exc)})",
-                              source=str(self.path.parent)) from None
+        self._file, self._raw = _create_hdf5(self.tmp, self.path)
         try:
             history = self._file.create_group("time_history", track_order=True)
             self._datasets = {}
@@ -211,9 +213,10 @@ class ResultWriter:
                 if name == "state":
                     ds.attrs["codes"] = STATE_CODES
                 self._datasets[name] = ds
-        except BaseException:
+            self._raw.check()
+        except BaseException as exc:
             self.discard()
-            raise
+            _raise_write_error(exc, self._raw, self.path)
 
     # -- context manager ---------------------------------------------------------------------------
     def __enter__(self) -> ResultWriter:
@@ -240,19 +243,22 @@ class ResultWriter:
         if n == 0:
             return
         try:
+            interrupts.check()
             start, end = self._rows, self._rows + n
             for i, name in enumerate(HISTORY_COLUMNS):
                 ds = self._datasets[name]
                 ds.resize((end,))
                 ds[start:end] = rows[:, i].astype(ds.dtype) if name == "state" else rows[:, i]
+            self._raw.check()
             self._rows = end
-        except BaseException:
+        except BaseException as exc:
             self.discard()
-            raise
+            _raise_write_error(exc, self._raw, self.path)
 
     def finish(self, result: Result, *, name: str, case_text: str = "", case: dict | None = None,
                records=(), extra_attrs: dict | None = None, ground: dict | None = None) -> Path:
-        """Write the ground motion, events, summary and metadata, then publish the file.
+        """Write the ground motion, events, summary and metadata, then publish the file (or leave it
+        to the writer's ``staging``).
 
         The streamed history is used if rows were appended; otherwise ``result.history``. The
         arguments are those of `write_result`.
@@ -264,17 +270,21 @@ class ResultWriter:
         """
         self._check_open()
         try:
+            interrupts.check()
             if self._rows == 0 and result.history and len(result.history.get("time", ())):
                 self._write_history_dict(result.history)
             _write_body(self._file, result, name=name, case_text=case_text, case=case,
                         records=records, extra_attrs=extra_attrs, ground=ground)
             self._file.flush()
             self._file.close()
-        except BaseException:
+            self._raw.close()
+            self._raw.check()
+        except BaseException as exc:
             self.discard()
-            raise
+            _raise_write_error(exc, self._raw, self.path)
         self._done = True
-        publish(self.tmp, self.path, overwrite=self.overwrite)
+        if self.staging is None:
+            publish(self.tmp, self.path, overwrite=self.overwrite)
         return self.path
 
     def discard(self) -> None:
@@ -291,6 +301,7 @@ class ResultWriter:
                     self._file.close()
             except Exception:  # noqa: BLE001 - closing a broken file must not hide the first error
                 pass
+            self._raw.close()
             remove_quietly(self.tmp)          # Windows cannot unlink an open file
 
     # -- internals ---------------------------------------------------------------------------------
@@ -500,6 +511,89 @@ def _attr_value(value):
     return str(value)
 
 
+class _RawFile:
+    """The file HDF5 writes through (h5py's file-object driver), never failing under it.
+
+    libhdf5 cannot close a file it failed to write (a full disk): every later flush fails again and
+    the process crashes at exit; and an exception raised inside h5py's driver callbacks corrupts
+    the calls that follow. So a write that fails is recorded (`error`, the first one) and reported
+    as done: HDF5 goes on, unaware, and closes the file normally. The writer checks `error` after
+    each of its steps (`check`) and discards the file.
+    """
+
+    def __init__(self, path: Path):
+        self._file = open(path, "w+b", buffering=0)  # noqa: SIM115 - closed by close()
+        self.error: OSError | None = None
+
+    def check(self) -> None:
+        """Raise the first write error, if any."""
+        if self.error is not None:
+            raise self.error
+
+    def write(self, data) -> int:
+        view = memoryview(data).cast("B")
+        if self.error is None:
+            done = 0
+            try:
+                while done < view.nbytes:
+                    done += self._file.write(view[done:])
+            except OSError as exc:
+                self.error = exc
+        return view.nbytes
+
+    def truncate(self, size=None):
+        if self.error is None:
+            try:
+                return self._file.truncate(size)
+            except OSError as exc:
+                self.error = exc
+        return size
+
+    def read(self, size=-1):
+        return self._file.read(size)
+
+    def readinto(self, buffer):
+        return self._file.readinto(buffer)
+
+    def seek(self, offset, whence=0):
+        return self._file.seek(offset, whence)
+
+    def tell(self):
+        return self._file.tell()
+
+    def flush(self):
+        pass
+
+    def close(self):
+        self._file.close()
+
+
+def _create_hdf5(tmp: Path, path: Path):
+    """A new HDF5 file written through a `_RawFile` at ``tmp``: ``(h5py.File, _RawFile)``."""
+    try:
+        raw = _RawFile(tmp)
+    except OSError as exc:
+        raise OutputError(f"cannot write in this folder ({_reason(exc)})", source=str(path.parent)) from None
+    try:
+        return h5py.File(raw, "w", track_order=True), raw
+    except BaseException as exc:
+        raw.close()
+        remove_quietly(tmp)
+        _raise_write_error(exc, raw, path)
+
+
+def _raise_write_error(exc: BaseException, raw: _RawFile, path: Path):
+    """Re-raise a failure while writing ``path``: an OSError (what the disk said, when it said
+    something) becomes one `OutputError` line; anything else (Ctrl-C, a bug) propagates as is."""
+    if isinstance(exc, OSError) or raw.error is not None:
+        cause = raw.error if raw.error is not None else exc
+        hint = "; free some space or choose another output folder" if getattr(cause, "errno", None) in (
+            errno.ENOSPC, errno.EDQUOT, errno.EFBIG) else ""
+        raise OutputError(f"cannot write the file ({_reason(cause)}); nothing was written{hint}",
+                          source=str(path)) from None
+    raise exc
+
+
 def _file_name(path) -> str:
     """The last component of a path, POSIX or Windows style."""
     return str(path).replace("\\", "/").rstrip("/").rsplit("/", 1)[-1]
@@ -693,7 +787,8 @@ class StoredDataset:
     attrs: dict
 
 
-def write_sweep(path, coords, variables, *, attrs: dict | None = None, overwrite: bool = False) -> Path:
+def write_sweep(path, coords, variables, *, attrs: dict | None = None, overwrite: bool = False,
+                staging: Staging | None = None) -> Path:
     """Write a sweep's results on its grid to the HDF5 file ``path``, atomically.
 
     `write_dataset` with every variable on every axis, in order, and ``format`` =
@@ -711,6 +806,8 @@ def write_sweep(path, coords, variables, *, attrs: dict | None = None, overwrite
         More root attributes (scalars, strings or 1-D numeric arrays).
     overwrite : bool
         Replace an existing file.
+    staging : files.Staging, optional
+        Publish the file with the other files of ``staging`` instead of at once.
 
     Returns
     -------
@@ -725,11 +822,11 @@ def write_sweep(path, coords, variables, *, attrs: dict | None = None, overwrite
     """
     dims = tuple(str(name) for name, _, _ in coords)
     return write_dataset(path, coords, {name: (dims, values, a) for name, (values, a) in variables.items()},
-                         format=SWEEP_FORMAT, attrs=attrs, overwrite=overwrite)
+                         format=SWEEP_FORMAT, attrs=attrs, overwrite=overwrite, staging=staging)
 
 
 def write_dataset(path, coords, variables, *, format: str, attrs: dict | None = None,
-                  overwrite: bool = False) -> Path:
+                  overwrite: bool = False, staging: Staging | None = None) -> Path:
     """Write labelled arrays to the HDF5 file ``path`` in the netCDF-4 data model, atomically.
 
     ``xarray.open_dataset(path, engine="h5netcdf")`` (or netCDF tools) read a labelled dataset:
@@ -754,6 +851,8 @@ def write_dataset(path, coords, variables, *, format: str, attrs: dict | None = 
         More root attributes (scalars, strings or 1-D numeric arrays).
     overwrite : bool
         Replace an existing file.
+    staging : files.Staging, optional
+        Publish the file with the other files of ``staging`` instead of at once.
 
     Raises
     ------
@@ -776,13 +875,9 @@ def write_dataset(path, coords, variables, *, format: str, attrs: dict | None = 
         if np.shape(values) != tuple(sizes[d] for d in dims):
             raise ValueError(f"variable {name!r} has shape {np.shape(values)}, its dimensions {dims} "
                              f"{tuple(sizes[d] for d in dims)}")
-    tmp = temporary_path(path)
+    tmp = staging.stage(path) if staging is not None else temporary_path(path)
+    f, raw = _create_hdf5(tmp, path)
     try:
-        try:
-            f = h5py.File(tmp, "w", track_order=True)
-        except OSError as exc:
-            raise OutputError(f"cannot write in this folder ({_reason(exc)})",
-                              source=str(path.parent)) from None
         with f:
             root = f.attrs
             root["format"] = format
@@ -807,16 +902,18 @@ def write_dataset(path, coords, variables, *, format: str, attrs: dict | None = 
                 for i, dim in enumerate(dims):
                     ds.dims[i].attach_scale(scales[dim])
             f.flush()
-    except OutputError:
+        raw.close()
+        raw.check()
+    except BaseException as exc:
         remove_quietly(tmp)
-        raise
-    except OSError as exc:
+        with contextlib.suppress(Exception):
+            if f.id.valid:
+                f.close()
+        raw.close()
         remove_quietly(tmp)
-        raise OutputError(f"cannot write the {_what(format)} ({_reason(exc)})", source=str(path)) from None
-    except BaseException:
-        remove_quietly(tmp)
-        raise
-    publish(tmp, path, overwrite=overwrite)
+        _raise_write_error(exc, raw, path)
+    if staging is None:
+        publish(tmp, path, overwrite=overwrite)
     return path
 
 
@@ -936,6 +1033,12 @@ def summary_to_json_dict(summary: Summary, events=()) -> dict:
     return out
 
 
+def json_ready(value):
+    """``value`` (nested dicts, lists, numpy scalars) as strict JSON values: a non-finite float
+    becomes None."""
+    return _json_value(value)
+
+
 def _json_value(value):
     if value is None or isinstance(value, (bool, str)):
         return value
@@ -991,7 +1094,7 @@ def _reason(exc: BaseException) -> str:
     return " ".join(str(text).split())
 
 
-__all__ = ["write_result", "read_result", "ResultWriter", "StoredResult", "summary_to_json_dict",
+__all__ = ["write_result", "read_result", "ResultWriter", "StoredResult", "summary_to_json_dict", "json_ready",
            "write_sweep", "read_sweep", "StoredSweep", "SWEEP_FORMAT", "SWEEP_FORMAT_VERSION",
            "check_destination", "temporary_path", "versions", "FORMAT", "FORMAT_VERSION",
            "HISTORY_UNITS", "GROUND_UNITS", "STATE_CODES"]

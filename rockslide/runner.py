@@ -9,6 +9,7 @@ pure core and calls `simulate` (or the reference solver).
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -20,6 +21,7 @@ from .case import Case
 from .core.simulate import Model, Result, Settings, simulate, substeps
 from .errors import CaseError, RecordError
 from .pulses import Pulse
+from .units import STANDARD_GRAVITY
 
 
 @dataclass(frozen=True)
@@ -120,11 +122,63 @@ def settings_for(case: Case, *, history: bool = True, energy: bool = True) -> Se
                     slip_rate=case.initial.slip_rate, history_every=every, energy=energy)
 
 
-def check_against_ground(case: Case, ground: rec.GroundMotion) -> None:
+#: Bounds that keep every number of a run finite in float64 (docs: "What rockslide promises").
+#: The kernel's largest quantities are energies, about ``M (A T)^2`` for a ground acceleration ``A``
+#: over a duration ``T``, and the rocking frequency ``p^2 = 3 g / (4 R)``; within these bounds they
+#: stay below 1e80 (``M <= 1e20 kg``, ``A <= 1e6 g``, ``T <= 1e9 s``: ``1e20 (1e7 * 1e9)^2 = 1e52``;
+#: ``g <= 1e3``, ``R >= 1e-12 m``: ``p^2 <= 1e15 /s^2``), far from float64's 1.8e308, while their
+#: ratios stay far from its 2.2e-16 resolution. No physical case comes near them: ground motions
+#: stay below 5 g, blocks between millimetres and tens of metres.
+MAX_ACCELERATION_IN_G = 1e6        # |scaled ground acceleration| / g
+LENGTH_RANGE = (1e-12, 1e6)        # [m] block height and width
+MASS_RANGE = (1e-20, 1e20)         # [kg]
+GRAVITY_RANGE = (1e-3, 1e3)        # [m/s^2]
+MAX_INITIAL_RATE = 1e6             # [rad/s] and [m/s]: |initial.rotation_rate|, |initial.slip_rate|
+#: [s] Largest |time of the first sample| (record start plus ``ground.time_shift``): times near 1e6 s
+#: still resolve a step of 1e-9 s (relative 1e-15, above float64's 2.2e-16).
+MAX_START_TIME = 1e6
+#: A scaled ground motion above this many g is accepted with a warning (a unit mistake, most likely).
+ABSURD_ACCELERATION_IN_G = 10.0
+
+
+def check_parameters(case: Case) -> None:
+    """Refuse a block, gravity or initial state outside the ranges float64 represents safely
+    (the bounds above), with one line naming the key."""
+    checks = (("block.height", case.block.height, LENGTH_RANGE, "m"),
+              ("block.width", case.block.width, LENGTH_RANGE, "m"),
+              ("block.mass", case.block.mass, MASS_RANGE, "kg"),
+              ("gravity", case.gravity, GRAVITY_RANGE, "m/s^2"),
+              ("initial.rotation_rate", abs(case.initial.rotation_rate), (0.0, MAX_INITIAL_RATE), "rad/s"),
+              ("initial.slip_rate", abs(case.initial.slip_rate), (0.0, MAX_INITIAL_RATE), "m/s"))
+    for key, value, (low, high), unit in checks:
+        if not low <= value <= high:
+            what = "in absolute value " if key.startswith("initial.") else ""
+            raise CaseError(f"{value:g} {unit} is outside what rockslide computes reliably; expected "
+                            f"{what}{low:g} to {high:g} {unit}", source=case.source, field=key)
+
+
+def check_against_ground(case: Case, ground: rec.GroundMotion, *, warn: bool = True) -> float:
     """Checks that need the records: the step is not coarser than the record's sampling
-    (`check_step`), and the scaled vertical motion never lifts the block off the ground (``g + av >
-    0``, model.md's 'no free flight'), reported before any computation."""
+    (`check_step`), the scaled motion stays within :data:`MAX_ACCELERATION_IN_G` (warned above
+    :data:`ABSURD_ACCELERATION_IN_G`), and the scaled vertical motion never lifts the block off the
+    ground (``g + av > 0``, model.md's 'no free flight'), reported before any computation.
+
+    Returns the peak scaled acceleration [m/s^2] (``warn=False``: the caller warns, once).
+    """
     check_step(case, ground)
+    start = ground.start + case.ground.time_shift
+    if not abs(start) <= MAX_START_TIME:
+        raise CaseError(f"the ground motion starts at t = {start:g} s; expected a time within "
+                        f"+-{MAX_START_TIME:g} s, where float64 still resolves the integration step (shift "
+                        "the record's times with ground.time_shift)", source=case.source,
+                        field="ground.time_shift")
+    peak = max(float(np.max(np.abs(ground.horizontal), initial=0.0)),
+               float(np.max(np.abs(ground.vertical), initial=0.0)))
+    if peak > MAX_ACCELERATION_IN_G * case.gravity:
+        raise CaseError(f"the scaled ground motion reaches {peak:.3g} m/s^2 = {peak / case.gravity:.3g} g; "
+                        f"expected at most {MAX_ACCELERATION_IN_G:.0e} g (beyond, the computation "
+                        "cannot stay finite); check the record's units and ground.scale",
+                        source=case.source, field="ground.scale")
     if ground.vertical.size:
         lowest = float(np.min(ground.vertical))
         if case.gravity + lowest <= 0.0:
@@ -140,6 +194,20 @@ def check_against_ground(case: Case, ground: rec.GroundMotion) -> None:
                 f"<= 0 (the block would fly, outside the model); lower "
                 f"{'ground.vertical.amplitude' if pulse else 'ground.scale'}",
                 source=case.source, field="ground.vertical.amplitude" if pulse else "ground.scale")
+    if warn and peak > ABSURD_ACCELERATION_IN_G * STANDARD_GRAVITY:
+        warnings.warn(absurd_acceleration(case.source, peak), RunWarning, stacklevel=2)
+    return peak
+
+
+def absurd_acceleration(source: str, peak: float) -> str:
+    """The warning for a scaled ground motion above :data:`ABSURD_ACCELERATION_IN_G`."""
+    return (f"{source}: ground.scale: the scaled ground motion reaches {peak / STANDARD_GRAVITY:.4g} g "
+            f"(above {ABSURD_ACCELERATION_IN_G:g} g); check the scale and the record's units")
+
+
+class RunWarning(UserWarning):
+    """A case that runs but is likely not what was meant: a step too coarse for the block, an
+    absurd ground motion, a run of hours."""
 
 
 def check_step(case: Case, ground: rec.GroundMotion) -> None:
@@ -161,7 +229,10 @@ MAX_HISTORY_ROWS = 10**8      # output rows (4.8 GB before compression)
 def check_size(case: Case, ground: rec.GroundMotion, *, history: bool = True) -> None:
     """Refuse a tail, step or output interval that would need absurd memory, time or disk."""
     dt_record, tail, dt = ground.dt, case.ground.tail, case.solver.dt
-    n_tail = math.ceil(tail / dt_record - 1e-9) if tail > 0 else 0
+    if tail / dt_record > MAX_GROUND_SAMPLES:
+        n_tail = tail / dt_record
+    else:
+        n_tail = math.ceil(tail / dt_record - 1e-9) if tail > 0 else 0
     # samples (n,), or interval end values (2, n) of a pulse: n intervals, n + 1 samples
     given = ground.horizontal.shape[-1] + (1 if ground.horizontal.ndim == 2 else 0)
     samples = given + n_tail
@@ -170,12 +241,18 @@ def check_size(case: Case, ground: rec.GroundMotion, *, history: bool = True) ->
         raise CaseError(f"a tail of {tail:g} s adds {n_tail:.3g} samples at the record's step "
                         f"{dt_record:g} s; expected at most {MAX_GROUND_SAMPLES:.0e} samples in all "
                         f"(a tail of at most {longest:.6g} s)", source=case.source, field="ground.tail")
-    steps = (samples - 1) * substeps(dt_record, dt)
-    if steps > MAX_STEPS:
-        raise CaseError(f"dt = {dt:g} s gives {steps:.3g} integration steps over "
-                        f"{(samples - 1) * dt_record:g} s of ground motion; expected at most "
+    duration = (samples - 1) * dt_record
+    if duration / dt > MAX_STEPS:          # before counting substeps: dt may be 5e-324
+        raise CaseError(f"dt = {dt:g} s gives {duration / dt:.3g} integration steps over "
+                        f"{duration:g} s of ground motion; expected at most "
                         f"{MAX_STEPS:.0e} (hours of computing): use a larger dt",
                         source=case.source, field="solver.dt")
+    interval = case.output.interval
+    if history and interval is not None and interval > duration:
+        raise CaseError(f"{interval:g} s is longer than the run ({duration:g} s of ground motion and "
+                        "tail); expected at most the run's duration", source=case.source,
+                        field="output.interval")
+    steps = (samples - 1) * substeps(dt_record, dt)
     every = settings_for(case, history=history, energy=False).history_every
     if every > 0 and steps // every + 1 > MAX_HISTORY_ROWS:
         raise CaseError(f"output every {every * dt:g} s gives {steps // every + 1:.3g} rows of results; "
@@ -183,11 +260,90 @@ def check_size(case: Case, ground: rec.GroundMotion, *, history: bool = True) ->
                         "(e.g. 0.01 s)", source=case.source, field="output.interval")
 
 
+#: Speeds behind the estimate of a run's time (results/bench.md, 2 cores): integration steps per
+#: second while the block moves (at rest it is about 3000 times cheaper), and history rows written
+#: per second (compressed HDF5).
+STEPS_PER_SECOND = 9e6
+ROWS_PER_SECOND = 1e6
+#: Largest ``p dt`` without a warning (`step_warning`).
+MAX_P_DT = 0.1
+
+
+@dataclass(frozen=True)
+class Work:
+    """What a run will compute: ``steps`` integration steps (for each of ``runs`` runs), ``rows``
+    history rows, ``seconds`` an upper estimate of the time it takes [s] (the block moving all
+    along; at rest it goes much faster)."""
+
+    steps: int
+    rows: int
+    runs: int
+    seconds: float
+
+    def describe(self) -> str:
+        """``2.2e+09 integration steps and 2.2e+08 history rows: up to about 5 min``."""
+        runs = f" in each of {self.runs} runs" if self.runs > 1 else ""
+        rows = f" and {self.rows:.3g} history rows" if self.rows else ""
+        return f"{self.steps:.3g} integration steps{runs}{rows}: up to about {duration_text(self.seconds)}"
+
+
+def work(prepared: Prepared, *, runs: int = 1) -> Work:
+    """The work of ``runs`` runs of ``prepared`` (the robustness check makes 3 more, one at dt/2)."""
+    s = prepared.settings
+    n = prepared.ground.horizontal.size + (math.ceil(s.tail / prepared.ground.dt - 1e-9) if s.tail > 0 else 0)
+    steps = max(1, n - 1) * substeps(prepared.ground.dt, s.dt)
+    rows = steps // s.history_every + 1 if s.history_every > 0 else 0
+    seconds = steps * (runs + (1 if runs > 1 else 0)) / STEPS_PER_SECOND + rows / ROWS_PER_SECOND
+    return Work(steps=int(steps), rows=int(rows), runs=runs, seconds=seconds)
+
+
+def duration_text(seconds: float) -> str:
+    """``45 s``, ``12 min``, ``3.5 h`` or ``4 days``."""
+    if seconds < 90:
+        return f"{seconds:.0f} s"
+    if seconds < 5400:
+        return f"{seconds / 60:.0f} min"
+    if seconds < 48 * 3600:
+        return f"{seconds / 3600:.1f} h"
+    return f"{seconds / 86400:.0f} days"
+
+
+def rocking_frequency(model: Model) -> float:
+    """``p = sqrt(3 g / (4 R))`` [rad/s] (model.md), the time scale of rocking."""
+    _, _, p2 = model.constants
+    return math.sqrt(p2)
+
+
+def step_warning(source: str, p: float, step: float) -> str | None:
+    """A warning when the integration step ``step`` [s] is too coarse for a block whose rocking
+    frequency is ``p`` [rad/s] (`rocking_frequency`); ``source`` is the case file.
+
+    Rocking about an edge grows and decays like ``exp(+-p t)``; RK4's error per step on it is
+    ``(p dt)^5 / 120``, and the event times it locates err by about ``0.09 (p dt)^4 / p``
+    (results/bench.md, free rocking: 4.9e-11 s at ``p dt = 8.1e-3``, the paper's block at 1 ms).
+    Above ``p dt`` = :data:`MAX_P_DT` that is 1e-5 of the rocking time scale ``1/p`` and more (10 %
+    at ``p dt = 1``, and RK4 itself is unstable beyond 2.8), so the verdict cannot be trusted.
+    """
+    if p * step <= MAX_P_DT:
+        return None
+    return (f"{source}: solver.dt: the step {step:.3g} s is too coarse for this block (rocking "
+            f"frequency p = {p:.3g} rad/s, p dt = {p * step:.3g} > {MAX_P_DT:g}): the rocking is not "
+            f"resolved and the verdict may be wrong; use dt <= {MAX_P_DT / p:.2g} s")
+
+
 def prepare(case: Case, records_dir: Path | None = None, *, history: bool = True) -> Prepared:
+    """Load the case's records and run every check that needs no computation (the parameters'
+    ranges, the ground motion, the sizes), warning when the step is too coarse for the block."""
+    check_parameters(case)
     ground = load_ground(case, records_dir)
     check_against_ground(case, ground)
     check_size(case, ground, history=history)
-    return Prepared(case, ground, model_for(case), settings_for(case, history=history))
+    model = model_for(case)
+    settings = settings_for(case, history=history)
+    warning = step_warning(case.source, rocking_frequency(model), ground.dt / substeps(ground.dt, settings.dt))
+    if warning:
+        warnings.warn(warning, RunWarning, stacklevel=2)
+    return Prepared(case, ground, model, settings)
 
 
 def start_time(prepared: Prepared) -> float:
@@ -195,15 +351,17 @@ def start_time(prepared: Prepared) -> float:
     return prepared.ground.start + prepared.case.ground.time_shift
 
 
-def simulate_prepared(prepared: Prepared, on_chunk=None) -> Result:
-    """Run the prepared case with the method its solver section asks for."""
+def simulate_prepared(prepared: Prepared, on_chunk=None, progress=None) -> Result:
+    """Run the prepared case with the method its solver section asks for; ``on_chunk`` and
+    ``progress`` as in `simulate` (the reference solver keeps its history and calls ``progress``
+    every hundred record intervals)."""
     g = prepared.ground
     if prepared.case.solver.method == "reference":
         from .core.reference import simulate_reference
         return simulate_reference(prepared.model, g.dt, g.horizontal, g.vertical, prepared.settings,
-                                  start=start_time(prepared))
+                                  start=start_time(prepared), progress=progress)
     return simulate(prepared.model, g.dt, g.horizontal, g.vertical, prepared.settings,
-                    start=start_time(prepared), on_chunk=on_chunk)
+                    start=start_time(prepared), on_chunk=on_chunk, progress=progress)
 
 
 def run_case(case: Case, records_dir: Path | None = None, *, history: bool = True) -> tuple[Prepared, Result]:
@@ -223,14 +381,15 @@ def record_entries(prepared: Prepared) -> list[dict]:
 
 
 __all__ = ["Prepared", "load_ground", "is_pulse_case", "unit_pulses", "pulse_ground", "model_for",
-           "settings_for", "check_against_ground", "check_step", "check_size", "prepare", "simulate_prepared",
-           "run_case", "record_entries", "start_time", "verdict_robustness"]
+           "settings_for", "check_parameters", "check_against_ground", "check_step", "check_size", "prepare",
+           "simulate_prepared", "run_case", "record_entries", "start_time", "verdict_robustness", "work", "Work",
+           "step_warning", "RunWarning"]
 
 
 ROBUSTNESS_VARIANTS = (("dt/2", 0.5, 1.0), ("mu-1%", 1.0, 0.99), ("mu+1%", 1.0, 1.01))
 
 
-def verdict_robustness(prepared: Prepared, overturned: bool) -> dict:
+def verdict_robustness(prepared: Prepared, overturned: bool, progress=None) -> dict:
     """Rerun a case at half the step and with the friction coefficients 1 % lower and higher
     (``mu_kinetic`` scaled with ``mu_static``), and say whether its verdict ``overturned`` (from
     the run the caller already has) holds.
@@ -238,7 +397,7 @@ def verdict_robustness(prepared: Prepared, overturned: bool) -> dict:
     Returns ``{"holds": bool, "overturned": bool, "variants": {name: {"overturned": bool,
     "overturn_time": float|None, "max_rotation": float, "residual_slip": float}}}``. A verdict
     that does not hold sits on a knife edge: a fraction of a percent in friction, or the step,
-    decides it.
+    decides it. ``progress`` is passed to each `simulate`.
     """
     from dataclasses import replace
 
@@ -249,7 +408,8 @@ def verdict_robustness(prepared: Prepared, overturned: bool) -> dict:
                         mu_kinetic=prepared.model.mu_kinetic * mu_factor)
         settings = replace(prepared.settings, dt=prepared.settings.dt * dt_factor, history_every=0,
                            energy=False)
-        s = simulate(model, g.dt, g.horizontal, g.vertical, settings, start=start_time(prepared)).summary
+        s = simulate(model, g.dt, g.horizontal, g.vertical, settings, start=start_time(prepared),
+                     progress=progress).summary
         variants[name] = {"overturned": s.overturned, "overturn_time": s.overturn_time,
                           "max_rotation": s.max_rotation, "residual_slip": s.residual_slip}
     holds = all(v["overturned"] == overturned for v in variants.values())

@@ -46,12 +46,15 @@ without history or event log.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import itertools
 import json
 import math
+import os
 import re
 import shutil
+import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from decimal import Decimal, InvalidOperation
@@ -59,7 +62,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import __version__
+from . import __version__, interrupts
 from . import records as rec
 from .case import Case, case_with
 from .core import batch
@@ -67,16 +70,22 @@ from .core import kernel as K
 from .core.physics import OVERTURNED
 from .core.simulate import ground_array, initial_state, parameters
 from .errors import CaseError, OutputError
-from .files import atomic_write
+from .files import atomic_write, remove_stale_temporaries
 from .plots import spectrum_category, spectrum_figure, sweep_category, sweep_figure
 from .pulses import Pulse, linear_overturning_ratio
 from .runner import (
+    ABSURD_ACCELERATION_IN_G,
+    STEPS_PER_SECOND,
+    RunWarning,
+    absurd_acceleration,
     check_against_ground,
+    check_parameters,
     check_size,
     is_pulse_case,
     model_for,
     pulse_ground,
     settings_for,
+    step_warning,
     unit_pulses,
 )
 from .units import STANDARD_GRAVITY, UNIT_REQUIRED, parse_quantity
@@ -91,6 +100,11 @@ CHUNKS_WANTED = 100
 MIN_CHUNK, MAX_CHUNK = 4, 256
 #: A local parallel call gets at least this many cases per thread (whole chunks).
 CASES_PER_THREAD = 32
+#: Points validated between two checks for Ctrl-C (and two calls of the planning's progress).
+PLAN_BATCH = 2000
+#: [s] Time to validate one point of a grid (`plan_sweep`; 0.27 ms measured on 2 cores), to say how
+#: long the checks of a large grid take before they start.
+PLAN_SECONDS_PER_POINT = 3e-4
 #: Ranges include their stop when it is within this fraction of a step of the grid.
 RANGE_TOLERANCE = 1e-9
 
@@ -395,6 +409,11 @@ class Plan:
         """Flat grid indices of chunk ``chunk``: ``chunk, chunk + n_chunks, ...``."""
         return np.arange(chunk, self.n_cases, self.n_chunks, dtype=np.int64)
 
+    @property
+    def steps_per_case(self) -> int:
+        """Integration steps of the longest case that runs to the end of its record and tail."""
+        return int(np.max(self.count * self.params[:, K.P_N_SUB])) if self.n_cases else 0
+
     def describe(self) -> str:
         """``41 mu x 37 pga = 1517 cases``."""
         dims = " x ".join(f"{len(a)} {a.name}" for a in self.axes)
@@ -407,7 +426,8 @@ def default_chunk_size(n_cases: int) -> int:
 
 
 def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = None,
-               mu_kinetic_ratio: float | None = None, chunk_size: int | None = None) -> Plan:
+               mu_kinetic_ratio: float | None = None, chunk_size: int | None = None,
+               progress: Callable[[int], None] | None = None) -> Plan:
     """Validate every point of the grid and build its kernel inputs.
 
     Parameters
@@ -422,6 +442,9 @@ def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = N
         ``mu_kinetic / mu_static`` for ``--mu`` (default: the case's).
     chunk_size : int, optional
         Cases per chunk (default `default_chunk_size`).
+    progress : callable, optional
+        Called with the number of points validated, every few thousand points (a large grid takes
+        minutes to validate).
 
     Returns
     -------
@@ -467,7 +490,7 @@ def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = N
             raise CaseError("scales record files; a pulse is scaled by its amplitude (--amplitude)",
                             source=axis.kind.option)
     if pulses:
-        return _plan_pulses(case, axes, ratio, chunk_size, n)
+        return _plan_pulses(case, axes, ratio, chunk_size, n, progress)
 
     traces, entries = _read_traces(case, records_dir)
     unscaled = rec.combine(traces["horizontal"], traces["vertical"], source=case.source,
@@ -485,8 +508,9 @@ def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = N
     factor_v = np.empty(n)
     factors: dict[tuple, tuple[float, float]] = {}     # scale section -> (kh, kv)
     checked: set[tuple] = set()                         # (scale section, gravity) checked
+    highest = (0.0, None)                               # the largest scaled peak, at this point
     grounds: dict[tuple, rec.GroundMotion] = {}         # a few scaled records, for the checks
-    for i, combo, point in _points(case, axes, ratio):
+    for i, combo, point in _points(case, axes, ratio, progress):
         s = point.ground.scale
         scale = (s.pga_horizontal, s.factor, s.pga_vertical, s.vertical_factor)
         if (scale, point.gravity) not in checked:
@@ -499,15 +523,21 @@ def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = N
                                              source=case.source, still_dt=case.solver.dt)
             ground = grounds[scale]
             try:
-                check_against_ground(point, ground)
+                peak = check_against_ground(point, ground, warn=False)
             except CaseError as exc:
                 raise _point_error(exc, axes, combo) from None
+            if peak > highest[0]:
+                highest = (peak, combo)
             checked.add((scale, point.gravity))
             factors[scale] = (ground.horizontal_factor, ground.vertical_factor)
         point_settings = settings_for(point, history=False, energy=False)
         params[i] = parameters(model_for(point), unscaled.dt, point_settings, start)
         states[i] = initial_state(point_settings)
         factor_h[i], factor_v[i] = factors[scale]
+    _warn_coarse_step(case, axes, params)
+    if highest[0] > ABSURD_ACCELERATION_IN_G * STANDARD_GRAVITY:
+        warnings.warn(f"{absurd_acceleration(case.source, highest[0])} [at {_point_text(axes, highest[1])}]",
+                      RunWarning, stacklevel=2)
     plan = Plan(case=case, axes=axes, mu_kinetic_ratio=ratio, params=params, states=states,
                 factor_h=factor_h, factor_v=factor_v, base=base, first=np.zeros(n, dtype=np.int64),
                 count=np.full(n, base.shape[1], dtype=np.int64), record_end=np.full(n, record_end),
@@ -516,21 +546,30 @@ def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = N
     return plan
 
 
-def _points(case: Case, axes, ratio):
+def _points(case: Case, axes, ratio, progress=None):
     """Every point of the grid in flat C order: ``(index, combo, case)``, validated by `case_with`
-    (a bad point is a CaseError naming the options responsible)."""
+    and `runner.check_parameters` (a bad point is a CaseError naming the options responsible).
+    Ctrl-C is noticed, and ``progress`` told, every `PLAN_BATCH` points (a large grid takes minutes)."""
+    n = math.prod(len(a) for a in axes)
     for i, combo in enumerate(itertools.product(*(range(len(a)) for a in axes))):
         changes = {}
         for axis, j in zip(axes, combo, strict=True):
             changes.update(axis_changes(axis.name, axis.values[j], case, ratio))
+        if i % PLAN_BATCH == 0 and i:
+            interrupts.check()
+            if progress is not None:
+                progress(PLAN_BATCH)
         try:
             point = case_with(case, changes)
+            check_parameters(point)
         except CaseError as exc:
             raise _point_error(exc, axes, combo) from None
         yield i, combo, point
+    if progress is not None:
+        progress(n - (n - 1) // PLAN_BATCH * PLAN_BATCH)
 
 
-def _plan_pulses(case: Case, axes, ratio, chunk_size: int, n: int) -> Plan:
+def _plan_pulses(case: Case, axes, ratio, chunk_size: int, n: int, progress=None) -> Plan:
     """`plan_sweep` for a case whose ground motion is analytic pulses: one record per distinct
     pulse shape and length (the amplitudes are the scale factors, as `runner.pulse_ground` applies
     them), each with its own sampling step and start."""
@@ -541,7 +580,7 @@ def _plan_pulses(case: Case, axes, ratio, chunk_size: int, n: int) -> Plan:
     records: dict[tuple, tuple] = {}          # (pulses at amplitude 1, dt, tail) -> (first, count, unit)
     pieces = []
     checked: set[tuple] = set()
-    for i, combo, point in _points(case, axes, ratio):
+    for i, combo, point in _points(case, axes, ratio, progress):
         h, v = point.ground.horizontal, point.ground.vertical
         shape = tuple(None if p is None else replace(p, amplitude=1.0) for p in (h, v))
         key = (shape, point.solver.dt, point.ground.tail)
@@ -567,12 +606,28 @@ def _plan_pulses(case: Case, axes, ratio, chunk_size: int, n: int) -> Plan:
         factor_v[i] = 1.0 if v is None else v.amplitude
         first[i], count[i] = offset, length
         record_end[i] = start + length * unit.dt
+    _warn_coarse_step(case, axes, params)
     plan = Plan(case=case, axes=list(axes), mu_kinetic_ratio=ratio, params=params, states=states,
                 factor_h=factor_h, factor_v=factor_v, base=np.concatenate(pieces, axis=1), first=first,
                 count=count, record_end=record_end, step=float(params[:, K.P_H].min()), records=[],
                 chunk_size=chunk_size)
     plan.key = definition_key(plan)
     return plan
+
+
+def _warn_coarse_step(case: Case, axes, params: np.ndarray) -> None:
+    """`runner.step_warning` for the point with the fastest rocking (the largest ``p dt``)."""
+    p2 = 0.75 * params[:, K.P_G] / params[:, K.P_R]          # p^2 = 3 g / (4 R)
+    i = int(np.argmax(p2))
+    warning = step_warning(case.source, math.sqrt(p2[i]), float(params[i, K.P_H]))
+    if warning:
+        combo = np.unravel_index(i, tuple(len(a) for a in axes))
+        warnings.warn(f"{warning} [at {_point_text(axes, combo)}]", RunWarning, stacklevel=3)
+
+
+def _point_text(axes, combo) -> str:
+    """``--mu 0.5, --pga 800gal``: a point of the grid as given."""
+    return ", ".join(f"{a.kind.option} {a.texts[j]}" for a, j in zip(axes, combo, strict=True))
 
 
 def _read_traces(case: Case, records_dir: Path | None):
@@ -604,8 +659,7 @@ def _point_error(exc: CaseError, axes, combo) -> CaseError:
                                   or _key_root(a.name).startswith(field_name))]
     if not options:
         options = [a.kind.option for a in axes]
-    point = ", ".join(f"{a.kind.option} {a.texts[i]}" for a, i in zip(axes, combo, strict=True))
-    return CaseError(f"{exc.message} [at {point}]", source="/".join(options), field=exc.field)
+    return CaseError(f"{exc.message} [at {_point_text(axes, combo)}]", source="/".join(options), field=exc.field)
 
 
 def _key_root(axis: str) -> str:
@@ -644,15 +698,18 @@ class ChunkStore:
     """Finished chunks of one sweep definition: ``FOLDER/KEY16/chunk-NNNNNN.npz``.
 
     ``FOLDER`` is ``.NAME.sweep.chunks`` beside the result file. Each file holds the chunk's flat
-    indices and final kernel states, and is written to a temporary name then renamed, so a file
-    with the chunk's name is always complete. A file that does not match the plan (another key,
-    other indices, damaged) is ignored and recomputed.
+    indices, final kernel states and a checksum (SHA-256 of the sweep's key, the indices and the
+    states), and is written to a temporary name then renamed, so a file with the chunk's name is
+    always complete. A file that cannot be read (truncated, a flipped byte, not an ``.npz``, a
+    folder) or does not match the plan (another key, other indices, a wrong checksum) counts as
+    missing: it is computed again, and `damaged` says which and why.
     """
 
     def __init__(self, folder: Path, key: str):
         self.root = Path(folder)
         self.key = key
         self.folder = self.root / key[:16]
+        self.damaged: dict[int, str] = {}
 
     @classmethod
     def beside(cls, result_path: Path, key: str) -> ChunkStore:
@@ -665,29 +722,66 @@ class ChunkStore:
         """The file of chunk ``chunk``."""
         return self.folder / f"chunk-{chunk:06d}.npz"
 
+    def checksum(self, indices: np.ndarray, states: np.ndarray) -> str:
+        """SHA-256 of the sweep's key, a chunk's indices and its states (as stored)."""
+        digest = hashlib.sha256(self.key.encode())
+        digest.update(np.ascontiguousarray(indices, dtype=np.int64).tobytes())
+        digest.update(np.ascontiguousarray(states, dtype=np.float64).tobytes())
+        return digest.hexdigest()
+
     def load(self, chunk: int, indices: np.ndarray) -> np.ndarray | None:
-        """The final states of ``chunk`` if a matching file is stored, else None."""
+        """The final states of ``chunk`` if a matching, intact file is stored, else None (and, for a
+        file that exists but cannot be used, the reason in ``damaged[chunk]``)."""
         path = self.path(chunk)
+        if not os.path.lexists(path):
+            return None
         try:
             with np.load(path, allow_pickle=False) as data:
-                if str(data["key"]) != self.key or not np.array_equal(data["indices"], indices):
-                    return None
-                states = np.array(data["states"], dtype=np.float64)
-        except (OSError, KeyError, ValueError, EOFError):
+                key, stored, states, checksum = (data["key"], data["indices"], data["states"],
+                                                 data["checksum"])
+                key, checksum = str(key), str(checksum)
+                stored = np.array(stored)
+                states = np.array(states, dtype=np.float64)
+        except Exception as exc:  # noqa: BLE001 - any way of not being a readable chunk file
+            self.damaged[chunk] = _one_line(exc) or type(exc).__name__
             return None
-        if states.shape != (indices.size, K.N_STATE):
-            return None
-        return states
+        if key != self.key:
+            self.damaged[chunk] = "of another sweep definition"
+        elif not np.array_equal(stored, indices) or states.shape != (indices.size, K.N_STATE):
+            self.damaged[chunk] = "other cases than the plan's"
+        elif checksum != self.checksum(stored, states):
+            self.damaged[chunk] = "its checksum does not match its content"
+        else:
+            self.damaged.pop(chunk, None)
+            return states
+        return None
 
     def save(self, chunk: int, indices: np.ndarray, states: np.ndarray) -> None:
-        """Store a finished chunk (atomically: a temporary file renamed)."""
+        """Store a finished chunk (atomically: a temporary file renamed; whatever was at its name,
+        a damaged file or a folder, is replaced)."""
         try:
             self.folder.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
             raise OutputError(f"cannot create the chunk folder: {exc.strerror or exc}",
                               source=str(self.folder)) from None
-        with atomic_write(self.path(chunk), overwrite=True, per_thread=True, what="chunk") as handle:
-            np.savez(handle, key=np.array(self.key), indices=indices, states=states)
+        path = self.path(chunk)
+        if path.is_dir() and not path.is_symlink():
+            shutil.rmtree(path, ignore_errors=True)
+        indices = np.ascontiguousarray(indices, dtype=np.int64)
+        states = np.ascontiguousarray(states, dtype=np.float64)
+        with atomic_write(path, overwrite=True, per_thread=True, what="chunk", interruptible=False) as handle:
+            np.savez(handle, key=np.array(self.key), indices=indices, states=states,
+                     checksum=np.array(self.checksum(indices, states)))
+        self.damaged.pop(chunk, None)
+
+    def remove_stale_temporaries(self) -> list[Path]:
+        """Delete temporary chunk files of processes that are gone (`files.remove_stale_temporaries`)."""
+        try:
+            names = [p.name for p in self.folder.glob(".chunk-*.tmp")]
+        except OSError:
+            return []
+        finals = {self.folder / (n.split(".npz.")[0][1:] + ".npz") for n in names if ".npz." in n}
+        return remove_stale_temporaries(sorted(finals))
 
     def count(self) -> int:
         """Chunk files stored for this definition."""
@@ -738,9 +832,11 @@ def compute(plan: Plan, store: ChunkStore, chunks: Sequence[int], *, workers: in
     Raises
     ------
     CaseError
-        ``workers`` out of range, or the scheduler cannot be reached or a task fails there.
-    KeyboardInterrupt
-        Propagated; the chunks finished before it are stored.
+        ``workers`` out of range, or the scheduler cannot be reached, is lost, or a task fails
+        there (the chunks finished before are stored).
+    interrupts.Interrupted
+        After Ctrl-C or SIGTERM, checked between chunk groups; the chunks finished before it are
+        stored.
     """
     if scheduler:
         _compute_dask(plan, store, chunks, scheduler, progress)
@@ -748,17 +844,25 @@ def compute(plan: Plan, store: ChunkStore, chunks: Sequence[int], *, workers: in
         _compute_local(plan, store, chunks, workers, progress)
 
 
+def check_workers(workers: int | None) -> None:
+    """Refuse a ``--workers`` outside ``1 ... NUMBA_NUM_THREADS`` (before any planning)."""
+    if workers is None:
+        return
+    import numba
+
+    limit = numba.config.NUMBA_NUM_THREADS
+    if isinstance(workers, bool) or not 1 <= int(workers) <= limit:
+        raise CaseError(f"must be within 1 ... {limit} (the cores numba may use here), got {workers!r}",
+                        source="--workers")
+
+
 def _compute_local(plan, store, chunks, workers, progress):
     """The chunks on numba's threads, a few at a time (at least `CASES_PER_THREAD` cases per
     thread in each parallel call, so that the threads rarely wait for each other's last case),
-    each chunk stored as soon as its call returns."""
+    each chunk stored as soon as its call returns, and Ctrl-C checked after each call."""
     import numba
 
-    if workers is not None:
-        limit = numba.config.NUMBA_NUM_THREADS
-        if isinstance(workers, bool) or not 1 <= int(workers) <= limit:
-            raise CaseError(f"must be within 1 ... {limit} (the cores numba may use here), "
-                            f"got {workers!r}", source="--workers")
+    check_workers(workers)
     previous = numba.get_num_threads()
     try:
         if workers is not None:
@@ -767,6 +871,7 @@ def _compute_local(plan, store, chunks, workers, progress):
         group = max(1, round(CASES_PER_THREAD * threads / plan.chunk_size)) if threads > 1 else 1
         chunks = list(chunks)
         for start in range(0, len(chunks), group):
+            interrupts.check()
             members = [(c, plan.chunk_indices(c)) for c in chunks[start:start + group]]
             indices = np.concatenate([i for _, i in members])
             states = batch.compute(*_chunk_inputs(plan, indices), parallel=True)
@@ -778,6 +883,7 @@ def _compute_local(plan, store, chunks, workers, progress):
                 progress(indices.size)
     finally:
         numba.set_num_threads(previous)
+    interrupts.check()
 
 
 def _chunk_inputs(plan: Plan, indices: np.ndarray):
@@ -786,75 +892,195 @@ def _chunk_inputs(plan: Plan, indices: np.ndarray):
             plan.count[indices], plan.factor_h[indices], plan.factor_v[indices])
 
 
+#: [s] for the connection to a dask scheduler, and for a lost one to come back.
+SCHEDULER_TIMEOUT = 10.0
+
+
 def _compute_dask(plan, store, chunks, address, progress):
     """One task per chunk on the cluster (`batch.compute`, serial in the task); each chunk is
-    stored as its result arrives."""
+    stored as its result arrives. One bounded connection attempt (`identify_scheduler`), the
+    cluster's log messages kept off the terminal, Ctrl-C checked while waiting."""
     try:
         import distributed
     except ImportError:  # pragma: no cover - a declared dependency
         raise CaseError("needs dask.distributed (pip install 'dask[distributed]')",
                         source="--scheduler") from None
-    _probe(address)
-    try:
-        client = distributed.Client(address, timeout="20s", set_as_default=False)
-    except (OSError, TimeoutError, ValueError) as exc:
-        raise CaseError(f"cannot connect to the dask scheduler at {address!r}: "
-                        f"{_one_line(exc)}", source="--scheduler") from None
-    futures = {}
-    try:
-        base = client.scatter(plan.base, broadcast=True)
-        for chunk in chunks:
-            indices = plan.chunk_indices(chunk)
-            p, s, _, first, count, kh, kv = _chunk_inputs(plan, indices)
-            future = client.submit(batch.compute, p, s, base, first, count, kh, kv, parallel=False,
-                                   pure=False)
-            futures[future] = (chunk, indices)
-        for future in distributed.as_completed(list(futures), loop=client.loop):
+    address = scheduler_address(address)
+    with _quiet_logs("distributed", "tornado", "asyncio"):
+        identify_scheduler(address)
+        try:
+            client = distributed.Client(address, timeout=f"{SCHEDULER_TIMEOUT:g}s", set_as_default=False)
+        except (OSError, TimeoutError, ValueError) as exc:
+            raise CaseError(f"cannot connect to the dask scheduler at {address}: {_one_line(exc)}",
+                            source="--scheduler") from None
+        futures = {}
+        try:
+            base = client.scatter(plan.base, broadcast=True)
+            for chunk in chunks:
+                indices = plan.chunk_indices(chunk)
+                p, s, _, first, count, kh, kv = _chunk_inputs(plan, indices)
+                future = client.submit(batch.compute, p, s, base, first, count, kh, kv, parallel=False,
+                                       pure=False)
+                futures[future] = (chunk, indices)
+            _collect_futures(client, futures, store, address, progress)
+        finally:
+            with contextlib.suppress(Exception):
+                if futures:
+                    client.cancel(list(futures))
+            with contextlib.suppress(Exception):
+                client.close(timeout=2)
+
+
+def _collect_futures(client, futures: dict, store: ChunkStore, address: str, progress) -> None:
+    """Store each chunk as its task finishes; Ctrl-C and a lost scheduler are noticed within a
+    fraction of a second and `SCHEDULER_TIMEOUT` respectively."""
+    import time
+
+    lost_since = None
+    while futures:
+        interrupts.check()
+        finished = [f for f in futures if f.status in ("finished", "error", "cancelled", "lost")]
+        for future in finished:
             chunk, indices = futures.pop(future)
+            if future.status != "finished":
+                if future.status == "error":
+                    exc = future.exception()
+                    raise CaseError(f"a task failed on the cluster: {type(exc).__name__}: {_one_line(exc)} "
+                                    "(are rockslide and its dependencies installed on the workers?)",
+                                    source="--scheduler")
+                raise _lost(address, store)
             try:
-                states = future.result()
-            except Exception as exc:  # noqa: BLE001 - a task's error, reported in one line
-                raise CaseError(f"a task failed on the cluster: {type(exc).__name__}: "
-                                f"{_one_line(exc)} (are rockslide and its dependencies installed "
-                                "on the workers?)", source="--scheduler") from None
-            store.save(chunk, indices, np.asarray(states, dtype=np.float64))
+                states = np.asarray(future.result(timeout=SCHEDULER_TIMEOUT), dtype=np.float64)
+            except Exception:  # noqa: BLE001 - the result could not be fetched: the scheduler is gone
+                raise _lost(address, store) from None
+            store.save(chunk, indices, states)
             if progress is not None:
                 progress(indices.size)
-    finally:
-        try:
-            if futures:
-                client.cancel(list(futures))
-        finally:
-            client.close()
+        if client.status == "running":
+            lost_since = None
+        elif lost_since is None:
+            lost_since = time.monotonic()
+        elif time.monotonic() - lost_since > SCHEDULER_TIMEOUT:
+            raise _lost(address, store)
+        if not finished:
+            time.sleep(0.1)
 
 
-def _probe(address: str) -> None:
-    """Fail fast, in one line, when nothing listens at a ``tcp://host:port`` address (dask itself
-    retries until its timeout)."""
-    import socket
+def _lost(address: str, store: ChunkStore) -> CaseError:
+    return CaseError(f"lost the connection to the dask scheduler at {address}; {store.count()} finished "
+                     f"chunks are kept in {store.folder} and the same command resumes from them",
+                     source="--scheduler")
+
+
+def scheduler_address(address: str) -> str:
+    """``tcp://HOST:PORT`` from ``--scheduler`` (``HOST:PORT`` taken as TCP), or a CaseError.
+
+    Only plain TCP: ``tls://`` needs certificates rockslide takes no options for, and ``inproc://``
+    exists only inside one Python process.
+    """
     from urllib.parse import urlsplit
 
-    if "://" not in address:
-        address = f"tcp://{address}"
-    parts = urlsplit(address)
-    if parts.scheme != "tcp":
-        return
+    text = str(address).strip()
+    if "://" not in text:
+        text = f"tcp://{text}"
+    scheme = text.split("://", 1)[0].lower()
+    if scheme != "tcp":
+        raise CaseError(f"{scheme}:// addresses are not supported; expected tcp://HOST:PORT (a scheduler "
+                        "started with 'dask scheduler'; for TLS, reach it through an SSH tunnel)",
+                        source="--scheduler")
     try:
+        parts = urlsplit(text)
         host, port = parts.hostname, parts.port
     except ValueError:
         host = port = None
     if not host or not port:
-        raise CaseError(f"expected an address like tcp://HOST:PORT, got {address!r}",
+        raise CaseError(f"expected an address like tcp://HOST:PORT, got {_shown(address)}",
                         source="--scheduler")
+    return text
+
+
+def identify_scheduler(address: str, timeout: float | None = None) -> dict:
+    """Ask ``address`` who it is, within ``timeout`` seconds in all (default
+    :data:`SCHEDULER_TIMEOUT`): a dask scheduler answers the ``identity`` request; anything else
+    (nothing listening, an HTTP server) is a CaseError."""
+    timeout = SCHEDULER_TIMEOUT if timeout is None else timeout
+    import asyncio
+    import socket
+    from concurrent.futures import ThreadPoolExecutor
+    from urllib.parse import urlsplit
+
+    from distributed.comm import connect
+
+    parts = urlsplit(address)
     try:
-        socket.create_connection((host, port), timeout=10).close()
-    except OSError as exc:
+        socket.create_connection((parts.hostname, parts.port), timeout=timeout).close()
+    except OSError as exc:       # refused, unreachable: at once (dask itself retries until its timeout)
         raise CaseError(f"cannot connect to the dask scheduler at {address}: "
                         f"{exc.strerror or _one_line(exc)}", source="--scheduler") from None
+
+    async def ask():
+        comm = await connect(address, timeout=timeout)
+        try:
+            await comm.write({"op": "identity", "reply": True})
+            return await comm.read()
+        finally:
+            comm.abort()
+
+    try:
+        with ThreadPoolExecutor(1) as pool:         # its own event loop, even under a running one
+            reply = pool.submit(asyncio.run, asyncio.wait_for(ask(), timeout)).result()
+    except (asyncio.TimeoutError, TimeoutError):
+        raise CaseError(f"no dask scheduler answered at {address} within {timeout:g} s (is something "
+                        "else listening there?)", source="--scheduler") from None
+    except Exception as exc:  # noqa: BLE001 - refused, reset, closed, a bad handshake
+        reason = getattr(exc, "strerror", None) or _one_line(exc)
+        raise CaseError(f"cannot connect to the dask scheduler at {address}: {reason}",
+                        source="--scheduler") from None
+    if not (isinstance(reply, dict) and reply.get("type") == "Scheduler"):
+        raise CaseError(f"{address} answers, but not as a dask scheduler", source="--scheduler")
+    return reply
+
+
+@contextlib.contextmanager
+def _quiet_logs(*prefixes: str):
+    """Keep the log messages of these libraries off the terminal (errors are reported in one line)."""
+    import logging
+
+    names = [n for n in list(logging.root.manager.loggerDict) if n.split(".")[0] in prefixes]
+    loggers = [logging.getLogger(n) for n in {*names, *prefixes}]
+    levels = [logger.level for logger in loggers]
+    for logger in loggers:
+        logger.setLevel(logging.CRITICAL + 1)
+    try:
+        yield
+    finally:
+        for logger, level in zip(loggers, levels, strict=True):
+            logger.setLevel(level)
+
+
+def _shown(text: str, limit: int = 80) -> str:
+    text = repr(str(text))
+    return text if len(text) <= limit else text[:limit - 4] + "...'"
 
 
 def _one_line(exc: BaseException) -> str:
     return " ".join(str(exc).split()) or type(exc).__name__
+
+
+def work_estimate(plan: Plan, n_cases: int, *, workers: int | None = None) -> float:
+    """An upper estimate [s] of the time ``n_cases`` cases of ``plan`` take on this machine's
+    threads (every case moving until the end; cases at rest go about 3000 times faster)."""
+    import numba
+
+    threads = workers or numba.config.NUMBA_NUM_THREADS
+    return n_cases * plan.steps_per_case / (STEPS_PER_SECOND * threads)
+
+
+def bytes_needed(plan: Plan, n_chunks: int) -> int:
+    """Bytes on disk for ``n_chunks`` more chunk files and the result file (both uncompressed)."""
+    per_case_chunk = (K.N_STATE + 1) * 8
+    per_case_result = 8 * 9 + 4 + 5          # nine float64, one int32, five int8 variables
+    return n_chunks * plan.chunk_size * per_case_chunk + plan.n_cases * per_case_result + 2**16
 
 
 def missing_chunks(plan: Plan, store: ChunkStore) -> list[int]:

@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import plots, runner
+from . import interrupts, plots, runner
 from .case import case_with, load_case
 from .core import criteria
 from .errors import RecordError
@@ -144,8 +144,8 @@ def run_table(configs: Path, records_dir: Path, gravities=(None, PAPER_G)) -> tu
         for gravity in gravities:
             case = base_case if gravity is None else case_with(base_case, {"gravity": gravity})
             prepared = runner.prepare(case, records_dir, history=gravity is None)
-            result = runner.simulate_prepared(prepared)
-            robustness = runner.verdict_robustness(prepared, result.summary.overturned)
+            result = runner.simulate_prepared(prepared, progress=_check_signals)
+            robustness = runner.verdict_robustness(prepared, result.summary.overturned, progress=_check_signals)
             key = case.gravity
             m = motion(result)
             s = result.summary
@@ -164,6 +164,11 @@ def run_table(configs: Path, records_dir: Path, gravities=(None, PAPER_G)) -> tu
             if gravity is None:
                 results[row.name] = (result, case)
     return rows, results
+
+
+def _check_signals(reached: float, end: float) -> None:
+    """The ``progress`` of every run: stop at the next kernel chunk after Ctrl-C or SIGTERM."""
+    interrupts.check()
 
 
 def claim(row: Row, previous: Row | None):

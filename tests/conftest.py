@@ -9,11 +9,14 @@ naming the file.
 from __future__ import annotations
 
 import os
+import shutil
 from pathlib import Path
 
 import pytest
 
 REPO = Path(__file__).resolve().parents[1]
+#: The synthetic records shipped in records/ (made by records/make_example_records.py).
+SHIPPED = ("synthetic_kt_h.at2", "synthetic_kt_v.at2")
 
 
 def real_records_dir() -> Path | None:
@@ -51,3 +54,14 @@ def one_line_error(result, *parts):
     for part in parts:
         assert part in lines[0], f"{part!r} not in {lines[0]!r}"
     return lines[0]
+
+
+@pytest.fixture
+def ws(tmp_path, monkeypatch):
+    """A working folder with copies of the shipped synthetic records, made the current folder (and
+    no $ROCKSLIDE_RECORDS: everything offline)."""
+    for name in SHIPPED:
+        shutil.copy(REPO / "records" / name, tmp_path / name)
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.delenv("ROCKSLIDE_RECORDS", raising=False)
+    return tmp_path

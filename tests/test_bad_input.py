@@ -34,6 +34,7 @@ import numpy as np
 import pytest
 import yaml
 from click.testing import CliRunner
+from conftest import REPO, SHIPPED
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -41,8 +42,6 @@ from rockslide import results, runner
 from rockslide.cli import main
 from rockslide.records import read_record, write_at2
 
-REPO = Path(__file__).resolve().parents[1]
-SHIPPED = ("synthetic_kt_h.at2", "synthetic_kt_v.at2")
 # the shipped example names its records relative to configs/; here they are copied beside the case
 EXAMPLE_TEXT = (REPO / "configs" / "example.yaml").read_text(encoding="utf-8").replace("../records/", "")
 EXAMPLE = yaml.safe_load(EXAMPLE_TEXT)
@@ -155,16 +154,6 @@ def assert_clean_error(result, expected=()):
     return lines[0]
 
 
-@pytest.fixture
-def ws(tmp_path, monkeypatch):
-    """A working folder with copies of the shipped synthetic records, made the current folder."""
-    for name in SHIPPED:
-        shutil.copy(REPO / "records" / name, tmp_path / name)
-    monkeypatch.chdir(tmp_path)
-    monkeypatch.delenv("ROCKSLIDE_RECORDS", raising=False)
-    return tmp_path
-
-
 def write_files(folder: Path, files: dict) -> None:
     for name, content in files.items():
         if callable(content):
@@ -195,6 +184,22 @@ def bad_record(id_, record_name, content, expected, spec=None, args=RUN, **chang
     spec = spec if spec is not None else record_name
     return pytest.param({record_name: content, "case.yaml": horizontal_only(spec, **changes)}, args,
                         expected, id=id_)
+
+
+def _merge_key_bomb(levels: int = 9, width: int = 10) -> str:
+    """664 bytes whose YAML merge keys expand to 10^9 entries (minutes and gigabytes to build)."""
+    lines = ["name: x", "a0: &a0 {k0: 0}"]
+    for i in range(1, levels + 1):
+        lines.append(f"a{i}: &a{i} {{<<: [{', '.join([f'*a{i - 1}'] * width)}], k{i}: {i}}}")
+    return "\n".join(lines) + "\n"
+
+
+def _alias_bomb(levels: int = 9, width: int = 10) -> str:
+    """The 'billion laughs': nested aliases that expand to 10^9 strings."""
+    lines = ["name: x", "a0: &a0 [" + ", ".join(["lol"] * width) + "]"]
+    for i in range(1, levels + 1):
+        lines.append(f"a{i}: &a{i} [" + ", ".join([f"*a{i - 1}"] * width) + "]")
+    return "\n".join(lines) + "\n"
 
 
 T, A = sine()
@@ -474,6 +479,71 @@ BAD_INPUTS = [
                  ["out/c.txt: unknown figure format '.txt'", ".png"], id="criteria-output-format"),
     pytest.param({"out/c.png": b"previous figure"}, ("criteria", "-o", "out/c.png"),
                  ["out/c.png exists (use --overwrite to replace it)"], id="criteria-output-exists"),
+    # -- hostile YAML (issue 16.4): bounded before it is built --------------------------------------------
+    bad_case("yaml-merge-key-bomb", _merge_key_bomb(), ["case.yaml: line", "expands to more than 10000 values"]),
+    bad_case("yaml-alias-bomb", _alias_bomb(), ["case.yaml: line", "expands to more than 10000 values"]),
+    bad_case("yaml-nested-too-deep", "name: x\nblock: " + "[" * 30 + "]" * 30 + "\n",
+             ["case.yaml: line", "nested more than 20 levels deep"]),
+    bad_case("yaml-recursive-alias", "name: &a [x, *a]\n", ["alias refers to a node that contains it"]),
+    bad_case("case-file-too-large", EXAMPLE_TEXT + ("# " + "x" * 98 + "\n") * 700,
+             ["case.yaml: the case file has", "expected at most 65536"]),
+    # -- values beyond what float64 and the model represent (issue 16.5, 16.9) -----------------------------
+    bad_case("dt-denormal", case_text({"solver.dt": 5e-324}), ["solver.dt: dt = 4.94066e-324 s gives",
+                                                                "use a larger dt"]),
+    bad_case("interval-longer-than-run", case_text({"output.interval": "1e20 s"}),
+             ["output.interval: 1e+20 s is longer than the run (22 s"]),
+    bad_record("record-at2-dt-1e300", "slow.at2", shipped_with_line("synthetic_kt_h.at2", 4,
+                                                                    "NPTS=    2001, DT=    1e300 SEC,"),
+               ["slow.at2", "dt = 1e+300 s; expected a sampling step of at most 1 s"]),
+    bad_record("record-1e307-g-sample", "spike.at2",
+               shipped_with_line("synthetic_kt_h.at2", 10, "  1.0000000E+307 0.0 0.0 0.0 0.0"),
+               ["case.yaml: ground.scale: the scaled ground motion reaches", "expected at most 1e+06 g"],
+               **{"ground.scale": {"factor": 1}}),
+    bad_record("record-overflow-in-g-one-line", "inf.at2",       # 1e308 g * 9.80665 overflows: no numpy warning
+               shipped_with_line("synthetic_kt_h.at2", 10, "  1.0000000E+308 0.0 0.0 0.0 0.0"),
+               ["inf.at2", "line 10", "is inf (after conversion to m/s^2)", "expected finite numbers"]),
+    bad_case("mass-absurd", case_text({"block.mass": "1e30 kg"}),
+             ["block.mass: 1e+30 kg is outside what rockslide computes reliably", "1e-20 to 1e+20 kg"]),
+    bad_case("block-subatomic", case_text({"block.width": 1e-15}),
+             ["block.width: 1e-15 m is outside what rockslide computes reliably"]),
+    bad_case("gravity-tiny", case_text({"gravity": "1e-300 m/s^2"}), ["gravity: 1e-300 m/s^2 is outside"]),
+    bad_case("slip-rate-absurd", case_text({"initial.slip_rate": 1e300}),
+             ["initial.slip_rate: 1e+300 m/s is outside", "in absolute value 0 to 1e+06 m/s"]),
+    bad_case("time-shift-absurd", case_text({"ground.time_shift": "1e12 s"}),
+             ["ground.time_shift: the ground motion starts at t = 1e+12 s", "within +-1e+06 s"]),
+    bad_case("output-dir-nul", case_text({"output.dir": "out\x00put"}),
+             ["output.dir: expected text without control characters", "\\x00"]),
+    bad_case("record-name-nul", horizontal_only("kt\x00h.at2"),
+             ["ground.horizontal.file: expected text without control characters", "\\x00"]),
+    bad_case("name-too-long", case_text({"name": "n" * 250}),
+             ["name: expected at most 200 characters", "got 250"]),
+    bad_case("name-of-a-megabyte", case_text({"name": "n" * 1_000_000}),
+             ["case.yaml: the case file has 1000", "expected at most 65536"]),
+    bad_case("name-ending-in-sweep", case_text({"name": "x.sweep"}),
+             ["name: a name ending in '.sweep' would write the files of the sweep of case 'x'"]),
+    pytest.param({"case.yaml": case_text(QUICK)}, ("run", "case.yaml", "--out-dir", "o" * 300),
+                 ["a folder name of 300 bytes"], id="out-dir-name-too-long"),
+    # -- the dask scheduler (issue 16.5, 16.6) ------------------------------------------------------------
+    pytest.param({"case.yaml": case_text()}, ("sweep", "case.yaml", "--mu", "0.5", "--scheduler", "tcp://[::1"),
+                 ["--scheduler: expected an address like tcp://HOST:PORT, got 'tcp://[::1'"], id="scheduler-ipv6-open"),
+    pytest.param({"case.yaml": case_text()}, ("sweep", "case.yaml", "--mu", "0.5", "--scheduler", "tls://[::1]:1"),
+                 ["--scheduler: tls:// addresses are not supported"], id="scheduler-tls"),
+    pytest.param({"case.yaml": case_text()}, ("sweep", "case.yaml", "--mu", "0.5", "--scheduler", "inproc://x"),
+                 ["--scheduler: inproc:// addresses are not supported"], id="scheduler-inproc"),
+    pytest.param({"case.yaml": case_text()}, ("sweep", "case.yaml", "--mu", "0.5", "--workers", "0"),
+                 ["--workers: must be within 1 ..."], id="sweep-workers-zero"),
+    # -- click's own errors, one line too (issue 16.12) ---------------------------------------------------
+    pytest.param({}, ("run",), ["rockslide run: Missing argument 'CASE_FILE'", "see 'rockslide run --help'"],
+                 id="usage-missing-argument"),
+    pytest.param({}, ("runn", "case.yaml"), ["No such command 'runn'"], id="usage-unknown-command"),
+    pytest.param({"case.yaml": case_text()}, ("run", "case.yaml", "--robust"),
+                 ["rockslide run: No such option '--robust'", "--robustness"], id="usage-unknown-option"),
+    pytest.param({}, ("info", "rec\x00.at2"), ["a file or folder name holds a NUL character"],
+                 id="path-with-nul-through-the-api"),
+    pytest.param({}, ("criteria", "--av", "nan", "-o", "out/c.png"),
+                 ["--av: cannot read 'nan' as an acceleration"], id="criteria-av-nan"),
+    pytest.param({}, ("criteria", "--av", "1e400 g", "-o", "out/c.png"),
+                 ["--av: '1e400 g' is not a finite number"], id="criteria-av-overflow"),
     # -- rockslide table1 --------------------------------------------------------------------------------
     pytest.param({}, ("table1", "--configs", "nosuch", "--out", "out"),
                  ["nosuch: --configs: folder not found", "Table 1 case files"], id="table1-configs-missing"),
@@ -705,13 +775,13 @@ def test_sigkill_midway_leaves_the_previous_result_or_none(ws, previous):
                                                 (signal.SIGTERM, 143, "terminated")],
                          ids=["ctrl-c", "sigterm"])
 def test_interrupted_run_exits_cleanly_without_any_file(ws, signum, code, word):
+    """Deterministic: the signal goes as soon as the run's temporary file exists (the run is then
+    computing, for a minute), and whenever it lands it is acted on at the next kernel chunk."""
     write_long_case(ws)
     out = ws / "out"
     proc = cli_subprocess(["run", "case.yaml", "--no-plot"], ws, preexec_fn=_default_sigint)
     try:
         wait_for_temporary_file(proc, out, "slow.h5")
-        time.sleep(1.0)
-        assert proc.poll() is None, "the run ended before it could be interrupted"
         proc.send_signal(signum)
         _, stderr = proc.communicate(timeout=120)
     finally:
@@ -719,7 +789,9 @@ def test_interrupted_run_exits_cleanly_without_any_file(ws, signum, code, word):
             proc.kill()
             proc.communicate()
     assert proc.returncode == code, stderr
-    assert stderr.splitlines() == [f"rockslide: {word} (no partial result was written)"]
+    *notes, last = stderr.splitlines()
+    assert last == f"rockslide: {word} (no partial result was written)", stderr
+    assert all(line.startswith("rockslide: note: ") for line in notes), stderr   # the work estimate
     assert listing(out) == []                           # no result, no temporary file
 
 

@@ -91,3 +91,26 @@ def test_both_close_the_energy_balance():
         scale = e["work_ground"] + e["friction_loss"]
         assert scale > 0
         assert abs(e["balance_residual"]) < 1e-9 * scale
+
+
+def test_reference_reports_progress_and_can_be_stopped():
+    """`simulate_reference` calls ``progress(reached, end)`` every hundred record intervals, with
+    increasing times below the end, as `simulate` does between chunks; an exception raised there
+    (the command line's Ctrl-C) stops the run."""
+    model, seed = CASES["low friction, slip only"]
+    dt, ah, av = pulse_input(seed)
+    calls = []
+    simulate_reference(model, dt, ah, av, Settings(history_every=0),
+                       progress=lambda reached, end: calls.append((reached, end)))
+    reached = [c[0] for c in calls]
+    assert len(calls) == (ah.size - 1) // 100 and np.all(np.diff(reached) > 0)
+    assert all(end == pytest.approx((ah.size - 1) * dt) for _, end in calls)
+
+    class Stop(Exception):
+        pass
+
+    def stop(reached, end):
+        raise Stop
+
+    with pytest.raises(Stop):
+        simulate_reference(model, dt, ah, av, Settings(history_every=0), progress=stop)

@@ -416,7 +416,8 @@ def start_sweep(out: Path, *extra) -> subprocess.Popen:
         [str(REPO)] + ([os.environ["PYTHONPATH"]] if os.environ.get("PYTHONPATH") else []))}
     args = [sys.executable, "-m", "rockslide.cli", *map(str, sweep_args(out, *SLOW_GRID)),
             "--workers", "1", "--chunk-size", "8", *extra]
-    return subprocess.Popen(args, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    return subprocess.Popen(args, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))   # not inherited SIG_IGN
 
 
 # 400 long-rocking cases (e = 0.95): about two seconds on one thread, in 50 chunks of 8.
@@ -466,18 +467,20 @@ def test_a_killed_sweep_resumes_and_gives_the_same_result(tmp_path, slow_referen
 
 @pytest.mark.slow
 @pytest.mark.skipif(sys.platform == "win32", reason="SIGINT to a child process is POSIX-only")
-def test_ctrl_c_keeps_the_chunks_and_writes_no_result(tmp_path):
+@pytest.mark.parametrize("signum, code, word", [(signal.SIGINT, 130, "interrupted"),
+                                                (signal.SIGTERM, 143, "terminated")], ids=["ctrl-c", "sigterm"])
+def test_ctrl_c_keeps_the_chunks_and_writes_no_result(tmp_path, signum, code, word):
     proc = start_sweep(tmp_path, "--no-plot")
     wait_for_chunk(proc, tmp_path)
-    proc.send_signal(signal.SIGINT)
+    proc.send_signal(signum)
     try:
         out, err = proc.communicate(timeout=60)
     except subprocess.TimeoutExpired:
         proc.kill()
-        pytest.fail("the sweep did not stop on SIGINT")
-    assert proc.returncode == 130, (out, err)
+        pytest.fail("the sweep did not stop on the signal")
+    assert proc.returncode == code, (out, err)
     lines = err.splitlines()
-    assert len(lines) == 1 and lines[0].startswith("rockslide: interrupted: "), err
+    assert len(lines) == 1 and lines[0].startswith(f"rockslide: {word}: "), err
     kept = len(list(tmp_path.glob(".example.sweep.chunks/*/chunk-*.npz")))
     assert f" {kept} of " in lines[0] and "chunks are kept" in lines[0] and "resumes" in lines[0]
     assert kept >= 1

@@ -50,6 +50,7 @@ from .physics import (
     rockslip_determinant,
     rockslip_determinant_rate,
     slip_acceleration,
+    slip_liftoff_margin,
     slip_margin,
     tilt,
     zeno_rate,
@@ -250,8 +251,8 @@ def event_functions(mode, lam, sigma, th, thd, xd, ah, G, s, c, thdd, D, p):
     same instant."""
     inf = math.inf
     if mode == SLIP:
-        push = slip_acceleration(ah, G, p[P_NU], sigma) + ah
-        return G, sigma * xd, liftoff_margin(p[P_TAN_ALPHA], G, push), inf, inf       # eq. 23
+        s0, c0 = tilt(0.0, p[P_ALPHA])
+        return G, sigma * xd, slip_liftoff_margin(s0, c0, ah, G, sigma, p[P_NU]), inf, inf   # eq. 23
     if mode == ROCK:
         Rx, N = contact_forces_sc(s, c, thd, thdd, ah, G, lam, p[P_R])
         return N, slip_margin(p[P_MU], N, Rx), th, HALF_PI - th, inf                   # eq. 21
@@ -430,8 +431,7 @@ def apply_event(kind, st, p, t, ah, G, events):
             st[S_MODE] = ROCK
             log_event(st, events, t, REST, ROCK, C_LIFTOFF, 0, 0.0)
         else:                                              # SLIP, eq. 24: lam = sign(xddot + ah)
-            push = slip_acceleration(ah, G, p[P_NU], sigma) + ah
-            st[S_LAM] = 1.0 if push > 0.0 else -1.0
+            st[S_LAM] = -sigma                             # xddot + ah = -nu sigma G
             st[S_MODE] = ROCKSLIP
             log_event(st, events, t, SLIP, ROCKSLIP, C_LIFTOFF, 0, 0.0)
     elif kind == K_SLIP_STOP:

@@ -101,10 +101,20 @@ def rockslip_determinant_rate(s, c, lam, sigma, nu, R):
 
 
 @njit(cache=True)
-def rockslip_accelerations_sc(s, c, thetadot, ah, G, lam, sigma, nu, R):
-    """Eqs. 15, 16 and 22 with ``s``, ``c`` from `tilt`; see `rockslip_accelerations`."""
+def rockslip_loads(s, c, thetadot, ah, G, lam, sigma, nu, R):
+    """The right-hand sides of the ROCKSLIP system (eqs. 15, 16 with 22, see
+    `rockslip_accelerations`): ``b1 = -G s + lam ah c`` [m/s^2] and
+    ``b2 = -ah - nu sigma G + R thetadot^2 (nu sigma c + lam s)`` [m/s^2]. ``D thetaddot =
+    b1 + lam c b2``."""
     b1 = -G * s + lam * ah * c
     b2 = -ah - nu * sigma * G + R * thetadot * thetadot * (nu * sigma * c + lam * s)
+    return b1, b2
+
+
+@njit(cache=True)
+def rockslip_accelerations_sc(s, c, thetadot, ah, G, lam, sigma, nu, R):
+    """Eqs. 15, 16 and 22 with ``s``, ``c`` from `tilt`; see `rockslip_accelerations`."""
+    b1, b2 = rockslip_loads(s, c, thetadot, ah, G, lam, sigma, nu, R)
     a21 = R * (nu * sigma * s - lam * c)
     D = rockslip_determinant(s, c, lam, sigma, nu, R)
     if D <= 0.0:
@@ -164,6 +174,21 @@ def contact_forces(theta, thetadot, thetaddot, ah, G, lam, R, alpha):
 
 
 @njit(cache=True)
+def slip_liftoff_margin(s, c, ah, G, sigma, nu):
+    """Eq. 23 during SLIP, ``tan(alpha) G - abs(xddot + ah)`` with ``abs(xddot + ah) = nu G``, decided
+    as the ROCKSLIP system it would enter decides it: the block lifts off about ``lam = -sigma``
+    (eq. 24: ``xddot + ah = -nu sigma G``) when the rotation it starts grows, ``D thetaddot =
+    b1 + lam c b2 > 0`` at ``theta = thetadot = 0`` (`rockslip_loads`; ``s = sin(alpha)``,
+    ``c = cos(alpha)``, from `tilt`). In exact arithmetic ``b1 + lam c b2 = G (nu c - s)``, so the
+    sign is eq. 23's (``nu > tan(alpha)``); with the same rounding as the state it enters, a
+    friction coefficient equal to ``tan(alpha)`` to the last bit cannot lift off into a rotation that
+    falls back at once. Returns ``-(b1 + lam c b2)`` [m/s^2]: liftoff when negative."""
+    lam = -sigma
+    b1, b2 = rockslip_loads(s, c, 0.0, ah, G, lam, sigma, nu, 1.0)
+    return -(b1 + lam * c * b2)
+
+
+@njit(cache=True)
 def slip_margin(mu, N, Rx):
     """Static friction margin ``mu N - |Rx|`` [m/s^2]; slip starts when it is negative.
 
@@ -176,7 +201,7 @@ def slip_margin(mu, N, Rx):
 def liftoff_margin(tan_alpha, G, push):
     """Liftoff margin ``tan(alpha) G - |push|`` [m/s^2]; liftoff starts when it is negative.
 
-    Eq. 6 at rest (``push = ah``) and eq. 23 during slip (``push = xddot + ah``).
+    Eq. 6 at rest (``push = ah``; during slip, eq. 23 is `slip_liftoff_margin`).
     ``tan_alpha`` is passed as ``b/h`` so that ties with ``mu`` are exact.
     """
     return tan_alpha * G - abs(push)

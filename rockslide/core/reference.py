@@ -34,14 +34,20 @@ RTOL = 1e-12
 ATOL = 1e-14
 
 
+#: The reference solver calls ``progress`` after this many record intervals.
+PROGRESS_INTERVALS = 100
+
+
 def simulate_reference(model: Model, dt_record: float, horizontal, vertical,
                        settings: Settings = Settings(), start: float = 0.0,
-                       rtol: float = RTOL, atol: float = ATOL) -> Result:
+                       rtol: float = RTOL, atol: float = ATOL, progress=None) -> Result:
     """Same inputs and result as `simulate.simulate`, computed with DOP853 and located events.
 
     The history is sampled on the same grid as the kernel's (every ``history_every``-th multiple of
     the kernel's step ``h``), from the solver's dense output. ``settings.events`` is ignored (events
-    are always located); ``settings.dt`` only sets the history grid.
+    are always located); ``settings.dt`` only sets the history grid. ``progress(reached, end)`` is
+    called every `PROGRESS_INTERVALS` record intervals, as `simulate` calls it between chunks (it
+    may raise to stop the run).
     """
     ground = ground_array(horizontal, vertical, dt_record, settings.tail)
     p = parameters(model, dt_record, settings, start)
@@ -67,6 +73,8 @@ def simulate_reference(model: Model, dt_record: float, horizontal, vertical,
     for k in range(n_intervals):
         if K.finished(st):
             break
+        if progress is not None and k % PROGRESS_INTERVALS == 0 and k:
+            progress(start + k * dt_record, start + n_intervals * dt_record)
         a0, v0 = ground[0, k], ground[2, k]
         sa = (ground[1, k] - a0) / dt_record
         sv = (ground[3, k] - v0) / dt_record

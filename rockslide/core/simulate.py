@@ -264,7 +264,7 @@ def ground_series(ground: np.ndarray, dt_record: float, start: float = 0.0):
 
 
 def simulate(model: Model, dt_record: float, horizontal, vertical, settings: Settings = Settings(),
-             start: float = 0.0, on_chunk=None) -> Result:
+             start: float = 0.0, on_chunk=None, progress=None) -> Result:
     """Compute the response of ``model`` to the ground motion.
 
     Parameters
@@ -281,6 +281,10 @@ def simulate(model: Model, dt_record: float, horizontal, vertical, settings: Set
     on_chunk : callable, optional
         ``on_chunk(rows)`` receives the history chunk by chunk (``float64[n, 6]``, columns
         ``kernel.HISTORY_COLUMNS``) instead of keeping it in the result (bounded memory).
+    progress : callable, optional
+        ``progress(reached, end)`` is called after each chunk with the time reached and the time of
+        the last ground sample [s] (tail included). It may raise to stop the run (Ctrl-C); the
+        exception propagates.
 
     Returns
     -------
@@ -322,6 +326,8 @@ def simulate(model: Model, dt_record: float, horizontal, vertical, settings: Set
         elif every > 0:
             kept.append(written)
         k = int(st[K.S_K])
+        if progress is not None:
+            progress(start + k * dt_record, start + n_intervals * dt_record)
     columns = kept[0] if len(kept) == 1 else (np.concatenate(kept, axis=1) if kept
                                               else np.empty((len(K.HISTORY_COLUMNS), 0)))
     ground_time, ground_h, ground_v = ground_series(ground, dt_record, start)
