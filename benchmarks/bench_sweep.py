@@ -100,7 +100,7 @@ def main() -> None:
     print(f"machine: {os.cpu_count()} cores, {threads} numba threads")
 
     with Clock() as warm:
-        batch.warm_up(parallel=True)
+        batch.warm_up()
     with Clock() as planning:
         plan = sw.plan_sweep(case, [sw.parse_axis("mu", args.mu), sw.parse_axis("pga", args.pga)],
                              records_dir=folder)

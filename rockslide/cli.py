@@ -526,7 +526,7 @@ def _axis_option(name: str, kind: str, what: str, example: str):
 @click.option("--no-plot", is_flag=True, help="Do not draw the PNG maps (with --overwrite, earlier maps "
               "of this sweep are removed).")
 @click.option("--workers", type=int, default=None, metavar="N",
-              help="numba threads for a local run (default: all cores).")
+              help="Threads for a local run (default: all cores).")
 @click.option("--scheduler", default=None, metavar="ADDRESS",
               help="Compute the chunks on this dask.distributed scheduler (e.g. tcp://10.0.0.5:8786), "
                    "one task per chunk.")
@@ -637,7 +637,7 @@ def sweep(case_file, mu, pga, vertical_factor, restitution, slenderness, gravity
 @click.option("--overwrite", is_flag=True, help="Replace an existing result of this analysis.")
 @click.option("--no-plot", is_flag=True, help="Do not draw the PNG figure.")
 @click.option("--workers", type=int, default=None, metavar="N",
-              help="numba threads for a local run (default: all cores).")
+              help="Threads for a local run (default: all cores).")
 @click.option("--scheduler", default=None, metavar="ADDRESS",
               help="Compute the chunks on this dask.distributed scheduler (e.g. tcp://10.0.0.5:8786).")
 @click.option("--chunk-size", type=int, default=None, metavar="N",
@@ -758,7 +758,7 @@ def _compute_plan(ctx, plan, h5_path, *, what, description, label, unit, workers
     show_warnings()
     if not scheduler and missing:
         compiling = time.perf_counter()
-        batch.warm_up(parallel=True)
+        batch.warm_up()
         if time.perf_counter() - compiling > 3.0:
             click.echo(f"  compiled the batch kernel in {time.perf_counter() - compiling:.0f} s (once after "
                        "each change of the kernel)", err=err)

@@ -39,8 +39,9 @@ without history or event log.
   inputs, the ground samples, the package version and the kernel's source). A rerun of the same
   definition computes only the missing chunks; another definition never sees them. The chunk
   folder is removed once the result file is written.
-- **Where.** Locally on numba's threads (`batch.run_parallel`, cases handed out one at a time), or
-  on a dask.distributed cluster: one task per chunk (`batch.compute` with ``parallel=False``)
+- **Where.** Locally on a pool of threads, one chunk per task (`batch.compute`, which releases the
+  GIL; a thread takes the next chunk as soon as it is done), or
+  on a dask.distributed cluster: one task per chunk (`batch.compute`)
   returning plain numpy arrays. Both give identical results.
 """
 
@@ -65,7 +66,7 @@ import numpy as np
 from . import __version__, interrupts
 from . import records as rec
 from .case import Case, case_with
-from .core import batch
+from .core import batch, compiled
 from .core import kernel as K
 from .core.physics import OVERTURNED
 from .core.simulate import ground_array, initial_state, parameters
@@ -98,8 +99,6 @@ MAX_POINTS = 1_000_000
 #: Chunk sizes: about ``n / CHUNKS_WANTED`` cases, within these bounds (the default).
 CHUNKS_WANTED = 100
 MIN_CHUNK, MAX_CHUNK = 4, 256
-#: A local parallel call gets at least this many cases per thread (whole chunks).
-CASES_PER_THREAD = 32
 #: Points validated between two checks for Ctrl-C (and two calls of the planning's progress).
 PLAN_BATCH = 2000
 #: [s] Time to validate one point of a grid (`plan_sweep`; 0.27 ms measured on 2 cores), to say how
@@ -673,7 +672,7 @@ def definition_key(plan: Plan) -> str:
 
     The case text, the axes (values as given and in SI), the kinetic friction ratio, the chunk size,
     every point's kernel parameters, initial state and scale factors, the unscaled ground samples,
-    the package version and the compiled kernel's source (`batch.SOURCE_STAMP`).
+    the package version and the compiled core's sources (`compiled.source_stamp`).
     """
     digest = hashlib.sha256()
     header = {
@@ -681,7 +680,7 @@ def definition_key(plan: Plan) -> str:
         "case_text": plan.case.text,
         "axes": [[a.name, list(a.texts), [repr(v) for v in a.values]] for a in plan.axes],
         "mu_kinetic_ratio": repr(plan.mu_kinetic_ratio), "chunk_size": plan.chunk_size,
-        "kernel_source": batch.SOURCE_STAMP,
+        "kernel_source": compiled.source_stamp(),
     }
     digest.update(json.dumps(header, sort_keys=True).encode())
     for array in (plan.params, plan.states, plan.factor_h, plan.factor_v, plan.base, plan.first, plan.count):
@@ -823,7 +822,7 @@ def compute(plan: Plan, store: ChunkStore, chunks: Sequence[int], *, workers: in
     chunks : sequence of int
         The chunks to compute (the missing ones).
     workers : int, optional
-        numba threads for the local run (default: all cores).
+        Threads for the local run (default: all cores).
     scheduler : str, optional
         Address of a dask.distributed scheduler: the chunks are computed there, one task each.
     progress : callable, optional
@@ -845,45 +844,58 @@ def compute(plan: Plan, store: ChunkStore, chunks: Sequence[int], *, workers: in
 
 
 def check_workers(workers: int | None) -> None:
-    """Refuse a ``--workers`` outside ``1 ... NUMBA_NUM_THREADS`` (before any planning)."""
+    """Refuse a ``--workers`` outside ``1 ... 4 x the cores`` (before any planning)."""
     if workers is None:
         return
-    import numba
-
-    limit = numba.config.NUMBA_NUM_THREADS
+    limit = 4 * local_threads()
     if isinstance(workers, bool) or not 1 <= int(workers) <= limit:
-        raise CaseError(f"must be within 1 ... {limit} (the cores numba may use here), got {workers!r}",
+        raise CaseError(f"must be within 1 ... {limit} (4 threads per core here), got {workers!r}",
                         source="--workers")
 
 
 def _compute_local(plan, store, chunks, workers, progress):
-    """The chunks on numba's threads, a few at a time (at least `CASES_PER_THREAD` cases per
-    thread in each parallel call, so that the threads rarely wait for each other's last case),
-    each chunk stored as soon as its call returns, and Ctrl-C checked after each call."""
-    import numba
+    """The chunks on a pool of threads running the compiled batch (`batch.run_batch` releases the
+    GIL), one chunk per task: each thread takes the next chunk as soon as it is done, so cases that
+    rock for a minute and cases at rest even out and every core is busy to the end. Each chunk is
+    stored as soon as it is done; Ctrl-C is checked while waiting, and the chunks being computed
+    are finished and kept."""
+    from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 
     check_workers(workers)
-    previous = numba.get_num_threads()
-    try:
-        if workers is not None:
-            numba.set_num_threads(int(workers))
-        threads = numba.get_num_threads()
-        group = max(1, round(CASES_PER_THREAD * threads / plan.chunk_size)) if threads > 1 else 1
-        chunks = list(chunks)
-        for start in range(0, len(chunks), group):
-            interrupts.check()
-            members = [(c, plan.chunk_indices(c)) for c in chunks[start:start + group]]
-            indices = np.concatenate([i for _, i in members])
-            states = batch.compute(*_chunk_inputs(plan, indices), parallel=True)
-            offset = 0
-            for chunk, chunk_indices in members:
-                store.save(chunk, chunk_indices, states[offset:offset + chunk_indices.size])
-                offset += chunk_indices.size
-            if progress is not None:
-                progress(indices.size)
-    finally:
-        numba.set_num_threads(previous)
+    threads = int(workers) if workers is not None else local_threads()
+
+    def task(chunk: int) -> int:
+        if interrupts.requested() is not None:      # stopping: start no new chunk
+            return 0
+        indices = plan.chunk_indices(chunk)
+        store.save(chunk, indices, batch.compute(*_chunk_inputs(plan, indices)))
+        return indices.size
+
+    with ThreadPoolExecutor(max_workers=threads, thread_name_prefix="rockslide-sweep") as pool:
+        pending = {pool.submit(task, chunk) for chunk in chunks}
+        try:
+            while pending:
+                interrupts.check()
+                done, pending = wait(pending, timeout=0.2, return_when=FIRST_COMPLETED)
+                for future in done:
+                    cases = future.result()
+                    if progress is not None:
+                        progress(cases)
+        except BaseException:
+            for future in pending:
+                future.cancel()
+            raise
     interrupts.check()
+
+
+def local_threads() -> int:
+    """Threads a local sweep uses by default: every core this process may run on."""
+    import os
+
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:                    # not on Linux
+        return os.cpu_count() or 1
 
 
 def _chunk_inputs(plan: Plan, indices: np.ndarray):
@@ -919,8 +931,7 @@ def _compute_dask(plan, store, chunks, address, progress):
             for chunk in chunks:
                 indices = plan.chunk_indices(chunk)
                 p, s, _, first, count, kh, kv = _chunk_inputs(plan, indices)
-                future = client.submit(batch.compute, p, s, base, first, count, kh, kv, parallel=False,
-                                       pure=False)
+                future = client.submit(batch.compute, p, s, base, first, count, kh, kv, pure=False)
                 futures[future] = (chunk, indices)
             _collect_futures(client, futures, store, address, progress)
         finally:
@@ -1070,9 +1081,7 @@ def _one_line(exc: BaseException) -> str:
 def work_estimate(plan: Plan, n_cases: int, *, workers: int | None = None) -> float:
     """An upper estimate [s] of the time ``n_cases`` cases of ``plan`` take on this machine's
     threads (every case moving until the end; cases at rest go about 3000 times faster)."""
-    import numba
-
-    threads = workers or numba.config.NUMBA_NUM_THREADS
+    threads = workers or local_threads()
     return n_cases * plan.steps_per_case / (STEPS_PER_SECOND * threads)
 
 

@@ -276,7 +276,7 @@ def test_file_size_limit_is_one_line_and_leaves_nothing(ws, command):
     disk, without privileges): one line, exit 2, no temporary file, no result."""
     (ws / "case.yaml").write_text(case_text(QUICK))
     runner.run_case(load_case(ws / "case.yaml"), ws, history=False)   # the kernels compiled and cached
-    batch.warm_up(parallel=True)                                      # (a child could not cache them)
+    batch.warm_up()                                                   # (a child could not cache them)
     proc = cli_subprocess(command, ws, preexec_fn=_file_size_limit(20_000))
     _, stderr = proc.communicate(timeout=300)
     lines = stderr.splitlines()

@@ -37,7 +37,7 @@ SUMMARY_FIELDS = ("overturned", "overturn_time", "direction", "max_rotation", "m
 
 @pytest.fixture(scope="module", autouse=True)
 def compiled():
-    batch.warm_up(parallel=True)
+    batch.warm_up()
 
 
 @pytest.fixture(scope="module")

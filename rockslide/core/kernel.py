@@ -11,15 +11,24 @@ interval, local time ``tau`` runs from 0 to ``dt_record``.
 
 - REST costs no integration: the exit conditions (eqs. 6 and 11, and flight) are linear in
   ``tau`` within an interval, so their first crossing is computed exactly, per interval.
-- SLIP, ROCK and ROCKSLIP are integrated with the classical fourth-order Runge-Kutta method. After
-  each step the event functions of the state (``g >= 0`` while the state holds, in the order of
-  model.md's table) are evaluated. With located events (``P_LOCATED = 1``) the earliest crossing
+- A record is indexed once (`rest_bounds`: the largest ``abs(ah)`` and the extremes of ``av`` over
+  blocks of `REST_BLOCK` intervals): a block whose bounds cannot reach the REST thresholds is
+  skipped whole, and only a block where an exit can happen is scanned interval by interval.
+- SLIP, ROCK and ROCKSLIP are integrated with the classical fourth-order Runge-Kutta method, with a
+  loop specialised to each state (`glide`: terms that are exactly zero in that state are not
+  computed). After each step the event functions of the state (``g >= 0`` while the state holds,
+  in the order of model.md's table) are evaluated. With located events (``P_LOCATED = 1``) the earliest crossing
   inside the step is found by Illinois regula falsi on RK4 sub-steps from the step's start, the
   transition is applied there and the rest of the step is integrated in the new state. With
   step-end switching (``P_LOCATED = 0``, the paper's ACSL-like scheme) the first event in table
   order is applied at the end of the step with the state found there.
 - After any transition, the tests of the new state apply at once (model.md: 'REST (then REST's
   tests apply at once)').
+
+The code allocates nothing and keeps its scratch values in tuples, so that the same source compiles
+for a GPU (numba-cuda) as well as for the CPU. A case reads its record from a shared array of
+unscaled records (``P_FIRST``) and scales it as it goes (``P_KH``, ``P_KV``): a batch of cases
+needs no copy of the ground motion per case.
 """
 
 from __future__ import annotations
@@ -29,6 +38,7 @@ import math
 import numpy as np
 from numba import njit
 
+from . import compiled
 from .physics import (
     IMPACT_FLAT,
     IMPACT_PAINLEVE,
@@ -58,8 +68,9 @@ from .physics import (
 
 # --- parameter vector ``p`` -------------------------------------------------------------------
 (P_R, P_ALPHA, P_TAN_ALPHA, P_G, P_MU, P_NU, P_E, P_H, P_DT_REC, P_N_SUB, P_LOCATED, P_T0,
- P_ENERGY) = range(13)
-N_PARAMS = 13   # `run` unpacks p into a 13-tuple: keep the two in step
+ P_ENERGY,
+ P_FIRST, P_KH, P_KV) = range(16)   # the case's record: its first column of ``ground``, scale factors
+N_PARAMS = 16   # `run` unpacks p into a 16-tuple: keep the two in step
 
 # --- state vector ``st`` ----------------------------------------------------------------------
 (S_MODE, S_LAM, S_SIGMA, S_THETA, S_THETADOT, S_X, S_XDOT,   # the mechanical state
@@ -107,6 +118,8 @@ PAINLEVE_TIME = 1e-12         # [s] D would reach 0 sooner than this: the Painle
 MAX_SUBSTEPS = 2000           # sub-steps of one step approaching a Painleve point (~400 are needed)
 MAX_EVENTS_AT_ONCE = 50       # transitions within EVENT_INSTANT beyond this: the run stops ('chatter')
 EVENT_INSTANT = 1e-9          # [s] transitions closer than this to the first of a cluster are 'at once'
+REST_BLOCK = 32               # record intervals per block of the REST index (`rest_bounds`)
+REST_SAFETY = 1e-9            # a block is skipped only with this relative margin to every threshold
 
 
 def new_state():
@@ -186,8 +199,40 @@ def rk4_step(mode, lam, sigma, th, thd, x, xd, wg, wf, tau, hh, a0, sa, v0, sv, 
     the derivatives at the start (the first stage, from `evaluate`). Returns the new state and
     the smallest ROCKSLIP determinant ``D`` of the later stages (1 in other states): a stage with
     ``D <= 0`` evaluated the model where it has no solution, and the step must be shortened.
+
+    ROCK does not slip and SLIP does not rotate: their stages leave out the terms that are exactly
+    zero (``xdot``, ``xddot`` and the friction power in ROCK; ``thetadot``, ``thetaddot`` in SLIP),
+    which gives the same numbers as the full step (they would add exact zeros).
     """
     half = 0.5 * hh
+    f = hh / 6.0
+    if mode == ROCK:
+        th2 = th + half * thd
+        thd2 = thd + half * a1
+        a2, _, pg2, _, _, _, _, _, _ = evaluate(mode, lam, sigma, th2, thd2, xd, tau + half, a0, sa, v0, sv, p)
+        th3 = th + half * thd2
+        thd3 = thd + half * a2
+        a3, _, pg3, _, _, _, _, _, _ = evaluate(mode, lam, sigma, th3, thd3, xd, tau + half, a0, sa, v0, sv, p)
+        th4 = th + hh * thd3
+        thd4 = thd + hh * a3
+        a4, _, pg4, _, _, _, _, _, _ = evaluate(mode, lam, sigma, th4, thd4, xd, tau + hh, a0, sa, v0, sv, p)
+        return (th + f * (thd + 2.0 * thd2 + 2.0 * thd3 + thd4),
+                thd + f * (a1 + 2.0 * a2 + 2.0 * a3 + a4),
+                x, xd,
+                wg + f * (pg1 + 2.0 * pg2 + 2.0 * pg3 + pg4),
+                wf, 1.0)
+    if mode == SLIP:
+        xd2 = xd + half * b1
+        _, b2, pg2, pf2, _, _, _, _, _ = evaluate(mode, lam, sigma, th, thd, xd2, tau + half, a0, sa, v0, sv, p)
+        xd3 = xd + half * b2
+        _, b3, pg3, pf3, _, _, _, _, _ = evaluate(mode, lam, sigma, th, thd, xd3, tau + half, a0, sa, v0, sv, p)
+        xd4 = xd + hh * b3
+        _, b4, pg4, pf4, _, _, _, _, _ = evaluate(mode, lam, sigma, th, thd, xd4, tau + hh, a0, sa, v0, sv, p)
+        return (th, thd,
+                x + f * (xd + 2.0 * xd2 + 2.0 * xd3 + xd4),
+                xd + f * (b1 + 2.0 * b2 + 2.0 * b3 + b4),
+                wg + f * (pg1 + 2.0 * pg2 + 2.0 * pg3 + pg4),
+                wf + f * (pf1 + 2.0 * pf2 + 2.0 * pf3 + pf4), 1.0)
     th2 = th + half * thd
     thd2 = thd + half * a1
     xd2 = xd + half * b1
@@ -200,7 +245,6 @@ def rk4_step(mode, lam, sigma, th, thd, x, xd, wg, wf, tau, hh, a0, sa, v0, sv, 
     thd4 = thd + hh * a3
     xd4 = xd + hh * b3
     a4, b4, pg4, pf4, _, _, D4, _, _ = evaluate(mode, lam, sigma, th4, thd4, xd4, tau + hh, a0, sa, v0, sv, p)
-    f = hh / 6.0
     return (th + f * (thd + 2.0 * thd2 + 2.0 * thd3 + thd4),
             thd + f * (a1 + 2.0 * a2 + 2.0 * a3 + a4),
             x + f * (xd + 2.0 * xd2 + 2.0 * xd3 + xd4),
@@ -211,13 +255,15 @@ def rk4_step(mode, lam, sigma, th, thd, x, xd, wg, wf, tau, hh, a0, sa, v0, sv, 
 
 
 @njit(cache=True)
-def rk4_from(mode, lam, sigma, y, tau, hh, a0, sa, v0, sv, p, out):
-    """`rk4_step` on arrays (``y`` -> ``out``), computing its own first stage (event location).
-    Returns the smallest stage determinant (see `rk4_step`)."""
-    a1, b1, pg1, pf1, _, _, _, _, _ = evaluate(mode, lam, sigma, y[0], y[1], y[3], tau, a0, sa, v0, sv, p)
-    out[0], out[1], out[2], out[3], out[4], out[5], d_min = rk4_step(
-        mode, lam, sigma, y[0], y[1], y[2], y[3], y[4], y[5], tau, hh, a0, sa, v0, sv, p, a1, b1, pg1, pf1)
-    return d_min
+def rk4_from(mode, lam, sigma, y, tau, hh, a0, sa, v0, sv, p):
+    """`rk4_step` from the state tuple ``y`` = ``(theta, thetadot, x, xdot, w_ground, w_friction)``,
+    computing its own first stage (event location). Returns the new state tuple and the smallest
+    stage determinant (see `rk4_step`)."""
+    th, thd, x, xd, wg, wf = y
+    a1, b1, pg1, pf1, _, _, _, _, _ = evaluate(mode, lam, sigma, th, thd, xd, tau, a0, sa, v0, sv, p)
+    th, thd, x, xd, wg, wf, d_min = rk4_step(mode, lam, sigma, th, thd, x, xd, wg, wf, tau, hh,
+                                             a0, sa, v0, sv, p, a1, b1, pg1, pf1)
+    return (th, thd, x, xd, wg, wf), d_min
 
 
 @njit(cache=True)
@@ -265,17 +311,21 @@ def event_functions(mode, lam, sigma, th, thd, xd, ah, G, s, c, thdd, D, p):
 
 
 @njit(cache=True)
-def event_values(mode, lam, sigma, y, ah, G, p, gv, kinds):
-    """`event_functions` at state ``y`` into ``gv`` and their kinds into ``kinds``; returns the
-    number of event functions of the state."""
-    s, c = tilt(y[0], p[P_ALPHA])
-    thdd, _, D = accelerations_sc(mode, lam, sigma, s, c, y[1], ah, G, p)
-    g = event_functions(mode, lam, sigma, y[0], y[1], y[3], ah, G, s, c, thdd, D, p)
-    n = N_EVENTS[mode] if mode < 4 else 0
+def event_values(mode, lam, sigma, th, thd, xd, ah, G, p):
+    """`event_functions` of ``mode`` at the state ``(th, thd, xd)`` (a 5-tuple; the state's own are
+    the first ``N_EVENTS[mode]``, their kinds ``EVENT_KINDS[mode]``)."""
+    s, c = tilt(th, p[P_ALPHA])
+    thdd, _, D = accelerations_sc(mode, lam, sigma, s, c, thd, ah, G, p)
+    return event_functions(mode, lam, sigma, th, thd, xd, ah, G, s, c, thdd, D, p)
+
+
+@njit(cache=True, inline='always')
+def first_event(g, n):
+    """Index of the first negative of the first ``n`` values of the 5-tuple ``g``, or -1."""
     for i in range(n):
-        gv[i] = g[i]
-        kinds[i] = EVENT_KINDS[mode][i]
-    return n
+        if g[i] < 0.0:
+            return i
+    return -1
 
 
 # ============================================================================================
@@ -285,7 +335,8 @@ def event_values(mode, lam, sigma, y, ah, G, p, gv, kinds):
 @njit(cache=True)
 def log_event(st, events, t, mode_from, mode_to, cause, branch, loss):
     """Append an event (`EVENT_COLUMNS`); ``branch`` and ``loss`` [J/kg] describe an impact (0
-    otherwise). Events beyond the log's capacity are counted, not stored."""
+    otherwise). Events beyond the log's capacity are counted, not stored. (The codes are passed as
+    floats, so that one compiled version serves every call.)"""
     n = int(st[S_N_EVENTS])
     if n < events.shape[0]:
         events[n, 0] = t
@@ -385,6 +436,7 @@ def apply_event(kind, st, p, t, ah, G, events):
         st[S_LAST_EVENT_TIME] = t
         st[S_EVENTS_AT_ONCE] = 0.0
     mode = int(st[S_MODE])
+    fmode = float(mode)
     lam = st[S_LAM]
     sigma = st[S_SIGMA]
     R = p[P_R]
@@ -393,11 +445,11 @@ def apply_event(kind, st, p, t, ah, G, events):
 
     if kind == K_FLIGHT:
         st[S_STATUS] = STATUS_FLIGHT
-        log_event(st, events, t, mode, mode, C_FLIGHT, 0, 0.0)
+        log_event(st, events, t, fmode, fmode, float(C_FLIGHT), 0.0, 0.0)
         stop(st, t)
     elif kind == K_PAINLEVE:
         st[S_STATUS] = STATUS_PAINLEVE
-        log_event(st, events, t, mode, mode, C_PAINLEVE, 0, 0.0)
+        log_event(st, events, t, fmode, fmode, float(C_PAINLEVE), 0.0, 0.0)
         stop(st, t)
     elif kind == K_OVERTURN:
         st[S_THETA] = HALF_PI
@@ -408,32 +460,32 @@ def apply_event(kind, st, p, t, ah, G, events):
         # step-end switching finds theta a little past pi/2 at the step's end: the block lies there
         st[S_MAX_THETA] = HALF_PI
         st[S_THETA_MAX_TIME] = t
-        log_event(st, events, t, mode, OVERTURNED, C_OVERTURN, 0, 0.0)
+        log_event(st, events, t, fmode, float(OVERTURNED), float(C_OVERTURN), 0.0, 0.0)
         stop(st, t)
     elif kind == K_SLIP_START:
         if mode == REST:                                   # eq. 11: sigma = -sign(ah)
             st[S_SIGMA] = -1.0 if ah > 0.0 else 1.0
             st[S_XDOT] = 0.0
             st[S_MODE] = SLIP
-            log_event(st, events, t, REST, SLIP, C_SLIP_START, 0, 0.0)
+            log_event(st, events, t, float(REST), float(SLIP), float(C_SLIP_START), 0.0, 0.0)
         else:                                              # ROCK, eq. 21: sigma = -sign(Rx)
             thdd = rock_acceleration(st[S_THETA], ah, G, lam, R, alpha)
             Rx, _ = contact_forces(st[S_THETA], st[S_THETADOT], thdd, ah, G, lam, R, alpha)
             st[S_SIGMA] = -1.0 if Rx > 0.0 else 1.0
             st[S_XDOT] = 0.0
             st[S_MODE] = ROCKSLIP
-            log_event(st, events, t, ROCK, ROCKSLIP, C_SLIP_START, 0, 0.0)
+            log_event(st, events, t, float(ROCK), float(ROCKSLIP), float(C_SLIP_START), 0.0, 0.0)
     elif kind == K_LIFTOFF:
         st[S_THETA] = 0.0
         st[S_THETADOT] = 0.0
         if mode == REST:                                   # eq. 7: lam = sign(ah)
             st[S_LAM] = 1.0 if ah > 0.0 else -1.0
             st[S_MODE] = ROCK
-            log_event(st, events, t, REST, ROCK, C_LIFTOFF, 0, 0.0)
+            log_event(st, events, t, float(REST), float(ROCK), float(C_LIFTOFF), 0.0, 0.0)
         else:                                              # SLIP, eq. 24: lam = sign(xddot + ah)
             st[S_LAM] = -sigma                             # xddot + ah = -nu sigma G
             st[S_MODE] = ROCKSLIP
-            log_event(st, events, t, SLIP, ROCKSLIP, C_LIFTOFF, 0, 0.0)
+            log_event(st, events, t, float(SLIP), float(ROCKSLIP), float(C_LIFTOFF), 0.0, 0.0)
     elif kind == K_SLIP_STOP:
         st[S_XDOT] = 0.0
         # The pivot sticks if static friction holds the contact forces of the state without slip:
@@ -446,10 +498,10 @@ def apply_event(kind, st, p, t, ah, G, events):
             stuck = ROCK
         if slip_margin(mu, N, Rx) >= 0.0:
             st[S_MODE] = stuck
-            log_event(st, events, t, mode, stuck, C_SLIP_STOP, 0, 0.0)
+            log_event(st, events, t, fmode, float(stuck), float(C_SLIP_STOP), 0.0, 0.0)
         else:                                              # reversed: sigma = -sign(Rx)
             st[S_SIGMA] = -1.0 if Rx > 0.0 else 1.0
-            log_event(st, events, t, mode, mode, C_SLIP_REVERSAL, 0, 0.0)
+            log_event(st, events, t, fmode, fmode, float(C_SLIP_REVERSAL), 0.0, 0.0)
     elif kind == K_IMPACT:
         impact_of_the_landing_edge(st, p, t, mode, ah, G, events)
 
@@ -468,13 +520,13 @@ def impact_of_the_landing_edge(st, p, t, mode, ah, G, events):
     branch, w, xi_plus = impact(abs(st[S_THETADOT]), lam * st[S_XDOT], p[P_E], p[P_MU], p[P_NU], R, alpha)
     if branch == IMPACT_PAINLEVE:
         st[S_STATUS] = STATUS_PAINLEVE
-        log_event(st, events, t, mode, mode, C_PAINLEVE, branch, 0.0)
+        log_event(st, events, t, float(mode), float(mode), float(C_PAINLEVE), float(branch), 0.0)
         stop(st, t)
         return
     st[S_LAM] = -lam                       # the landing edge pivots from now on
     cause = C_IMPACT
     w_z = zeno_rate(THETA_END, 0.75 * p[P_G] / R, alpha)
-    thetadot, xdot = w, lam * xi_plus
+    thetadot, xdot = w, (lam * xi_plus if xi_plus != 0.0 else 0.0)     # a stopped slip is +0, not -0
     if branch != IMPACT_FLAT:
         new_mode = ROCK if branch == IMPACT_STICK else ROCKSLIP
         # End of liftoff (decision 3): a rebound whose free-rocking peak is below THETA_END, w <= w_z,
@@ -508,29 +560,22 @@ def impact_of_the_landing_edge(st, p, t, mode, ah, G, events):
         st[S_SIGMA] = 1.0 if xdot > 0.0 else -1.0
     loss = energy_before - mechanical_energy(st, p)
     st[S_W_IMPACT] -= loss
-    log_event(st, events, t, mode, st[S_MODE], cause, branch, loss)
+    log_event(st, events, t, float(mode), st[S_MODE], float(cause), float(branch), loss)
 
 
 @njit(cache=True)
-def settle(st, p, t, ah, av, events, gv, kinds, y):
+def settle(st, p, t, ah, av, events):
     """Apply at once every condition of the current state that already holds at time ``t``."""
     G = p[P_G] + av
     for _ in range(MAX_TRANSITIONS_PER_STEP):
         if finished(st):
             return
-        y[0] = st[S_THETA]
-        y[1] = st[S_THETADOT]
-        y[2] = st[S_X]
-        y[3] = st[S_XDOT]
-        n = event_values(int(st[S_MODE]), st[S_LAM], st[S_SIGMA], y, ah, G, p, gv, kinds)
-        fired = -1
-        for i in range(n):
-            if gv[i] < 0.0:
-                fired = i
-                break
+        mode = int(st[S_MODE])
+        g = event_values(mode, st[S_LAM], st[S_SIGMA], st[S_THETA], st[S_THETADOT], st[S_XDOT], ah, G, p)
+        fired = first_event(g, N_EVENTS[mode])
         if fired < 0:
             return
-        apply_event(kinds[fired], st, p, t, ah, G, events)
+        apply_event(EVENT_KINDS[mode][fired], st, p, t, ah, G, events)
 
 
 # ============================================================================================
@@ -595,21 +640,57 @@ def rest_exit(tau, tau_end, a0, sa, v0, sv, p, step_end, h):
     return best, K_LIFTOFF
 
 
+@njit(cache=True)
+def rest_bounds(ground):
+    """The REST index of a ground array (`GROUND_ROWS`): ``float64[3, n_blocks]``, for each block of
+    `REST_BLOCK` intervals (columns) the largest ``abs(ah)`` and the smallest and largest ``av`` at
+    their ends, which bound the linearly interpolated motion anywhere in the block."""
+    K = ground.shape[1]
+    n_blocks = max(1, (K + REST_BLOCK - 1) // REST_BLOCK)
+    bounds = np.empty((3, n_blocks))
+    for b in range(n_blocks):
+        a_max, v_low, v_high = 0.0, math.inf, -math.inf
+        for k in range(b * REST_BLOCK, min(K, (b + 1) * REST_BLOCK)):
+            a_max = max(a_max, max(abs(ground[0, k]), abs(ground[1, k])))
+            v_low = min(v_low, min(ground[2, k], ground[3, k]))
+            v_high = max(v_high, max(ground[2, k], ground[3, k]))
+        bounds[0, b], bounds[1, b], bounds[2, b] = a_max, v_low, v_high
+    return bounds
+
+
+@njit(cache=True, inline='always')
+def rest_block_holds(p, bounds, block):
+    """Whether the block at rest stays at rest through the whole block ``block`` of the REST index:
+    with the case's scale factors, ``G = g + av`` stays positive and ``abs(ah)`` below
+    ``min(mu, tan(alpha)) G`` everywhere in it, with a relative margin `REST_SAFETY` so that the
+    exact per-interval exits (`rest_exit`) could not have found a crossing there either."""
+    amax = abs(p[P_KH]) * bounds[0, block]
+    kv = p[P_KV]
+    av_low = kv * bounds[1, block] if kv >= 0.0 else kv * bounds[2, block]
+    g_low = p[P_G] + av_low
+    if not g_low > REST_SAFETY * p[P_G]:
+        return False
+    if amax == 0.0:
+        return True
+    m = min(p[P_MU], p[P_TAN_ALPHA]) * g_low
+    return m - amax > REST_SAFETY * (m + amax)
+
+
 # ============================================================================================
 # Moving states: RK4 steps with event location
 # ============================================================================================
 
 @njit(cache=True)
-def event_value_at(i, mode, lam, sigma, y0, tau_a, dtau, a0, sa, v0, sv, p, ytmp, gv, kinds):
-    """Event function ``i`` at ``tau_a + dtau``, reached by one RK4 step from ``y0``."""
-    rk4_from(mode, lam, sigma, y0, tau_a, dtau, a0, sa, v0, sv, p, ytmp)
+def event_value_at(i, mode, lam, sigma, y0, tau_a, dtau, a0, sa, v0, sv, p):
+    """Event function ``i`` at ``tau_a + dtau``, reached by one RK4 step from the state ``y0``."""
+    y, _ = rk4_from(mode, lam, sigma, y0, tau_a, dtau, a0, sa, v0, sv, p)
     t = tau_a + dtau
-    event_values(mode, lam, sigma, ytmp, a0 + sa * t, p[P_G] + v0 + sv * t, p, gv, kinds)
-    return gv[i]
+    g = event_values(mode, lam, sigma, y[0], y[1], y[3], a0 + sa * t, p[P_G] + v0 + sv * t, p)
+    return g[i]
 
 
 @njit(cache=True)
-def locate(i, mode, lam, sigma, y0, tau_a, tau_b, g_a, g_b, a0, sa, v0, sv, p, ytmp, gv, kinds):
+def locate(i, mode, lam, sigma, y0, tau_a, tau_b, g_a, g_b, a0, sa, v0, sv, p):
     """Local time of the zero crossing of event function ``i`` in ``(tau_a, tau_b]`` (Illinois).
 
     ``g_a >= 0 > g_b``. Returns the upper end of the final bracket, where the event function is
@@ -636,7 +717,7 @@ def locate(i, mode, lam, sigma, y0, tau_a, tau_b, g_a, g_b, a0, sa, v0, sv, p, y
             m = lo + 0.01 * width
         elif hi - m < 0.01 * width:
             m = hi - 0.01 * width
-        gm = event_value_at(i, mode, lam, sigma, y0, tau_a, m, a0, sa, v0, sv, p, ytmp, gv, kinds)
+        gm = event_value_at(i, mode, lam, sigma, y0, tau_a, m, a0, sa, v0, sv, p)
         if gm < 0.0:
             hi = m
             ghi = gm
@@ -652,8 +733,19 @@ def locate(i, mode, lam, sigma, y0, tau_a, tau_b, g_a, g_b, a0, sa, v0, sv, p, y
     return tau_a + hi
 
 
+@njit(cache=True, inline='always')
+def crossing_time(i, n, g_start, g_end, mode, lam, sigma, y0, tau_a, tau_b, a0, sa, v0, sv, p):
+    """The located crossing of event function ``i`` in ``(tau_a, tau_b]``, or ``inf`` if it stays
+    non-negative (or is not one of the state's ``n``). An event function that starts at zero
+    (theta after an impact) counts its start as the positive side."""
+    if i >= n or not g_end[i] < 0.0:
+        return math.inf
+    ga = g_start[i] if g_start[i] > 0.0 else 0.0
+    return locate(i, mode, lam, sigma, y0, tau_a, tau_b, ga, g_end[i], a0, sa, v0, sv, p)
+
+
 @njit(cache=True)
-def advance(st, p, tau_a, tau_b, tk, a0, sa, v0, sv, events, y0, y1, ytmp, gv, kinds):
+def advance(st, p, tau_a, tau_b, tk, a0, sa, v0, sv, events):
     """Integrate the moving state from local time ``tau_a`` to ``tau_b`` (one step), handling
     every transition inside it. Returns the local time reached: ``tau_b``, or earlier if the block
     came to REST (the caller handles REST) or the run ended.
@@ -681,20 +773,17 @@ def advance(st, p, tau_a, tau_b, tk, a0, sa, v0, sv, events, y0, y1, ytmp, gv, k
                 return tau_a
             if hh > SINGULAR_FRACTION * remaining:
                 tau_end = tau_a + SINGULAR_FRACTION * remaining
-        load_state(st, y0)
-        d_min = rk4_from(mode, lam, sigma, y0, tau_a, tau_end - tau_a, a0, sa, v0, sv, p, y1)
+        y0 = (st[S_THETA], st[S_THETADOT], st[S_X], st[S_XDOT], st[S_W_GROUND], st[S_W_FRICTION])
+        y1, d_min = rk4_from(mode, lam, sigma, y0, tau_a, tau_end - tau_a, a0, sa, v0, sv, p)
         for _ in range(60):                   # a stage past D = 0 (should not happen): shorten
             if d_min > 0.0:
                 break
             tau_end = tau_a + 0.5 * (tau_end - tau_a)
-            d_min = rk4_from(mode, lam, sigma, y0, tau_a, tau_end - tau_a, a0, sa, v0, sv, p, y1)
+            y1, d_min = rk4_from(mode, lam, sigma, y0, tau_a, tau_end - tau_a, a0, sa, v0, sv, p)
         hh = tau_end - tau_a
-        n = event_values(mode, lam, sigma, y1, a0 + sa * tau_end, g + v0 + sv * tau_end, p, gv, kinds)
-        first = -1
-        for i in range(n):
-            if gv[i] < 0.0:
-                first = i
-                break
+        n = N_EVENTS[mode]
+        g_end = event_values(mode, lam, sigma, y1[0], y1[1], y1[3], a0 + sa * tau_end, g + v0 + sv * tau_end, p)
+        first = first_event(g_end, n)
         if first < 0:              # the rest of the (sub-)step holds no event
             accept(st, y1[0], y1[1], y1[2], y1[3], y1[4], y1[5], mode, tau_a, tau_end, tk, p, True)
             if tau_end >= tau_b:
@@ -703,30 +792,26 @@ def advance(st, p, tau_a, tau_b, tk, a0, sa, v0, sv, events, y0, y1, ytmp, gv, k
             continue
         # an event inside this (sub-)step
         if located:
-            g_end = gv.copy()
-            kinds_end = kinds.copy()
             # event values at the start of the step (all >= 0 by construction)
-            event_values(mode, lam, sigma, y0, a0 + sa * tau_a, g + v0 + sv * tau_a, p, gv, kinds)
-            g_start = gv.copy()
-            times = np.full(n, math.inf)
-            for i in range(n):
-                if g_end[i] < 0.0:
-                    ga = g_start[i] if g_start[i] > 0.0 else 0.0
-                    times[i] = locate(i, mode, lam, sigma, y0, tau_a, tau_end, ga, g_end[i],
-                                      a0, sa, v0, sv, p, ytmp, gv, kinds)
+            g_start = event_values(mode, lam, sigma, y0[0], y0[1], y0[3], a0 + sa * tau_a, g + v0 + sv * tau_a, p)
+            times = (crossing_time(0, n, g_start, g_end, mode, lam, sigma, y0, tau_a, tau_end, a0, sa, v0, sv, p),
+                     crossing_time(1, n, g_start, g_end, mode, lam, sigma, y0, tau_a, tau_end, a0, sa, v0, sv, p),
+                     crossing_time(2, n, g_start, g_end, mode, lam, sigma, y0, tau_a, tau_end, a0, sa, v0, sv, p),
+                     crossing_time(3, n, g_start, g_end, mode, lam, sigma, y0, tau_a, tau_end, a0, sa, v0, sv, p),
+                     crossing_time(4, n, g_start, g_end, mode, lam, sigma, y0, tau_a, tau_end, a0, sa, v0, sv, p))
             # The earliest wins; crossings within the location tolerance of it are ties, which go
             # to the first row of the table (e.g. flight before the eq. 23 liftoff at G = 0).
-            best = times.min()
+            best = min(min(min(times[0], times[1]), min(times[2], times[3])), times[4])
             best_i = 0
             while times[best_i] > best + TIE_TOLERANCE * hh + 1e-15:
                 best_i += 1
             te = times[best_i]
-            kind = kinds_end[best_i]
+            kind = EVENT_KINDS[mode][best_i]
             if te < tau_end:
-                rk4_from(mode, lam, sigma, y0, tau_a, te - tau_a, a0, sa, v0, sv, p, y1)
+                y1, _ = rk4_from(mode, lam, sigma, y0, tau_a, te - tau_a, a0, sa, v0, sv, p)
         else:
             te = tau_end
-            kind = kinds[first]
+            kind = EVENT_KINDS[mode][first]
         accept(st, y1[0], y1[1], y1[2], y1[3], y1[4], y1[5], mode, tau_a, te, tk, p, True)
         if kind == K_IMPACT:
             if not located:
@@ -737,7 +822,7 @@ def advance(st, p, tau_a, tau_b, tk, a0, sa, v0, sv, events, y0, y1, ytmp, gv, k
         ah_e = a0 + sa * te
         av_e = v0 + sv * te
         apply_event(kind, st, p, tk + te, ah_e, g + av_e, events)
-        settle(st, p, tk + te, ah_e, av_e, events, gv, kinds, ytmp)
+        settle(st, p, tk + te, ah_e, av_e, events)
         tau_a = te
     return tau_a
 
@@ -758,19 +843,8 @@ def land_on_the_ground(st, p, G):
     st[S_THETADOT] = -math.sqrt(w2) if w2 > 0.0 else 0.0
 
 
-@njit(cache=True)
-def load_state(st, y):
-    """The integrated part of the state into ``y``: theta, thetadot, x, xdot, w_ground, w_friction."""
-    y[0] = st[S_THETA]
-    y[1] = st[S_THETADOT]
-    y[2] = st[S_X]
-    y[3] = st[S_XDOT]
-    y[4] = st[S_W_GROUND]
-    y[5] = st[S_W_FRICTION]
-
-
 @njit(cache=True, inline='always')
-def track(th0, thd0, x0, xd0, th1, thd1, x1, xd1, hh, t_start, alpha, max_th, max_th_time, max_x, fall,
+def track(mode, th0, thd0, x0, xd0, th1, thd1, x1, xd1, hh, t_start, alpha, max_th, max_th_time, max_x, fall,
           peaks_inside):
     """The bookkeeping of one step from ``(th0, thd0, x0, xd0)`` to ``(th1, thd1, x1, xd1)``,
     pure: returns the updated ``(max theta, its time, max |x|, fall candidate)``.
@@ -779,20 +853,22 @@ def track(th0, thd0, x0, xd0, th1, thd1, x1, xd1, hh, t_start, alpha, max_th, ma
     reference solver's long steps), at a peak inside the step where the rate changes sign, from the
     parabola through the step's ends (exact to O(h^3); the ends alone are off by up to
     thetaddot h^2 / 8). The fall that ends in overturning starts when theta last passed alpha upwards.
+    The slip does not change in ROCK, nor the rotation in SLIP: their checks are left out there.
     """
-    if th1 > max_th:
-        max_th = th1
-        max_th_time = t_start + hh
-    if abs(x1) > max_x:
-        max_x = abs(x1)
-    if peaks_inside:
-        if thd0 > 0.0 >= thd1:
+    if mode != SLIP:
+        if th1 > max_th:
+            max_th = th1
+            max_th_time = t_start + hh
+        if peaks_inside and thd0 > 0.0 >= thd1:
             s_peak = hh * thd0 / (thd0 - thd1)
             peak = th0 + 0.5 * thd0 * s_peak
             if peak > max_th:
                 max_th = peak
                 max_th_time = t_start + s_peak
-        if xd0 * xd1 < 0.0:
+    if mode != ROCK:
+        if abs(x1) > max_x:
+            max_x = abs(x1)
+        if peaks_inside and xd0 * xd1 < 0.0:
             peak = abs(x0 + 0.5 * xd0 * hh * xd0 / (xd0 - xd1))
             if peak > max_x:
                 max_x = peak
@@ -808,7 +884,7 @@ def accept(st, th, thd, x, xd, wg, wf, mode, tau_a, tau_b, tk, p, peaks_inside):
     """Take the state integrated from local time ``tau_a`` to ``tau_b`` into ``st``."""
     st[S_K1_VALID] = 0.0
     (st[S_MAX_THETA], st[S_THETA_MAX_TIME], st[S_MAX_X], st[S_FALL_CANDIDATE]) = track(
-        st[S_THETA], st[S_THETADOT], st[S_X], st[S_XDOT], th, thd, x, xd, tau_b - tau_a, tk + tau_a,
+        ROCKSLIP, st[S_THETA], st[S_THETADOT], st[S_X], st[S_XDOT], th, thd, x, xd, tau_b - tau_a, tk + tau_a,
         p[P_ALPHA], st[S_MAX_THETA], st[S_THETA_MAX_TIME], st[S_MAX_X], st[S_FALL_CANDIDATE], peaks_inside)
     st[S_THETA] = th
     st[S_THETADOT] = thd
@@ -824,7 +900,8 @@ def glide(st, p, mode, j, n_sub, h, dt_rec, tk, a0, sa, v0, sv, history, every, 
     """Full steps of the moving state ``mode`` from grid point ``j - 1`` of the interval for as
     long as no event function turns negative, with the whole state in registers; ``st`` is written
     back once. Returns the grid point reached (``n_sub + 1``: the interval is done; otherwise the
-    step ending at grid point ``j`` holds an event, or approaches a Painleve point, for `advance`)."""
+    step ending at grid point ``j`` holds an event, or approaches a Painleve point, for `advance`).
+    Called with ``mode`` a constant (`glide_in`), so that each state gets a loop of its own."""
     lam = st[S_LAM]
     sigma = st[S_SIGMA]
     th, thd, x, xd = st[S_THETA], st[S_THETADOT], st[S_X], st[S_XDOT]
@@ -848,7 +925,7 @@ def glide(st, p, mode, j, n_sub, h, dt_rec, tk, a0, sa, v0, sv, history, every, 
         g0, g1, g2, g3, g4 = event_functions(mode, lam, sigma, th1, thd1, xd1, ah, G, s, c, thdd, D, p)
         if d_min <= 0.0 or g0 < 0.0 or g1 < 0.0 or g2 < 0.0 or g3 < 0.0 or g4 < 0.0:
             break
-        max_th, max_th_time, max_x, fall = track(th, thd, x, xd, th1, thd1, x1, xd1, hh, tk + tau_a, alpha,
+        max_th, max_th_time, max_x, fall = track(mode, th, thd, x, xd, th1, thd1, x1, xd1, hh, tk + tau_a, alpha,
                                                  max_th, max_th_time, max_x, fall, True)
         th, thd, x, xd, wg, wf = th1, thd1, x1, xd1, wg1, wf1
         a1, b1, pg1, pf1 = thdd, xdd, pg, pf
@@ -865,60 +942,88 @@ def glide(st, p, mode, j, n_sub, h, dt_rec, tk, a0, sa, v0, sv, history, every, 
     return j
 
 
+@njit(cache=True)
+def glide_in(st, p, j, n_sub, h, dt_rec, tk, a0, sa, v0, sv, history, every, offset, n_base, t0):
+    """`glide` in the block's present state, each state with its own specialised loop."""
+    mode = int(st[S_MODE])
+    if mode == ROCK:
+        return glide(st, p, ROCK, j, n_sub, h, dt_rec, tk, a0, sa, v0, sv, history, every, offset, n_base, t0)
+    if mode == SLIP:
+        return glide(st, p, SLIP, j, n_sub, h, dt_rec, tk, a0, sa, v0, sv, history, every, offset, n_base, t0)
+    return glide(st, p, ROCKSLIP, j, n_sub, h, dt_rec, tk, a0, sa, v0, sv, history, every, offset, n_base, t0)
+
+
 # ============================================================================================
 # The driver
 # ============================================================================================
 
 @njit(cache=True)
-def run(p, ground, st, history, every, offset, events, k_end):
+def run(p, ground, bounds, st, history, every, offset, events, k_end):
     """Integrate from the interval ``st[S_K]`` up to (not including) ``k_end``.
 
     Parameters
     ----------
     p : float64[N_PARAMS]
-        Constants (``P_*``).
-    ground : float64[4, K]
+        Constants (``P_*``). The case's record is columns ``P_FIRST ...`` of ``ground``, scaled by
+        ``P_KH`` (horizontal) and ``P_KV`` (vertical).
+    ground : float64[4, M]
         The ground motion [m/s^2] interval by interval (`GROUND_ROWS`): ``ah`` and ``av`` at the
-        start and at the end of interval ``k``, ``[t0 + k dt_rec, t0 + (k + 1) dt_rec]``, linear in
-        between; tail of zeros included. A record's samples give ``ground[1, k] = ground[0, k + 1]``;
-        an analytic pulse may jump at an interval's boundary.
+        start and at the end of each interval, linear in between; tail of zeros included. Interval
+        ``k`` of the case, ``[t0 + k dt_rec, t0 + (k + 1) dt_rec]``, is column ``P_FIRST + k``. A
+        record's samples give ``ground[1, k] = ground[0, k + 1]``; an analytic pulse may jump at an
+        interval's boundary. Several records may share the array (a batch).
+    bounds : float64[3, n_blocks]
+        `rest_bounds` of ``ground`` (unscaled), to skip whole blocks at rest.
     st : float64[N_STATE]
         The integration state, updated in place (resumable).
     history : float64[6, n]
         Output (rows ``HISTORY_COLUMNS``) for every ``every``-th grid point ``n``, in column
         ``n // every - offset``; ``st[S_ROWS]`` counts the columns written. ``every = 0`` keeps none.
-    events : float64[m, 6]
+    events : float64[m, 8]
         Event log rows (``EVENT_COLUMNS``); ``st[S_N_EVENTS]`` counts all events, including those
         beyond the log's capacity.
     k_end : int
-        Stop before this interval (at most ``K``).
+        Stop before this interval (at most the record's number of intervals).
     """
     # The constants as a tuple of scalars: unlike an array, it cannot alias the state arrays, so
     # the compiler keeps them in registers instead of reloading them after every store.
-    p = (p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], p[12])
+    p = (p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], p[12], p[13], p[14],
+         p[15])
     n_sub = int(p[P_N_SUB])
     h = p[P_H]
     dt_rec = p[P_DT_REC]
     t0 = p[P_T0]
+    first = int(p[P_FIRST])
+    kh = p[P_KH]
+    kv = p[P_KV]
     step_end = p[P_LOCATED] == 0.0
-    y0 = np.zeros(6)
-    y1 = np.zeros(6)
-    ytmp = np.zeros(6)
-    gv = np.zeros(MAX_EVENTS_PER_MODE)
-    kinds = np.zeros(MAX_EVENTS_PER_MODE, dtype=np.int64)
     k = int(st[S_K])
     if st[S_STARTED] == 0.0:
         st[S_STARTED] = 1.0
         st[S_E_INITIAL] = mechanical_energy(st, p)
-        settle(st, p, t0, ground[0, 0], ground[2, 0], events, gv, kinds, ytmp)
+        settle(st, p, t0, kh * ground[0, first], kv * ground[2, first], events)
         note_extremes(st, t0)
         write_history(st, history, every, offset, 0, t0)
     while k < k_end and not finished(st):
-        a0 = ground[0, k]
-        sa = (ground[1, k] - a0) / dt_rec
-        v0 = ground[2, k]
-        sv = (ground[3, k] - v0) / dt_rec
-        if k > 0 and (a0 != ground[1, k - 1] or v0 != ground[3, k - 1]):
+        col = first + k
+        if st[S_MODE] == REST:
+            # whole blocks of the record in which nothing can move the block: no scan at all
+            block = col // REST_BLOCK
+            if rest_block_holds(p, bounds, block):
+                k_stop = min(k_end, (block + 1) * REST_BLOCK - first)
+                while k < k_stop:
+                    st[S_T_REST] += dt_rec
+                    if every > 0:
+                        n_base = k * n_sub
+                        for jj in range(1, n_sub + 1):
+                            write_history(st, history, every, offset, n_base + jj, t0 + (n_base + jj) * h)
+                    k += 1
+                continue
+        a0 = kh * ground[0, col]
+        sa = (kh * ground[1, col] - a0) / dt_rec
+        v0 = kv * ground[2, col]
+        sv = (kv * ground[3, col] - v0) / dt_rec
+        if k > 0 and (a0 != kh * ground[1, col - 1] or v0 != kv * ground[3, col - 1]):
             st[S_K1_VALID] = 0.0        # the ground jumps: the derivative at the step's start changes
         tk = t0 + k * dt_rec
         n_base = k * n_sub
@@ -943,19 +1048,23 @@ def run(p, ground, st, history, every, offset, events, k_end):
                 ah_e = a0 + sa * te
                 av_e = v0 + sv * te
                 apply_event(kind, st, p, tk + te, ah_e, p[P_G] + av_e, events)
-                settle(st, p, tk + te, ah_e, av_e, events, gv, kinds, ytmp)
+                settle(st, p, tk + te, ah_e, av_e, events)
                 continue
             if tau == (j - 1) * h:         # on the grid: full steps while nothing happens
-                j = glide(st, p, int(st[S_MODE]), j, n_sub, h, dt_rec, tk, a0, sa, v0, sv,
-                          history, every, offset, n_base, t0)
+                j = glide_in(st, p, j, n_sub, h, dt_rec, tk, a0, sa, v0, sv, history, every, offset, n_base, t0)
                 if j > n_sub:
                     break
                 tau = (j - 1) * h
             tau_b = j * h if j < n_sub else dt_rec
-            tau = advance(st, p, tau, tau_b, tk, a0, sa, v0, sv, events, y0, y1, ytmp, gv, kinds)
+            tau = advance(st, p, tau, tau_b, tk, a0, sa, v0, sv, events)
             if tau >= tau_b:
                 write_history(st, history, every, offset, n_base + j, t0 + (n_base + j) * h)
                 j += 1
         k += 1
     st[S_K] = k
     return k
+
+
+# numba keys each function's cache on its own file only: drop the core's compiled code when any
+# of its sources changed (`compiled.freshen`), before anything is loaded from the cache.
+compiled.freshen(run)

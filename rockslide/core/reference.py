@@ -57,14 +57,11 @@ def simulate_reference(model: Model, dt_record: float, horizontal, vertical,
     every = int(settings.history_every)
     st = initial_state(settings)
     events = np.zeros((100_000, len(K.EVENT_COLUMNS)))
-    gv = np.zeros(K.MAX_EVENTS_PER_MODE)
-    kinds = np.zeros(K.MAX_EVENTS_PER_MODE, dtype=np.int64)
-    ytmp = np.zeros(6)
     rows = []
 
     st[K.S_STARTED] = 1.0
     st[K.S_E_INITIAL] = K.mechanical_energy(st, p)
-    K.settle(st, p, start, ground[0, 0], ground[2, 0], events, gv, kinds, ytmp)
+    K.settle(st, p, start, ground[0, 0], ground[2, 0], events)
     K.note_extremes(st, start)
     if every > 0:
         rows.append(_row(st, start))
@@ -92,9 +89,9 @@ def simulate_reference(model: Model, dt_record: float, horizontal, vertical,
                 tau = end
                 if kind >= 0:
                     K.apply_event(kind, st, p, tk + te, a0 + sa * te, p[K.P_G] + v0 + sv * te, events)
-                    K.settle(st, p, tk + te, a0 + sa * te, v0 + sv * te, events, gv, kinds, ytmp)
+                    K.settle(st, p, tk + te, a0 + sa * te, v0 + sv * te, events)
                 continue
-            tau = _integrate_moving(st, p, tau, dt_record, tk, a0, sa, v0, sv, events, gv, kinds, ytmp,
+            tau = _integrate_moving(st, p, tau, dt_record, tk, a0, sa, v0, sv, events,
                                     grid, start, h, k * n_sub, n_sub, rows, rtol, atol)
 
     n_events = int(st[K.S_N_EVENTS])
@@ -121,7 +118,7 @@ def _local(j, n_sub, h, dt_record):
     return dt_record if j == n_sub else j * h
 
 
-def _integrate_moving(st, p, tau, tau_end, tk, a0, sa, v0, sv, events, gv, kinds, ytmp,
+def _integrate_moving(st, p, tau, tau_end, tk, a0, sa, v0, sv, events,
                       grid, start, h, n_first, n_sub, rows, rtol, atol):
     """Integrate the current moving state from ``tau`` until the interval's end or its first event;
     apply the event. Returns the local time reached."""
@@ -134,17 +131,14 @@ def _integrate_moving(st, p, tau, tau_end, tk, a0, sa, v0, sv, events, gv, kinds
         thdd, xdd, pg, pf, _, _, _, _, _ = K.evaluate(mode, lam, sigma, y[0], y[1], y[3], t, a0, sa, v0, sv, p)
         return [y[1], thdd, y[3], xdd, pg, pf]
 
-    n_events = K.event_values(mode, lam, sigma, y0, a0 + sa * tau, p[K.P_G] + v0 + sv * tau, p, gv, kinds)
-    event_kinds = kinds[:n_events].copy()
-
-    starts_at_zero = gv[:n_events] == 0.0
+    n_events = K.N_EVENTS[mode]
+    event_kinds = K.EVENT_KINDS[mode][:n_events]
 
     def make_values(y, t):
         """The state's event functions at state ``y`` and local time ``t``."""
-        g = np.zeros(K.MAX_EVENTS_PER_MODE)
-        kk = np.zeros(K.MAX_EVENTS_PER_MODE, dtype=np.int64)
-        K.event_values(mode, lam, sigma, np.asarray(y), a0 + sa * t, p[K.P_G] + v0 + sv * t, p, g, kk)
-        return g
+        return K.event_values(mode, lam, sigma, y[0], y[1], y[3], a0 + sa * t, p[K.P_G] + v0 + sv * t, p)
+
+    starts_at_zero = [value == 0.0 for value in make_values(y0, tau)[:n_events]]
 
     def make_event(i):
         def event(t, y):
@@ -180,7 +174,7 @@ def _integrate_moving(st, p, tau, tau_end, tk, a0, sa, v0, sv, events, gv, kinds
         _set_state(st, solution.y[:, -1].copy())
         if mode == K.ROCKSLIP:
             st[K.S_STATUS] = K.STATUS_PAINLEVE
-            K.log_event(st, events, tk + t_stop, mode, mode, K.C_PAINLEVE, 0, 0.0)
+            K.log_event(st, events, tk + t_stop, float(mode), float(mode), float(K.C_PAINLEVE), 0.0, 0.0)
             K.stop(st, tk + t_stop)
             return t_stop
         raise RuntimeError(f"the reference solver failed at t = {tk + t_stop:.9g} s in state "
@@ -205,7 +199,7 @@ def _integrate_moving(st, p, tau, tau_end, tk, a0, sa, v0, sv, events, gv, kinds
         st[K.S_XDOT] = 0.0
     ah_e, av_e = a0 + sa * te, v0 + sv * te
     K.apply_event(kind, st, p, tk + te, ah_e, p[K.P_G] + av_e, events)
-    K.settle(st, p, tk + te, ah_e, av_e, events, gv, kinds, ytmp)
+    K.settle(st, p, tk + te, ah_e, av_e, events)
     # grid rows exactly at the event time that were before the stop are already written
     return te if te < tau_end else tau_end
 

@@ -186,6 +186,9 @@ def parameters(model: Model, dt_record: float, settings: Settings, start: float 
     p[K.P_LOCATED] = 1.0 if settings.events == "located" else 0.0
     p[K.P_T0] = start
     p[K.P_ENERGY] = 1.0 if settings.energy else 0.0
+    p[K.P_FIRST] = 0.0                     # a single record, as applied: no offset, no scaling
+    p[K.P_KH] = 1.0
+    p[K.P_KV] = 1.0
     return p
 
 
@@ -210,18 +213,34 @@ def initial_state(settings: Settings) -> np.ndarray:
     return st
 
 
-def _intervals(component, n_tail: int) -> np.ndarray:
-    """One component as ``float64[2, K]`` (start and end value of each interval), tail included."""
+def _intervals(component) -> tuple[np.ndarray, bool]:
+    """One component as an array and whether it is samples ``(n,)`` (else interval end values
+    ``(2, n)``)."""
     values = np.asarray(component, dtype=np.float64)
-    if values.ndim == 1:                       # samples, linear in between
-        samples = np.concatenate([values, np.zeros(n_tail)])
-        if samples.size < 2:                   # a single sample: one interval, constant
-            samples = np.concatenate([samples, np.zeros(2 - samples.size)])
-        return np.stack([samples[:-1], samples[1:]])
+    if values.ndim == 1:
+        return values, True
     if values.ndim != 2 or values.shape[0] != 2:
         raise ValueError(f"a ground component is samples (n,) or interval end values (2, n), got "
                          f"shape {values.shape}")
-    return np.concatenate([values, np.zeros((2, n_tail))], axis=1)
+    return values, False
+
+
+def _interval_count(values: np.ndarray, samples: bool, n_tail: int) -> int:
+    if samples:                               # n samples and the tail's zeros: n + n_tail - 1 intervals
+        return max(values.size + n_tail, 2) - 1
+    return values.shape[1] + n_tail
+
+
+def _fill_intervals(out: np.ndarray, row: int, values: np.ndarray, samples: bool) -> None:
+    """Write one component into rows ``row`` (start) and ``row + 1`` (end) of ``out`` (zeros after
+    the component: the tail)."""
+    K = out.shape[1]
+    if samples:                               # interval k runs from sample k to sample k + 1
+        n = values.size
+        out[row, :min(n, K)] = values[:min(n, K)]
+        out[row + 1, :min(n - 1, K)] = values[1:min(n, K + 1)]
+    else:
+        out[row:row + 2, :values.shape[1]] = values
 
 
 def ground_array(horizontal, vertical, dt_record: float, tail: float = 0.0) -> np.ndarray:
@@ -240,12 +259,16 @@ def ground_array(horizontal, vertical, dt_record: float, tail: float = 0.0) -> n
         [s] still ground appended.
     """
     n_tail = math.ceil(tail / dt_record - 1e-9) if tail > 0 else 0
-    ah = _intervals(horizontal, n_tail)
-    av = _intervals(vertical, n_tail)
-    if ah.shape != av.shape:
-        raise ValueError(f"horizontal and vertical ground motion differ in length: {ah.shape[1]} and "
-                         f"{av.shape[1]} intervals")
-    return np.ascontiguousarray(np.concatenate([ah, av]))
+    ah, ah_samples = _intervals(horizontal)
+    av, av_samples = _intervals(vertical)
+    K = _interval_count(ah, ah_samples, n_tail)
+    if _interval_count(av, av_samples, n_tail) != K:
+        raise ValueError(f"horizontal and vertical ground motion differ in length: {K} and "
+                         f"{_interval_count(av, av_samples, n_tail)} intervals")
+    out = np.zeros((4, K))
+    _fill_intervals(out, 0, ah, ah_samples)
+    _fill_intervals(out, 2, av, av_samples)
+    return out
 
 
 def ground_series(ground: np.ndarray, dt_record: float, start: float = 0.0):
@@ -291,6 +314,7 @@ def simulate(model: Model, dt_record: float, horizontal, vertical, settings: Set
     Result
     """
     ground = ground_array(horizontal, vertical, dt_record, settings.tail)
+    bounds = K.rest_bounds(ground)
     p = parameters(model, dt_record, settings, start)
     st = initial_state(settings)
     n_sub = int(p[K.P_N_SUB])
@@ -313,7 +337,7 @@ def simulate(model: Model, dt_record: float, horizontal, vertical, settings: Set
         while True:
             st[K.S_N_EVENTS] = 0
             st[K.S_ROWS] = 0
-            K.run(p, ground, st, history, every, first, events, k_end)
+            K.run(p, ground, bounds, st, history, every, first, events, k_end)
             n_events = int(st[K.S_N_EVENTS])
             if n_events <= events.shape[0]:
                 break

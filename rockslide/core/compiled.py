@@ -1,0 +1,80 @@
+"""The compiled core on disk: numba's cache of `physics`, `kernel` and `batch`, kept fresh.
+
+numba keys the cached machine code of a function on the content of the function's own source file.
+The kernel's code includes the physics functions it calls, and the batch driver's code the kernel's,
+so an edited ``physics.py`` would leave a stale compiled kernel behind. `freshen` therefore
+compares a hash of the three sources (`source_stamp`) with the one recorded beside the cache, and
+removes the core's cached code when they differ; the next call compiles it again (and the package
+build compiles it before installation, so that users start warm).
+
+The stamp also identifies the compiled code elsewhere: a sweep's chunks are reused only under the
+same stamp (`sweep.definition_key`).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+from pathlib import Path
+
+#: The modules whose functions numba compiles, in the order their code includes each other.
+COMPILED_MODULES = ("physics", "kernel", "batch")
+STAMP_FILE = "rockslide-core.stamp"
+
+
+def source_stamp() -> str:
+    """SHA-256 of the sources of `COMPILED_MODULES` (stable across processes and machines)."""
+    digest = hashlib.sha256()
+    folder = Path(__file__).parent
+    for name in COMPILED_MODULES:
+        digest.update((folder / f"{name}.py").read_bytes())
+    return digest.hexdigest()
+
+
+def cache_folder(dispatcher) -> Path | None:
+    """The folder numba caches ``dispatcher``'s compiled code in (None: caching is off)."""
+    folder = getattr(getattr(dispatcher, "_cache", None), "_cache_path", None)
+    return Path(folder) if folder else None
+
+
+def freshen(dispatcher) -> bool:
+    """Remove the core's cached compiled code beside ``dispatcher``'s if the core's sources changed
+    since it was written, and record the new stamp. Returns True when the cache was (or is now)
+    fresh, False when it could not be checked (no cache, or a folder that cannot be written)."""
+    folder = cache_folder(dispatcher)
+    if folder is None:
+        return False
+    stamp = source_stamp()
+    recorded = folder / STAMP_FILE
+    try:
+        if recorded.read_text() == stamp:
+            return True
+    except OSError:
+        pass
+    try:
+        for path in folder.iterdir():
+            if path.suffix in (".nbi", ".nbc") and path.name.split(".", 1)[0] in COMPILED_MODULES:
+                path.unlink(missing_ok=True)
+        temporary = folder / f".{STAMP_FILE}.{os.getpid()}.tmp"
+        temporary.write_text(stamp)
+        os.replace(temporary, recorded)
+    except OSError:
+        return False
+    return True
+
+
+def is_warm(dispatcher) -> bool:
+    """Whether ``dispatcher``'s compiled code is in the cache and fresh (no compile at first call)."""
+    folder = cache_folder(dispatcher)
+    if folder is None:
+        return False
+    name = dispatcher.py_func.__qualname__
+    module = dispatcher.py_func.__module__.rsplit(".", 1)[-1]
+    try:
+        fresh = (folder / STAMP_FILE).read_text() == source_stamp()
+    except OSError:
+        return False
+    return fresh and any(folder.glob(f"{module}.{name}-*.nbi"))
+
+
+__all__ = ["COMPILED_MODULES", "source_stamp", "cache_folder", "freshen", "is_warm"]
