@@ -160,28 +160,31 @@ def accelerations(mode, lam, sigma, theta, thetadot, ah, G, p):
 
 
 @njit(cache=True, inline='always')
-def evaluate(mode, lam, sigma, th, thd, xd, t, a0, sa, v0, sv, p):
+def evaluate(mode, energy, lam, sigma, th, thd, xd, t, a0, sa, v0, sv, p):
     """Everything the integrator needs at one instant (local time ``t``, ground linear in it).
 
     Returns ``(thetaddot, xddot, ground power, friction power, s, c, D, ah, G)``. The powers
     [W/kg] are those of the ground's inertia forces ``-ah``, ``-av`` on the centre of gravity, whose
     velocity relative to the foundation is ``(xdot - lam R c thetadot, R s thetadot)`` (the virtual
     displacements of eq. 14), and of kinetic friction, ``-nu N |xdot|`` (eqs. 9 and 22); they are
-    computed only when the energy ledger is on.
+    computed only when the energy ledger is on (``energy``).
+
+    ``mode`` and ``energy`` are compile-time constants in the integration loops (`glide_in` passes
+    literals), so that each state gets code of its own without the others' branches.
     """
     ah = a0 + sa * t
     av = v0 + sv * t
     G = p[P_G] + av
     if mode == SLIP:            # upright: theta = 0, no trigonometry needed
         xdd = slip_acceleration(ah, G, p[P_NU], sigma)
-        if p[P_ENERGY] != 0.0:
+        if energy:
             return 0.0, xdd, -ah * xd, -p[P_NU] * G * abs(xd), 0.0, 0.0, 1.0, ah, G
         return 0.0, xdd, 0.0, 0.0, 0.0, 0.0, 1.0, ah, G
     s, c = tilt(th, p[P_ALPHA])
     thdd, xdd, D = accelerations_sc(mode, lam, sigma, s, c, thd, ah, G, p)
     pg = 0.0
     pf = 0.0
-    if p[P_ENERGY] != 0.0 and mode != REST:
+    if energy and mode != REST:
         R = p[P_R]
         pg = -ah * (xd - lam * R * c * thd) - av * R * s * thd
         if mode == ROCKSLIP:
@@ -190,8 +193,8 @@ def evaluate(mode, lam, sigma, th, thd, xd, t, a0, sa, v0, sv, p):
     return thdd, xdd, pg, pf, s, c, D, ah, G
 
 
-@njit(cache=True, inline='always')
-def rk4_step(mode, lam, sigma, th, thd, x, xd, wg, wf, tau, hh, a0, sa, v0, sv, p, a1, b1, pg1, pf1):
+@njit(cache=True)
+def rk4_step(mode, energy, lam, sigma, th, thd, x, xd, wg, wf, tau, hh, a0, sa, v0, sv, p, a1, b1, pg1, pf1):
     """One classical fourth-order Runge-Kutta step of length ``hh`` from local time ``tau``.
 
     The state is ``theta, thetadot, x, xdot, w_ground, w_friction``; the ground is
@@ -209,13 +212,13 @@ def rk4_step(mode, lam, sigma, th, thd, x, xd, wg, wf, tau, hh, a0, sa, v0, sv, 
     if mode == ROCK:
         th2 = th + half * thd
         thd2 = thd + half * a1
-        a2, _, pg2, _, _, _, _, _, _ = evaluate(mode, lam, sigma, th2, thd2, xd, tau + half, a0, sa, v0, sv, p)
+        a2, _, pg2, _, _, _, _, _, _ = evaluate(mode, energy, lam, sigma, th2, thd2, xd, tau + half, a0, sa, v0, sv, p)
         th3 = th + half * thd2
         thd3 = thd + half * a2
-        a3, _, pg3, _, _, _, _, _, _ = evaluate(mode, lam, sigma, th3, thd3, xd, tau + half, a0, sa, v0, sv, p)
+        a3, _, pg3, _, _, _, _, _, _ = evaluate(mode, energy, lam, sigma, th3, thd3, xd, tau + half, a0, sa, v0, sv, p)
         th4 = th + hh * thd3
         thd4 = thd + hh * a3
-        a4, _, pg4, _, _, _, _, _, _ = evaluate(mode, lam, sigma, th4, thd4, xd, tau + hh, a0, sa, v0, sv, p)
+        a4, _, pg4, _, _, _, _, _, _ = evaluate(mode, energy, lam, sigma, th4, thd4, xd, tau + hh, a0, sa, v0, sv, p)
         return (th + f * (thd + 2.0 * thd2 + 2.0 * thd3 + thd4),
                 thd + f * (a1 + 2.0 * a2 + 2.0 * a3 + a4),
                 x, xd,
@@ -223,11 +226,11 @@ def rk4_step(mode, lam, sigma, th, thd, x, xd, wg, wf, tau, hh, a0, sa, v0, sv, 
                 wf, 1.0)
     if mode == SLIP:
         xd2 = xd + half * b1
-        _, b2, pg2, pf2, _, _, _, _, _ = evaluate(mode, lam, sigma, th, thd, xd2, tau + half, a0, sa, v0, sv, p)
+        _, b2, pg2, pf2, _, _, _, _, _ = evaluate(mode, energy, lam, sigma, th, thd, xd2, tau + half, a0, sa, v0, sv, p)
         xd3 = xd + half * b2
-        _, b3, pg3, pf3, _, _, _, _, _ = evaluate(mode, lam, sigma, th, thd, xd3, tau + half, a0, sa, v0, sv, p)
+        _, b3, pg3, pf3, _, _, _, _, _ = evaluate(mode, energy, lam, sigma, th, thd, xd3, tau + half, a0, sa, v0, sv, p)
         xd4 = xd + hh * b3
-        _, b4, pg4, pf4, _, _, _, _, _ = evaluate(mode, lam, sigma, th, thd, xd4, tau + hh, a0, sa, v0, sv, p)
+        _, b4, pg4, pf4, _, _, _, _, _ = evaluate(mode, energy, lam, sigma, th, thd, xd4, tau + hh, a0, sa, v0, sv, p)
         return (th, thd,
                 x + f * (xd + 2.0 * xd2 + 2.0 * xd3 + xd4),
                 xd + f * (b1 + 2.0 * b2 + 2.0 * b3 + b4),
@@ -236,15 +239,15 @@ def rk4_step(mode, lam, sigma, th, thd, x, xd, wg, wf, tau, hh, a0, sa, v0, sv, 
     th2 = th + half * thd
     thd2 = thd + half * a1
     xd2 = xd + half * b1
-    a2, b2, pg2, pf2, _, _, D2, _, _ = evaluate(mode, lam, sigma, th2, thd2, xd2, tau + half, a0, sa, v0, sv, p)
+    a2, b2, pg2, pf2, _, _, D2, _, _ = evaluate(mode, energy, lam, sigma, th2, thd2, xd2, tau + half, a0, sa, v0, sv, p)
     th3 = th + half * thd2
     thd3 = thd + half * a2
     xd3 = xd + half * b2
-    a3, b3, pg3, pf3, _, _, D3, _, _ = evaluate(mode, lam, sigma, th3, thd3, xd3, tau + half, a0, sa, v0, sv, p)
+    a3, b3, pg3, pf3, _, _, D3, _, _ = evaluate(mode, energy, lam, sigma, th3, thd3, xd3, tau + half, a0, sa, v0, sv, p)
     th4 = th + hh * thd3
     thd4 = thd + hh * a3
     xd4 = xd + hh * b3
-    a4, b4, pg4, pf4, _, _, D4, _, _ = evaluate(mode, lam, sigma, th4, thd4, xd4, tau + hh, a0, sa, v0, sv, p)
+    a4, b4, pg4, pf4, _, _, D4, _, _ = evaluate(mode, energy, lam, sigma, th4, thd4, xd4, tau + hh, a0, sa, v0, sv, p)
     return (th + f * (thd + 2.0 * thd2 + 2.0 * thd3 + thd4),
             thd + f * (a1 + 2.0 * a2 + 2.0 * a3 + a4),
             x + f * (xd + 2.0 * xd2 + 2.0 * xd3 + xd4),
@@ -259,9 +262,10 @@ def rk4_from(mode, lam, sigma, y, tau, hh, a0, sa, v0, sv, p):
     """`rk4_step` from the state tuple ``y`` = ``(theta, thetadot, x, xdot, w_ground, w_friction)``,
     computing its own first stage (event location). Returns the new state tuple and the smallest
     stage determinant (see `rk4_step`)."""
+    energy = p[P_ENERGY] != 0.0
     th, thd, x, xd, wg, wf = y
-    a1, b1, pg1, pf1, _, _, _, _, _ = evaluate(mode, lam, sigma, th, thd, xd, tau, a0, sa, v0, sv, p)
-    th, thd, x, xd, wg, wf, d_min = rk4_step(mode, lam, sigma, th, thd, x, xd, wg, wf, tau, hh,
+    a1, b1, pg1, pf1, _, _, _, _, _ = evaluate(mode, energy, lam, sigma, th, thd, xd, tau, a0, sa, v0, sv, p)
+    th, thd, x, xd, wg, wf, d_min = rk4_step(mode, energy, lam, sigma, th, thd, x, xd, wg, wf, tau, hh,
                                              a0, sa, v0, sv, p, a1, b1, pg1, pf1)
     return (th, thd, x, xd, wg, wf), d_min
 
@@ -895,13 +899,14 @@ def accept(st, th, thd, x, xd, wg, wf, mode, tau_a, tau_b, tk, p, peaks_inside):
     add_time(st, mode, tau_b - tau_a)
 
 
-@njit(cache=True, inline='always')
-def glide(st, p, mode, j, n_sub, h, dt_rec, tk, a0, sa, v0, sv, history, every, offset, n_base, t0):
+@njit(cache=True)
+def glide(st, p, mode, energy, j, n_sub, h, dt_rec, tk, a0, sa, v0, sv, history, every, offset, n_base, t0):
     """Full steps of the moving state ``mode`` from grid point ``j - 1`` of the interval for as
     long as no event function turns negative, with the whole state in registers; ``st`` is written
     back once. Returns the grid point reached (``n_sub + 1``: the interval is done; otherwise the
     step ending at grid point ``j`` holds an event, or approaches a Painleve point, for `advance`).
-    Called with ``mode`` a constant (`glide_in`), so that each state gets a loop of its own."""
+    Called with ``mode`` and ``energy`` (the energy ledger is on) literal constants (`glide_in`), so
+    that each state gets a loop of its own."""
     lam = st[S_LAM]
     sigma = st[S_SIGMA]
     th, thd, x, xd = st[S_THETA], st[S_THETADOT], st[S_X], st[S_XDOT]
@@ -912,16 +917,16 @@ def glide(st, p, mode, j, n_sub, h, dt_rec, tk, a0, sa, v0, sv, history, every, 
     if st[S_K1_VALID] != 0.0:
         a1, b1, pg1, pf1 = st[S_K1_THDD], st[S_K1_XDD], st[S_K1_PG], st[S_K1_PF]
     else:
-        a1, b1, pg1, pf1, _, _, _, _, _ = evaluate(mode, lam, sigma, th, thd, xd, tau_a, a0, sa, v0, sv, p)
+        a1, b1, pg1, pf1, _, _, _, _, _ = evaluate(mode, energy, lam, sigma, th, thd, xd, tau_a, a0, sa, v0, sv, p)
     elapsed = 0.0
     while j <= n_sub:
         tau_b = j * h if j < n_sub else dt_rec
         hh = tau_b - tau_a
         if mode == ROCKSLIP and hh > SINGULAR_FRACTION * time_to_painleve(lam, sigma, th, thd, p):
             break                  # near a Painleve point: `advance` takes sub-steps
-        th1, thd1, x1, xd1, wg1, wf1, d_min = rk4_step(mode, lam, sigma, th, thd, x, xd, wg, wf, tau_a, hh,
-                                                       a0, sa, v0, sv, p, a1, b1, pg1, pf1)
-        thdd, xdd, pg, pf, s, c, D, ah, G = evaluate(mode, lam, sigma, th1, thd1, xd1, tau_b, a0, sa, v0, sv, p)
+        th1, thd1, x1, xd1, wg1, wf1, d_min = rk4_step(mode, energy, lam, sigma, th, thd, x, xd, wg, wf, tau_a,
+                                                       hh, a0, sa, v0, sv, p, a1, b1, pg1, pf1)
+        thdd, xdd, pg, pf, s, c, D, ah, G = evaluate(mode, energy, lam, sigma, th1, thd1, xd1, tau_b, a0, sa, v0, sv, p)
         g0, g1, g2, g3, g4 = event_functions(mode, lam, sigma, th1, thd1, xd1, ah, G, s, c, thdd, D, p)
         if d_min <= 0.0 or g0 < 0.0 or g1 < 0.0 or g2 < 0.0 or g3 < 0.0 or g4 < 0.0:
             break
@@ -944,13 +949,26 @@ def glide(st, p, mode, j, n_sub, h, dt_rec, tk, a0, sa, v0, sv, history, every, 
 
 @njit(cache=True)
 def glide_in(st, p, j, n_sub, h, dt_rec, tk, a0, sa, v0, sv, history, every, offset, n_base, t0):
-    """`glide` in the block's present state, each state with its own specialised loop."""
+    """`glide` in the block's present state: each state, with and without the energy ledger, gets
+    a loop of its own (the literal arguments make numba compile a version for each)."""
     mode = int(st[S_MODE])
+    if p[P_ENERGY] != 0.0:
+        if mode == ROCK:
+            return glide(st, p, ROCK, True, j, n_sub, h, dt_rec, tk, a0, sa, v0, sv, history, every, offset,
+                         n_base, t0)
+        if mode == SLIP:
+            return glide(st, p, SLIP, True, j, n_sub, h, dt_rec, tk, a0, sa, v0, sv, history, every, offset,
+                         n_base, t0)
+        return glide(st, p, ROCKSLIP, True, j, n_sub, h, dt_rec, tk, a0, sa, v0, sv, history, every, offset,
+                     n_base, t0)
     if mode == ROCK:
-        return glide(st, p, ROCK, j, n_sub, h, dt_rec, tk, a0, sa, v0, sv, history, every, offset, n_base, t0)
+        return glide(st, p, ROCK, False, j, n_sub, h, dt_rec, tk, a0, sa, v0, sv, history, every, offset,
+                     n_base, t0)
     if mode == SLIP:
-        return glide(st, p, SLIP, j, n_sub, h, dt_rec, tk, a0, sa, v0, sv, history, every, offset, n_base, t0)
-    return glide(st, p, ROCKSLIP, j, n_sub, h, dt_rec, tk, a0, sa, v0, sv, history, every, offset, n_base, t0)
+        return glide(st, p, SLIP, False, j, n_sub, h, dt_rec, tk, a0, sa, v0, sv, history, every, offset,
+                     n_base, t0)
+    return glide(st, p, ROCKSLIP, False, j, n_sub, h, dt_rec, tk, a0, sa, v0, sv, history, every, offset,
+                 n_base, t0)
 
 
 # ============================================================================================
@@ -1028,7 +1046,9 @@ def run(p, ground, bounds, st, history, every, offset, events, k_end):
         tk = t0 + k * dt_rec
         n_base = k * n_sub
         tau = 0.0
-        j = 1                                   # next grid point of this interval
+        j = np.int64(1)                         # next grid point of this interval (typed int64
+                                                # from the start: a literal 1 makes numba compile
+                                                # `glide_in` twice)
         while j <= n_sub and not finished(st):
             if st[S_MODE] == REST:
                 te, kind = rest_exit(tau, dt_rec, a0, sa, v0, sv, p, step_end, h)

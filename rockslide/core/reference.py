@@ -127,8 +127,10 @@ def _integrate_moving(st, p, tau, tau_end, tk, a0, sa, v0, sv, events,
     y0 = np.array([st[K.S_THETA], st[K.S_THETADOT], st[K.S_X], st[K.S_XDOT],
                    st[K.S_W_GROUND], st[K.S_W_FRICTION]])
 
+    energy = p[K.P_ENERGY] != 0.0
+
     def rhs(t, y):
-        thdd, xdd, pg, pf, _, _, _, _, _ = K.evaluate(mode, lam, sigma, y[0], y[1], y[3], t, a0, sa, v0, sv, p)
+        thdd, xdd, pg, pf, _, _, _, _, _ = K.evaluate(mode, energy, lam, sigma, y[0], y[1], y[3], t, a0, sa, v0, sv, p)
         return [y[1], thdd, y[3], xdd, pg, pf]
 
     n_events = K.N_EVENTS[mode]
