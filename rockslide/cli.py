@@ -238,8 +238,8 @@ def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, robustness
                 writer.finish(result, name=case.name, case_text=case.text, case=_case_dict(case),
                               records=runner.record_entries(prepared), extra_attrs=extra, ground=ground)
             if not no_plot:
-                written = writer.written_result()
-                _draw(written if written is not None else results.read_result(writer.tmp).result, case.name,
+                kept = writer.written_result()
+                _draw(kept if kept is not None else results.read_result(writer.tmp).result, case.name,
                       png_path, overwrite=overwrite, dpi=dpi, staging=staging)
             staging.publish(remove=[png_path] if no_plot else [])
         written = f"{h5_path}" + ("" if no_plot else f" and {png_path}")
@@ -1021,11 +1021,11 @@ def entry() -> None:
     """The ``rockslide`` script and ``python -m rockslide``: `main`, in a process of its own.
 
     A command is a short-lived process, which allows two settings of the garbage collector that
-    save a tenth of a warm run (results/bench_startup.md): rarer collections (the libraries loaded
-    make hundreds of thousands of objects that live to the end, and each collection walks them),
-    and none at the exit (`gc.freeze`: the interpreter's last collections would walk every object
-    only to free what the process gives back anyway). Every file is closed and published before
-    (or removed); exit handlers still run.
+    save 0.2-0.3 s of a warm run: rarer collections (the libraries loaded make hundreds of
+    thousands of objects that live to the end, and each collection walks them again), and none at
+    the exit (`gc.freeze`: the interpreter's last collections took 0.2 s to walk every object only
+    to free what the process gives back anyway). Every file is closed and published before (or
+    removed); exit handlers still run.
     """
     gc.set_threshold(10_000, 50, 50)
     try:
