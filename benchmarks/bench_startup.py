@@ -307,9 +307,15 @@ def cold(repeat: int, keep: bool) -> None:
         }
         figures = {key: ([], []) for key in steps}
         notes = {}
+        purelib = "import sysconfig; print(sysconfig.get_paths()['purelib'])"
+        installed = Path(subprocess.run([str(python), "-c", purelib], capture_output=True, text=True,
+                                        check=True).stdout.strip()) / "rockslide"
         for r in range(repeat):
             say(f"cold repetition {r + 1} of {repeat}: the wheel installed afresh, an empty HOME")
-            subprocess.run(pip + ["install", "--force-reinstall", "--no-deps", str(wheel)], check=True, env=base)
+            # pip leaves what the package wrote beside itself (numba's cache): remove it all
+            subprocess.run(pip + ["uninstall", "--yes", "rockslide"], check=True, env=base)
+            shutil.rmtree(installed, ignore_errors=True)
+            subprocess.run(pip + ["install", "--no-deps", str(wheel)], check=True, env=base)
             home = folder / f"home{r}"
             home.mkdir()
             shutil.rmtree(clone / "out", ignore_errors=True)
