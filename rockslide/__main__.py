@@ -1,6 +1,6 @@
 """``python -m rockslide``: the command line, as the ``rockslide`` script."""
 
-from .cli import main
+from .cli import entry
 
 if __name__ == "__main__":  # pragma: no branch
-    main(prog_name="rockslide")
+    entry()

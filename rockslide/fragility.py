@@ -478,9 +478,9 @@ def plan_fragility(case: Case, suite: Suite, im: IntensityMeasure, levels: sw.Ax
     measures = {key: np.empty(n_records) for key in ("pga", "pgv", "pgv_pga", "im", "dt", "duration")}
     offset = 0
     for r, entry in enumerate(suite.entries):
-        traces, specs, found = _read_entry(suite, r, entry, folder)
+        records, specs, found = _read_entry(suite, r, entry, folder)
         where = _entry_source(suite, r)
-        ground = rec.combine(traces["horizontal"], traces["vertical"], source=where)
+        ground = rec.combine(records["horizontal"], records["vertical"], source=where)
         changes = {"ground.horizontal": specs["horizontal"], "ground.vertical": specs["vertical"],
                    "ground.scale": {"vertical_factor": vertical_factor} if specs["vertical"] else {}}
         try:
@@ -542,35 +542,34 @@ def _entry_source(suite: Suite, r: int) -> str:
 
 
 def _read_entry(suite: Suite, r: int, entry: SuiteEntry, folder: Path):
-    """A suite entry's records: traces by role, their specs for `case.case_with` (files as found)
+    """A suite entry's records: records by role, their specs for `case.case_with` (files as found)
     and their file names and checksums."""
-    traces, specs, found = {}, {}, {}
+    records, specs, found = {}, {}, {}
     for role in ("horizontal", "vertical"):
         spec = getattr(entry, role)
         found[role], found[f"{role}_sha256"] = "", ""
         if spec is None:
-            traces[role], specs[role] = None, None
+            records[role], specs[role] = None, None
             continue
         field = f"records[{r}].{role}" if suite.base_dir is not None else None
         source = suite.source if suite.base_dir is not None else None
         path = rec.resolve_record_path(spec.file, case_dir=suite.base_dir, records_dir=folder,
                                        source=source, field=f"{field}.file" if field else None)
         try:
-            trace = rec.read_record(path, format=spec.format, units=spec.units,
-                                    time_column=spec.time_column, column=spec.column, dt=spec.dt,
-                                    skip_lines=spec.skip_lines, source=source, field=field)
+            record = rec.load_record(path, format=spec.format, units=spec.units,
+                                     time_column=spec.time_column, column=spec.column, dt=spec.dt,
+                                     skip_lines=spec.skip_lines, source=source, field=field)
         except RecordError as exc:
             if suite.base_dir is None and spec.units is None and "units" in str(exc):
                 raise RecordError(f"{exc.message} (for a folder or a glob of records: --units)",
                                   source=exc.source, field=exc.field) from None
             raise
-        traces[role] = trace
+        records[role] = record
         specs[role] = {k: v for k, v in vars(spec).items() if v is not None and k != "file"}
         specs[role]["file"] = str(path.absolute())
-        meta = dict(trace.stats.get("rockslide", {}))
         found[role] = path.name
-        found[f"{role}_sha256"] = str(meta.get("sha256", ""))
-    return traces, specs, found
+        found[f"{role}_sha256"] = record.sha256
+    return records, specs, found
 
 
 def point_case(fplan: FragilityPlan, record: int, level: int) -> Case:

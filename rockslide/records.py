@@ -1,10 +1,10 @@
 """Accelerograms: find them, read them into SI, scale and align the two components.
 
-Every reader returns an :class:`obspy.Trace` whose data are float64 acceleration in [m/s^2],
-``stats.delta`` the sampling step [s], and ``stats.rockslide`` an :class:`obspy.core.AttribDict`
-with the provenance of the samples: ``format``, ``units`` (the unit of the file's numbers),
-``path``, ``sha256`` (of the file's bytes) and ``start`` [s] (time of the first sample: 0 unless a
-time column says otherwise).
+`load_record` reads a file into a `Record`: float64 acceleration in [m/s^2], the sampling step
+``dt`` [s], and the provenance of the samples: ``format``, ``units`` (the unit of the file's
+numbers), ``path``, ``sha256`` (of the file's bytes) and ``start`` [s] (time of the first sample: 0
+unless a time column says otherwise). `read_record` gives the same as an :class:`obspy.Trace`
+(``stats.delta``, and the provenance in ``stats.rockslide``, an :class:`obspy.core.AttribDict`).
 
 Supported formats (``format=None`` sniffs them in this order):
 
@@ -20,7 +20,8 @@ Supported formats (``format=None`` sniffs them in this order):
 any obspy waveform format
     ``SAC``, ``MSEED``, ...: the first and only trace, in the ``units`` given.
 
-This is the only module of rockslide that imports obspy.
+This is the only module of rockslide that imports obspy, and only when it needs it (K-NET, obspy's
+formats, a Trace): loading obspy takes a tenth of a second, more than reading an AT2 file.
 """
 
 from __future__ import annotations
@@ -35,16 +36,18 @@ import tempfile
 import warnings
 from dataclasses import dataclass
 from decimal import Decimal
+from functools import cache
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-import obspy
-from obspy.core import AttribDict
-from obspy.core.util.base import ENTRY_POINTS, buffered_load_entry_point
 
 from .errors import CaseError, RecordError
 from .files import atomic_write
 from .units import STANDARD_GRAVITY, unit_factor
+
+if TYPE_CHECKING:
+    import obspy
 
 RECORDS_ENV = "ROCKSLIDE_RECORDS"
 
@@ -53,7 +56,14 @@ OWN_FORMATS = ("at2", "knet", "column", "values")
 #: obspy formats never used: reading (or even detecting) a PICKLE file unpickles it, which runs any
 #: code the file holds. A record file is data, like a case file.
 UNSAFE_OBSPY_FORMATS = frozenset({"PICKLE"})
-OBSPY_FORMATS = tuple(sorted(set(ENTRY_POINTS["waveform"]) - UNSAFE_OBSPY_FORMATS))
+
+
+@cache
+def obspy_formats() -> tuple[str, ...]:
+    """The waveform formats obspy reads (upper case, sorted), less `UNSAFE_OBSPY_FORMATS`."""
+    from obspy.core.util.base import ENTRY_POINTS
+
+    return tuple(sorted(set(ENTRY_POINTS["waveform"]) - UNSAFE_OBSPY_FORMATS))
 
 #: [s] Largest sampling step read: an earthquake's acceleration has its energy at 0.1 to 20 Hz, so a
 #: record needs a step of at most 0.025 s; a step above 1 s is a mistake of unit (ms written as s).
@@ -202,10 +212,73 @@ class _Parsed:
     stats: obspy.core.Stats | None = None   # obspy's header, kept for obspy formats
 
 
-def read_record(path, *, format: str | None = None, units: str | None = None,
+@dataclass(frozen=True)
+class Record:
+    """One component of an accelerogram in SI units, with its provenance (`load_record`).
+
+    Attributes
+    ----------
+    data : numpy.ndarray
+        float64 acceleration [m/s^2].
+    dt : float
+        [s] sampling step.
+    start : float
+        [s] time of the first sample.
+    format : str
+        ``at2``, ``knet``, ``column``, ``values`` or the obspy format, lower case.
+    units : str
+        The unit of the file's numbers.
+    path : str or None
+        The record file (None for a Trace made in memory, `from_trace`).
+    sha256 : str or None
+        Of the file's bytes.
+    header : obspy.core.Stats or None
+        obspy's header, for the formats obspy reads.
+    """
+
+    data: np.ndarray
+    dt: float
+    start: float
+    format: str | None
+    units: str | None
+    path: str | None
+    sha256: str | None
+    header: obspy.core.Stats | None = None
+
+    def trace(self) -> obspy.Trace:
+        """The record as an :class:`obspy.Trace` (see `read_record`); the data are not copied."""
+        import obspy
+        from obspy.core import AttribDict
+
+        trace = obspy.Trace(data=self.data, header=self.header)
+        trace.stats.delta = self.dt
+        trace.stats.calib = 1.0
+        trace.stats.rockslide = AttribDict({"format": self.format, "units": self.units, "path": self.path,
+                                            "sha256": self.sha256, "start": self.start})
+        return trace
+
+    @classmethod
+    def from_trace(cls, trace: obspy.Trace) -> Record:
+        """A Trace of `read_record`, or any Trace (provenance from ``stats.rockslide`` if it has
+        one, else no file and a start of 0 s)."""
+        meta = dict(trace.stats.get("rockslide", {}))
+        return cls(data=trace.data, dt=float(trace.stats.delta), start=float(meta.get("start", 0.0)),
+                   format=meta.get("format"), units=meta.get("units"), path=meta.get("path"),
+                   sha256=meta.get("sha256"), header=trace.stats)
+
+    @property
+    def name(self) -> str:
+        """What messages call the record: its file, else its obspy id (``NET.STA.LOC.CHA``)."""
+        if self.path:
+            return str(self.path)
+        header = self.header or {}
+        return ".".join(str(header.get(key, "")) for key in ("network", "station", "location", "channel"))
+
+
+def load_record(path, *, format: str | None = None, units: str | None = None,
                 time_column: int | str | None = None, column: int | str | None = None,
                 dt: float | None = None, skip_lines: int = 0,
-                source: str | None = None, field: str | None = None) -> obspy.Trace:
+                source: str | None = None, field: str | None = None) -> Record:
     """Read an accelerogram into SI units.
 
     Parameters
@@ -231,10 +304,9 @@ def read_record(path, *, format: str | None = None, units: str | None = None,
 
     Returns
     -------
-    obspy.Trace
-        float64 data in [m/s^2], ``stats.delta`` [s], ``stats.calib`` 1, and ``stats.rockslide``
-        (``format``, ``units``, ``path``, ``sha256``, ``start`` [s]). For obspy formats the
-        samples are taken as they are in the file, times the unit factor (``calib`` is not applied).
+    Record
+        For obspy formats the samples are taken as they are in the file, times the unit factor
+        (obspy's ``calib`` is not applied). obspy is imported only for K-NET and obspy's formats.
 
     Raises
     ------
@@ -255,6 +327,13 @@ def read_record(path, *, format: str | None = None, units: str | None = None,
     with np.errstate(over="ignore", invalid="ignore"):    # a non-finite sample is reported in _finish
         parsed, kind = _parse(ctx, raw, kind, options)
     return _finish(ctx, parsed, kind, options, hashlib.sha256(raw).hexdigest())
+
+
+def read_record(path, **options) -> obspy.Trace:
+    """`load_record` as an :class:`obspy.Trace`: float64 data in [m/s^2], ``stats.delta`` [s],
+    ``stats.calib`` 1, and ``stats.rockslide`` (``format``, ``units``, ``path``, ``sha256``,
+    ``start`` [s]). The keyword ``options`` are those of `load_record`."""
+    return load_record(path, **options).trace()
 
 
 def _parse(ctx: _Context, raw: bytes, kind: str, options: _Options) -> tuple[_Parsed, str]:
@@ -289,27 +368,26 @@ def record_info(path, **options) -> dict:
         ``peak_gal``, ``peak_g``, ``peak_signed`` [m/s^2] (the sample at the peak, with its sign),
         ``peak_time`` [s] (its time, first one if tied), ``mean`` [m/s^2], ``sha256``.
     """
-    trace = read_record(path, **options)
-    meta = trace.stats.rockslide
-    data = trace.data
+    record = load_record(path, **options)
+    data = record.data
     index = int(np.argmax(np.abs(data)))
     peak = float(abs(data[index]))
-    dt = float(trace.stats.delta)
+    dt = record.dt
     return {
-        "format": meta.format,
-        "path": meta.path,
-        "npts": int(trace.stats.npts),
+        "format": record.format,
+        "path": record.path,
+        "npts": int(data.size),
         "dt": dt,
-        "duration": trace.stats.npts * dt,
-        "units": meta.units,
-        "start": meta.start,
+        "duration": data.size * dt,
+        "units": record.units,
+        "start": record.start,
         "peak": peak,
         "peak_gal": peak / unit_factor("gal", "acceleration"),
         "peak_g": peak / STANDARD_GRAVITY,
         "peak_signed": float(data[index]),
-        "peak_time": meta.start + index * dt,
+        "peak_time": record.start + index * dt,
         "mean": float(np.mean(data)),
-        "sha256": meta.sha256,
+        "sha256": record.sha256,
     }
 
 
@@ -355,10 +433,10 @@ def _choose_format(ctx: _Context, raw: bytes, format: str | None, options: _Opti
         name = str(format).strip()
         if name.lower() in OWN_FORMATS:
             return name.lower()
-        if name.upper() in OBSPY_FORMATS:
+        if name.upper() in obspy_formats():
             return name.upper()
         raise ctx.error(f"unknown format {format!r}; expected one of {', '.join(OWN_FORMATS)} "
-                        f"or an obspy format ({', '.join(OBSPY_FORMATS)})", "format")
+                        f"or an obspy format ({', '.join(obspy_formats())})", "format")
     first_line = raw.split(b"\n", 1)[0]
     if b"PEER NGA" in first_line.upper() or ctx.path.suffix.lower() == ".at2":
         return "at2"
@@ -395,8 +473,8 @@ def _reject_unused_options(ctx: _Context, kind: str, options: _Options) -> None:
                         f"not to this {kind.upper()} record; remove them", unused[0])
 
 
-def _finish(ctx: _Context, parsed: _Parsed, kind: str, options: _Options, sha256: str) -> obspy.Trace:
-    """Checks common to all formats, then the Trace with its provenance."""
+def _finish(ctx: _Context, parsed: _Parsed, kind: str, options: _Options, sha256: str) -> Record:
+    """Checks common to all formats, then the Record with its provenance."""
     _reject_unused_options(ctx, kind, options)
     values = np.asarray(parsed.values, dtype=np.float64)
     _require_samples(ctx, values.size)
@@ -422,14 +500,11 @@ def _finish(ctx: _Context, parsed: _Parsed, kind: str, options: _Options, sha256
     if peak > ABSURD_PEAK:
         warnings.warn(f"{ctx.path}: peak acceleration {peak / STANDARD_GRAVITY:.4g} g is above 10 g "
                       f"(units {parsed.units!r}); check the units", RecordWarning, stacklevel=3)
-    trace = obspy.Trace(data=values, header=parsed.stats)
-    trace.stats.delta = parsed.dt
-    trace.stats.calib = 1.0
-    trace.stats.rockslide = AttribDict({
-        "format": kind, "units": parsed.units, "path": str(ctx.path), "sha256": sha256,
-        "start": float(parsed.start),
-    })
-    return trace
+    # the step as an obspy Trace holds it (the inverse of its sampling rate, which may differ from the
+    # file's step in the last bit), as results have always been computed with it
+    dt = 1.0 / (1.0 / parsed.dt)
+    return Record(data=values, dt=dt, start=float(parsed.start), format=kind, units=parsed.units,
+                  path=str(ctx.path), sha256=sha256, header=parsed.stats)
 
 
 def _require_samples(ctx: _Context, count: int) -> None:
@@ -688,6 +763,8 @@ def _uniform_time(ctx: _Context, time: np.ndarray, lines: np.ndarray,
 
 def _obspy_trace(ctx: _Context, raw: bytes, obspy_format: str | None) -> obspy.Trace:
     """The one trace of a file read by obspy (``obspy_format`` None: obspy detects it)."""
+    import obspy
+
     detected = obspy_format is None
     if detected:
         obspy_format = _detect_obspy_format(raw)
@@ -709,6 +786,8 @@ def _obspy_trace(ctx: _Context, raw: bytes, obspy_format: str | None) -> obspy.T
 def _detect_obspy_format(raw: bytes) -> str | None:
     """The first obspy waveform format whose detector accepts ``raw`` (obspy's own order), None if
     none does. Like ``obspy.read(format=None)``, but never tries the UNSAFE_OBSPY_FORMATS."""
+    from obspy.core.util.base import ENTRY_POINTS, buffered_load_entry_point
+
     with tempfile.TemporaryDirectory(prefix="rockslide-") as folder:
         path = os.path.join(folder, "record")
         with open(path, "wb") as file:
@@ -823,7 +902,7 @@ def still_ground(dt: float) -> GroundMotion:
                         files=())
 
 
-def combine(horizontal: obspy.Trace | None, vertical: obspy.Trace | None, *,
+def combine(horizontal: Record | obspy.Trace | None, vertical: Record | obspy.Trace | None, *,
             pga_horizontal: float | None = None, factor: float | None = None,
             pga_vertical: float | None = None, vertical_factor: float = 1.0,
             source: str | None = None, still_dt: float | None = None) -> GroundMotion:
@@ -831,8 +910,8 @@ def combine(horizontal: obspy.Trace | None, vertical: obspy.Trace | None, *,
 
     Parameters
     ----------
-    horizontal, vertical : obspy.Trace or None
-        Records from :func:`read_record` ([m/s^2]); at least one. Both: same ``delta``
+    horizontal, vertical : Record or obspy.Trace or None
+        Records from `load_record` or `read_record` ([m/s^2]); at least one. Both: same ``delta``
         (relative 1e-9), number of samples and start.
     pga_horizontal : float, optional
         [m/s^2] peak to scale the horizontal to; sets the common factor ``k = pga / max|h|``.
@@ -874,6 +953,8 @@ def combine(horizontal: obspy.Trace | None, vertical: obspy.Trace | None, *,
                                   ("pga_vertical", pga_vertical, True),
                                   ("vertical_factor", vertical_factor, False)):
         _check_scale(name, value, positive, source)
+    horizontal, vertical = (r if r is None or isinstance(r, Record) else Record.from_trace(r)
+                            for r in (horizontal, vertical))
     if horizontal is not None and vertical is not None:
         _check_same_grid(horizontal, vertical, source)
     h = None if horizontal is None else np.asarray(horizontal.data, dtype=np.float64)
@@ -901,14 +982,15 @@ def combine(horizontal: obspy.Trace | None, vertical: obspy.Trace | None, *,
         h = None if h is None else k * h
         v = None if v is None else kv * v
     return GroundMotion(
-        dt=float(reference.stats.delta),
-        start=_start(reference),
+        dt=float(reference.dt),
+        start=reference.start,
         horizontal=_frozen(np.zeros(npts) if h is None else h),
         vertical=_frozen(np.zeros(npts) if v is None else v),
         horizontal_factor=1.0 if h is None else k,
         vertical_factor=1.0 if v is None else kv,
-        files=tuple(_file_entry(role, trace) for role, trace in
-                    (("horizontal", horizontal), ("vertical", vertical)) if trace is not None),
+        files=tuple({"role": role, "path": record.path, "sha256": record.sha256, "format": record.format,
+                     "units": record.units}
+                    for role, record in (("horizontal", horizontal), ("vertical", vertical)) if record is not None),
     )
 
 
@@ -921,9 +1003,9 @@ def _check_scale(name: str, value, positive: bool, source: str | None) -> None:
         raise RecordError(f"{name} = {value!r}; expected {expected}", source=source, field=name)
 
 
-def _check_same_grid(horizontal: obspy.Trace, vertical: obspy.Trace, source: str | None) -> None:
-    dh, dv = float(horizontal.stats.delta), float(vertical.stats.delta)
-    names = f"horizontal {_trace_name(horizontal)} and vertical {_trace_name(vertical)}"
+def _check_same_grid(horizontal: Record, vertical: Record, source: str | None) -> None:
+    dh, dv = float(horizontal.dt), float(vertical.dt)
+    names = f"horizontal {horizontal.name} and vertical {vertical.name}"
     if abs(dh - dv) > 1e-9 * max(dh, dv):
         raise RecordError(f"{names} have different dt ({dh} s and {dv} s); resample one of them "
                           "(rockslide does not resample)", source=source)
@@ -931,35 +1013,18 @@ def _check_same_grid(horizontal: obspy.Trace, vertical: obspy.Trace, source: str
     if nh != nv:
         raise RecordError(f"{names} have different lengths ({nh} and {nv} samples); expected the "
                           "same number of samples (cut or pad one of them)", source=source)
-    sh, sv = _start(horizontal), _start(vertical)
+    sh, sv = horizontal.start, vertical.start
     if abs(sh - sv) > 1e-6 * dh:
         raise RecordError(f"{names} start at different times ({sh} s and {sv} s); expected the "
                           "same start", source=source)
 
 
-def _peak_to_scale(trace: obspy.Trace, data: np.ndarray, option: str, source: str | None) -> float:
+def _peak_to_scale(record: Record, data: np.ndarray, option: str, source: str | None) -> float:
     peak = float(np.max(np.abs(data))) if data.size else 0.0
     if peak == 0.0:
-        raise RecordError(f"the record {_trace_name(trace)} is all zeros: it cannot be scaled to "
+        raise RecordError(f"the record {record.name} is all zeros: it cannot be scaled to "
                           f"{option}", source=source, field=option)
     return peak
-
-
-def _meta(trace: obspy.Trace) -> dict:
-    return dict(trace.stats.get("rockslide", {}))
-
-
-def _start(trace: obspy.Trace) -> float:
-    return float(_meta(trace).get("start", 0.0))
-
-
-def _trace_name(trace: obspy.Trace) -> str:
-    return str(_meta(trace).get("path") or trace.id)
-
-
-def _file_entry(role: str, trace: obspy.Trace) -> dict:
-    meta = _meta(trace)
-    return {"role": role, **{key: meta.get(key) for key in ("path", "sha256", "format", "units")}}
 
 
 def _frozen(array: np.ndarray) -> np.ndarray:

@@ -41,21 +41,21 @@ def load_ground(case: Case, records_dir: Path | None = None) -> rec.GroundMotion
     if is_pulse_case(case):
         return pulse_ground(case)
     folder = records_dir if records_dir is not None else rec.records_dir()
-    traces = {}
+    records = {}
     for role in ("horizontal", "vertical"):
         spec = getattr(case.ground, role)
         if spec is None:
-            traces[role] = None
+            records[role] = None
             continue
         field = f"ground.{role}.file"
         path = rec.resolve_record_path(spec.file, case_dir=case.base_dir, records_dir=folder,
                                        source=case.source, field=field)
-        traces[role] = rec.read_record(path, format=spec.format, units=spec.units,
-                                       time_column=spec.time_column, column=spec.column, dt=spec.dt,
-                                       skip_lines=spec.skip_lines)
+        records[role] = rec.load_record(path, format=spec.format, units=spec.units,
+                                        time_column=spec.time_column, column=spec.column, dt=spec.dt,
+                                        skip_lines=spec.skip_lines)
     scale = case.ground.scale
     try:
-        return rec.combine(traces["horizontal"], traces["vertical"], pga_horizontal=scale.pga_horizontal,
+        return rec.combine(records["horizontal"], records["vertical"], pga_horizontal=scale.pga_horizontal,
                            factor=scale.factor, pga_vertical=scale.pga_vertical,
                            vertical_factor=scale.vertical_factor, source=case.source,
                            still_dt=case.solver.dt)

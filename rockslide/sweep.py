@@ -491,8 +491,8 @@ def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = N
     if pulses:
         return _plan_pulses(case, axes, ratio, chunk_size, n, progress)
 
-    traces, entries = _read_traces(case, records_dir)
-    unscaled = rec.combine(traces["horizontal"], traces["vertical"], source=case.source,
+    records, entries = _read_records(case, records_dir)
+    unscaled = rec.combine(records["horizontal"], records["vertical"], source=case.source,
                            still_dt=case.solver.dt)
     check_size(case, unscaled, history=False)
 
@@ -516,7 +516,7 @@ def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = N
             if scale not in grounds:
                 if len(grounds) >= 16:
                     grounds.clear()
-                grounds[scale] = rec.combine(traces["horizontal"], traces["vertical"],
+                grounds[scale] = rec.combine(records["horizontal"], records["vertical"],
                                              pga_horizontal=scale[0], factor=scale[1],
                                              pga_vertical=scale[2], vertical_factor=scale[3],
                                              source=case.source, still_dt=case.solver.dt)
@@ -629,25 +629,23 @@ def _point_text(axes, combo) -> str:
     return ", ".join(f"{a.kind.option} {a.texts[j]}" for a, j in zip(axes, combo, strict=True))
 
 
-def _read_traces(case: Case, records_dir: Path | None):
+def _read_records(case: Case, records_dir: Path | None):
     """The case's records, read once (as `runner.load_ground` reads them)."""
     folder = records_dir if records_dir is not None else rec.records_dir()
-    traces, entries = {}, []
+    records, entries = {}, []
     for role in ("horizontal", "vertical"):
         spec = getattr(case.ground, role)
         if spec is None:
-            traces[role] = None
+            records[role] = None
             continue
         path = rec.resolve_record_path(spec.file, case_dir=case.base_dir, records_dir=folder,
                                        source=case.source, field=f"ground.{role}.file")
-        trace = rec.read_record(path, format=spec.format, units=spec.units,
-                                time_column=spec.time_column, column=spec.column, dt=spec.dt,
-                                skip_lines=spec.skip_lines)
-        traces[role] = trace
-        meta = dict(trace.stats.get("rockslide", {}))
-        entries.append({"role": role, "path": Path(str(meta.get("path", spec.file))).name,
-                        "sha256": str(meta.get("sha256", ""))})
-    return traces, entries
+        record = rec.load_record(path, format=spec.format, units=spec.units,
+                                 time_column=spec.time_column, column=spec.column, dt=spec.dt,
+                                 skip_lines=spec.skip_lines)
+        records[role] = record
+        entries.append({"role": role, "path": Path(record.path).name, "sha256": record.sha256})
+    return records, entries
 
 
 def _point_error(exc: CaseError, axes, combo) -> CaseError:

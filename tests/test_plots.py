@@ -439,6 +439,45 @@ def test_save_figure_errors(tmp_path, responses):
     assert sorted(os.listdir(tmp_path)) == ["plainfile"]
 
 
+def test_titles_are_placed_without_a_search_only_where_nothing_can_be_in_their_way():
+    """`plots._title_height` spares matplotlib's search for what a panel's titles might overlap
+    (1.0) only for y ranges it labels without an offset text (``1e-5`` over the axis, where the
+    titles are): checked against matplotlib's own tick labels for ranges holding zero from 1e-8 to
+    1e8, on a short and a tall axis; the usual ranges are spared, tiny and huge ones are not."""
+    spared = set()
+    for height in (1.0, 6.0):                          # [in]: few ticks, many ticks
+        ax = Figure(figsize=(6.0, height + 1.0), dpi=plots.DPI).subplots()
+        for span in 10.0 ** (np.arange(-32, 33) / 4.0):
+            for zero in (0.0, 0.25, 0.5, 0.9, 1.0):   # where zero is in the range
+                ax.set_ylim(-zero * span, (1.0 - zero) * span)
+                ax.yaxis.get_majorticklabels()        # ticks and their formatter, as a draw sets them
+                offset = ax.yaxis.get_major_formatter().get_offset()
+                if plots._title_height(ax) == 1.0:
+                    assert offset == "", (span, zero, height)
+                    spared.add(span)
+                else:
+                    assert plots._title_height(ax) is None
+    assert min(spared) <= 1e-3 * 1.0001 and 1e5 <= max(spared) < 1e6
+
+
+@pytest.mark.parametrize("kind", ["rest", "rockslip", "overturn"])
+def test_titles_placed_without_a_search_are_where_matplotlib_puts_them(tmp_path, responses, kind, monkeypatch):
+    """The figure is the same, byte for byte, when matplotlib searches for the titles' places."""
+    answers = []
+    title_height = plots._title_height
+
+    def recorded(*axes):
+        answers.append(title_height(*axes))
+        return answers[-1]
+
+    monkeypatch.setattr(plots, "_title_height", recorded)
+    fast = save_figure(response_figure(responses[kind], title=kind), tmp_path / "fast.png")
+    assert 1.0 in answers                              # some titles were placed without the search
+    monkeypatch.setattr(plots, "_title_height", lambda *axes: None)
+    searched = save_figure(response_figure(responses[kind], title=kind), tmp_path / "searched.png")
+    assert fast.read_bytes() == searched.read_bytes()
+
+
 def test_other_formats(tmp_path, responses):
     fig = response_figure(responses["rock"])
     assert save_figure(fig, tmp_path / "f.pdf").read_bytes()[:5] == b"%PDF-"

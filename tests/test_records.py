@@ -21,8 +21,10 @@ from rockslide.errors import RecordError
 from rockslide.records import (
     RECORDS_ENV,
     GroundMotion,
+    Record,
     RecordWarning,
     combine,
+    load_record,
     read_record,
     record_info,
     records_dir,
@@ -518,6 +520,29 @@ class TestCombine:
         assert motion.horizontal[1] == 2.0
         with pytest.raises(AttributeError):
             motion.dt = 1.0
+
+    def test_records_read_without_obspy_combine_as_their_traces(self, tmp_path):
+        """`load_record` reads rockslide's own formats without obspy: the same samples, step and
+        provenance as the Trace of `read_record`, and `combine` makes the same ground motion of
+        either, to the bit; the step is the one a Trace holds (the inverse of its sampling rate:
+        0.0019 s is not 1 / (1 / 0.0019) in float64), with which results have always been computed."""
+        dt = 0.0019
+        assert 1.0 / (1.0 / dt) != dt
+        h = write(tmp_path, "h.txt", "1.5 -2.25 3.0 0.5\n")
+        v = write(tmp_path, "v.txt", "0.25 0.5 -0.75 0.0\n")
+        records = [load_record(p, format="values", dt=dt, units="gal") for p in (h, v)]
+        traces = [read_record(p, format="values", dt=dt, units="gal") for p in (h, v)]
+        for record, trace in zip(records, traces, strict=True):
+            assert isinstance(record, Record)
+            assert record.dt == trace.stats.delta == 1.0 / (1.0 / dt)
+            assert np.array_equal(record.data, trace.data)
+            assert {k: getattr(record, k) for k in ("format", "units", "path", "sha256", "start")} == \
+                dict(trace.stats.rockslide)
+        for options in ({}, {"pga_horizontal": 8.0}, {"factor": 2.0, "pga_vertical": 0.3}):
+            a, b = combine(*records, **options), combine(*traces, **options)
+            assert (a.dt, a.start, a.files, a.horizontal_factor, a.vertical_factor) == \
+                (b.dt, b.start, b.files, b.horizontal_factor, b.vertical_factor)
+            assert np.array_equal(a.horizontal, b.horizontal) and np.array_equal(a.vertical, b.vertical)
 
     def test_dt_within_relative_tolerance(self):
         motion = combine(make_trace(H, dt=0.01), make_trace(V, dt=0.01 * (1 + 1e-12)))

@@ -28,11 +28,11 @@ REPO = Path(__file__).resolve().parents[1]
 TEMP_NAME = re.compile(r"^\..+\.\d+\.tmp$")
 
 
-def pulse_result(amplitude=6.0, mu=0.52, vertical=0.3, frequency=1.5, **settings):
+def pulse_result(amplitude=6.0, mu=0.52, vertical=0.3, frequency=1.5, on_chunk=None, **settings):
     t = np.arange(0, 10, 0.01)
     ah = amplitude * np.sin(2 * np.pi * frequency * t) * np.exp(-((t - 4) / 2) ** 2)
     model = Model.from_block(0.2, 0.1, mu, 0.95 * mu, 0.8)
-    return simulate(model, 0.01, ah, vertical * ah, Settings(tail=2.0, **settings))
+    return simulate(model, 0.01, ah, vertical * ah, Settings(tail=2.0, **settings), on_chunk=on_chunk)
 
 
 @pytest.fixture(scope="module")
@@ -206,7 +206,7 @@ def test_units_compression_and_codes(tmp_path, result):
             assert ds.attrs["units"] == units and ds.dtype == np.float64
         for name in HISTORY_COLUMNS:
             ds = f["time_history"][name]
-            assert ds.chunks and ds.compression == "gzip" and ds.compression_opts == 4 and ds.shuffle
+            assert ds.chunks and ds.compression == "gzip" and ds.compression_opts == 1 and ds.shuffle
         state = f["time_history/state"]
         assert state.dtype == np.int8
         assert state.attrs["codes"] == "0 REST, 1 SLIP, 2 ROCK, 3 ROCKSLIP, 4 OVERTURNED"
@@ -303,6 +303,51 @@ def test_streaming_gives_the_same_file(tmp_path, result):
                       records=records_for(tmp_path), extra_attrs={"command": "rockslide run"})
     assert_same_contents(file_contents(whole), file_contents(tmp_path / "streamed.h5"))
     assert leftovers(tmp_path) == ["streamed.h5", "whole.h5"]
+
+
+def assert_same_result(a, b):
+    """Two results hold the same values to the bit, with the same types."""
+    assert a.history.keys() == b.history.keys() == set(HISTORY_COLUMNS)
+    for key in HISTORY_COLUMNS:
+        assert a.history[key].dtype == b.history[key].dtype, key
+        assert np.array_equal(a.history[key], b.history[key]), key
+    assert a.events.dtype == b.events.dtype and np.array_equal(a.events, b.events)
+    assert a.summary == b.summary and a.step == b.step
+    for key in ("ground_time", "ground_horizontal", "ground_vertical"):
+        assert getattr(a, key).dtype == getattr(b, key).dtype, key
+        assert np.array_equal(getattr(a, key), getattr(b, key)), key
+
+
+@pytest.mark.parametrize("chunk_steps", [97 * 100, None])
+def test_the_result_kept_in_memory_is_the_file_read_back(tmp_path, chunk_steps):
+    """What the writer keeps for the run's figure (`ResultWriter.written_result`) equals what
+    `read_result` gives back from the file: a history streamed in 13 chunks, or given whole."""
+    with ResultWriter(tmp_path / "r.h5", keep_rows=10**6) as writer:
+        if chunk_steps is None:
+            kept = pulse_result()
+        else:
+            kept = pulse_result(chunk_steps=chunk_steps, on_chunk=writer.append_history)
+            assert kept.history["time"].size == 0 and writer.rows_written == 119_901
+        writer.finish(kept, name="demo", case_text=CASE_TEXT, case=CASE, records=records_for(tmp_path))
+    assert_same_result(writer.written_result(), read_result(tmp_path / "r.h5").result)
+
+
+def test_a_history_longer_than_keep_rows_is_read_from_the_file(tmp_path, result):
+    """Up to ``keep_rows`` streamed rows are kept; beyond, or without ``keep_rows``, none."""
+    rows = np.column_stack([result.history[k] for k in HISTORY_COLUMNS])
+    for keep, parts, expected in ((25, (10, 15), 25), (24, (10, 15), None), (0, (25,), None)):
+        with ResultWriter(tmp_path / f"s{keep}.h5", keep_rows=keep) as writer:
+            start = 0
+            for n in parts:
+                writer.append_history(rows[start:start + n])
+                start += n
+            writer.finish(result, name="s")
+        written = writer.written_result()
+        if expected is None:
+            assert written is None, keep
+        else:
+            assert written.history["time"].size == expected
+            assert_same_result(written, read_result(tmp_path / f"s{keep}.h5").result)
 
 
 def test_streamed_rows_win_over_result_history(tmp_path, result):

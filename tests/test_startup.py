@@ -1,0 +1,94 @@
+"""A warm start (issue 11): a command loads the libraries it needs when it needs them, and what a
+run does to be quick changes nothing but its speed: its figure, drawn from the result kept in
+memory, is the figure drawn from its file.
+
+The speed itself is measured by benchmarks/bench_startup.py (results/bench_startup.md), not here.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from rockslide import cli, results
+from rockslide.cli import main
+
+REPO = Path(__file__).resolve().parents[1]
+EXAMPLE = REPO / "configs" / "example.yaml"
+#: Libraries that take from a tenth of a second to most of one to load, and the commands that need them.
+HEAVY = ("numpy", "matplotlib", "obspy", "h5py", "scipy", "numba", "dask", "distributed", "tqdm", "yaml", "PIL")
+
+
+def loaded_after(*commands) -> list[list[str]]:
+    """Run each command line (a list of arguments) in turn in one fresh interpreter, in the
+    repository; give, after each, the `HEAVY` libraries loaded so far."""
+    code = f"""
+import json, sys
+from rockslide.cli import main
+seen = []
+for args in json.loads(sys.argv[1]):
+    try:
+        main(args, prog_name="rockslide", standalone_mode=False)
+    except SystemExit:
+        pass
+    seen.append(sorted(m for m in {HEAVY!r} if m in sys.modules))
+print(json.dumps(seen))
+"""
+    done = subprocess.run([sys.executable, "-c", code, json.dumps([list(map(str, c)) for c in commands])],
+                          cwd=REPO, capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr[-3000:]
+    return json.loads(done.stdout.splitlines()[-1])
+
+
+def test_help_and_version_load_no_heavy_library():
+    """``rockslide --help``, ``--version`` and every command's ``--help`` answer at once."""
+    commands = [["--help"], ["--version"]] + [[name, "--help"] for name in sorted(main.commands)]
+    assert loaded_after(*commands)[-1] == []
+
+
+def test_a_run_loads_what_it_needs(tmp_path):
+    """A run of AT2 records reads them without obspy; without its figure it loads no matplotlib;
+    a run loads no dask or tqdm (a short one shows no progress bar)."""
+    out = tmp_path / "out"
+    no_plot, with_plot = loaded_after(["run", EXAMPLE, "--out-dir", out, "--no-plot"],
+                                      ["run", EXAMPLE, "--out-dir", out, "--overwrite"])
+    assert {"numpy", "numba", "h5py", "yaml"} <= set(no_plot)
+    assert not {"matplotlib", "PIL", "obspy", "dask", "distributed", "tqdm"} & set(no_plot)
+    assert "matplotlib" in with_plot
+    assert not {"obspy", "dask", "distributed", "tqdm"} & set(with_plot)
+
+
+def short_example(folder: Path) -> Path:
+    """The shipped example on its own records, output every millisecond (22 000 rows): quick."""
+    case = folder / "example.yaml"
+    text = EXAMPLE.read_text().replace("../records/", str(REPO / "records") + "/")
+    case.write_text(text.replace("output:  {dir: out}", "output:  {dir: out, interval: 1 ms}"))
+    return case
+
+
+@pytest.mark.parametrize("kept", [True, False])
+def test_the_run_figure_is_the_figure_of_the_file(tmp_path, monkeypatch, kept):
+    """The figure a run draws from the result it holds in memory is, byte for byte, the one
+    ``rockslide plot`` draws from the file it wrote; a history longer than
+    `cli.KEEP_HISTORY_ROWS` is read back from the file instead (same figure)."""
+    case = short_example(tmp_path)
+    out = tmp_path / "out"
+    if kept:
+        def no_reading_back(path):
+            raise AssertionError("the run read its result back from the file")
+        monkeypatch.setattr(results, "read_result", no_reading_back)
+    else:
+        monkeypatch.setattr(cli, "KEEP_HISTORY_ROWS", 1000)
+    run = CliRunner().invoke(main, ["run", str(case), "--out-dir", str(out)])
+    assert run.exit_code == 0, run.output
+    monkeypatch.undo()
+    redrawn = tmp_path / "redrawn.png"
+    plot = CliRunner().invoke(main, ["plot", str(out / "example.h5"), "-o", str(redrawn)])
+    assert plot.exit_code == 0, plot.output
+    assert results.read_result(out / "example.h5").result.history["time"].size == 22_001
+    assert (out / "example.png").read_bytes() == redrawn.read_bytes()
