@@ -129,8 +129,9 @@ def temporary_path(path, *, per_thread: bool = False) -> Path:
     return path.with_name(f".{path.name}.{os.getpid()}{thread}.tmp")
 
 
-def publish(tmp: Path, path: Path, *, overwrite: bool, interruptible: bool = True) -> None:
-    """Sync ``tmp`` to disk and rename it onto ``path`` (atomic on POSIX and Windows).
+def publish(tmp: Path, path: Path, *, overwrite: bool, interruptible: bool = True, sync: bool = True) -> None:
+    """Sync ``tmp`` to disk (unless not ``sync``) and rename it onto ``path`` (atomic on POSIX and
+    Windows).
 
     Raises `interrupts.Interrupted` after Ctrl-C or SIGTERM (unless not ``interruptible``: work
     to keep, such as a finished sweep chunk), and OutputError if ``path`` exists (or appeared
@@ -138,7 +139,7 @@ def publish(tmp: Path, path: Path, *, overwrite: bool, interruptible: bool = Tru
     """
     staging = Staging(overwrite=overwrite)
     staging.add(tmp, path)
-    staging.publish(interruptible=interruptible)
+    staging.publish(interruptible=interruptible, sync=sync)
 
 
 class Staging:
@@ -190,9 +191,10 @@ class Staging:
         for tmp, _ in self.items:
             remove_quietly(tmp)
 
-    def publish(self, *, remove=(), interruptible: bool = True) -> list[Path]:
-        """Sync every temporary file, then rename them all onto their names and delete the files in
-        ``remove`` (stale companions of an earlier result), in one section (module docstring).
+    def publish(self, *, remove=(), interruptible: bool = True, sync: bool = True) -> list[Path]:
+        """Sync every temporary file (unless not ``sync``), then rename them all onto their names
+        and delete the files in ``remove`` (stale companions of an earlier result), in one section
+        (module docstring).
 
         Raises
         ------
@@ -206,8 +208,9 @@ class Staging:
         try:
             if interruptible:
                 interrupts.check()
-            for tmp, _ in self.items:
-                fsync_file(tmp)
+            if sync:
+                for tmp, _ in self.items:
+                    fsync_file(tmp)
             folders = sorted({path.parent for _, path in self.items} | {Path(p).parent for p in remove})
             with interrupts.critical(), _folder_locks(folders):
                 if self.overwrite:
@@ -223,8 +226,9 @@ class Staging:
         finally:
             self.discard()                      # temporaries left by a failure, or the linked ones
         self.published = True
-        for folder in {path.parent for _, path in self.items}:
-            fsync_folder(folder)
+        if sync:
+            for folder in {path.parent for _, path in self.items}:
+                fsync_folder(folder)
         return [path for _, path in self.items]
 
     def _link_all(self) -> None:
@@ -287,11 +291,13 @@ def _folder_locks(folders):
 
 @contextlib.contextmanager
 def atomic_write(path, *, overwrite: bool, mode: str = "wb", per_thread: bool = False, what: str = "file",
-                 staging: Staging | None = None, interruptible: bool = True):
+                 staging: Staging | None = None, interruptible: bool = True, sync: bool = True):
     """Open a temporary file for writing; on success publish it onto ``path`` (or leave it to
     ``staging`` to publish with the rest of a set), on any exception delete it. OSErrors while
     writing become one-line OutputErrors naming ``path``. After Ctrl-C or SIGTERM nothing is
-    written (`interrupts.Interrupted`), unless not ``interruptible`` (work to keep)."""
+    written (`interrupts.Interrupted`), unless not ``interruptible`` (work to keep). Not ``sync``:
+    the file is not forced to disk before the rename (for files whose damage by a power cut is
+    detected when they are read, such as checksummed sweep chunks)."""
     path = Path(path)
     tmp = staging.stage(path, per_thread=per_thread) if staging is not None else \
         temporary_path(path, per_thread=per_thread)
@@ -304,7 +310,7 @@ def atomic_write(path, *, overwrite: bool, mode: str = "wb", per_thread: bool = 
         except OSError as exc:
             raise OutputError(f"cannot write the {what}: {exc.strerror or exc}", source=str(path)) from None
         if staging is None:
-            publish(tmp, path, overwrite=overwrite, interruptible=interruptible)
+            publish(tmp, path, overwrite=overwrite, interruptible=interruptible, sync=sync)
     except BaseException:
         remove_quietly(tmp)
         raise

@@ -153,6 +153,50 @@ def test_vertical_factor_with_pga_vertical_names_the_option(tmp_path):
     one_line_error(result, "--vertical-factor", "exclusive")
 
 
+def _points_validated_in_full(case, axes, ratio):
+    """Every point through `case_with` with all its changes (what `sw._points` shortens)."""
+    import itertools
+    for combo in itertools.product(*(range(len(a)) for a in axes)):
+        changes = {}
+        for axis, j in zip(axes, combo):
+            changes.update(sw.axis_changes(axis.name, axis.values[j], case, ratio))
+        try:
+            point = case_with(case, changes)
+            runner.check_parameters(point)
+        except CaseError as exc:
+            yield combo, exc
+            return
+        yield combo, point
+
+
+@pytest.mark.parametrize("specs, bad_field", [
+    ([("mu", "0.3,0.52,0.7"), ("restitution", "0,0.8,1"), ("pga", "300gal,700gal"),
+      ("vertical_factor", "0,0.5"), ("slenderness", "0.25,0.5"), ("gravity", "9.8m/s^2,1.62m/s^2")], None),
+    ([("restitution", "0.5,1"), ("mu", "0.4,-0.1")], "contact.mu_static"),   # the second point
+    ([("pga", "500gal"), ("slenderness", "0.5,1e-12")], "block.width"),       # below the length range
+])
+def test_points_validated_per_section_equal_points_validated_in_full(example, specs, bad_field):
+    """`_points` validates each section's changes once: the points, and the first bad point with
+    its field, are those of validating every point in full."""
+    axes = [sw.parse_axis(name, spec) for name, spec in specs]
+    ratio = sw.kinetic_ratio(example, None)
+    expected = list(_points_validated_in_full(example, axes, ratio))
+    got = []
+    try:
+        for _, combo, point in sw._points(example, axes, ratio):
+            got.append((combo, point))
+    except CaseError as exc:
+        got.append((None, exc))
+    assert len(got) == len(expected)
+    assert (expected[-1][1].field if isinstance(expected[-1][1], CaseError) else None) == bad_field
+    for (combo, point), (combo_full, full) in zip(got, expected):
+        if isinstance(full, CaseError):
+            assert isinstance(point, CaseError) and point.field == full.field
+            assert sw._point_text(axes, combo_full) in str(point)
+        else:
+            assert combo == combo_full and case_to_dict(point) == case_to_dict(full)
+
+
 def test_mu_kinetic_follows_the_case_ratio(example):
     assert sw.kinetic_ratio(example, None) == 0.95
     odd = case_with(example, {"contact.mu_static": 0.55, "contact.mu_kinetic": 0.5225})
