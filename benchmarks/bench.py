@@ -19,14 +19,14 @@ import time
 from pathlib import Path
 
 import numpy as np
+from baseline import plain_rk4_rocking
 from matplotlib.figure import Figure
 from matplotlib.ticker import NullFormatter
-from numba import njit
 from scipy.integrate import quad
 
 from rockslide import records as rec
 from rockslide.core.reference import simulate_reference
-from rockslide.core.simulate import Model, Settings, simulate
+from rockslide.core.simulate import Model, Settings, ground_array, simulate
 from rockslide.synthetic import kanai_tajimi
 
 REPO = Path(__file__).resolve().parents[1]
@@ -49,32 +49,15 @@ def cpu(fn, repeat=3):
 # Speed
 # ----------------------------------------------------------------------------------------------
 
-@njit(cache=True)
-def plain_rk4_rocking(n, h, R, alpha, g, theta, rate):
-    """A plain compiled RK4 loop of free rocking (eq. 3, no ground, bounce at theta = 0): the
-    baseline the kernel's state machine, event checks and bookkeeping are measured against."""
-    c = 0.75 / R
-    for _ in range(n):
-        a1 = -c * g * math.sin(alpha - theta)
-        t2, r2 = theta + 0.5 * h * rate, rate + 0.5 * h * a1
-        a2 = -c * g * math.sin(alpha - t2)
-        t3, r3 = theta + 0.5 * h * r2, rate + 0.5 * h * a2
-        a3 = -c * g * math.sin(alpha - t3)
-        t4, r4 = theta + h * r3, rate + h * a3
-        a4 = -c * g * math.sin(alpha - t4)
-        theta, rate = theta + h / 6 * (rate + 2 * r2 + 2 * r3 + r4), rate + h / 6 * (a1 + 2 * a2 + 2 * a3 + a4)
-        if theta < 0.0:
-            theta, rate = -theta, -rate
-    return theta
-
-
 def speed(quick: bool) -> dict:
     out = {}
     R, alpha, _ = Model.from_block(0.2, 0.1, 1, 1, 1).constants
-    n_plain = 5_000_000
-    plain_rk4_rocking(10, 1e-4, R, alpha, 9.80665, 0.1, 0.0)
-    seconds, _ = cpu(lambda: plain_rk4_rocking(n_plain, 1e-4, R, alpha, 9.80665, 0.1, 0.0))
-    out["baseline: a plain compiled RK4 rocking loop (no events, no bookkeeping)"] = (n_plain / seconds, "steps/s")
+    still = ground_array(np.zeros(2501), np.zeros(2501), 0.02)                # 50 s, 200 steps per interval
+    n_plain = still.shape[1] * 200
+    plain_rk4_rocking(still[:, :1], 200, 1e-4, 0.02, R, alpha, 9.80665, 1.0, 0.1, 0.0, 1.0)     # compile or load
+    seconds, _ = cpu(lambda: plain_rk4_rocking(still, 200, 1e-4, 0.02, R, alpha, 9.80665, 1.0, 0.1, 0.0, 1.0))
+    out["baseline: a plain compiled RK4 rocking loop (no events, no bookkeeping; benchmarks/baseline.py)"] = (
+        n_plain / seconds, "steps/s")
     duration = 20.0 if quick else 60.0
     rocking = Model.from_block(0.2, 0.1, 10.0, 10.0, 1.0)          # e = 1: rocks the whole time
     n = int(duration / 0.02) + 1

@@ -222,7 +222,8 @@ def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, robustness
         if work.seconds > LONG_RUN:
             click.echo(f"rockslide: note: {work.describe()}", err=True)
         files.warn_free_space(folder, work.rows * results.BYTES_PER_ROW)
-        _note_first_compile()
+        from .core import kernel
+        _note_first_compile(kernel.run)
         with files.Staging(overwrite=overwrite) as staging:
             keep = 0 if no_plot else KEEP_HISTORY_ROWS
             with results.ResultWriter(h5_path, overwrite=overwrite, staging=staging, keep_rows=keep) as writer, \
@@ -764,11 +765,8 @@ def _compute_plan(ctx, plan, h5_path, *, what, description, label, unit, workers
     files.require_free_space(Path(h5_path).parent, sw.bytes_needed(plan, len(missing)), f"the {what}")
     show_warnings()
     if not scheduler and missing:
-        compiling = time.perf_counter()
+        _note_first_compile(batch.run_batch, "the batch kernel")
         batch.warm_up()
-        if time.perf_counter() - compiling > 3.0:
-            click.echo(f"  compiled the batch kernel in {time.perf_counter() - compiling:.0f} s (once after "
-                       "each change of the kernel)", err=err)
     computing = time.perf_counter()
     try:
         # disable=None: tqdm draws only on a terminal, so that no frames land in log files
@@ -833,18 +831,19 @@ def _command_line(ctx, case_file) -> str:
     return shlex.join(words)
 
 
-def _note_first_compile():
-    """Say so when the compiled kernel is not in numba's cache yet (the first run on a machine
-    compiles it, which takes a minute; later runs load it in a second or two)."""
-    import os
+def _note_first_compile(dispatcher, what="the numerical kernel") -> None:
+    """Say so before a compile: when ``dispatcher``'s machine code is not in numba's cache yet
+    (`compiled.is_warm`: the package build puts it there, so this is a new CPU, a new numba or an
+    edited kernel), or when no cache folder can be written at all."""
+    from .core import compiled
 
-    from .core import kernel
-    folders = [Path(kernel.__file__).parent / "__pycache__"]
-    if os.environ.get("NUMBA_CACHE_DIR"):
-        folders.append(Path(os.environ["NUMBA_CACHE_DIR"]))
-    if not any(any(folder.rglob("kernel.run-*.nbi")) for folder in folders if folder.is_dir()):
-        click.echo("rockslide: compiling the numerical kernel (first run on this machine only, "
-                   "about a minute; cached afterwards)", err=True)
+    if compiled.CACHE_IS_TEMPORARY:
+        click.echo(f"rockslide: compiling {what} in memory, for this process only (about a minute): neither "
+                   "the installation nor the user's cache folder can be written; set NUMBA_CACHE_DIR to a "
+                   "writable folder to keep it", err=True)
+    elif not compiled.is_warm(dispatcher):
+        click.echo(f"rockslide: compiling {what} for this machine (once, about a minute on 2 cores; "
+                   f"cached in {compiled.cache_folder(dispatcher)})", err=True)
 
 
 def _column(value):

@@ -4,8 +4,14 @@ numba keys the cached machine code of a function on the content of the function'
 The kernel's code includes the physics functions it calls, and the batch driver's code the kernel's,
 so an edited ``physics.py`` would leave a stale compiled kernel behind. `freshen` therefore
 compares a hash of the three sources (`source_stamp`) with the one recorded beside the cache, and
-removes the core's cached code when they differ; the next call compiles it again (and the package
-build compiles it before installation, so that users start warm).
+removes the core's cached code when they differ; the next call compiles it again.
+
+The package build compiles the core into this cache before installation (`precompile`, called by
+``setup.py``), so that the first command after ``pip install`` loads machine code instead of
+spending a minute compiling it. Where no folder numba would cache in can be written (a read-only
+installation and a read-only home), the core caches in a temporary folder that the process
+removes at exit: it compiles in memory, once per process (`CACHE_IS_TEMPORARY`), instead of
+failing at import.
 
 The stamp also identifies the compiled code elsewhere: a sweep's chunks are reused only under the
 same stamp (`sweep.definition_key`).
@@ -13,13 +19,34 @@ same stamp (`sweep.definition_key`).
 
 from __future__ import annotations
 
+import atexit
 import hashlib
 import os
+import shutil
+import tempfile
 from pathlib import Path
 
 #: The modules whose functions numba compiles, in the order their code includes each other.
 COMPILED_MODULES = ("physics", "kernel", "batch")
 STAMP_FILE = "rockslide-core.stamp"
+
+
+def _cache_is_temporary() -> bool:
+    """Make sure numba has a folder to cache the core in (module docstring); True when it is a
+    temporary one."""
+    from numba.core import caching, config
+
+    if config.CACHE_DIR:
+        return False
+    for locator in (caching.InTreeCacheLocator, caching.UserWideCacheLocator):
+        try:
+            if locator.from_function(source_stamp, __file__) is not None:
+                return False
+        except OSError:
+            pass
+    config.CACHE_DIR = tempfile.mkdtemp(prefix="rockslide-numba-")
+    atexit.register(shutil.rmtree, config.CACHE_DIR, ignore_errors=True)
+    return True
 
 
 def source_stamp() -> str:
@@ -77,4 +104,29 @@ def is_warm(dispatcher) -> bool:
     return fresh and any(folder.glob(f"{module}.{name}-*.nbi"))
 
 
-__all__ = ["COMPILED_MODULES", "source_stamp", "cache_folder", "freshen", "is_warm"]
+def precompile() -> None:
+    """Compile the core into numba's cache: `kernel.run` with the argument types `simulate` gives it
+    (which compiles every state's loop and every physics function it calls), the batch driver, and
+    the intensity measures' oscillator when scipy is there. The package build runs this in the
+    freshly built package (``setup.py``); it is also what ``rockslide`` would otherwise do on its
+    first run."""
+    import numpy as np
+
+    from . import batch, simulate
+
+    model = simulate.Model.from_block(0.2, 0.1, 0.5, 0.5, 0.8)
+    still = np.zeros(11)
+    simulate.simulate(model, 0.01, still, still, simulate.Settings(rotation=0.01))
+    batch.warm_up()
+    try:
+        from . import intensity
+    except ImportError:            # scipy is not needed to build the package
+        return
+    intensity.spectral_acceleration(still, 0.01, 0.5)
+
+
+#: True when no folder numba caches in can be written: the core compiles in memory, in every process.
+CACHE_IS_TEMPORARY = _cache_is_temporary()
+
+__all__ = ["COMPILED_MODULES", "CACHE_IS_TEMPORARY", "source_stamp", "cache_folder", "freshen", "is_warm",
+           "precompile"]

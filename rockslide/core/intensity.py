@@ -35,6 +35,8 @@ import numpy as np
 from numba import njit
 from scipy.linalg import expm
 
+from . import compiled  # noqa: F401  (before any cache=True: numba needs a cache folder)
+
 __all__ = ["DAMPING", "POINTS_PER_PERIOD", "peak_acceleration", "ground_velocity", "peak_velocity",
            "sdof_coefficients", "sdof_response", "spectral_acceleration"]
 

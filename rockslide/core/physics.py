@@ -21,6 +21,8 @@ import math
 
 from numba import njit
 
+from . import compiled  # noqa: F401  (before any cache=True: numba needs a cache folder)
+
 # State codes, in the order of docs/model.md's table. They are stored in results as int8.
 REST, SLIP, ROCK, ROCKSLIP, OVERTURNED = 0, 1, 2, 3, 4
 STATE_NAMES = ("REST", "SLIP", "ROCK", "ROCKSLIP", "OVERTURNED")
