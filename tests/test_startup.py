@@ -8,6 +8,7 @@ The speed itself is measured by benchmarks/bench_startup.py (results/bench_start
 from __future__ import annotations
 
 import json
+import math
 import subprocess
 import sys
 from pathlib import Path
@@ -92,3 +93,65 @@ def test_the_run_figure_is_the_figure_of_the_file(tmp_path, monkeypatch, kept):
     assert plot.exit_code == 0, plot.output
     assert results.read_result(out / "example.h5").result.history["time"].size == 22_001
     assert (out / "example.png").read_bytes() == redrawn.read_bytes()
+
+
+def compiled_by_commands(*commands) -> dict[str, int]:
+    """Run `compiled.precompile` (what the package build does), then each command line in one
+    fresh interpreter; give the core's functions that numba had to compile for the commands
+    (cache misses), by name."""
+    code = """
+import json, sys
+from rockslide.core import compiled
+compiled.precompile()
+from numba.core.registry import CPUDispatcher
+from rockslide.core import batch, intensity, kernel, physics
+modules = (batch, intensity, kernel, physics)
+before = {f"{m.__name__}.{n}": sum(d.stats.cache_misses.values())
+          for m in modules for n, d in vars(m).items() if isinstance(d, CPUDispatcher)}
+from rockslide.cli import main
+for args in json.loads(sys.argv[1]):
+    main(args, prog_name="rockslide", standalone_mode=False)
+missed = {f"{m.__name__}.{n}": sum(d.stats.cache_misses.values())
+          for m in modules for n, d in vars(m).items() if isinstance(d, CPUDispatcher)}
+print(json.dumps({name: n - before[name] for name, n in missed.items() if n > before[name]}))
+"""
+    done = subprocess.run([sys.executable, "-c", code, json.dumps([list(map(str, c)) for c in commands])],
+                          cwd=REPO, capture_output=True, text=True, timeout=900)
+    assert done.returncode == 0, done.stderr[-3000:]
+    return json.loads(done.stdout.splitlines()[-1])
+
+
+@pytest.mark.slow
+def test_after_the_build_compile_a_run_and_a_sweep_compile_nothing(tmp_path):
+    """What the package build compiles (`compiled.precompile`) is every compiled function a run
+    and a sweep call, with the argument types they call it with: a new user's first commands load
+    machine code and compile nothing (cache misses are counted by numba per function)."""
+    compiled = compiled_by_commands(
+        ["run", EXAMPLE, "--out-dir", tmp_path, "--no-plot"],
+        ["sweep", EXAMPLE, "--mu", "0.3:0.5:0.2", "--out-dir", tmp_path, "--no-plot", "--no-progress"])
+    assert compiled == {}
+
+
+def test_without_a_writable_cache_folder_the_core_compiles_in_memory(tmp_path):
+    """Neither the installation's ``__pycache__`` nor the user's cache folder can be written (here:
+    numba's in-tree locator refused, and HOME a plain file): importing the core still works, numba
+    caches in a temporary folder for this process only, and that folder is gone at exit."""
+    home = tmp_path / "home"
+    home.write_text("not a folder")
+    code = """
+from numba.core import caching
+caching.InTreeCacheLocator.from_function = classmethod(lambda cls, py_func, py_file: None)
+from rockslide.core import compiled, physics
+from numba.core import config
+print(compiled.CACHE_IS_TEMPORARY, config.CACHE_DIR, physics.rock_acceleration(0.0, 0.0, 9.8, 1.0, 0.5, 0.3))
+"""
+    env = {key: value for key, value in __import__("os").environ.items()
+           if key not in ("NUMBA_CACHE_DIR", "XDG_CACHE_HOME")}
+    env["HOME"] = str(home)
+    done = subprocess.run([sys.executable, "-c", code], cwd=REPO, capture_output=True, text=True, env=env,
+                          timeout=300)
+    assert done.returncode == 0, done.stderr[-3000:]
+    temporary, folder, acceleration = done.stdout.split()
+    assert temporary == "True"
+    assert float(acceleration) == 0.75 / 0.5 * (-9.8 * math.sin(0.3))    # eq. 3, still ground
+    assert not Path(folder).exists()

@@ -158,7 +158,7 @@ def _points_validated_in_full(case, axes, ratio):
     import itertools
     for combo in itertools.product(*(range(len(a)) for a in axes)):
         changes = {}
-        for axis, j in zip(axes, combo):
+        for axis, j in zip(axes, combo, strict=True):
             changes.update(sw.axis_changes(axis.name, axis.values[j], case, ratio))
         try:
             point = case_with(case, changes)
@@ -189,7 +189,7 @@ def test_points_validated_per_section_equal_points_validated_in_full(example, sp
         got.append((None, exc))
     assert len(got) == len(expected)
     assert (expected[-1][1].field if isinstance(expected[-1][1], CaseError) else None) == bad_field
-    for (combo, point), (combo_full, full) in zip(got, expected):
+    for (combo, point), (combo_full, full) in zip(got, expected, strict=True):
         if isinstance(full, CaseError):
             assert isinstance(point, CaseError) and point.field == full.field
             assert sw._point_text(axes, combo_full) in str(point)
