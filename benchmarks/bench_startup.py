@@ -337,7 +337,8 @@ def cold(repeat: int, keep: bool) -> None:
         print(line + "  ")
     state = f"HEAD {head}" + (" (the working tree has uncommitted changes: not measured)" if dirty else "")
     times = f"{repeat} times" if repeat > 1 else "once"
-    print(f"a clone of {state}, its wheel built ({setup:.0f} s) and installed with its dependencies into a new "
+    print(f"a clone of {state}, its wheel built ({setup:.0f} s, of which most is compiling the core into the "
+          "numba cache the wheel carries: setup.py) and installed with its dependencies into a new "
           f"virtual environment ({install:.0f} s); then, {times}: the wheel installed afresh (no numba "
           "cache but what it ships), an empty HOME, and in the clone:\n")
     print("| step | wall [s] | CPU [s] | goal (wall) | what it said (stderr, and stdout about compiling) |")
