@@ -113,7 +113,7 @@ def versions() -> str:
 
 
 def other_busy_processes() -> str:
-    """Processes using 10 % of a core or more (``ps``), this benchmark left out."""
+    """Processes using 10 % of a core or more (``ps``), this benchmark and ``ps`` itself left out."""
     try:
         ps = subprocess.run(["ps", "-eo", "pid=,pcpu=,comm="], capture_output=True, text=True, timeout=10).stdout
     except (OSError, subprocess.SubprocessError):
@@ -122,7 +122,7 @@ def other_busy_processes() -> str:
     busy = []
     for line in ps.splitlines():
         pid, pcpu, comm = line.split(None, 2)
-        if int(pid) not in ours and float(pcpu) >= 10.0:
+        if int(pid) not in ours and float(pcpu) >= 10.0 and comm.strip() != "ps":
             busy.append(f"{comm} {float(pcpu):.0f} %")
     return ", ".join(busy)
 
