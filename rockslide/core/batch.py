@@ -27,7 +27,7 @@ from numba import njit
 
 from . import kernel as K
 
-__all__ = ["compute", "warm_up", "run_batch"]
+__all__ = ["compute", "warm_up", "warm_up_case", "run_batch"]
 
 
 @njit(nogil=True, cache=True)
@@ -91,12 +91,18 @@ def compute(params, states, base, first, count, kh, kv):
     return out
 
 
-def warm_up():
-    """Compile the driver, or load it from numba's cache, on a trivial case (a block at rest on
-    still ground), so that the first real batch is not charged with it."""
+def warm_up_case():
+    """`compute`'s arguments for a trivial case (a block at rest on still ground), which compiles a
+    driver, or loads it from numba's cache, at almost no cost."""
     p = np.zeros((1, K.N_PARAMS))
     p[0, K.P_R], p[0, K.P_ALPHA], p[0, K.P_TAN_ALPHA] = 0.1, 0.5, np.tan(0.5)
     p[0, K.P_G], p[0, K.P_MU], p[0, K.P_NU], p[0, K.P_E] = 9.80665, 0.5, 0.5, 0.8
     p[0, K.P_H], p[0, K.P_DT_REC], p[0, K.P_N_SUB], p[0, K.P_LOCATED] = 0.01, 0.01, 1.0, 1.0
     states = K.new_state()[None, :]
-    compute(p, states, np.zeros((4, 1)), 0, 1, np.ones(1), np.ones(1))
+    return p, states, np.zeros((4, 1)), 0, 1, np.ones(1), np.ones(1)
+
+
+def warm_up():
+    """Compile the driver, or load it from numba's cache, on `warm_up_case`, so that the first real
+    batch is not charged with it."""
+    compute(*warm_up_case())
