@@ -27,7 +27,7 @@ from numba import njit
 
 from . import kernel as K
 
-__all__ = ["compute", "warm_up", "warm_up_case", "run_batch"]
+__all__ = ["compute", "kernel_inputs", "warm_up", "warm_up_case", "run_batch"]
 
 
 @njit(nogil=True, cache=True)
@@ -77,18 +77,23 @@ def compute(params, states, base, first, count, kh, kv):
     numpy.ndarray
         float64[n, N_STATE]: the final states.
     """
+    params, out, base, count = kernel_inputs(params, states, base, first, count, kh, kv)
+    if params.shape[0]:
+        run_batch(params, out, base, K.rest_bounds(base), count)
+    return out
+
+
+def kernel_inputs(params, states, base, first, count, kh, kv):
+    """`compute`'s arguments as the kernel takes them: ``(params, states, base, count)``, fresh
+    C-contiguous float64 (int64 ``count``) arrays, each case's record columns set in ``params``."""
     params = np.array(params, dtype=np.float64, order="C", copy=True)
-    out = np.array(states, dtype=np.float64, order="C", copy=True)
+    states = np.array(states, dtype=np.float64, order="C", copy=True)
     n = params.shape[0]
-    if n == 0:
-        return out
     base = np.ascontiguousarray(base, dtype=np.float64)
     params[:, K.P_FIRST] = np.broadcast_to(first, n)
     params[:, K.P_KH] = np.broadcast_to(kh, n)
     params[:, K.P_KV] = np.broadcast_to(kv, n)
-    run_batch(params, out, base, K.rest_bounds(base),
-              np.ascontiguousarray(np.broadcast_to(count, n), dtype=np.int64))
-    return out
+    return params, states, base, np.ascontiguousarray(np.broadcast_to(count, n), dtype=np.int64)
 
 
 def warm_up_case():

@@ -166,17 +166,11 @@ def compute(params, states, base, first, count, kh, kv):
         numba-cuda is not installed or finds no GPU.
     """
     kernel = _device_kernel()
-    params = np.array(params, dtype=np.float64, order="C", copy=True)
-    out = np.array(states, dtype=np.float64, order="C", copy=True)
+    params, out, base, count = batch.kernel_inputs(params, states, base, first, count, kh, kv)
     n = params.shape[0]
     if n == 0:
         return out
-    base = np.ascontiguousarray(base, dtype=np.float64)
-    params[:, K.P_FIRST] = np.broadcast_to(first, n)
-    params[:, K.P_KH] = np.broadcast_to(kh, n)
-    params[:, K.P_KV] = np.broadcast_to(kv, n)
-    count = np.ascontiguousarray(np.broadcast_to(count, n), dtype=np.int64)
-    order = launch_order(params, base, first, count, kh)
+    order = launch_order(params, base, params[:, K.P_FIRST], count, params[:, K.P_KH])
     d_states = cuda.to_device(np.ascontiguousarray(out[order]))
     blocks = math.ceil(n / THREADS_PER_BLOCK)
     kernel[blocks, THREADS_PER_BLOCK](
