@@ -538,6 +538,9 @@ def _axis_option(name: str, kind: str, what: str, example: str):
 @click.option("--scheduler", default=None, metavar="ADDRESS",
               help="Compute the chunks on this dask.distributed scheduler (e.g. tcp://10.0.0.5:8786), "
                    "one task per chunk.")
+@click.option("--device", type=click.Choice(["cpu", "gpu"]), default="cpu", show_default=True,
+              help="Compute a local run on the CPU's cores or on an NVIDIA GPU (needs the extra: "
+                   "pip install 'rockslide[gpu]'; README, 'GPU').")
 @click.option("--chunk-size", type=int, default=None, metavar="N",
               help="Cases per chunk (default: about 1/100 of the grid, 4 to 256). Part of the sweep's "
                    "definition: a different size does not resume an interrupted run.")
@@ -545,7 +548,7 @@ def _axis_option(name: str, kind: str, what: str, example: str):
               help="No progress bar on stderr (there is none anyway when stderr is not a terminal).")
 @dpi_option("PNG maps")
 def sweep(case_file, mu, pga, vertical_factor, restitution, slenderness, gravity, amplitude, period, duration,
-          mu_kinetic_ratio, records_dir, out_dir, overwrite, no_plot, workers, scheduler, chunk_size,
+          mu_kinetic_ratio, records_dir, out_dir, overwrite, no_plot, workers, scheduler, device, chunk_size,
           no_progress, dpi):
     """Grid of cases over friction, intensity, vertical factor, restitution, slenderness or gravity,
     or over a pulse's amplitude and period or duration: CASE_FILE (YAML) -> OUT/NAME.sweep.h5 and
@@ -574,10 +577,7 @@ def sweep(case_file, mu, pga, vertical_factor, restitution, slenderness, gravity
     started = time.perf_counter()
     case = load_case(case_file)
     axes = [sw.parse_axis(name, text) for name, text in ctx.meta.get("rockslide.sweep.axes", [])]
-    if workers is not None and scheduler:
-        raise CaseError("sets the local threads; with --scheduler the cluster's workers compute",
-                        source="--workers")
-    sw.check_workers(workers)
+    _check_where(workers, scheduler, device)
     if scheduler:
         scheduler = sw.scheduler_address(scheduler)
     folder = (Path(out_dir) if out_dir is not None else Path(case.output.dir)).expanduser()
@@ -601,7 +601,7 @@ def sweep(case_file, mu, pga, vertical_factor, restitution, slenderness, gravity
     files.remove_stale_temporaries([h5_path, png_path])
     store, states, n_new, computed = _compute_plan(
         ctx, plan, h5_path, what="sweep", description=plan.describe(), label=case.name, unit="case",
-        workers=workers, scheduler=scheduler, no_progress=no_progress)
+        workers=workers, scheduler=scheduler, device=device, no_progress=no_progress)
     variables = sw.sweep_variables(plan, states)
     with files.Staging(overwrite=overwrite) as staging:
         results.write_sweep(h5_path, sw.coordinates(plan), variables, overwrite=overwrite, staging=staging,
@@ -648,12 +648,15 @@ def sweep(case_file, mu, pga, vertical_factor, restitution, slenderness, gravity
               help="Threads for a local run (default: all cores).")
 @click.option("--scheduler", default=None, metavar="ADDRESS",
               help="Compute the chunks on this dask.distributed scheduler (e.g. tcp://10.0.0.5:8786).")
+@click.option("--device", type=click.Choice(["cpu", "gpu"]), default="cpu", show_default=True,
+              help="Compute a local run on the CPU's cores or on an NVIDIA GPU (needs the extra: "
+                   "pip install 'rockslide[gpu]'; README, 'GPU').")
 @click.option("--chunk-size", type=int, default=None, metavar="N",
               help="Runs per chunk (default: about 1/100 of them, 4 to 256); part of the definition.")
 @click.option("--no-progress", is_flag=True, help="No progress bar on stderr.")
 @dpi_option("figure (PNG)")
 def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, resamples, records_dir,
-              out_dir, as_json, overwrite, no_plot, workers, scheduler, chunk_size, no_progress, dpi):
+              out_dir, as_json, overwrite, no_plot, workers, scheduler, device, chunk_size, no_progress, dpi):
     """Fragility curves of a block over a record suite scaled to levels of an intensity measure:
     CASE_FILE (YAML) -> OUT/NAME.fragility.h5 and OUT/NAME.fragility.png.
 
@@ -683,10 +686,7 @@ def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, 
     im = fr.parse_im(im_text)
     levels = fr.parse_levels(levels_text, im)
     states = fr.damage_states(damage_texts)
-    if workers is not None and scheduler:
-        raise CaseError("sets the local threads; with --scheduler the cluster's workers compute",
-                        source="--workers")
-    sw.check_workers(workers)
+    _check_where(workers, scheduler, device)
     if scheduler:
         scheduler = sw.scheduler_address(scheduler)
     suite = fr.suite_from(suite_spec, units=units)
@@ -701,7 +701,7 @@ def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, 
     plan = fplan.plan
     store, final_states, n_new, computed = _compute_plan(
         ctx, plan, h5_path, what="fragility", description=fplan.describe(), label=case.name, unit="run",
-        workers=workers, scheduler=scheduler, no_progress=no_progress, err=as_json)
+        workers=workers, scheduler=scheduler, device=device, no_progress=no_progress, err=as_json)
     analysis = fr.analyse(fplan, final_states, states, resamples=resamples)
     coords, variables, attrs = fr.dataset(fplan, analysis, _command_line(ctx, case_file))
     with files.Staging(overwrite=overwrite) as staging:
@@ -728,8 +728,24 @@ def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, 
     click.echo(f"  wrote {written} in {elapsed:.1f} s")
 
 
+def _check_where(workers, scheduler, device):
+    """Refuse ``--workers``, ``--scheduler`` and ``--device`` that do not go together, a bad
+    ``--workers``, and ``--device gpu`` where no GPU can be used (before any planning)."""
+    from . import sweep as sw
+
+    if workers is not None and scheduler:
+        raise CaseError("sets the local threads; with --scheduler the cluster's workers compute",
+                        source="--workers")
+    if device != "cpu" and scheduler:
+        raise CaseError("with --scheduler the cluster's workers compute, on their CPUs", source="--device")
+    if device != "cpu" and workers is not None:
+        raise CaseError("sets the CPU threads; with --device gpu the GPU computes", source="--workers")
+    sw.check_workers(workers)
+    sw.check_device(device)
+
+
 def _compute_plan(ctx, plan, h5_path, *, what, description, label, unit, workers, scheduler, no_progress,
-                  err=False):
+                  device="cpu", err=False):
     """Compute what a sweep plan (`sweep.Plan`) still misses, with the chunks kept beside ``h5_path``
     (`sweep.ChunkStore`): say what is reused (and which stored chunks cannot be), check the free
     space, compile the kernel, show a progress bar, and on Ctrl-C or SIGTERM keep the finished chunks
@@ -754,7 +770,8 @@ def _compute_plan(ctx, plan, h5_path, *, what, description, label, unit, workers
         click.echo(f"  note: {store.path(chunk)} cannot be used ({reason}); computing it again", err=err)
     reused = plan.n_chunks - len(missing)
     reused_cases = plan.n_cases - sum(plan.chunk_indices(c).size for c in missing)
-    where = f"on the dask scheduler {scheduler}" if scheduler else "on this machine"
+    where = (f"on the dask scheduler {scheduler}" if scheduler else
+             "on this machine's GPU" if device == "gpu" else "on this machine")
     click.echo(f"{what} {label}: {description} in {plan.n_chunks} chunks, {where}", err=err)
     if reused:
         click.echo(f"  reused {reused} of {plan.n_chunks} chunks ({reused_cases} {unit}s) from {store.folder}",
@@ -765,14 +782,23 @@ def _compute_plan(ctx, plan, h5_path, *, what, description, label, unit, workers
     files.require_free_space(Path(h5_path).parent, sw.bytes_needed(plan, len(missing)), f"the {what}")
     show_warnings()
     if not scheduler and missing:
-        _note_first_compile(batch.run_batch, "the batch kernel")
-        batch.warm_up()
+        if device == "gpu":
+            from .core import gpu
+            compiling = time.perf_counter()
+            gpu.warm_up()
+            if time.perf_counter() - compiling > 3.0:
+                click.echo(f"  compiled the device kernel in {time.perf_counter() - compiling:.0f} s (once after "
+                           "each change of the kernel)", err=err)
+        else:
+            _note_first_compile(batch.run_batch, "the batch kernel")
+            batch.warm_up()
     computing = time.perf_counter()
     try:
         # disable=None: tqdm draws only on a terminal, so that no frames land in log files
         with tqdm(total=plan.n_cases, initial=reused_cases, unit=unit, file=sys.stderr,
                   disable=True if no_progress else None, dynamic_ncols=True, desc=label, smoothing=0.1) as bar:
-            sw.compute(plan, store, missing, workers=workers, scheduler=scheduler, progress=bar.update)
+            sw.compute(plan, store, missing, workers=workers, scheduler=scheduler, progress=bar.update,
+                       device=device)
     except interrupts.Interrupted as exc:
         kept = store.count()
         click.echo(f"rockslide: {exc.word}: {kept} of {plan.n_chunks} chunks are kept in {store.folder}; "

@@ -43,7 +43,10 @@ without history or event log.
 - **Where.** Locally on a pool of threads, one chunk per task (`batch.compute`, which releases the
   GIL; a thread takes the next chunk as soon as it is done), or
   on a dask.distributed cluster: one task per chunk (`batch.compute`)
-  returning plain numpy arrays. Both give identical results.
+  returning plain numpy arrays. Both give identical results. Or on an NVIDIA GPU (``--device gpu``,
+  the optional extra ``rockslide[gpu]``: `core.gpu`, the same kernel compiled for the device),
+  many chunks per launch (`DEVICE_CASES_PER_LAUNCH`); the device may round the last bits
+  differently (fused multiply-adds).
 """
 
 from __future__ import annotations
@@ -837,7 +840,8 @@ class ChunkStore:
 
 
 def compute(plan: Plan, store: ChunkStore, chunks: Sequence[int], *, workers: int | None = None,
-            scheduler: str | None = None, progress: Callable[[int], None] | None = None) -> None:
+            scheduler: str | None = None, progress: Callable[[int], None] | None = None,
+            device: str = "cpu") -> None:
     """Compute ``chunks`` of ``plan`` and store each as soon as it is done.
 
     Parameters
@@ -853,20 +857,72 @@ def compute(plan: Plan, store: ChunkStore, chunks: Sequence[int], *, workers: in
         Address of a dask.distributed scheduler: the chunks are computed there, one task each.
     progress : callable, optional
         Called with the number of cases of each finished chunk.
+    device : {"cpu", "gpu"}
+        Where a local run computes (`DEVICES`): the CPU's cores, or an NVIDIA GPU (`core.gpu`).
 
     Raises
     ------
     CaseError
-        ``workers`` out of range, or the scheduler cannot be reached, is lost, or a task fails
-        there (the chunks finished before are stored).
+        ``workers`` out of range, the scheduler cannot be reached, is lost, or a task fails there
+        (the chunks finished before are stored), or no GPU can be used (`check_device`).
     interrupts.Interrupted
         After Ctrl-C or SIGTERM, checked between chunk groups; the chunks finished before it are
         stored.
     """
+    check_device(device)
     if scheduler:
         _compute_dask(plan, store, chunks, scheduler, progress)
+    elif device == "gpu":
+        _compute_device(plan, store, chunks, progress)
     else:
         _compute_local(plan, store, chunks, workers, progress)
+
+
+#: Where a local sweep computes (``--device``).
+DEVICES = ("cpu", "gpu")
+
+#: Cases per launch of the GPU kernel: enough to fill a large GPU many times over (an H100 keeps
+#: some 10^4 to 10^5 threads of a register-heavy kernel resident) and to sort by work over many
+#: chunks, few enough for the progress bar and Ctrl-C to come every launch.
+DEVICE_CASES_PER_LAUNCH = 1 << 16
+
+
+def check_device(device: str) -> None:
+    """Refuse a ``--device`` that is not one of `DEVICES`, or ``gpu`` where no GPU run can be made
+    (numba-cuda not installed, no CUDA GPU or driver), with one line saying why."""
+    if device not in DEVICES:
+        raise CaseError(f"must be one of {', '.join(DEVICES)}, got {device!r}", source="--device")
+    if device == "gpu":
+        from .core import gpu
+        try:
+            gpu.require_device()
+        except gpu.DeviceUnavailable as exc:
+            raise CaseError(str(exc), source="--device gpu") from None
+
+
+def _compute_device(plan, store, chunks, progress):
+    """The chunks on the GPU (`core.gpu.compute`), as many per launch as make up to
+    `DEVICE_CASES_PER_LAUNCH` cases (the device sorts a launch's cases by work); each chunk of a
+    launch is stored when the launch is done. Ctrl-C is checked between launches."""
+    from .core import gpu
+
+    group: list[int] = []
+    cases = 0
+    for position, chunk in enumerate(chunks):
+        group.append(chunk)
+        cases += plan.chunk_indices(chunk).size
+        if cases < DEVICE_CASES_PER_LAUNCH and position + 1 < len(chunks):
+            continue
+        interrupts.check()
+        parts = [plan.chunk_indices(c) for c in group]
+        final = gpu.compute(*_chunk_inputs(plan, np.concatenate(parts)))
+        for c, indices, part in zip(group, parts, np.split(final, np.cumsum([p.size for p in parts])[:-1]),
+                                    strict=True):
+            store.save(c, indices, part)
+        if progress is not None:
+            progress(cases)
+        group, cases = [], 0
+    interrupts.check()
 
 
 def check_workers(workers: int | None) -> None:

@@ -27,7 +27,7 @@ from numba import njit
 
 from . import kernel as K
 
-__all__ = ["compute", "warm_up", "run_batch"]
+__all__ = ["compute", "kernel_inputs", "warm_up", "warm_up_case", "run_batch"]
 
 
 @njit(nogil=True, cache=True)
@@ -77,26 +77,37 @@ def compute(params, states, base, first, count, kh, kv):
     numpy.ndarray
         float64[n, N_STATE]: the final states.
     """
+    params, out, base, count = kernel_inputs(params, states, base, first, count, kh, kv)
+    if params.shape[0]:
+        run_batch(params, out, base, K.rest_bounds(base), count)
+    return out
+
+
+def kernel_inputs(params, states, base, first, count, kh, kv):
+    """`compute`'s arguments as the kernel takes them: ``(params, states, base, count)``, fresh
+    C-contiguous float64 (int64 ``count``) arrays, each case's record columns set in ``params``."""
     params = np.array(params, dtype=np.float64, order="C", copy=True)
-    out = np.array(states, dtype=np.float64, order="C", copy=True)
+    states = np.array(states, dtype=np.float64, order="C", copy=True)
     n = params.shape[0]
-    if n == 0:
-        return out
     base = np.ascontiguousarray(base, dtype=np.float64)
     params[:, K.P_FIRST] = np.broadcast_to(first, n)
     params[:, K.P_KH] = np.broadcast_to(kh, n)
     params[:, K.P_KV] = np.broadcast_to(kv, n)
-    run_batch(params, out, base, K.rest_bounds(base),
-              np.ascontiguousarray(np.broadcast_to(count, n), dtype=np.int64))
-    return out
+    return params, states, base, np.ascontiguousarray(np.broadcast_to(count, n), dtype=np.int64)
 
 
-def warm_up():
-    """Compile the driver, or load it from numba's cache, on a trivial case (a block at rest on
-    still ground), so that the first real batch is not charged with it."""
+def warm_up_case():
+    """`compute`'s arguments for a trivial case (a block at rest on still ground), which compiles a
+    driver, or loads it from numba's cache, at almost no cost."""
     p = np.zeros((1, K.N_PARAMS))
     p[0, K.P_R], p[0, K.P_ALPHA], p[0, K.P_TAN_ALPHA] = 0.1, 0.5, np.tan(0.5)
     p[0, K.P_G], p[0, K.P_MU], p[0, K.P_NU], p[0, K.P_E] = 9.80665, 0.5, 0.5, 0.8
     p[0, K.P_H], p[0, K.P_DT_REC], p[0, K.P_N_SUB], p[0, K.P_LOCATED] = 0.01, 0.01, 1.0, 1.0
     states = K.new_state()[None, :]
-    compute(p, states, np.zeros((4, 1)), 0, 1, np.ones(1), np.ones(1))
+    return p, states, np.zeros((4, 1)), 0, 1, np.ones(1), np.ones(1)
+
+
+def warm_up():
+    """Compile the driver, or load it from numba's cache, on `warm_up_case`, so that the first real
+    batch is not charged with it."""
+    compute(*warm_up_case())

@@ -1,9 +1,9 @@
-"""The compiled core on disk: numba's cache of `physics`, `kernel` and `batch`, kept fresh.
+"""The compiled core on disk: numba's cache of `physics`, `kernel`, `batch` and `gpu`, kept fresh.
 
 numba keys the cached machine code of a function on the content of the function's own source file.
 The kernel's code includes the physics functions it calls, and the batch driver's code the kernel's,
 so an edited ``physics.py`` would leave a stale compiled kernel behind. `freshen` therefore
-compares a hash of the three sources (`source_stamp`) with the one recorded beside the cache, and
+compares a hash of their sources (`source_stamp`) with the one recorded beside the cache, and
 removes the core's cached code when they differ; the next call compiles it again.
 
 The package build compiles the core into this cache before installation (`precompile`, called by
@@ -27,7 +27,7 @@ import tempfile
 from pathlib import Path
 
 #: The modules whose functions numba compiles, in the order their code includes each other.
-COMPILED_MODULES = ("physics", "kernel", "batch")
+COMPILED_MODULES = ("physics", "kernel", "batch", "gpu")
 STAMP_FILE = "rockslide-core.stamp"
 
 
