@@ -156,8 +156,14 @@ def test_a_chunk_group_computed_when_the_signal_comes_is_kept(ws, monkeypatch):
     store = sw.ChunkStore.beside(ws / "out" / "example.sweep.h5", plan.key)
     compute = batch.compute
 
+    signalled = []
+
     def interrupted_meanwhile(*args, **kwargs):
-        os.kill(os.getpid(), signal.SIGINT)
+        if not signalled:       # one signal, during the first chunk, handled before that chunk ends
+            signalled.append(os.kill(os.getpid(), signal.SIGINT))
+            deadline = time.monotonic() + 30.0
+            while interrupts.requested() is None and time.monotonic() < deadline:
+                time.sleep(0.001)
         return compute(*args, **kwargs)
 
     monkeypatch.setattr(batch, "compute", interrupted_meanwhile)
