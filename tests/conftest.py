@@ -46,6 +46,14 @@ def records_dir_real() -> Path:
     return folder
 
 
+def invoke(*args):
+    """``rockslide ARGS`` in this process (click's runner); each argument as a string."""
+    from click.testing import CliRunner
+
+    from rockslide.cli import main
+    return CliRunner().invoke(main, [str(a) for a in args])
+
+
 def one_line_error(result, *parts):
     """Exit code 2 and one line on stderr naming each of ``parts``."""
     lines = result.stderr.splitlines()

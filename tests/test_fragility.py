@@ -14,15 +14,13 @@ import math
 import numpy as np
 import pytest
 import yaml
-from click.testing import CliRunner
-from conftest import REPO, real_records_dir
+from conftest import REPO, invoke, one_line_error, real_records_dir
 from scipy import optimize, stats
 
 from rockslide import fragility as fr
 from rockslide import results, runner
 from rockslide import sweep as sw
 from rockslide.case import case_to_dict, load_case, load_suite
-from rockslide.cli import main
 from rockslide.core import batch, intensity
 from rockslide.core import kernel as K
 from rockslide.errors import CaseError, RockslideError
@@ -43,19 +41,6 @@ def compiled():
 @pytest.fixture(scope="module")
 def example():
     return load_case(EXAMPLE)
-
-
-def invoke(*args):
-    return CliRunner().invoke(main, [str(a) for a in args])
-
-
-def one_line_error(result, *parts):
-    lines = result.stderr.splitlines()
-    assert result.exit_code == 2, (result.exit_code, result.output, result.exception)
-    assert len(lines) == 1 and lines[0].startswith("rockslide: error: "), result.stderr
-    for part in parts:
-        assert part in lines[0], f"{part!r} not in {lines[0]!r}"
-    return lines[0]
 
 
 # --------------------------------------------------------------------------------------------------

@@ -18,11 +18,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from click.testing import CliRunner
-from conftest import one_line_error
+from conftest import invoke, one_line_error
 
 from rockslide import results
-from rockslide.cli import main
 from rockslide.core import batch, gpu
 from rockslide.core import kernel as K
 
@@ -39,10 +37,6 @@ needs_numba_cuda = pytest.mark.skipif(importlib.util.find_spec("numba_cuda") is 
 def compiled():
     """Compile (or load) the CPU batch driver once, before any subprocess needs it."""
     batch.warm_up()
-
-
-def invoke(*args):
-    return CliRunner().invoke(main, [str(a) for a in args])
 
 
 def simulated(*args, code=None):

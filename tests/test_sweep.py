@@ -17,13 +17,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
-from click.testing import CliRunner
-from conftest import one_line_error
+from conftest import invoke, one_line_error
 
 from rockslide import results, runner
 from rockslide import sweep as sw
 from rockslide.case import case_to_dict, case_with, load_case
-from rockslide.cli import main
 from rockslide.core import batch
 from rockslide.core import kernel as K
 from rockslide.errors import CaseError
@@ -47,10 +45,6 @@ def compiled():
 @pytest.fixture(scope="module")
 def example():
     return load_case(EXAMPLE)
-
-
-def invoke(*args):
-    return CliRunner().invoke(main, [str(a) for a in args])
 
 
 def sweep_args(out: Path, *axes, extra=()):
