@@ -167,8 +167,13 @@ def test_a_chunk_group_computed_when_the_signal_comes_is_kept(ws, monkeypatch):
         return compute(*args, **kwargs)
 
     monkeypatch.setattr(batch, "compute", interrupted_meanwhile)
-    with interrupts.handling_signals(), pytest.raises(interrupts.Interrupted):
-        sw.compute(plan, store, range(plan.n_chunks), workers=1)
+    # a background job (a CI script started with &) inherits SIGINT ignored, which handling_signals respects
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        with interrupts.handling_signals(), pytest.raises(interrupts.Interrupted):
+            sw.compute(plan, store, range(plan.n_chunks), workers=1)
+    finally:
+        signal.signal(signal.SIGINT, previous)
     assert 1 <= store.count() < plan.n_chunks
     assert sw.missing_chunks(plan, store) == list(range(store.count(), plan.n_chunks))
 
