@@ -35,9 +35,9 @@ from pathlib import Path
 
 import numpy as np
 from bench_fragility import BLOCKS, CASE, find_suite
+from bench_startup import KOBE, find_records
 
 REPO = Path(__file__).resolve().parents[1]
-KOBE = ("kobe_jma_1995_ns_peer_rsn1106_kjm000.at2", "kobe_jma_1995_ud_peer_rsn1106_kjmup.at2")
 ROCKING_CASE = """\
 name: rocking
 block:   {{height: 2.5 m, width: 0.5 m, mass: 500 kg}}
@@ -51,11 +51,9 @@ EXTREME_TOLERANCE = 1e-9
 
 
 def kobe_records() -> tuple[Path, Path | None, str]:
-    folders = [Path(os.environ["ROCKSLIDE_RECORDS"])] if os.environ.get("ROCKSLIDE_RECORDS") else []
-    folders.append(REPO.parent / "shared" / "records")
-    for folder in folders:
-        if all((folder / name).is_file() for name in KOBE):
-            return folder / KOBE[0], folder / KOBE[1], "the 150 s Kobe record (N-S + U-D)"
+    folder = find_records()
+    if folder is not None:
+        return folder / KOBE[0], folder / KOBE[1], "the 150 s Kobe record (N-S + U-D)"
     return REPO / "records" / "synthetic_kt_h.at2", None, "the synthetic record (Kobe not found)"
 
 

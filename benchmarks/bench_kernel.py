@@ -39,7 +39,7 @@ from pathlib import Path
 
 import numpy as np
 from baseline import plain_rk4_rocking
-from bench_startup import other_busy_processes
+from bench_startup import KOBE, find_records, other_busy_processes
 
 from rockslide import records as rec
 from rockslide import results
@@ -51,7 +51,6 @@ from rockslide.core.simulate import Model, Settings, ground_array, initial_state
 from rockslide.plots import save_figure
 
 REPO = Path(__file__).resolve().parents[1]
-KOBE = ("kobe_jma_1995_ns_peer_rsn1106_kjm000.at2", "kobe_jma_1995_ud_peer_rsn1106_kjmup.at2")
 G = 9.80665
 H, DT_REC = 1e-4, 0.01
 GOALS = {"rocking": 0.85, "rest": 0.3, "sweep": 0.85, "kobe": 0.6, "scaling": 13.0 / 16.0}
@@ -196,12 +195,6 @@ def rocking_grid(folder: Path):
     return case, axes
 
 
-def find_kobe() -> Path | None:
-    candidates = [Path(os.environ["ROCKSLIDE_RECORDS"])] if os.environ.get("ROCKSLIDE_RECORDS") else []
-    candidates.append(REPO.parent / "shared" / "records")
-    return next((c for c in candidates if all((c / n).is_file() for n in KOBE)), None)
-
-
 def kobe_grid(folder: Path, mu_step: str = "0.01"):
     case = parse_case(CASE.format(mu=0.52, nu=0.494, h=KOBE[0], v=KOBE[1]), source="kobe.yaml", base_dir=folder)
     axes = [sw.parse_axis("mu", f"0.40:0.80:{mu_step}"), sw.parse_axis("pga", "100gal:1000gal:25gal")]
@@ -268,7 +261,7 @@ def main(argv=None) -> None:
                      f"**{median:.3f}** ({low:.3f}-{high:.3f}); {speed / 1e6:.1f} M steps/s | >= 0.85 | "
                      f"{verdict(median, GOALS['sweep'])} |")
 
-    kobe = find_kobe()
+    kobe = find_records()
     if kobe is None:
         lines.append("note: the Kobe records were not found in $ROCKSLIDE_RECORDS or ../shared/records: the "
                      "Kobe figures are left out.")

@@ -46,6 +46,13 @@ def records_dir_real() -> Path:
     return folder
 
 
+@pytest.fixture(scope="module")
+def example():
+    """The shipped example case (configs/example.yaml), loaded."""
+    from rockslide.case import load_case
+    return load_case(REPO / "configs" / "example.yaml")
+
+
 def invoke(*args):
     """``rockslide ARGS`` in this process (click's runner); each argument as a string."""
     from click.testing import CliRunner

@@ -20,7 +20,7 @@ from scipy import optimize, stats
 from rockslide import fragility as fr
 from rockslide import results, runner
 from rockslide import sweep as sw
-from rockslide.case import case_to_dict, load_case, load_suite
+from rockslide.case import case_to_dict, load_suite
 from rockslide.core import batch, intensity
 from rockslide.core import kernel as K
 from rockslide.errors import CaseError, RockslideError
@@ -36,11 +36,6 @@ SUMMARY_FIELDS = ("overturned", "overturn_time", "direction", "max_rotation", "m
 @pytest.fixture(scope="module", autouse=True)
 def compiled():
     batch.warm_up()
-
-
-@pytest.fixture(scope="module")
-def example():
-    return load_case(EXAMPLE)
 
 
 # --------------------------------------------------------------------------------------------------

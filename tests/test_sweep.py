@@ -42,11 +42,6 @@ def compiled():
     batch.warm_up()
 
 
-@pytest.fixture(scope="module")
-def example():
-    return load_case(EXAMPLE)
-
-
 def sweep_args(out: Path, *axes, extra=()):
     return ["sweep", EXAMPLE, *axes, "--records-dir", RECORDS, "--out-dir", out, "--no-progress",
             *extra]

@@ -20,6 +20,7 @@ same stamp (`sweep.definition_key`).
 from __future__ import annotations
 
 import atexit
+import functools
 import hashlib
 import os
 import shutil
@@ -40,7 +41,7 @@ def _cache_is_temporary() -> bool:
         return False
     for locator in (caching.InTreeCacheLocator, caching.UserWideCacheLocator):
         try:
-            if locator.from_function(source_stamp, __file__) is not None:
+            if locator.from_function(cache_folder, __file__) is not None:   # any function of this file
                 return False
         except OSError:
             pass
@@ -49,8 +50,10 @@ def _cache_is_temporary() -> bool:
     return True
 
 
+@functools.lru_cache(maxsize=1)
 def source_stamp() -> str:
-    """SHA-256 of the sources of `COMPILED_MODULES` (stable across processes and machines)."""
+    """SHA-256 of the sources of `COMPILED_MODULES` (stable across processes and machines), read
+    once per process (`freshen` at import and `is_warm` before a run both need it)."""
     digest = hashlib.sha256()
     folder = Path(__file__).parent
     for name in COMPILED_MODULES:
