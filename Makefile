@@ -41,6 +41,7 @@ bench:
 	$(PYTHON) benchmarks/bench_kernel.py > results/bench_kernel.md
 	$(PYTHON) benchmarks/bench_sweep.py > results/bench_sweep.md
 	$(PYTHON) benchmarks/bench_fragility.py > results/bench_fragility.md
+	$(PYTHON) benchmarks/bench_startup.py --cold >> results/bench.md
 	$(PYTHON) benchmarks/bench_startup.py > results/bench_startup.md
 
 table1:

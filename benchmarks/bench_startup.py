@@ -1,8 +1,8 @@
 """Start-up of the command line (issue 11): warm runs, and with ``--cold`` the first runs after a
 fresh install.
 
-Prints Markdown (``python benchmarks/bench_startup.py > results/bench_startup.md``) and asserts
-nothing: the goals live here, never in the tests.
+Prints Markdown and asserts nothing: the goals live here, never in the tests. ``make bench`` appends
+``--cold`` to ``results/bench.md`` and writes the warm run to ``results/bench_startup.md``.
 
 Warm (the default): numba's cache built and the byte code written (one untimed run of each command
 first), then each command run ``--repeat`` times, each in a fresh process, as a user types it:
@@ -20,7 +20,9 @@ a new virtual environment with the wheel's dependencies; then ``--repeat`` times
 installed afresh (with no numba cache but what it ships) and an empty HOME (no ~/.cache: neither
 numba's nor matplotlib's font list), and in the clone: the first ``rockslide run
 configs/example.yaml``, the first ``rockslide sweep`` after it (a 2 x 2 grid: compiling the batch
-kernel is the work), then the same run again, warm. This takes minutes.
+kernel is the work), then the same run again, warm. Last, in that environment, the warm table
+(each command 7 times): the issue's fresh-venv measurement of every figure. ``make bench`` appends
+this to ``results/bench.md``. This takes minutes.
 
 The machine is shared: the load average and the other busy processes are printed with the figures.
 
@@ -30,6 +32,8 @@ Usage: python benchmarks/bench_startup.py [--repeat N] [--module] [--cold] [--ke
 from __future__ import annotations
 
 import argparse
+import contextlib
+import io
 import os
 import platform
 import re
@@ -49,7 +53,7 @@ GOALS = {"run": 1.0, "run --no-plot": 0.5, "run Kobe": 1.5}     # [s] warm, issu
 #: Imports whose cost is not obvious from their name.
 WHY = {
     "rockslide.plots": "matplotlib",
-    "rockslide.results": "h5py, numba and the kernel's module",
+    "rockslide.results": "h5py",
     "rockslide.case": "yaml",
     "numba.np.arraymath": "numba's first call (its BLAS check imports scipy.linalg)",
     "numba.core.typing.cmathdecl": "numba's first call",
@@ -155,10 +159,21 @@ def warm(repeat: int, module: bool) -> None:
     records = find_records()
     out = Path(tempfile.mkdtemp(prefix="rockslide-bench-"))
     env = user_env(ROCKSLIDE_RECORDS=str(records.resolve()) if records else None)
+    print(f"# Start-up of the command line, warm ({' '.join(rockslide[-2:]) if module else 'the rockslide script'})\n")
+    for line in machine():
+        print(line + "  ")
+    warm_table(rockslide, REPO, env, out, repeat, records is not None)
+    import_breakdown(env, out)
+    choices(out)
+    shutil.rmtree(out, ignore_errors=True)
+
+
+def warm_table(rockslide: list[str], cwd: Path, env: dict, out: Path, repeat: int, kobe: bool) -> None:
+    """The table of warm commands: each ``repeat`` times in a fresh process, after one untimed run."""
     commands = {
         "run": ["run", "configs/example.yaml", "--out-dir", out, "--overwrite"],
         "run --no-plot": ["run", "configs/example.yaml", "--out-dir", out, "--overwrite", "--no-plot"],
-        "run Kobe": ["run", KOBE_CASE, "--out-dir", out, "--overwrite"] if records else None,
+        "run Kobe": ["run", KOBE_CASE, "--out-dir", out, "--overwrite"] if kobe else None,
         "--help": ["--help"],
         "--version": ["--version"],
     }
@@ -166,9 +181,6 @@ def warm(repeat: int, module: bool) -> None:
             "run --no-plot": "`rockslide run configs/example.yaml --no-plot`",
             "run Kobe": f"`rockslide run {KOBE_CASE.as_posix()}` (150 s Kobe record, a row every 1 ms, HDF5 + PNG)",
             "--help": "`rockslide --help`", "--version": "`rockslide --version`"}
-    print(f"# Start-up of the command line, warm ({' '.join(rockslide[-2:]) if module else 'the rockslide script'})\n")
-    for line in machine():
-        print(line + "  ")
     print(f"each command {repeat} times in a fresh process, after one untimed run (numba's cache and the "
           "byte code in place); median (range) in seconds\n")
     print("| command | wall [s] | CPU [s] | goal (wall) |")
@@ -178,10 +190,10 @@ def warm(repeat: int, module: bool) -> None:
             print(f"| {what[key]} | - | - | needs the Kobe records ($ROCKSLIDE_RECORDS or ../shared/records) |")
             continue
         command = rockslide + [str(a) for a in args]
-        timed(command, cwd=REPO, env=env)                               # warm numba's cache and the .pyc
+        timed(command, cwd=cwd, env=env)                               # warm numba's cache and the .pyc
         walls, cpus = [], []
         for _ in range(repeat):
-            wall, cpu, _ = timed(command, cwd=REPO, env=env)
+            wall, cpu, _ = timed(command, cwd=cwd, env=env)
             walls.append(wall)
             cpus.append(cpu)
         goal = GOALS.get(key)
@@ -189,9 +201,6 @@ def warm(repeat: int, module: bool) -> None:
         print(f"| {what[key]} | {spread(walls)} | {spread(cpus)} | {verdict} |")
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     print(f"\nload average at the end: {load:.2f}\n")
-    import_breakdown(env, out)
-    choices(out)
-    shutil.rmtree(out, ignore_errors=True)
 
 
 _IMPORT_LINE = re.compile(r"^import time:\s+(\d+) \|\s+(\d+) \|( +)(\S+)$")
@@ -279,7 +288,7 @@ def _seconds(action) -> float:
 # --------------------------------------------------------------------------------------------------
 
 
-def cold(repeat: int, keep: bool) -> None:
+def cold(repeat: int, keep: bool, warm_repeat: int = 7) -> None:
     folder = Path(tempfile.mkdtemp(prefix="rockslide-cold-"))
     say = lambda text: print(text, file=sys.stderr, flush=True)  # noqa: E731 - progress on stderr
     base = user_env(**{name: None for name in CACHE_VARIABLES})
@@ -327,6 +336,11 @@ def cold(repeat: int, keep: bool) -> None:
                 said = [line.strip() for line in done.stderr.splitlines() if line.strip()]
                 said += [line.strip() for line in done.stdout.splitlines() if "compil" in line]
                 notes.setdefault(key, said[:2])
+        say(f"warm commands, {warm_repeat} times each, in the same environment (the last HOME)")
+        records = find_records()
+        warm_env = {**env, "ROCKSLIDE_RECORDS": str(records.resolve())} if records else env
+        with contextlib.redirect_stdout(io.StringIO()) as warm_text:
+            warm_table([rockslide], clone, warm_env, folder / "warm-out", warm_repeat, records is not None)
     finally:
         if keep:
             say(f"kept {folder}")
@@ -350,6 +364,8 @@ def cold(repeat: int, keep: bool) -> None:
         text = " / ".join(notes.get(key, [])).replace("|", "\\|") or "(nothing)"
         print(f"| `rockslide {' '.join(command[1:])}` | {spread(walls)} | {spread(cpus)} | {goals[key]} | {text} |")
     print()
+    print("## Warm, in the same new environment\n")
+    print(warm_text.getvalue())
 
 
 def main() -> None:

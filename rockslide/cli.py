@@ -222,8 +222,10 @@ def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, robustness
         if work.seconds > LONG_RUN:
             click.echo(f"rockslide: note: {work.describe()}", err=True)
         files.warn_free_space(folder, work.rows * results.BYTES_PER_ROW)
-        from .core import kernel
-        _note_first_compile(kernel.run)
+        from .core import native
+        if native.ahead_of_time() is None:      # no machine code from the build: numba's JIT
+            from .core import kernel
+            _note_first_compile(kernel.run)
         with files.Staging(overwrite=overwrite) as staging:
             keep = 0 if no_plot else KEEP_HISTORY_ROWS
             with results.ResultWriter(h5_path, overwrite=overwrite, staging=staging, keep_rows=keep) as writer, \

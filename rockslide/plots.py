@@ -34,7 +34,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
-from .core.physics import OVERTURNED, REST, ROCK, ROCKSLIP, SLIP, STATE_NAMES
+from .core.layout import OVERTURNED, REST, ROCK, ROCKSLIP, SLIP, STATE_NAMES
 from .errors import OutputError
 from .files import atomic_write, check_destination
 from .units import percent_text

@@ -92,8 +92,7 @@ import h5py
 import numpy as np
 
 from . import __version__, interrupts
-from .core.kernel import HISTORY_COLUMNS
-from .core.physics import STATE_NAMES
+from .core.layout import HISTORY_COLUMNS, STATE_NAMES
 from .core.simulate import EVENT_DTYPE, Result, Summary
 from .errors import OutputError
 from .files import Staging, check_destination, publish, remove_quietly, temporary_path

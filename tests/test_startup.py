@@ -13,6 +13,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 from click.testing import CliRunner
 
@@ -54,11 +55,15 @@ def test_help_and_version_load_no_heavy_library():
 
 def test_a_run_loads_what_it_needs(tmp_path):
     """A run of AT2 records reads them without obspy; without its figure it loads no matplotlib;
-    a run loads no dask or tqdm (a short one shows no progress bar)."""
+    a run loads no dask or tqdm (a short one shows no progress bar); with the build's machine code
+    (`core.native`) it loads no numba, and without it numba's JIT does the work."""
+    from rockslide.core import native
+
     out = tmp_path / "out"
     no_plot, with_plot = loaded_after(["run", EXAMPLE, "--out-dir", out, "--no-plot"],
                                       ["run", EXAMPLE, "--out-dir", out, "--overwrite"])
-    assert {"numpy", "numba", "h5py", "yaml"} <= set(no_plot)
+    assert {"numpy", "h5py", "yaml"} <= set(no_plot)
+    assert ("numba" in no_plot) == (native.ahead_of_time() is None)
     assert not {"matplotlib", "PIL", "obspy", "dask", "distributed", "tqdm"} & set(no_plot)
     assert "matplotlib" in with_plot
     assert not {"obspy", "dask", "distributed", "tqdm"} & set(with_plot)
@@ -155,3 +160,81 @@ print(compiled.CACHE_IS_TEMPORARY, config.CACHE_DIR, physics.rock_acceleration(0
     assert temporary == "True"
     assert float(acceleration) == 0.75 / 0.5 * (-9.8 * math.sin(0.3))    # eq. 3, still ground
     assert not Path(folder).exists()
+
+
+# --- the build's ahead-of-time machine code (`core.native`) --------------------------------------
+
+def _ground_cases():
+    """Inputs that take a block through every state, with both event schemes, the energy ledger on
+    and off, and history kept every step and every third step: (name, model, dt, ah, av, settings)."""
+    from rockslide.core.simulate import Model, Settings
+
+    dt = 0.01
+    t = np.arange(0.0, 6.0, dt)
+    envelope = np.minimum(1.0, t / 1.5) * np.exp(-0.3 * t)
+    cases = []
+    for name, peak, period, mu, e, vertical in [
+            ("slides", 2.5, 0.5, 0.2, 0.9, 0.0),
+            ("rocks", 6.0, 0.8, 0.9, 0.9, 0.0),
+            ("rocks and slides", 7.0, 0.6, 0.4, 0.8, 0.5),
+            ("overturns", 12.0, 1.2, 0.9, 0.95, 0.3),
+            ("rests", 0.5, 0.5, 0.9, 0.9, 0.0)]:
+        ah = peak * envelope * np.sin(2 * np.pi * t / period)
+        av = vertical * peak * envelope * np.sin(2 * np.pi * t / (0.7 * period))
+        model = Model.from_block(0.8, 0.3, mu, 0.9 * mu, e)
+        for settings in (Settings(), Settings(events="step-end", energy=False, history_every=3)):
+            cases.append((f"{name}, {settings.events}", model, dt, ah, av, settings))
+    return cases
+
+
+@pytest.fixture(scope="module")
+def built_native(tmp_path_factory):
+    """The entry points compiled ahead of time from the sources as they are, by `native.build` (what
+    the package build runs), into a folder of this test and imported from there."""
+    import importlib.util
+
+    from rockslide.core import native
+
+    folder = tmp_path_factory.mktemp("native")
+    path = native.build(folder)
+    spec = importlib.util.spec_from_file_location(native.MODULE_NAME, path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    assert (folder / native.STAMP_FILE).read_text() == native.source_stamp()
+    return module
+
+
+def _same_result(a, b) -> bool:
+    return (all(np.array_equal(a.history[name], b.history[name]) for name in a.history)
+            and a.events.tobytes() == b.events.tobytes()
+            and repr(a.summary) == repr(b.summary))        # repr: NaN fields compare equal
+
+
+@pytest.mark.slow
+def test_the_machine_code_of_the_build_is_numbas_to_the_last_bit(built_native, monkeypatch):
+    """`native.build` compiles the same kernel as numba's JIT: every event time, history sample,
+    extreme and energy of a run is the same bit for bit, in every state and with both event
+    schemes (the inputs below visit all five states; the paper's records: test_paper.py runs
+    through whichever the installation has)."""
+    from rockslide.core import native, simulate
+
+    jit = native.just_in_time()
+    visited = set()
+    for name, model, dt, ah, av, settings in _ground_cases():
+        monkeypatch.setattr(native, "entry_points", lambda: jit)
+        expected = simulate.simulate(model, dt, ah, av, settings)
+        monkeypatch.setattr(native, "entry_points", lambda: built_native)
+        got = simulate.simulate(model, dt, ah, av, settings)
+        assert _same_result(expected, got), name
+        visited.update(got.summary.states_seen)
+    assert visited == {"REST", "SLIP", "ROCK", "ROCKSLIP", "OVERTURNED"}
+
+
+def test_edited_sources_run_on_numbas_jit(monkeypatch):
+    """The build's machine code serves only the sources it was compiled from: once the core's
+    sources differ from its stamp, a run uses numba's JIT (which recompiles them)."""
+    from rockslide.core import native
+
+    monkeypatch.setattr(native, "source_stamp", lambda: "an edited core")
+    assert native.ahead_of_time() is None
+    assert native.just_in_time().run.py_func.__module__ == "rockslide.core.kernel"

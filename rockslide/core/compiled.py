@@ -20,15 +20,13 @@ same stamp (`sweep.definition_key`).
 from __future__ import annotations
 
 import atexit
-import functools
-import hashlib
 import os
 import shutil
 import tempfile
 from pathlib import Path
 
-#: The modules whose functions numba compiles, in the order their code includes each other.
-COMPILED_MODULES = ("physics", "kernel", "batch", "gpu")
+from .native import COMPILED_MODULES, source_stamp
+
 STAMP_FILE = "rockslide-core.stamp"
 
 
@@ -48,17 +46,6 @@ def _cache_is_temporary() -> bool:
     config.CACHE_DIR = tempfile.mkdtemp(prefix="rockslide-numba-")
     atexit.register(shutil.rmtree, config.CACHE_DIR, ignore_errors=True)
     return True
-
-
-@functools.lru_cache(maxsize=1)
-def source_stamp() -> str:
-    """SHA-256 of the sources of `COMPILED_MODULES` (stable across processes and machines), read
-    once per process (`freshen` at import and `is_warm` before a run both need it)."""
-    digest = hashlib.sha256()
-    folder = Path(__file__).parent
-    for name in COMPILED_MODULES:
-        digest.update((folder / f"{name}.py").read_bytes())
-    return digest.hexdigest()
 
 
 def cache_folder(dispatcher) -> Path | None:
@@ -108,18 +95,29 @@ def is_warm(dispatcher) -> bool:
 
 
 def precompile() -> None:
-    """Compile the core into numba's cache: `kernel.run` with the argument types `simulate` gives it
-    (which compiles every state's loop and every physics function it calls), the batch driver, and
-    the intensity measures' oscillator when scipy is there. The package build runs this in the
-    freshly built package (``setup.py``); it is also what ``rockslide`` would otherwise do on its
-    first run."""
+    """Compile the core into numba's cache: `native.ENTRY_POINTS` with the argument types `simulate`
+    gives them (`kernel.run` compiles every state's loop and every physics function it calls), the
+    batch driver, and the intensity measures' oscillator when scipy is there. The package build runs
+    this in the freshly built package (``setup.py``), before `native.build`; it is also what
+    ``rockslide`` would otherwise do on its first run without the build's machine code."""
     import numpy as np
 
-    from . import batch, simulate
+    from . import batch, layout, native, simulate
 
+    jit = native.just_in_time()
     model = simulate.Model.from_block(0.2, 0.1, 0.5, 0.5, 0.8)
+    settings = simulate.Settings(rotation=0.01)
     still = np.zeros(11)
-    simulate.simulate(model, 0.01, still, still, simulate.Settings(rotation=0.01))
+    ground = simulate.ground_array(still, still, 0.01)
+    st = simulate.initial_state(settings)
+    history = np.empty((len(layout.HISTORY_COLUMNS), 16))
+    events = np.zeros((16, len(layout.EVENT_COLUMNS)))
+    jit.run(simulate.parameters(model, 0.01, settings), ground, jit.rest_bounds(ground), st, history, 1, 0, events,
+            0)                     # the start only (every=1 would need a longer history): all is compiled
+    jit.finished(st)
+    R, alpha, _ = jit.block_constants(0.1, 0.2, 9.8)
+    jit.kinetic_energy(0.0, 0.0, 0.0, 1.0, R, alpha)
+    jit.potential_energy(0.0, 9.8, R, alpha)
     batch.warm_up()
     try:
         from . import intensity

@@ -39,15 +39,98 @@ import numpy as np
 from numba import njit
 
 from . import compiled
-from .physics import (
+from .layout import (  # noqa: F401  (the array layout, re-exported: `kernel.S_MODE` etc.)
+    C_FLIGHT,
+    C_IMPACT,
+    C_LIFTOFF,
+    C_LIFTOFF_END,
+    C_OVERTURN,
+    C_PAINLEVE,
+    C_SLIP_REVERSAL,
+    C_SLIP_START,
+    C_SLIP_STOP,
+    CAUSE_NAMES,
+    EVENT_COLUMNS,
+    GROUND_ROWS,
+    HISTORY_COLUMNS,
     IMPACT_FLAT,
     IMPACT_PAINLEVE,
     IMPACT_STICK,
+    K_FLIGHT,
+    K_IMPACT,
+    K_LIFTOFF,
+    K_OVERTURN,
+    K_PAINLEVE,
+    K_SLIP_START,
+    K_SLIP_STOP,
+    MAX_EVENTS_PER_MODE,
+    N_PARAMS,
+    N_STATE,
     OVERTURNED,
+    P_ALPHA,
+    P_DT_REC,
+    P_E,
+    P_ENERGY,
+    P_FIRST,
+    P_G,
+    P_H,
+    P_KH,
+    P_KV,
+    P_LOCATED,
+    P_MU,
+    P_N_SUB,
+    P_NU,
+    P_R,
+    P_T0,
+    P_TAN_ALPHA,
     REST,
     ROCK,
     ROCKSLIP,
+    S_DIRECTION,
+    S_E_INITIAL,
+    S_END_TIME,
+    S_EVENTS_AT_ONCE,
+    S_FALL_CANDIDATE,
+    S_FALL_START,
+    S_IMPACTS,
+    S_K,
+    S_K1_PF,
+    S_K1_PG,
+    S_K1_THDD,
+    S_K1_VALID,
+    S_K1_XDD,
+    S_LAM,
+    S_LAST_EVENT_TIME,
+    S_MAX_THETA,
+    S_MAX_X,
+    S_MODE,
+    S_N_EVENTS,
+    S_OVERTURN_TIME,
+    S_ROWS,
+    S_SIGMA,
+    S_STARTED,
+    S_STATUS,
+    S_T_REST,
+    S_T_ROCK,
+    S_T_ROCKSLIP,
+    S_T_SLIP,
+    S_THETA,
+    S_THETA_MAX_TIME,
+    S_THETADOT,
+    S_W_FRICTION,
+    S_W_GROUND,
+    S_W_IMPACT,
+    S_X,
+    S_XDOT,
     SLIP,
+    STATUS_CHATTER,
+    STATUS_FLIGHT,
+    STATUS_NAMES,
+    STATUS_OK,
+    STATUS_PAINLEVE,
+    new_state,
+)
+from .physics import (
     contact_forces,
     contact_forces_sc,
     impact,
@@ -66,47 +149,6 @@ from .physics import (
     zeno_rate,
 )
 
-# --- parameter vector ``p`` -------------------------------------------------------------------
-(P_R, P_ALPHA, P_TAN_ALPHA, P_G, P_MU, P_NU, P_E, P_H, P_DT_REC, P_N_SUB, P_LOCATED, P_T0,
- P_ENERGY,
- P_FIRST, P_KH, P_KV) = range(16)   # the case's record: its first column of ``ground``, scale factors
-N_PARAMS = 16   # `run` unpacks p into a 16-tuple: keep the two in step
-
-# --- state vector ``st`` ----------------------------------------------------------------------
-(S_MODE, S_LAM, S_SIGMA, S_THETA, S_THETADOT, S_X, S_XDOT,   # the mechanical state
- S_STATUS, S_K, S_STARTED, S_END_TIME,                      # bookkeeping
- S_MAX_THETA, S_MAX_X, S_IMPACTS, S_FALL_START, S_OVERTURN_TIME, S_DIRECTION,
- S_T_REST, S_T_SLIP, S_T_ROCK, S_T_ROCKSLIP,                # time spent in each state [s]
- S_N_EVENTS,
- S_W_GROUND, S_W_FRICTION, S_W_IMPACT,                      # energy ledger [J/kg]
- S_FALL_CANDIDATE, S_THETA_MAX_TIME, S_E_INITIAL,
- S_K1_VALID, S_K1_THDD, S_K1_XDD, S_K1_PG, S_K1_PF,  # first RK4 stage of the next step
- S_ROWS,                                             # history columns written by the last call
- S_LAST_EVENT_TIME, S_EVENTS_AT_ONCE) = range(36)    # transitions at one instant (chatter guard)
-N_STATE = 36
-
-# --- outcomes ---------------------------------------------------------------------------------
-STATUS_OK, STATUS_FLIGHT, STATUS_PAINLEVE, STATUS_CHATTER = 0, 1, 2, 3
-STATUS_NAMES = ("ok", "flight", "painleve", "chatter")
-
-# --- event causes (the event log's ``cause`` column) -------------------------------------------
-(C_SLIP_START, C_LIFTOFF, C_SLIP_STOP, C_SLIP_REVERSAL, C_IMPACT, C_LIFTOFF_END,
- C_OVERTURN, C_FLIGHT, C_PAINLEVE) = range(9)
-CAUSE_NAMES = ("slip-start", "liftoff", "slip-stop", "slip-reversal", "impact",
-               "liftoff-end", "overturn", "flight", "painleve")
-
-# --- event kinds: which condition of model.md's table a crossing is ----------------------------
-K_FLIGHT, K_PAINLEVE, K_SLIP_START, K_LIFTOFF, K_SLIP_STOP, K_IMPACT, K_OVERTURN = range(7)
-MAX_EVENTS_PER_MODE = 5
-
-# rows of the ground array: ah and av at the start and at the end of each record interval
-GROUND_ROWS = ("ah_start", "ah_end", "av_start", "av_end")
-# history columns: time, rotation phi = lam theta, rotation rate, slip, slip rate, state
-HISTORY_COLUMNS = ("time", "rotation", "rotation_rate", "slip", "slip_rate", "state")
-# event log columns: ``impact`` is the branch of the impact law (`physics.IMPACT_BRANCHES`, 0: not an
-# impact), ``energy_loss`` the kinetic energy the impact took [J/kg]
-EVENT_COLUMNS = ("time", "from", "to", "cause", "edge", "slip_direction", "impact", "energy_loss")
-
 HALF_PI = 0.5 * math.pi
 THETA_END = 1e-7   # [rad] a rebound predicted to rise less than this ends the liftoff (decision 3)
 STEP_END_FLIGHT_STEPS = 4.0   # step-end switching also ends liftoff for flights shorter than this
@@ -120,19 +162,6 @@ MAX_EVENTS_AT_ONCE = 50       # transitions within EVENT_INSTANT beyond this: th
 EVENT_INSTANT = 1e-9          # [s] transitions closer than this to the first of a cluster are 'at once'
 REST_BLOCK = 32               # record intervals per block of the REST index (`rest_bounds`)
 REST_SAFETY = 1e-9            # a block is skipped only with this relative margin to every threshold
-
-
-def new_state():
-    """A state vector at rest, before the first call of `run`."""
-    st = np.zeros(N_STATE)
-    st[S_LAST_EVENT_TIME] = math.nan
-    st[S_LAM] = 1.0
-    st[S_SIGMA] = 1.0
-    st[S_FALL_START] = math.nan
-    st[S_OVERTURN_TIME] = math.nan
-    st[S_END_TIME] = math.nan
-    st[S_FALL_CANDIDATE] = math.nan
-    return st
 
 
 # ============================================================================================

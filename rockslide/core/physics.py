@@ -22,10 +22,20 @@ import math
 from numba import njit
 
 from . import compiled  # noqa: F401  (before any cache=True: numba needs a cache folder)
-
-# State codes, in the order of docs/model.md's table. They are stored in results as int8.
-REST, SLIP, ROCK, ROCKSLIP, OVERTURNED = 0, 1, 2, 3, 4
-STATE_NAMES = ("REST", "SLIP", "ROCK", "ROCKSLIP", "OVERTURNED")
+from .layout import (  # noqa: F401  (state codes and impact branches, re-exported: `physics.REST` etc.)
+    IMPACT_BRANCHES,
+    IMPACT_FLAT,
+    IMPACT_NONE,
+    IMPACT_PAINLEVE,
+    IMPACT_SLIP,
+    IMPACT_STICK,
+    OVERTURNED,
+    REST,
+    ROCK,
+    ROCKSLIP,
+    SLIP,
+    STATE_NAMES,
+)
 
 
 @njit(cache=True)
@@ -207,11 +217,6 @@ def liftoff_margin(tan_alpha, G, push):
     ``tan_alpha`` is passed as ``b/h`` so that ties with ``mu`` are exact.
     """
     return tan_alpha * G - abs(push)
-
-
-# Branches of the impact law (model.md decision 2), as the event log stores them (0: not an impact).
-IMPACT_NONE, IMPACT_STICK, IMPACT_SLIP, IMPACT_FLAT, IMPACT_PAINLEVE = 0, 1, 2, 3, 4
-IMPACT_BRANCHES = ("", "stick", "slip", "flat", "painleve")
 
 
 @njit(cache=True)

@@ -1,6 +1,7 @@
 """Model + ground motion arrays -> Result. Pure: no files, no plotting.
 
-`simulate` sets up the compiled kernel (`kernel.run`), drives it chunk by chunk (so that an
+`simulate` sets up the compiled kernel (`kernel.run`, through `native.entry_points`: the build's
+ahead-of-time machine code when it fits the sources, else numba's JIT), drives it chunk by chunk (so that an
 hour-long record needs bounded memory when the history is streamed with ``on_chunk``), and turns
 its state vector and logs into a `Result` whose summary is plain data (overturning, flight and the
 Painleve case are outcomes, not exceptions).
@@ -13,19 +14,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import kernel as K
-from .physics import (
-    IMPACT_BRANCHES,
-    OVERTURNED,
-    REST,
-    ROCK,
-    ROCKSLIP,
-    SLIP,
-    STATE_NAMES,
-    block_constants,
-    kinetic_energy,
-    potential_energy,
-)
+from . import layout as L
+from . import native
+from .layout import IMPACT_BRANCHES, OVERTURNED, REST, ROCK, ROCKSLIP, SLIP, STATE_NAMES
 
 #: The event log of a result: time [s], the state before and after, the cause, the pivoting edge
 #: (``lam``) and slip direction (``sigma``) after the event, and for an impact the branch of the impact
@@ -68,7 +59,7 @@ class Model:
     @property
     def constants(self):
         """``(R, alpha, p2)``: see `physics.block_constants`."""
-        return block_constants(self.half_width, self.half_height, self.gravity)
+        return native.entry_points().block_constants(self.half_width, self.half_height, self.gravity)
 
 
 @dataclass(frozen=True)
@@ -172,23 +163,23 @@ def parameters(model: Model, dt_record: float, settings: Settings, start: float 
     """The kernel's parameter vector ``p`` (indices ``kernel.P_*``)."""
     R, alpha, _ = model.constants
     n_sub = substeps(dt_record, settings.dt)
-    p = np.zeros(K.N_PARAMS)
-    p[K.P_R] = R
-    p[K.P_ALPHA] = alpha
-    p[K.P_TAN_ALPHA] = model.half_width / model.half_height
-    p[K.P_G] = model.gravity
-    p[K.P_MU] = model.mu_static
-    p[K.P_NU] = model.mu_kinetic
-    p[K.P_E] = model.restitution
-    p[K.P_H] = dt_record / n_sub
-    p[K.P_DT_REC] = dt_record
-    p[K.P_N_SUB] = n_sub
-    p[K.P_LOCATED] = 1.0 if settings.events == "located" else 0.0
-    p[K.P_T0] = start
-    p[K.P_ENERGY] = 1.0 if settings.energy else 0.0
-    p[K.P_FIRST] = 0.0                     # a single record, as applied: no offset, no scaling
-    p[K.P_KH] = 1.0
-    p[K.P_KV] = 1.0
+    p = np.zeros(L.N_PARAMS)
+    p[L.P_R] = R
+    p[L.P_ALPHA] = alpha
+    p[L.P_TAN_ALPHA] = model.half_width / model.half_height
+    p[L.P_G] = model.gravity
+    p[L.P_MU] = model.mu_static
+    p[L.P_NU] = model.mu_kinetic
+    p[L.P_E] = model.restitution
+    p[L.P_H] = dt_record / n_sub
+    p[L.P_DT_REC] = dt_record
+    p[L.P_N_SUB] = n_sub
+    p[L.P_LOCATED] = 1.0 if settings.events == "located" else 0.0
+    p[L.P_T0] = start
+    p[L.P_ENERGY] = 1.0 if settings.energy else 0.0
+    p[L.P_FIRST] = 0.0                     # a single record, as applied: no offset, no scaling
+    p[L.P_KH] = 1.0
+    p[L.P_KV] = 1.0
     return p
 
 
@@ -198,18 +189,18 @@ def initial_state(settings: Settings) -> np.ndarray:
     A rotation (or rotation rate) starts in ROCK about the edge of its sign; a slip rate in SLIP,
     or ROCKSLIP with a rotation too. The kernel applies the state's tests at once at t = 0.
     """
-    st = K.new_state()
+    st = L.new_state()
     phi, phidot, xdot = settings.rotation, settings.rotation_rate, settings.slip_rate
     rocking = phi != 0.0 or phidot != 0.0
     if rocking:
         lam = math.copysign(1.0, phi) if phi != 0.0 else math.copysign(1.0, phidot)
-        st[K.S_LAM] = lam
-        st[K.S_THETA] = abs(phi)
-        st[K.S_THETADOT] = lam * phidot
+        st[L.S_LAM] = lam
+        st[L.S_THETA] = abs(phi)
+        st[L.S_THETADOT] = lam * phidot
     if xdot != 0.0:
-        st[K.S_SIGMA] = math.copysign(1.0, xdot)
-        st[K.S_XDOT] = xdot
-    st[K.S_MODE] = (ROCKSLIP if xdot != 0.0 else ROCK) if rocking else (SLIP if xdot != 0.0 else REST)
+        st[L.S_SIGMA] = math.copysign(1.0, xdot)
+        st[L.S_XDOT] = xdot
+    st[L.S_MODE] = (ROCKSLIP if xdot != 0.0 else ROCK) if rocking else (SLIP if xdot != 0.0 else REST)
     return st
 
 
@@ -313,54 +304,55 @@ def simulate(model: Model, dt_record: float, horizontal, vertical, settings: Set
     -------
     Result
     """
+    core = native.entry_points()
     ground = ground_array(horizontal, vertical, dt_record, settings.tail)
-    bounds = K.rest_bounds(ground)
+    bounds = core.rest_bounds(ground)
     p = parameters(model, dt_record, settings, start)
     st = initial_state(settings)
-    n_sub = int(p[K.P_N_SUB])
+    n_sub = int(p[L.P_N_SUB])
     every = int(settings.history_every)
     n_intervals = ground.shape[1]
     kept = []
     event_chunks = []
-    events = np.zeros((1024, len(K.EVENT_COLUMNS)))
+    events = np.zeros((1024, len(L.EVENT_COLUMNS)))
     k = 0
-    while k < n_intervals and not K.finished(st):
+    while k < n_intervals and not core.finished(st):
         k_end = min(n_intervals, k + max(1, settings.chunk_steps // n_sub))
         # history columns on the output grid between steps k*n_sub (exclusive, except at the
         # start) and k_end*n_sub (inclusive)
         if every > 0:
             first = 0 if k == 0 else (k * n_sub) // every + 1
-            history = np.empty((len(K.HISTORY_COLUMNS), max(0, (k_end * n_sub) // every - first + 1)))
+            history = np.empty((len(L.HISTORY_COLUMNS), max(0, (k_end * n_sub) // every - first + 1)))
         else:
-            first, history = 0, np.empty((len(K.HISTORY_COLUMNS), 0))
+            first, history = 0, np.empty((len(L.HISTORY_COLUMNS), 0))
         saved = st.copy()
         while True:
-            st[K.S_N_EVENTS] = 0
-            st[K.S_ROWS] = 0
-            K.run(p, ground, bounds, st, history, every, first, events, k_end)
-            n_events = int(st[K.S_N_EVENTS])
+            st[L.S_N_EVENTS] = 0
+            st[L.S_ROWS] = 0
+            core.run(p, ground, bounds, st, history, every, first, events, k_end)
+            n_events = int(st[L.S_N_EVENTS])
             if n_events <= events.shape[0]:
                 break
-            events = np.zeros((2 * n_events, len(K.EVENT_COLUMNS)))
+            events = np.zeros((2 * n_events, len(L.EVENT_COLUMNS)))
             st[:] = saved
         event_chunks.append(events[:n_events].copy())
-        written = history[:, :int(st[K.S_ROWS])]
+        written = history[:, :int(st[L.S_ROWS])]
         if on_chunk is not None:
             on_chunk(written.T)
         elif every > 0:
             kept.append(written)
-        k = int(st[K.S_K])
+        k = int(st[L.S_K])
         if progress is not None:
             progress(start + k * dt_record, start + n_intervals * dt_record)
     columns = kept[0] if len(kept) == 1 else (np.concatenate(kept, axis=1) if kept
-                                              else np.empty((len(K.HISTORY_COLUMNS), 0)))
+                                              else np.empty((len(L.HISTORY_COLUMNS), 0)))
     ground_time, ground_h, ground_v = ground_series(ground, dt_record, start)
     return Result(
         history=history_dict(columns),
         events=event_table(np.concatenate(event_chunks) if event_chunks
-                           else np.zeros((0, len(K.EVENT_COLUMNS))), model.mass),
+                           else np.zeros((0, len(L.EVENT_COLUMNS))), model.mass),
         summary=summarise(st, model, start + n_intervals * dt_record),
-        step=p[K.P_H],
+        step=p[L.P_H],
         ground_time=ground_time,
         ground_horizontal=ground_h,
         ground_vertical=ground_v,
@@ -369,7 +361,7 @@ def simulate(model: Model, dt_record: float, horizontal, vertical, settings: Set
 
 def history_dict(columns: np.ndarray) -> dict[str, np.ndarray]:
     """History arrays by name from the kernel's ``float64[6, n]`` output (views, no copies)."""
-    out = {name: columns[i] for i, name in enumerate(K.HISTORY_COLUMNS)}
+    out = {name: columns[i] for i, name in enumerate(L.HISTORY_COLUMNS)}
     out["state"] = out["state"].astype(np.int8)
     return out
 
@@ -381,7 +373,7 @@ def event_table(rows: np.ndarray, mass: float = 1.0) -> np.ndarray:
     if rows.shape[0]:
         table["time"] = rows[:, 0]
         names = np.array([n.encode() for n in STATE_NAMES])
-        causes = np.array([c.encode() for c in K.CAUSE_NAMES])
+        causes = np.array([c.encode() for c in L.CAUSE_NAMES])
         branches = np.array([b.encode() for b in IMPACT_BRANCHES])
         table["from"] = names[rows[:, 1].astype(int)]
         table["to"] = names[rows[:, 2].astype(int)]
@@ -396,41 +388,42 @@ def event_table(rows: np.ndarray, mass: float = 1.0) -> np.ndarray:
 def summarise(st: np.ndarray, model: Model, record_end: float) -> Summary:
     """The summary from the kernel's final state vector."""
     R, alpha, _ = model.constants
-    time_in = {"REST": st[K.S_T_REST], "SLIP": st[K.S_T_SLIP], "ROCK": st[K.S_T_ROCK],
-               "ROCKSLIP": st[K.S_T_ROCKSLIP]}
-    overturned = st[K.S_MODE] == OVERTURNED
-    seen = [name for name, t in time_in.items() if t > 0.0 or (name == "REST" and st[K.S_MODE] == REST)]
+    time_in = {"REST": st[L.S_T_REST], "SLIP": st[L.S_T_SLIP], "ROCK": st[L.S_T_ROCK],
+               "ROCKSLIP": st[L.S_T_ROCKSLIP]}
+    overturned = st[L.S_MODE] == OVERTURNED
+    seen = [name for name, t in time_in.items() if t > 0.0 or (name == "REST" and st[L.S_MODE] == REST)]
     if overturned:
         seen.append("OVERTURNED")
-    end_time = st[K.S_END_TIME] if not math.isnan(st[K.S_END_TIME]) else record_end
+    end_time = st[L.S_END_TIME] if not math.isnan(st[L.S_END_TIME]) else record_end
     M = model.mass
-    kinetic = M * kinetic_energy(st[K.S_THETA], st[K.S_THETADOT], st[K.S_XDOT], st[K.S_LAM], R, alpha)
-    potential = M * potential_energy(st[K.S_THETA], model.gravity, R, alpha)
-    ground, friction, impact = M * st[K.S_W_GROUND], M * st[K.S_W_FRICTION], M * st[K.S_W_IMPACT]
+    core = native.entry_points()
+    kinetic = M * core.kinetic_energy(st[L.S_THETA], st[L.S_THETADOT], st[L.S_XDOT], st[L.S_LAM], R, alpha)
+    potential = M * core.potential_energy(st[L.S_THETA], model.gravity, R, alpha)
+    ground, friction, impact = M * st[L.S_W_GROUND], M * st[L.S_W_FRICTION], M * st[L.S_W_IMPACT]
     energy = {
         "kinetic": kinetic, "potential": potential, "work_ground": ground,
         "friction_loss": -friction, "impact_loss": -impact,
-        "initial": M * st[K.S_E_INITIAL],
-        "balance_residual": kinetic + potential - M * st[K.S_E_INITIAL] - (ground + friction + impact),
+        "initial": M * st[L.S_E_INITIAL],
+        "balance_residual": kinetic + potential - M * st[L.S_E_INITIAL] - (ground + friction + impact),
     }
-    fall = st[K.S_FALL_START]
+    fall = st[L.S_FALL_START]
     return Summary(
         overturned=bool(overturned),
-        overturn_time=float(st[K.S_OVERTURN_TIME]) if overturned else None,
-        direction=int(st[K.S_DIRECTION]) if overturned else None,
+        overturn_time=float(st[L.S_OVERTURN_TIME]) if overturned else None,
+        direction=int(st[L.S_DIRECTION]) if overturned else None,
         fall_start_time=None if math.isnan(fall) else float(fall),
-        max_rotation=float(st[K.S_MAX_THETA]),
-        max_rotation_time=float(st[K.S_THETA_MAX_TIME]),
-        max_slip=float(st[K.S_MAX_X]),
-        residual_slip=float(st[K.S_X]),
-        impacts=int(st[K.S_IMPACTS]),
+        max_rotation=float(st[L.S_MAX_THETA]),
+        max_rotation_time=float(st[L.S_THETA_MAX_TIME]),
+        max_slip=float(st[L.S_MAX_X]),
+        residual_slip=float(st[L.S_X]),
+        impacts=int(st[L.S_IMPACTS]),
         states_seen=seen,
         time_in_state={k: float(v) for k, v in time_in.items()},
-        status=K.STATUS_NAMES[int(st[K.S_STATUS])],
+        status=L.STATUS_NAMES[int(st[L.S_STATUS])],
         end_time=float(end_time),
         energy={k: float(v) for k, v in energy.items()},
         alpha=float(alpha),
-        max_rotation_ratio=float(st[K.S_MAX_THETA]) / alpha,
+        max_rotation_ratio=float(st[L.S_MAX_THETA]) / alpha,
     )
 
 

@@ -1,0 +1,101 @@
+"""The core's entry points for one run as machine code compiled ahead of time by the package build,
+so that ``rockslide run`` neither imports numba nor waits for it (issue 11; README, 'The first run').
+
+`build` compiles, with numba's ahead-of-time compiler (`numba.pycc`), the very `kernel` and
+`physics` functions that numba compiles at run time (`ENTRY_POINTS`, with the argument types
+`simulate` gives them) into an extension module ``_native`` beside this file, for a generic CPU of
+the build's architecture, and records the `source_stamp` of the sources it compiled beside it.
+`entry_points` returns that module when it imports and its stamp is the stamp of the sources
+beside it (they were not edited since), else numba's JIT dispatchers of the same functions. Both
+run the same code: results are identical to the last bit (tests/test_startup.py). The batch, GPU
+and fragility paths keep numba's JIT, whose cache the build fills as well (`compiled.precompile`).
+
+Plain standard library at import: numba is imported only by `build` and by the JIT fallback.
+"""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+import importlib
+import os
+import types
+import warnings
+from pathlib import Path
+
+#: The modules whose functions are compiled (numba's JIT and `build`), in the order their code
+#: includes each other; `layout`'s constants are compiled into them.
+COMPILED_MODULES = ("layout", "physics", "kernel", "batch", "gpu")
+MODULE_NAME = "_native"
+STAMP_FILE = f"{MODULE_NAME}.stamp"
+
+_VECTOR, _MATRIX = "f8[::1]", "f8[:, ::1]"
+#: (name, module, numba signature) of each function `simulate` calls from Python.
+ENTRY_POINTS = (
+    ("run", "kernel", f"i8({_VECTOR}, {_MATRIX}, {_MATRIX}, {_VECTOR}, {_MATRIX}, i8, i8, {_MATRIX}, i8)"),
+    ("rest_bounds", "kernel", f"{_MATRIX}({_MATRIX})"),
+    ("finished", "kernel", f"b1({_VECTOR})"),
+    ("block_constants", "physics", "UniTuple(f8, 3)(f8, f8, f8)"),
+    ("kinetic_energy", "physics", "f8(f8, f8, f8, f8, f8, f8)"),
+    ("potential_energy", "physics", "f8(f8, f8, f8, f8)"),
+)
+
+
+@functools.lru_cache(maxsize=1)
+def source_stamp() -> str:
+    """SHA-256 of the sources of `COMPILED_MODULES` (stable across processes and machines), read
+    once per process."""
+    digest = hashlib.sha256()
+    folder = Path(__file__).parent
+    for name in COMPILED_MODULES:
+        digest.update((folder / f"{name}.py").read_bytes())
+    return digest.hexdigest()
+
+
+def ahead_of_time():
+    """The build's compiled module when it fits the sources beside it (module docstring), else None."""
+    try:
+        if (Path(__file__).with_name(STAMP_FILE)).read_text() != source_stamp():
+            return None
+        return importlib.import_module(f"{__package__}.{MODULE_NAME}")
+    except (OSError, ImportError):
+        return None
+
+
+def just_in_time() -> types.SimpleNamespace:
+    """`ENTRY_POINTS` as numba's JIT dispatchers (they compile, or load numba's cache, at first call)."""
+    modules = {name: importlib.import_module(f"{__package__}.{name}") for name in ("kernel", "physics")}
+    return types.SimpleNamespace(**{name: getattr(modules[module], name) for name, module, _ in ENTRY_POINTS})
+
+
+@functools.lru_cache(maxsize=1)
+def entry_points():
+    """`ENTRY_POINTS` for this process: the build's machine code (`ahead_of_time`) or numba's JIT."""
+    return ahead_of_time() or just_in_time()
+
+
+def build(folder: Path | None = None) -> Path:
+    """Compile `ENTRY_POINTS` ahead of time into ``folder`` (default: beside this file) and record
+    their `source_stamp`. Returns the extension module's path. Needs numba and a C compiler."""
+    with warnings.catch_warnings():      # pending deprecation since numba 0.57 (README, 'The first run')
+        warnings.simplefilter("ignore", PendingDeprecationWarning)
+        from numba.pycc import CC
+
+    folder = Path(folder) if folder is not None else Path(__file__).parent
+    stamp = folder / STAMP_FILE
+    stamp.unlink(missing_ok=True)        # no stamp until the module beside it is complete
+    compiler = CC(MODULE_NAME)
+    compiler.output_dir = str(folder)
+    compiler.verbose = False
+    for name, module, signature in ENTRY_POINTS:
+        dispatcher = getattr(importlib.import_module(f"{__package__}.{module}"), name)
+        compiler.export(name, signature)(dispatcher.py_func)
+    compiler.compile()
+    temporary = folder / f".{STAMP_FILE}.{os.getpid()}.tmp"
+    temporary.write_text(source_stamp())
+    os.replace(temporary, stamp)
+    return folder / Path(compiler.output_file).name
+
+
+__all__ = ["COMPILED_MODULES", "ENTRY_POINTS", "source_stamp", "ahead_of_time", "just_in_time", "entry_points",
+           "build"]
