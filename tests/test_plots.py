@@ -16,6 +16,8 @@ import pytest
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.collections import PolyCollection
 from matplotlib.figure import Figure
+from matplotlib.transforms import Bbox
+from PIL import Image
 
 from rockslide import plots
 from rockslide.core.simulate import EVENT_DTYPE, Model, Result, Settings, Summary, simulate
@@ -317,6 +319,56 @@ def test_labels_never_cover_data(responses, kind):
             assert not box.overlaps(area), (kind, text.get_text())
 
 
+def scaled(result, rotation: float, slip: float) -> Result:
+    """``result`` with its rotation and slip histories multiplied by ``rotation`` and ``slip``."""
+    history = {**result.history, "rotation": result.history["rotation"] * rotation,
+               "slip": result.history["slip"] * slip}
+    return Result(history=history, events=result.events, summary=result.summary, step=result.step,
+                  ground_time=result.ground_time, ground_horizontal=result.ground_horizontal,
+                  ground_vertical=result.ground_vertical)
+
+
+# The kinds of response, and two whose y axes are labelled otherwise: with offset texts (1e-8 over
+# the rotation axis, 1e-5 over the slip axis), and with wide tick labels (-0.0001, 600000).
+LAYOUTS = {kind: (lambda r, kind=kind: r[kind]) for kind in KINDS}
+LAYOUTS["offset texts"] = lambda r: scaled(r["rockslip"], 1e-6, 1e-6)
+LAYOUTS["wide tick labels"] = lambda r: scaled(r["rockslip"], 1e-2, 1e4)
+
+
+@pytest.mark.parametrize("dpi", [50, 150, 300])
+@pytest.mark.parametrize("layout", list(LAYOUTS))
+def test_the_layout_keeps_everything_in_the_figure_and_apart(responses, layout, dpi):
+    """What constrained layout did, `_fit_column` does once: every panel with its decorations
+    (tick labels, axis labels, offset texts, titles), the title and the legend lie inside the
+    figure, stacked without overlapping, at any dpi (the margins are fractions of the figure)."""
+    fig = response_figure(LAYOUTS[layout](responses), title=layout)
+    fig.set_dpi(dpi)
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    rows = {}
+    for ax in fig.axes:
+        rows.setdefault(ax.get_subplotspec().rowspan.start, []).append(ax.get_tightbbox(renderer))
+    stack = ([fig._suptitle.get_window_extent(renderer)] + [Bbox.union(rows[k]) for k in sorted(rows)]
+             + [fig.legends[0].get_window_extent(renderer)])
+    for box in stack:
+        assert 0 <= box.x0 and box.x1 <= fig.bbox.width and 0 <= box.y0 and box.y1 <= fig.bbox.height, box
+    for upper, lower in zip(stack[:-1], stack[1:], strict=True):
+        assert upper.y0 > lower.y1, (upper, lower)
+    if layout == "offset texts":
+        assert {ax.yaxis.offsetText.get_text() for ax in fig.axes} >= {"1e\u22128", "1e\u22125"}
+
+
+def test_a_saved_response_figure_is_drawn_once(tmp_path, responses, monkeypatch):
+    """No layout engine: constrained layout drew the figure twice for each savefig."""
+    draws = []
+    draw = Figure.draw
+    monkeypatch.setattr(Figure, "draw", lambda self, renderer: (draws.append(self), draw(self, renderer))[1])
+    fig = response_figure(responses["overturn"], title="overturn")
+    assert fig.get_layout_engine() is None
+    save_figure(fig, tmp_path / "f.png")
+    assert draws == [fig]
+
+
 # --------------------------------------------------------------------------------------------------
 # zoom_window on known events
 # --------------------------------------------------------------------------------------------------
@@ -476,6 +528,24 @@ def test_titles_placed_without_a_search_are_where_matplotlib_puts_them(tmp_path,
     monkeypatch.setattr(plots, "_title_height", lambda *axes: None)
     searched = save_figure(response_figure(responses[kind], title=kind), tmp_path / "searched.png")
     assert fast.read_bytes() == searched.read_bytes()
+
+
+@pytest.mark.parametrize("dpi, facecolor", [(150, "white"), (67, "white"), (100, "none")])
+def test_png_holds_the_figure_as_drawn(tmp_path, responses, dpi, facecolor):
+    """`plots._write_png` writes the pixels matplotlib draws, RGB where they are opaque (RGBA
+    otherwise), and the resolution."""
+    fig = response_figure(responses["rock"])
+    fig.set_facecolor(facecolor)
+    path = save_figure(fig, tmp_path / "f.png", dpi=dpi)
+    fig.set_dpi(dpi)
+    fig.canvas.draw()
+    drawn = np.asarray(fig.canvas.buffer_rgba())
+    with Image.open(path) as image:
+        assert image.mode == ("RGB" if facecolor == "white" else "RGBA")
+        assert image.info["dpi"] == pytest.approx((dpi, dpi), abs=0.05)     # pixels per metre, whole
+        read = np.asarray(image.convert("RGBA"))
+    assert drawn[..., 3].min() == (255 if facecolor == "white" else 0)
+    assert np.array_equal(read, drawn)
 
 
 def test_other_formats(tmp_path, responses):
