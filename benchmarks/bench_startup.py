@@ -267,13 +267,30 @@ def choices(out: Path, runs: int = 5) -> None:
         results._COMPRESSION = chosen
     canvas = FigureCanvasAgg(plots.response_figure(result, title="example"))
     canvas.draw()
-    image = Image.fromarray(np.asarray(canvas.buffer_rgba()))
-    for level in (plots.PNG_COMPRESSION, 6):
-        path = out / f"figure{level}.png"
-        write = min(_seconds(lambda p=path, z=level: image.save(p, format="png", compress_level=z))
-                    for _ in range(runs))
-        used = " (used)" if level == plots.PNG_COMPRESSION else " (Pillow's default)"
-        print(f"| PNG 1650 x 1200 (zlib) | {level}{used} | {1000 * write:.0f} | - | {path.stat().st_size / 1024:.0f} |")
+    pixels = np.asarray(canvas.buffer_rgba())
+    height, width, _ = pixels.shape
+    image = Image.fromarray(pixels)
+
+    def write_png(path, level):
+        saved = plots.PNG_COMPRESSION
+        plots.PNG_COMPRESSION = level
+        try:
+            with open(path, "wb") as handle:
+                plots._write_png(handle, pixels, dpi=plots.DPI)
+        finally:
+            plots.PNG_COMPRESSION = saved
+
+    def pillow(path, level):
+        image.save(path, format="png", compress_level=level)
+
+    ours, theirs = "PNG, rows unfiltered (`plots._write_png`)", "PNG, Pillow (adaptive row filters)"
+    writers = [(ours, plots.PNG_COMPRESSION, " (used)", write_png), (ours, 6, "", write_png),
+               (theirs, 3, "", pillow), (theirs, 6, " (Pillow's default)", pillow)]
+    for number, (what, level, note, write) in enumerate(writers):
+        path = out / f"figure{number}.png"
+        seconds = min(_seconds(lambda p=path, z=level, w=write: w(p, z)) for _ in range(runs))
+        print(f"| {what} {width} x {height} | {level}{note} | {1000 * seconds:.0f} | - | "
+              f"{path.stat().st_size / 1024:.0f} |")
     print()
 
 
