@@ -238,3 +238,34 @@ def test_edited_sources_run_on_numbas_jit(monkeypatch):
     monkeypatch.setattr(native, "source_stamp", lambda: "an edited core")
     assert native.ahead_of_time() is None
     assert native.just_in_time().run.py_func.__module__ == "rockslide.core.kernel"
+
+
+def test_the_figure_module_leaves_matplotlib_as_it_found_it():
+    """`plots` imports matplotlib's drawing modules without generating the long docstrings of their
+    artists' ``set`` (`plots._artists_without_set_docstrings`): ``set`` still sets properties and
+    refuses unknown ones, and matplotlib's own method is back in place for classes defined later."""
+    code = """
+import matplotlib.artist as A
+name = "_update_set_signature_and_docstring"
+original = A.Artist.__dict__[name]
+import rockslide.plots
+from matplotlib.lines import Line2D
+assert A.Artist.__dict__[name] is original
+line = Line2D([0.0, 1.0], [0.0, 1.0])
+line.set(linewidth=3.0, color="red")
+assert line.get_linewidth() == 3.0 and line.get_color() == "red"
+try:
+    line.set(no_such_property=1)
+except AttributeError as error:
+    assert "no_such_property" in str(error)
+else:
+    raise AssertionError("an unknown property was accepted")
+class Later(A.Artist):
+    pass
+assert "Supported properties are" in Later.set.__doc__
+assert "Supported properties are" not in Line2D.set.__doc__
+print("ok")
+"""
+    done = subprocess.run([sys.executable, "-c", code], cwd=REPO, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr[-3000:]
+    assert done.stdout.split() == ["ok"]
