@@ -964,7 +964,8 @@ def glide(st, p, mode, energy, j, n_sub, h, dt_rec, tk, a0, sa, v0, sv, history,
         th, thd, x, xd, wg, wf = th1, thd1, x1, xd1, wg1, wf1
         a1, b1, pg1, pf1 = thdd, xdd, pg, pf
         elapsed += hh
-        store_row(st, history, every, offset, n_base + j, t0 + (n_base + j) * h, lam, th, thd, x, xd, mode)
+        if every > 0:
+            store_row(st, history, every, offset, n_base + j, t0 + (n_base + j) * h, lam, th, thd, x, xd, mode)
         tau_a = tau_b
         j += 1
     st[S_THETA], st[S_THETADOT], st[S_X], st[S_XDOT] = th, thd, x, xd
