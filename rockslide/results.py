@@ -79,10 +79,13 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import errno
-import importlib.metadata
+import functools
 import math
+import os
 import platform
+import re
 import signal
+import sys
 import threading
 from dataclasses import dataclass
 from datetime import datetime, timezone
@@ -507,17 +510,43 @@ def _summary_attrs(summary: Summary) -> dict:
 
 def versions() -> dict[str, str]:
     """Versions of Python and of the packages a result depends on (``<name>_version`` keys)."""
+    installed = installed_versions()
     out = {}
     for package in VERSIONED_PACKAGES:
         if package == "python":
             version = platform.python_version()
+        elif package in installed:
+            version = installed[package]
         else:
+            import importlib.metadata
+
             try:
                 version = importlib.metadata.version(package)
             except importlib.metadata.PackageNotFoundError:
                 version = __version__ if package == "rockslide" else "not installed"
         out[f"{package}_version"] = version
     return out
+
+
+@functools.lru_cache(maxsize=1)
+def installed_versions() -> dict[str, str]:
+    """The versions of the installed distributions, by normalised name, read from the names of
+    their ``NAME-VERSION.dist-info`` folders on ``sys.path`` (the layout installers write; the first
+    on the path wins, as for imports). What importlib.metadata gives, without its import and the
+    parsing of whole metadata files: 30 ms of a run. A distribution installed otherwise (an
+    ``.egg-info``) is missing here, and `versions` asks importlib.metadata for it."""
+    found: dict[str, str] = {}
+    for entry in sys.path:
+        try:
+            names = os.listdir(entry or ".")
+        except OSError:
+            continue
+        for name in names:
+            stem = name[:-len(".dist-info")]
+            if name.endswith(".dist-info") and stem.count("-") == 1:
+                project, version = stem.split("-")
+                found.setdefault(re.sub(r"[-_.]+", "_", project).lower(), version)
+    return found
 
 
 def _flatten(tree: dict, prefix: str = "") -> dict:

@@ -762,6 +762,38 @@ def at2_like(draw) -> str:
 ANY_TEXT = st.one_of(st.text(max_size=300), NUMBERY_TEXT, column_like())
 
 
+@settings(max_examples=300, deadline=None)
+@given(st.one_of(NUMBERY_TEXT, st.text(max_size=200), st.lists(
+    st.sampled_from(["1_0", "\u0661", "1.5", "-2e3", "1.0D-02", "nan", "inf", "infinity", "+.5", "5."]),
+    max_size=8).map(" ".join)))
+def test_the_quick_reading_of_numbers_reads_what_the_careful_one_reads(text):
+    """`records._values_in_order` reads a record's numbers with Python's ``float`` where it can:
+    same values (bit for bit) and line numbers as `records._numbers` token by token, or the same
+    error naming the same field."""
+    from rockslide import records
+
+    rows = list(records._content_lines(text))
+    context = records._Context(Path("r.txt"), None, None)
+
+    def careful():
+        values, lines = [], []
+        for number, tokens in rows:
+            row = records._numbers(context, number, tokens)
+            values.extend(row)
+            lines.extend([number] * len(row))
+        return np.array(values, dtype=np.float64), np.array(lines, dtype=np.int64)
+
+    outcomes = []
+    for read in (lambda: records._values_in_order(context, iter(rows)), careful):
+        try:
+            values, lines = read()
+        except RecordError as exc:
+            outcomes.append(str(exc))
+        else:
+            outcomes.append((values.view(np.int64).tolist(), lines.tolist()))
+    assert outcomes[0] == outcomes[1]
+
+
 @pytest.fixture(scope="module")
 def fuzz_dir(tmp_path_factory):
     return tmp_path_factory.mktemp("fuzz")

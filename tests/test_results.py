@@ -581,3 +581,17 @@ def test_summary_to_json_dict_is_strict_json():
     out = summary_to_json_dict(s)
     assert out["energy"] == {"balance_residual": None} and out["events"] == []
     json.dumps(out, allow_nan=False)
+
+
+def test_the_versions_stored_are_those_importlib_metadata_gives():
+    """`results.versions` reads the installed distributions from their ``.dist-info`` folders'
+    names instead of importlib.metadata (30 ms of a run): the same versions."""
+    import importlib.metadata
+    import platform
+
+    from rockslide import results
+
+    expected = {f"{package}_version": importlib.metadata.version(package)
+                for package in results.VERSIONED_PACKAGES if package != "python"}
+    assert results.versions() == {**expected, "python_version": platform.python_version()}
+    assert set(results.VERSIONED_PACKAGES) - {"python"} <= set(results.installed_versions())
