@@ -550,7 +550,7 @@ def _content_lines(text: str, skip_lines: int = 0, first: int = 0):
             continue
         content = content.rstrip(",").strip()
         if content:
-            yield number, _FIELD_SEPARATOR.split(content)
+            yield number, _FIELD_SEPARATOR.split(content) if "," in content else content.split()
 
 
 def _numbers(ctx: _Context, number: int, tokens: list[str]) -> list[float]:

@@ -763,6 +763,22 @@ ANY_TEXT = st.one_of(st.text(max_size=300), NUMBERY_TEXT, column_like())
 
 
 @settings(max_examples=300, deadline=None)
+@given(st.one_of(NUMBERY_TEXT, st.text(max_size=200)))
+def test_fields_are_split_at_commas_and_white_space(text):
+    """`records._content_lines` splits a line without commas with ``str.split``: the fields the
+    regular expression `records._FIELD_SEPARATOR` gives."""
+    from rockslide import records
+
+    expected = []
+    for number, line in enumerate(text.splitlines(), start=1):
+        content = line.split("#", 1)[0].strip()
+        content = "" if content.startswith(";") else content.rstrip(",").strip()
+        if content:
+            expected.append((number, records._FIELD_SEPARATOR.split(content)))
+    assert list(records._content_lines(text)) == expected
+
+
+@settings(max_examples=300, deadline=None)
 @given(st.one_of(NUMBERY_TEXT, st.text(max_size=200), st.lists(
     st.sampled_from(["1_0", "\u0661", "1.5", "-2e3", "1.0D-02", "nan", "inf", "infinity", "+.5", "5."]),
     max_size=8).map(" ".join)))
