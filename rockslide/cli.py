@@ -202,18 +202,10 @@ def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, robustness
     Example:
         rockslide run example/example.yaml --json
     """
-    from .drawing import FigureProcess
-
-    started = time.perf_counter()
-    with FigureProcess(wanted=not no_plot) as helper:
-        _run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, robustness, dpi, started, helper)
-
-
-def _run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, robustness, dpi, started, helper):
-    """`run`'s work; the figure is drawn by ``helper`` (`drawing.FigureProcess`) where it can."""
     from . import files, records, results, runner
     from .case import load_case
 
+    started = time.perf_counter()
     case = load_case(case_file)
     folder = (Path(out_dir) if out_dir is not None else Path(case.output.dir)).expanduser()
     h5_path = folder / f"{case.name}.h5"
@@ -251,13 +243,12 @@ def _run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, robustnes
             if not no_plot:
                 kept = writer.written_result()
                 _draw(kept if kept is not None else results.read_result(writer.tmp).result, case.name,
-                      png_path, overwrite=overwrite, dpi=dpi, staging=staging,
-                      helper=helper if kept is not None else None)
+                      png_path, overwrite=overwrite, dpi=dpi, staging=staging)
             staging.publish(remove=[png_path] if no_plot else [])
         written = f"{h5_path}" + ("" if no_plot else f" and {png_path}")
     else:
         with files.Staging(overwrite=False) as staging:
-            _draw(stored.result, stored.name, png_path, overwrite=False, dpi=dpi, staging=staging, helper=helper)
+            _draw(stored.result, stored.name, png_path, overwrite=False, dpi=dpi, staging=staging)
             staging.publish()
         result = stored.result
         check = None if not robustness else {
@@ -889,23 +880,11 @@ def _column(value):
     return int(value) if str(value).isdigit() else value
 
 
-def _draw(result, name, path, *, overwrite, dpi=None, time_shift=0.0, zoom="auto", crop="auto", staging=None,
-          helper=None):
-    """Draw the figure of one run (`plots.response_figure`) and save it (`plots.save_figure`); a
-    PNG drawn by ``helper`` (`drawing.FigureProcess`) if it delivers one."""
-    options = {"time_shift": time_shift, "zoom": zoom, "crop": crop}
-    data = helper.png(result, name, dpi=dpi, **options) if helper is not None else None
-    if data is not None:
-        from . import files
-
-        files.check_destination(path, overwrite=overwrite, example="out/case.png")
-        with files.atomic_write(path, overwrite=overwrite, what="figure", staging=staging) as handle:
-            handle.write(data)
-        return
-    interrupts.check()                  # the helper may have died of the same Ctrl-C
+def _draw(result, name, path, *, overwrite, dpi=None, time_shift=0.0, zoom="auto", crop="auto", staging=None):
+    """Draw the figure of one run (`plots.response_figure`) and save it (`plots.save_figure`)."""
     from .plots import response_figure, save_figure
 
-    figure = response_figure(result, title=name, **options)
+    figure = response_figure(result, title=name, time_shift=time_shift, zoom=zoom, crop=crop)
     save_figure(figure, path, overwrite=overwrite, dpi=dpi, staging=staging)
 
 

@@ -25,7 +25,6 @@ in what is stored. The format follows the file name in `save_figure` (PNG, PDF, 
 
 from __future__ import annotations
 
-import io
 import math
 import os
 import struct
@@ -1126,20 +1125,12 @@ def save_figure(fig: Figure, path, *, overwrite: bool = False, dpi: float | None
     dpi = DPI if dpi is None else dpi
     with atomic_write(path, overwrite=overwrite, what="figure", staging=staging) as handle:
         if fmt == "png":
-            handle.write(render_png(fig, dpi=dpi))
+            canvas = fig.canvas if isinstance(fig.canvas, FigureCanvasAgg) else FigureCanvasAgg(fig)
+            fig.savefig(os.devnull, format="rgba", dpi=dpi)      # drawn on canvas, as savefig draws a PNG
+            _write_png(handle, np.asarray(canvas.buffer_rgba()), dpi=dpi)
         else:
             fig.savefig(handle, format=fmt, dpi=dpi)
     return path
-
-
-def render_png(fig: Figure, *, dpi: float | None = None) -> bytes:
-    """The PNG file of ``fig`` at ``dpi`` (default `DPI`), as bytes (`_write_png`)."""
-    dpi = DPI if dpi is None else dpi
-    canvas = fig.canvas if isinstance(fig.canvas, FigureCanvasAgg) else FigureCanvasAgg(fig)
-    fig.savefig(os.devnull, format="rgba", dpi=dpi)      # drawn on canvas, as savefig draws a PNG
-    out = io.BytesIO()
-    _write_png(out, np.asarray(canvas.buffer_rgba()), dpi=dpi)
-    return out.getvalue()
 
 
 def _write_png(handle, rgba: np.ndarray, *, dpi: float) -> None:
@@ -1176,6 +1167,6 @@ def _write_png(handle, rgba: np.ndarray, *, dpi: float) -> None:
     chunk(b"IEND", b"")
 
 
-__all__ = ["response_figure", "save_figure", "render_png", "zoom_window", "state_segments", "sweep_figure",
+__all__ = ["response_figure", "save_figure", "zoom_window", "state_segments", "sweep_figure",
            "sweep_category", "SWEEP_CATEGORIES", "fragility_figure", "spectrum_figure", "spectrum_category",
            "SPECTRUM_CATEGORIES"]

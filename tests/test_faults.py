@@ -130,49 +130,6 @@ def test_signals_at_random_moments_keep_the_previous_result_or_publish_the_new_o
     assert stopped >= 1, "signals should land while the run computes or writes"
 
 
-def _group_members(pgid: int) -> list[int]:
-    """Processes of the process group ``pgid`` (Linux: from /proc)."""
-    members = []
-    for entry in Path("/proc").iterdir():
-        try:
-            fields = (entry / "stat").read_text().rsplit(")", 1)[1].split()
-        except (OSError, IndexError):
-            continue
-        if entry.name.isdigit() and int(fields[2]) == pgid:
-            members.append(int(entry.name))
-    return members
-
-
-@pytest.mark.skipif(sys.platform != "linux", reason="process groups read from /proc")
-def test_ctrl_c_in_a_terminal_ends_the_run_and_its_figure_process(ws):
-    """Ctrl-C in a terminal signals the whole foreground group: the run and the helper process that
-    draws its figure (`drawing.FigureProcess`). The run ends with 130 and its previous result
-    intact, no temporary file is left, and no process of the group outlives it."""
-    (ws / "case.yaml").write_text(case_text(STREAMING))
-    code, stderr, _ = _run_streaming(ws)
-    assert code == 0, stderr
-    out = ws / "out"
-    before = (sha256(out / "stream.h5"), sha256(out / "stream.png"))
-    proc = cli_subprocess(["run", "case.yaml", "--overwrite"], ws, preexec_fn=_default_sigint,
-                          start_new_session=True)
-    try:
-        deadline = time.monotonic() + 300
-        while not list(out.glob(".stream.h5.*.tmp")):
-            assert proc.poll() is None and time.monotonic() < deadline, "the run did not start writing"
-            time.sleep(0.002)
-        os.killpg(proc.pid, signal.SIGINT)
-        _, stderr = proc.communicate(timeout=300)
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.communicate()
-    assert proc.returncode == 130, stderr
-    assert stderr.splitlines()[-1] == "rockslide: interrupted (no partial result was written)"
-    assert _group_members(proc.pid) == []          # the run waited for its helper before it exited
-    assert temporaries(ws) == []
-    assert (sha256(out / "stream.h5"), sha256(out / "stream.png")) == before
-
-
 def test_the_signal_handler_only_records_and_check_raises(monkeypatch):
     """In-process: SIGTERM sent to this process sets the flag; `check` raises Interrupted with exit
     code 143 (the handler itself raises nothing, wherever it runs)."""

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import json
 import math
-import os
 import subprocess
 import sys
 from pathlib import Path
@@ -268,106 +267,5 @@ assert "Supported properties are" not in Line2D.set.__doc__
 print("ok")
 """
     done = subprocess.run([sys.executable, "-c", code], cwd=REPO, capture_output=True, text=True, timeout=300)
-    assert done.returncode == 0, done.stderr[-3000:]
-    assert done.stdout.split() == ["ok"]
-
-
-# --------------------------------------------------------------------------------------------------
-# The figure's helper process (`drawing.FigureProcess`)
-# --------------------------------------------------------------------------------------------------
-
-two_cores_on_linux = pytest.mark.skipif(
-    not (sys.platform == "linux" and len(os.sched_getaffinity(0)) >= 2),
-    reason="the figure's helper process is forked on Linux with two cores or more")
-
-#: One BLAS thread: numpy then starts no thread of its own, and a script may fork after importing it.
-ONE_THREAD = {**os.environ, "OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
-
-
-def run_delivered(args, cwd: Path, cpus) -> list[bool]:
-    """Run the command line ``args`` in a fresh process restricted to ``cpus``, as the ``rockslide``
-    script does; give, for each figure, whether the helper process delivered it."""
-    code = """
-import json, sys
-from rockslide import drawing
-delivered = []
-original = drawing.FigureProcess.png
-def png(self, *args, **kwargs):
-    data = original(self, *args, **kwargs)
-    delivered.append(data is not None)
-    return data
-drawing.FigureProcess.png = png
-from rockslide.cli import main
-try:
-    main(sys.argv[1:], prog_name="rockslide", standalone_mode=False)
-finally:
-    print(json.dumps(delivered))
-"""
-    done = subprocess.run([sys.executable, "-c", code, *map(str, args)], cwd=cwd, capture_output=True,
-                          text=True, timeout=600, preexec_fn=lambda: os.sched_setaffinity(0, cpus))
-    assert done.returncode == 0, done.stderr[-3000:]
-    return json.loads(done.stdout.splitlines()[-1])
-
-
-@two_cores_on_linux
-def test_the_figure_of_the_helper_process_is_the_figure_drawn_in_process(tmp_path):
-    """A run on two cores has its figure drawn by the helper process, and a run on one core draws
-    it itself: the two PNG files are the same to the byte. A rerun that only draws the missing
-    figure of a complete result uses the helper too."""
-    case = short_example(tmp_path)
-    cpus = sorted(os.sched_getaffinity(0))
-    assert run_delivered(["run", case, "--out-dir", tmp_path / "two"], tmp_path, set(cpus[:2])) == [True]
-    assert run_delivered(["run", case, "--out-dir", tmp_path / "one"], tmp_path, {cpus[0]}) == [False]
-    figure = (tmp_path / "one" / "example.png").read_bytes()
-    assert (tmp_path / "two" / "example.png").read_bytes() == figure
-    (tmp_path / "two" / "example.png").unlink()
-    assert run_delivered(["run", case, "--out-dir", tmp_path / "two"], tmp_path, set(cpus[:2])) == [True]
-    assert (tmp_path / "two" / "example.png").read_bytes() == figure
-
-
-@two_cores_on_linux
-def test_a_helper_process_that_fails_leaves_the_figure_to_the_run(tmp_path):
-    """The helper delivers the figure `plots` draws; killed, or given a result it cannot draw, it
-    delivers nothing (the run then draws the figure itself); it is not forked where it is not
-    wanted or where the process has a second thread; it is gone after its ``with`` block."""
-    run = CliRunner().invoke(main, ["run", str(short_example(tmp_path)), "--out-dir", str(tmp_path / "out"),
-                                    "--no-plot"])
-    assert run.exit_code == 0, run.output
-    code = """
-import os, signal, sys, threading
-from rockslide import drawing, plots, results
-stored = results.read_result(sys.argv[1]).result
-expected = plots.render_png(plots.response_figure(stored, title="example"))
-assert drawing.available()
-
-def gone(pid):
-    return not os.path.exists(f"/proc/{pid}")
-
-with drawing.FigureProcess() as helper:
-    pid = helper.pid
-    assert pid is not None and helper.png(stored, "example") == expected
-assert gone(pid)
-with drawing.FigureProcess() as helper:
-    os.kill(helper.pid, signal.SIGKILL)
-    assert helper.png(stored, "example") is None
-with drawing.FigureProcess() as helper:
-    assert helper.png(None, "example") is None
-with drawing.FigureProcess() as helper:
-    pid = helper.pid
-assert gone(pid)
-with drawing.FigureProcess(wanted=False) as helper:
-    assert helper.pid is None and helper.png(stored, "example") is None
-stop = threading.Event()
-thread = threading.Thread(target=stop.wait)
-thread.start()
-try:
-    assert not drawing.available()
-finally:
-    stop.set()
-    thread.join()
-print("ok")
-"""
-    done = subprocess.run([sys.executable, "-c", code, str(tmp_path / "out" / "example.h5")], cwd=REPO,
-                          capture_output=True, text=True, timeout=600, env=ONE_THREAD)
     assert done.returncode == 0, done.stderr[-3000:]
     assert done.stdout.split() == ["ok"]
