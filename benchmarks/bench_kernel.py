@@ -4,8 +4,9 @@ Every figure of issue 17's table, measured in this one run. The baseline is `bas
 compiled RK4 loop of rocking on a record (the kernel's ground interpolation, nothing else). Each
 comparison alternates the baseline and the measured code ``--repeats`` times and reports the
 median of the per-repeat ratios, with their range: on a shared machine the load drifts, and a
-ratio of two neighbouring measurements drifts less than either. Times are CPU times of this
-process (`time.process_time`, all its threads) unless a figure says wall.
+ratio of two neighbouring measurements drifts less than either; for the same reason the baseline of
+a sweep integrates as many steps as the sweep (its loop repeated), so that both last about as long.
+Times are CPU times of this process (`time.process_time`, all its threads) unless a figure says wall.
 
 - **rocking**: `simulate` on 60 s of still ground, the block started at 0.1 rad with e = 1 (it
   rocks the whole time), no history, no energy ledger, against the baseline on the same ground.
@@ -84,14 +85,23 @@ def run_duration(case) -> float:
     return (len(record.data) - 1) * record.dt
 
 
-def baseline_on(ground: np.ndarray, model: Model):
-    """The baseline's steps per CPU second on ``ground``, rocking from 0.1 rad with e = 1."""
+def baseline_on(ground: np.ndarray, model: Model, steps: float = 0.0):
+    """The baseline's steps per CPU second on ``ground``, rocking from 0.1 rad with e = 1.
+
+    The loop runs as many times over ``ground`` as it takes to integrate ``steps`` (once at
+    least), so that a measurement of the baseline lasts about as long as one of the work it is
+    compared with: on a shared machine whose speed drifts within seconds, a 40 ms baseline next to
+    a 1.3 s sweep compares two different machines."""
     R, alpha, _ = model.constants
     n_sub = round(DT_REC / H)
-    steps = ground.shape[1] * n_sub
+    per_pass = ground.shape[1] * n_sub
+    passes = max(1, round(steps / per_pass))
     plain_rk4_rocking(ground[:, :1], n_sub, H, DT_REC, R, alpha, G, 1.0, 0.1, 0.0, 1.0)   # compile or load
-    return lambda: steps / cpu(lambda: plain_rk4_rocking(ground, n_sub, H, DT_REC, R, alpha, G, 1.0, 0.1,
-                                                         0.0, 1.0))
+
+    def all_passes():
+        for _ in range(passes):
+            plain_rk4_rocking(ground, n_sub, H, DT_REC, R, alpha, G, 1.0, 0.1, 0.0, 1.0)
+    return lambda: passes * per_pass / cpu(all_passes)
 
 
 # --------------------------------------------------------------------------------------------------
@@ -201,8 +211,11 @@ def kobe_grid(folder: Path, mu_step: str = "0.01"):
     return case, axes
 
 
-def sweep_ratio(case, axes, folder: Path, baseline, repeats: int, figure: bool = False):
-    runs = []
+def sweep_ratio(case, axes, folder: Path, ground: np.ndarray, model: Model, repeats: int, figure: bool = False):
+    """`ratios` of the sweep's steps per CPU second to the baseline's on ``ground``, the baseline
+    measured over as many steps as the sweep integrates (after one untimed sweep)."""
+    runs = [sweep_work(case, axes, folder, figure=figure)]
+    baseline = baseline_on(ground, model, runs[0]["steps"])
 
     def measured():
         runs.append(sweep_work(case, axes, folder, figure=figure))
@@ -253,7 +266,7 @@ def main(argv=None) -> None:
         folder = Path(tmp)
         case, axes = rocking_grid(folder)
         model = Model.from_block(0.2, 0.1, 1.0, 0.95, 0.8)
-        (median, low, high, speed), run = sweep_ratio(case, axes, folder, baseline_on(still(60.0), model),
+        (median, low, high, speed), run = sweep_ratio(case, axes, folder, still(60.0), model,
                                                       repeats)
         moving = 1.0 - run["shares"]["REST"] / (run["cases"] * run["duration"])
         table.append(f"| `sweep --workers 1`, rocking-heavy grid ({run['cases']} cases, moving "
@@ -268,13 +281,14 @@ def main(argv=None) -> None:
     else:
         case, axes = kobe_grid(kobe)
         kobe_model = Model.from_block(0.2, 0.1, 0.52, 0.494, 0.8)
-        base = baseline_on(still(run_duration(case)), kobe_model)
-        (median, low, high, speed), run = sweep_ratio(case, axes, kobe, base, repeats)
+        ground = still(run_duration(case))
+        (median, low, high, speed), run = sweep_ratio(case, axes, kobe, ground, kobe_model, repeats)
         table.append(f"| `sweep --workers 1`, the paper's Kobe grid ({run['cases']} cases, {run['steps']:.3g} "
                      f"steps), planning, chunks, collecting and the HDF5 file included | **{median:.3f}** "
                      f"({low:.3f}-{high:.3f}); {speed / 1e6:.1f} M steps/s | >= 0.6 | "
                      f"{verdict(median, GOALS['kobe'])} |")
-        (median, low, high, speed), drawn = sweep_ratio(case, axes, kobe, base, max(3, repeats // 2), figure=True)
+        (median, low, high, speed), drawn = sweep_ratio(case, axes, kobe, ground, kobe_model, max(3, repeats // 2),
+                                                        figure=True)
         table.append(f"| the same with the PNG drawn too ({drawn['cpu'] - run['cpu']:.2f} s more) | "
                      f"**{median:.3f}** ({low:.3f}-{high:.3f}) | - | |")
         # scaling: enough work for about 1.5 s per core
