@@ -35,7 +35,6 @@ import re
 import tempfile
 import warnings
 from dataclasses import dataclass
-from decimal import Decimal
 from functools import cache
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -565,24 +564,30 @@ def _numbers(ctx: _Context, number: int, tokens: list[str]) -> list[float]:
     return values
 
 
-def _values_in_order(ctx: _Context, rows) -> tuple[np.ndarray, np.ndarray]:
-    """All numbers of ``rows`` in reading order, with the line number of each.
-
-    Tokens of ASCII without ``_`` or white space that Python's ``float`` reads are exactly the
-    numbers `_number` accepts, less the Fortran ``D`` exponent: such a record is read with ``float`` alone, five
-    times faster (the same values); any other goes token by token through `_number`, which names
-    the offending field."""
-    rows = list(rows)
+def _quick_values(rows) -> np.ndarray | None:
+    """All numbers of ``rows`` in reading order, read with Python's ``float``, or None where that
+    cannot be trusted. Tokens of ASCII without ``_`` or white space that ``float`` reads are
+    exactly the numbers `_number` accepts, less the Fortran ``D`` exponent; such a record is read
+    five times faster (the same values). Others go token by token through `_number` (the caller),
+    which names the offending field."""
     tokens = [token for _, row in rows for token in row]
     text = "".join(tokens)
-    if text.isascii() and "_" not in text and len(text.split()) <= 1:
-        try:
-            values = np.array([float(token) for token in tokens], dtype=np.float64)
-        except ValueError:
-            pass
-        else:
-            numbers = np.array([number for number, _ in rows], dtype=np.int64)
-            return values, np.repeat(numbers, [len(row) for _, row in rows])
+    if not (text.isascii() and "_" not in text and len(text.split()) <= 1):
+        return None
+    try:
+        return np.array([float(token) for token in tokens], dtype=np.float64)
+    except ValueError:
+        return None
+
+
+def _values_in_order(ctx: _Context, rows) -> tuple[np.ndarray, np.ndarray]:
+    """All numbers of ``rows`` in reading order, with the line number of each (`_quick_values`
+    where it can)."""
+    rows = list(rows)
+    quick = _quick_values(rows)
+    if quick is not None:
+        numbers = np.array([number for number, _ in rows], dtype=np.int64)
+        return quick, np.repeat(numbers, [len(row) for _, row in rows])
     values: list[float] = []
     lines: list[int] = []
     for number, tokens in rows:
@@ -665,15 +670,19 @@ def _read_text(ctx: _Context, text: str, options: _Options, *, values_only: bool
                         f"{columns} values", f"line {header_line}")
     if columns == 1:
         return _values_record(ctx, rows, options), "values"
-    table = []
-    for number, tokens in rows:
-        if len(tokens) != columns:
-            raise ctx.error(f"{len(tokens)} values where line {rows[0][0]} has {columns}; column text "
-                            "needs the same number of columns on every line (for several values per "
-                            "line in reading order use format: values, with dt and skip_lines)",
-                            f"line {number}")
-        table.append(_numbers(ctx, number, tokens))
-    table = np.array(table, dtype=np.float64)
+    quick = _quick_values(rows) if all(len(tokens) == columns for _, tokens in rows) else None
+    if quick is not None:
+        table = quick.reshape(len(rows), columns)
+    else:                                 # line by line: the first fault met is the one reported
+        table = []
+        for number, tokens in rows:
+            if len(tokens) != columns:
+                raise ctx.error(f"{len(tokens)} values where line {rows[0][0]} has {columns}; column text "
+                                "needs the same number of columns on every line (for several values per "
+                                "line in reading order use format: values, with dt and skip_lines)",
+                                f"line {number}")
+            table.append(_numbers(ctx, number, tokens))
+        table = np.array(table, dtype=np.float64)
     lines = np.array([number for number, _ in rows], dtype=np.int64)
     time_index, value_index = _time_and_value_columns(ctx, options, header, columns)
     _require_samples(ctx, len(table))
@@ -738,11 +747,20 @@ def _column_index(ctx: _Context, spec, what: str, header, columns: int) -> int:
 
 
 def _printed_resolution(tokens) -> float:
-    """[s] One unit in the last printed digit of the coarsest time value (``64.43999`` -> 1e-5)."""
-    exponents = [Decimal(token.replace("d", "e").replace("D", "E")).as_tuple().exponent
-                 for token in tokens]
-    exponent = max((e for e in exponents if isinstance(e, int)), default=0)  # nan/inf: 'n', 'F'
+    """[s] One unit in the last printed digit of the coarsest time value (``64.43999`` -> 1e-5):
+    the largest exponent of the tokens as decimals (`_printed_exponent`), nan and inf left out."""
+    exponents = [_printed_exponent(token) for token in tokens]
+    exponent = max((e for e in exponents if e is not None), default=0)
     return 10.0 ** max(-300, min(300, exponent))
+
+
+def _printed_exponent(token: str) -> int | None:
+    """The exponent of the last printed digit of a number `_number` reads (``Decimal(token)``'s:
+    ``64.43999`` -> -5, ``1.5e-3`` -> -4, ``100`` -> 0), or None for nan and inf."""
+    mantissa, _, power = token.lower().replace("d", "e").partition("e")
+    if not mantissa or not (mantissa[-1].isdigit() or mantissa[-1] == "."):
+        return None                                               # nan, inf, infinity
+    return (int(power) if power else 0) - len(mantissa.partition(".")[2])
 
 
 def _uniform_time(ctx: _Context, time: np.ndarray, lines: np.ndarray,

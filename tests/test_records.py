@@ -17,6 +17,7 @@ from conftest import real_record
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from rockslide import records as records_module
 from rockslide.errors import RecordError
 from rockslide.records import (
     RECORDS_ENV,
@@ -760,6 +761,22 @@ def at2_like(draw) -> str:
 
 
 ANY_TEXT = st.one_of(st.text(max_size=300), NUMBERY_TEXT, column_like())
+
+
+@settings(max_examples=500, deadline=None)
+@given(st.one_of(NUMBER, TOKENS, st.from_regex(records_module._NUMBER, fullmatch=True)))
+def test_the_printed_exponent_is_the_decimal_one(token):
+    """`records._printed_exponent` (the last printed digit of a time, for the uniformity check of a
+    time column) is the exponent ``decimal.Decimal`` gives the token, None for nan and inf."""
+    from decimal import Decimal, InvalidOperation
+
+    if records_module._number(token) is None:
+        return                                             # not a number: never asked
+    try:
+        exponent = Decimal(token.replace("d", "e").replace("D", "E")).as_tuple().exponent
+    except InvalidOperation:                               # beyond Decimal's exponents, e.g. 0D1000000000000000000
+        return
+    assert records_module._printed_exponent(token) == (exponent if isinstance(exponent, int) else None)
 
 
 @settings(max_examples=300, deadline=None)
