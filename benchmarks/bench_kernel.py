@@ -233,7 +233,7 @@ def verdict(value: float, goal: float, higher: bool = True) -> str:
 
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--repeats", type=int, default=5, help="alternations per figure (default 5)")
+    parser.add_argument("--repeats", type=int, default=9, help="alternations per figure (default 9)")
     parser.add_argument("--quick", action="store_true", help="shorter records, 3 repeats (a smoke test)")
     args = parser.parse_args(argv)
     repeats = 3 if args.quick else args.repeats
