@@ -806,9 +806,10 @@ def _read_value(value, spec: dict, path: str, ctx: _Ctx):
         if len(value) > MAX_NAME_LENGTH:
             ctx.fail(path, f"expected at most {MAX_NAME_LENGTH} characters (the name is part of the output "
                      f"files' names), got {len(value)}: {_show(value)}")
-        if value.endswith(".sweep"):
-            ctx.fail(path, f"a name ending in '.sweep' would write the files of the sweep of case "
-                     f"{value[:-len('.sweep')]!r} (NAME.sweep.h5); choose another name")
+        for command in ("sweep", "fragility"):
+            if value.endswith(f".{command}"):
+                ctx.fail(path, f"a name ending in '.{command}' would write the files of the {command} of case "
+                         f"{value[:-len(command) - 1]!r} (NAME.{command}.h5); choose another name")
         return value
     if kind == "string":
         if not isinstance(value, str) or not value.strip():

@@ -286,8 +286,11 @@ def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, robustness
 @click.option("--crop", default="auto", show_default=True, metavar="START:END|auto|all",
               help="Time range of the response and ground panels (auto: where the ground or the block "
                    "moves; all: the whole record).")
+@click.option("--overwrite", is_flag=True,
+              help="Replace the file given with -o if it exists (the result's own figure is always "
+                   "redrawn).")
 @dpi_option("figure (PNG)")
-def plot(result_file, output, time_shift, window, crop, dpi):
+def plot(result_file, output, time_shift, window, crop, dpi, overwrite):
     """Redraw the figure of a result, sweep or fragility file (replaces it).
 
     \b
@@ -303,7 +306,10 @@ def plot(result_file, output, time_shift, window, crop, dpi):
     shift = parse_quantity(time_shift, "time", source="--time-shift")
     zoom = _time_range(window, "--window", {"auto": "auto", "none": None})
     span = _time_range(crop, "--crop", {"auto": "auto", "all": None})
-    png = output if output is not None else Path(result_file).with_suffix(".png")
+    own = Path(result_file).with_suffix(".png")
+    png = output if output is not None else own
+    # the result's own figure is the one redrawn; another file is replaced only when asked to
+    replace = overwrite or png.resolve() == own.resolve()
     kind = results.file_format(result_file)
     if kind == results.SWEEP_FORMAT:
         from .plots import save_figure
@@ -312,7 +318,7 @@ def plot(result_file, output, time_shift, window, crop, dpi):
                                                        ("--crop", span, "auto")) if value != default]
         if given:
             raise CaseError("applies to result files, not to sweep files", source=given[0])
-        save_figure(stored_figure(results.read_sweep(result_file)), png, overwrite=True, dpi=dpi)
+        save_figure(stored_figure(results.read_sweep(result_file)), png, overwrite=replace, dpi=dpi)
     elif kind == results.FRAGILITY_FORMAT:
         from .fragility import stored_figure as stored_fragility_figure
         from .plots import save_figure
@@ -321,10 +327,17 @@ def plot(result_file, output, time_shift, window, crop, dpi):
         if given:
             raise CaseError("applies to result files, not to fragility files", source=given[0])
         stored = results.read_dataset(result_file, format=results.FRAGILITY_FORMAT)
-        save_figure(stored_fragility_figure(stored), png, overwrite=True, dpi=dpi)
+        save_figure(stored_fragility_figure(stored), png, overwrite=replace, dpi=dpi)
     else:
         stored = results.read_result(result_file)
-        _draw(stored.result, stored.name, png, overwrite=True, time_shift=shift, zoom=zoom, crop=span, dpi=dpi)
+        times = stored.result.ground_time
+        if times.size:
+            first, last = float(times[0]) + shift, float(times[-1]) + shift
+            for option, pair in (("--window", zoom), ("--crop", span)):
+                if isinstance(pair, tuple) and (pair[1] <= first or pair[0] >= last):
+                    raise CaseError(f"{pair[0]:g} to {pair[1]:g} s is outside the result, which runs from "
+                                    f"{first:g} to {last:g} s (in the figure's time)", source=option)
+        _draw(stored.result, stored.name, png, overwrite=replace, time_shift=shift, zoom=zoom, crop=span, dpi=dpi)
     click.echo(f"redrew {png}")
 
 
@@ -493,7 +506,11 @@ def criteria(height, width, vertical, ah_max, mu_max, output, overwrite, dpi):
 
 def _axis_option(name: str, kind: str, what: str, example: str):
     """An axis option of `sweep`; the order the axes are given in is kept (dimension order)."""
-    def remember(ctx, param, value):
+    def remember(ctx, param, values):
+        if len(values) > 1:       # click would keep the last silently
+            raise click.BadParameter(f"given {len(values)} times; give it once (a comma list holds several "
+                                     "values, e.g. 0.5,0.6)")
+        value = values[0] if values else None
         if value is not None:
             ctx.meta.setdefault("rockslide.sweep.axes", []).append((name, value))
         return value
@@ -503,7 +520,7 @@ def _axis_option(name: str, kind: str, what: str, example: str):
         units = " Values need a unit (g, gal, cm/s^2, m/s^2) as in case files; one unit for a range."
     elif kind == "time":
         units = " Values may carry units as in case files (one unit for a range)."
-    return click.option(f"--{name.replace('_', '-')}", name, default=None, metavar="SPEC", callback=remember,
+    return click.option(f"--{name.replace('_', '-')}", name, multiple=True, metavar="SPEC", callback=remember,
                         help=f"{what}: START:STOP:STEP or a comma list, e.g. {example}.{units}")
 
 
@@ -614,9 +631,13 @@ def sweep(case_file, mu, pga, vertical_factor, restitution, slenderness, gravity
     store.remove()
     over = int(variables["overturned"][0].sum())
     outside = int((variables["status"][0] != 0).sum())
+    undecided = int(variables["undecided"][0].sum())
     rate = f" ({n_new / computed:.0f} cases/s)" if n_new and computed > 0 else ""
     click.echo(f"  {over} of {plan.n_cases} overturned, {outside} outside the model; computed {n_new} "
                f"cases in {computed:.1f} s{rate}")
+    if undecided:
+        click.echo(f"  {undecided} undecided: still moving at the end with the energy to overturn "
+                   "(give the case a ground.tail for their free motion)")
     written = f"{h5_path}" + ("" if no_plot else f" and {png_path}")
     click.echo(f"  wrote {written} in {time.perf_counter() - started:.1f} s")
 
@@ -724,6 +745,10 @@ def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, 
     rate = f" ({n_new / computed:.0f} runs/s)" if n_new and computed > 0 else ""
     click.echo(f"  computed {n_new} runs in {computed:.1f} s{rate}; {outside} of {plan.n_cases} outside the "
                "model (left out of the fits)")
+    undecided = int(analysis.variables["undecided"][0].sum())
+    if undecided:
+        click.echo(f"  {undecided} undecided: still moving at the end with the energy to overturn, counted as "
+                   "not overturned (give the case a ground.tail for their free motion)")
     for state, fit in zip(analysis.states, analysis.fits, strict=True):
         click.echo("  " + fr.describe_fit(state, fit, im))
     written = f"{h5_path}" + ("" if no_plot else f" and {png_path}")
@@ -1002,7 +1027,8 @@ def human_summary(name, summary, *, ground=None, units=None) -> str:
 
     units = units or {}
     verdict = summary.verdict
-    if summary.status == "ok" and not summary.overturned and math.isfinite(summary.max_rotation_ratio):
+    if (summary.status == "ok" and not summary.overturned and not summary.undecided
+            and math.isfinite(summary.max_rotation_ratio)):
         verdict += f", {percent_text(summary.max_rotation_ratio)} of alpha"
     lines = [f"{name}: {verdict}"]
     if ground is not None:
@@ -1033,10 +1059,12 @@ def _ground_line(ground: dict, units: dict) -> str:
     v_unit = units.get("ground.scale.pga_vertical", h_unit)
     scales = [(role, ground[f"scale_{role}"]) for role in ("horizontal", "vertical")
               if ground.get(f"scale_{role}") is not None]
-    if not scales:
-        return "ground as applied: still (no record: a free vibration)"
     peaks = (f"peaks {acceleration_text(ground['pga_horizontal'], h_unit)} H, "
              f"{acceleration_text(ground['pga_vertical'], v_unit)} V")
+    if not scales:
+        if ground["pga_horizontal"] == 0.0 and ground["pga_vertical"] == 0.0:
+            return "ground as applied: still (no record: a free vibration)"
+        return f"ground as applied: {peaks} (analytic pulses, not scaled)"
     if len(scales) == 2 and f"{scales[0][1]:.4g}" == f"{scales[1][1]:.4g}":
         factors = f"x{scales[0][1]:.4g}"
     else:

@@ -496,7 +496,7 @@ def plan_fragility(case: Case, suite: Suite, im: IntensityMeasure, levels: sw.Ax
         measures["pgv"][r] = intensity.peak_velocity(h, dt)
         measures["pgv_pga"][r] = measures["pgv"][r] / measures["pga"][r] if measures["pga"][r] else math.nan
         measures["im"][r] = value = im.of_record(h, dt, case.gravity, tan_alpha)
-        measures["dt"][r], measures["duration"][r] = dt, h.size * dt
+        measures["dt"][r], measures["duration"][r] = dt, (h.size - 1) * dt
         if not (math.isfinite(value) and value > 0):
             raise RecordError(f"its {im.label} is {value:g}: a record without motion cannot be scaled "
                               "to a level", source=where, field="horizontal")
@@ -938,7 +938,8 @@ def dataset(fplan: FragilityPlan, analysis: Analysis, command_line: str = "") ->
                             ("pgv", "m/s", "peak horizontal ground velocity (baseline-corrected)"),
                             ("pgv_pga", "s", "PGV / PGA"),
                             ("im", im.units, f"intensity measure: {im.long_name}"),
-                            ("dt", "s", "sampling step"), ("duration", "s", "samples x sampling step")):
+                            ("dt", "s", "sampling step"),
+                            ("duration", "s", "time the samples span: (samples - 1) x sampling step")):
         variables[f"record_{key}"] = (per_record, m[key], {"units": unit, "long_name": f"{text} of the "
                                                             "record as read (unscaled)"})
     for key in ("horizontal", "vertical"):

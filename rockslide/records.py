@@ -377,7 +377,7 @@ def record_info(path, **options) -> dict:
         "path": record.path,
         "npts": int(data.size),
         "dt": dt,
-        "duration": data.size * dt,
+        "duration": (data.size - 1) * dt,      # the time the samples span, as a run applies them
         "units": record.units,
         "start": record.start,
         "peak": peak,

@@ -73,7 +73,7 @@ from .case import Case, case_with
 from .core import batch, compiled
 from .core import kernel as K
 from .core.physics import OVERTURNED
-from .core.simulate import ground_array, initial_state, parameters
+from .core.simulate import ground_array, initial_state, may_still_overturn, parameters
 from .errors import CaseError, OutputError
 from .files import atomic_write, remove_stale_temporaries
 from .plots import spectrum_category, spectrum_figure, sweep_category, sweep_figure
@@ -1228,6 +1228,9 @@ def sweep_variables(plan: Plan, states: np.ndarray) -> dict:
              + (t_rockslip > 0) * MODE_BITS["liftoff_slip"]).astype(np.int8)
     end = np.where(np.isnan(st[:, K.S_END_TIME]), plan.record_end, st[:, K.S_END_TIME])
     alpha = plan.params[:, K.P_ALPHA]
+    undecided = np.zeros(len(st), dtype=bool)
+    for i in np.flatnonzero((st[:, K.S_MODE] != K.REST) & ~overturned & (status == 0)):
+        undecided[i] = may_still_overturn(st[i], plan.params[i, K.P_R], alpha[i], plan.params[i, K.P_G])
 
     def grid(values, dtype):
         return np.asarray(values, dtype=dtype).reshape(shape)
@@ -1267,6 +1270,10 @@ def sweep_variables(plan: Plan, states: np.ndarray) -> dict:
                            "before, or after one or more impacts (0: standing)",
                            "flag_values": np.array([0, 1, 2], dtype=np.int8),
                            "flag_meanings": "standing without_impact after_impact"}),
+        "undecided": (grid(undecided, np.int8),
+                      {"units": "1", "long_name": "still moving at the end with the energy or tilt to "
+                       "overturn afterwards: 'standing' not decided (give ground.tail)",
+                       "flag_values": np.array([0, 1], dtype=np.int8), "flag_meanings": "decided undecided"}),
         "status": (grid(status, np.int8),
                    {"units": "1", "long_name": "ok, or where the computation left the model",
                     **STATUS_FLAGS}),

@@ -23,7 +23,8 @@ import numpy as np
 from . import interrupts, plots, runner
 from .case import case_with, load_case
 from .core import criteria
-from .errors import RecordError
+from .errors import OutputError, RecordError
+from .files import Staging, atomic_write
 
 PAPER_G = 9.8
 
@@ -442,7 +443,7 @@ FIGURES = {
 }
 
 
-def write_figures(results: dict, out: Path, overwrite: bool = True) -> list[Path]:
+def write_figures(results: dict, out: Path, overwrite: bool = True, staging=None) -> list[Path]:
     paths = []
     for stem, (title, panels) in FIGURES.items():
         entries = []
@@ -450,8 +451,9 @@ def write_figures(results: dict, out: Path, overwrite: bool = True) -> list[Path
             result, case = results[name]
             entries.append((label, result, f"mu = {case.contact.mu_static:.2f}: {result.summary.verdict}"))
         fig = plots.paper_figure(entries, title=f"Figure {int(stem[3:])}: {title}")
-        paths.append(plots.save_figure(fig, out / f"{stem}.png", overwrite=overwrite))
-    paths.append(plots.save_figure(criteria_map_figure(), out / "fig05.png", overwrite=overwrite))
+        paths.append(plots.save_figure(fig, out / f"{stem}.png", overwrite=overwrite, staging=staging))
+    paths.append(plots.save_figure(criteria_map_figure(), out / "fig05.png", overwrite=overwrite,
+                                   staging=staging))
     return paths
 
 
@@ -466,14 +468,23 @@ def criteria_map_figure(height: float = 0.2, width: float = 0.1, gravity: float 
 
 
 def reproduce(configs: Path, records_dir: Path, out: Path) -> dict:
-    """Run the table, write ``table1.md``, ``table1.csv`` and the figures into ``out``."""
+    """Run the table, write ``table1.md``, ``table1.csv`` and the figures into ``out``, all
+    published together (`files.Staging`): after Ctrl-C or an error, ``out`` holds what it held
+    before, not new figures beside an old table."""
     started = time.perf_counter()
     rows, results = run_table(configs, records_dir)
     gravities = list(rows[0].runs)
-    out.mkdir(parents=True, exist_ok=True)
-    figures = write_figures(results, out)
-    (out / "table1.csv").write_text(csv_text(rows, gravities))
-    (out / "table1.md").write_text(markdown(rows, results, gravities, previous_figures(configs)))
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise OutputError(f"cannot create the output folder: {exc.strerror or exc}", source=str(out)) from None
+    with Staging(overwrite=True) as staging:
+        figures = write_figures(results, out, staging=staging)
+        for name, text in (("table1.csv", csv_text(rows, gravities)),
+                           ("table1.md", markdown(rows, results, gravities, previous_figures(configs)))):
+            with atomic_write(out / name, overwrite=True, what="table", staging=staging) as handle:
+                handle.write(text.encode())
+        staging.publish()
     elapsed = time.perf_counter() - started
     summary = {}
     for gravity in gravities:

@@ -524,6 +524,8 @@ BAD_INPUTS = [
              ["case.yaml: the case file has 1000", "expected at most 65536"]),
     bad_case("name-ending-in-sweep", case_text({"name": "x.sweep"}),
              ["name: a name ending in '.sweep' would write the files of the sweep of case 'x'"]),
+    bad_case("name-ending-in-fragility", case_text({"name": "x.fragility"}),
+             ["name: a name ending in '.fragility' would write the files of the fragility of case 'x'"]),
     pytest.param({"case.yaml": case_text(QUICK)}, ("run", "case.yaml", "--out-dir", "o" * 300),
                  ["a folder name of 300 bytes"], id="out-dir-name-too-long"),
     # -- the dask scheduler (issue 16.5, 16.6) ------------------------------------------------------------
@@ -535,6 +537,8 @@ BAD_INPUTS = [
                  ["--scheduler: inproc:// addresses are not supported"], id="scheduler-inproc"),
     pytest.param({"case.yaml": case_text()}, ("sweep", "case.yaml", "--mu", "0.5", "--workers", "0"),
                  ["--workers: must be within 1 ..."], id="sweep-workers-zero"),
+    pytest.param({"case.yaml": case_text()}, ("sweep", "case.yaml", "--mu", "0.5", "--mu", "0.6"),
+                 ["Invalid value for '--mu': given 2 times; give it once (a comma list"], id="sweep-axis-twice"),
     # -- click's own errors, one line too (issue 16.12) ---------------------------------------------------
     pytest.param({}, ("run",), ["rockslide run: Missing argument 'CASE_FILE'", "see 'rockslide run --help'"],
                  id="usage-missing-argument"),
@@ -635,6 +639,64 @@ def test_existing_result_is_kept_without_overwrite_and_replaced_with_it(ws):
     assert h5.stat().st_ino != inode                   # a new file renamed into place
     assert results.read_result(h5).name == "example"
     assert listing(ws / "out") == ["example.h5"]
+
+
+def test_plot_redraws_its_own_figure_and_replaces_another_file_only_with_overwrite(ws):
+    """`plot` always redraws the result's own figure; with -o it does not replace another file (the
+    review's case: a run's figure drawn over its sweep's maps) unless --overwrite; a window or crop
+    wholly outside the result (0 to 20 s here) is an error, not empty panels."""
+    (ws / "case.yaml").write_text(case_text(QUICK))
+    assert invoke(["run", "case.yaml", "--dpi", "20"]).exit_code == 0
+    other = ws / "out" / "example.sweep.png"
+    other.write_bytes(b"the sweep's maps")
+    assert_clean_error(invoke(["plot", "out/example.h5", "-o", other, "--dpi", "20"]),
+                       ["example.sweep.png exists", "--overwrite"])
+    assert other.read_bytes() == b"the sweep's maps"
+    for args in (["plot", "out/example.h5", "--dpi", "20"], ["plot", "out/example.h5", "-o", "out/example.png"],
+                 ["plot", "out/example.h5", "-o", other, "--overwrite", "--dpi", "20"]):
+        result = invoke(args)
+        assert result.exit_code == 0, result.stderr
+    assert other.read_bytes()[:4] == b"\x89PNG"
+    for option, value in (("--crop", "50:60"), ("--window", "-10:-1")):
+        assert_clean_error(invoke(["plot", "out/example.h5", option, value, "-o", "out/x.png"]),
+                           [f"{option}: {value.replace(':', ' to ')} s is outside the result"])
+    assert not (ws / "out" / "x.png").exists()
+
+
+def test_table1_publishes_its_figures_and_tables_together(ws, monkeypatch):
+    """The review's case: Ctrl-C while `table1` writes left new figures beside the old table and
+    said nothing was written. The figures are now staged with the tables: a failure while the
+    second table is written leaves the folder as it was (the run itself is replaced by a stand-in;
+    the paper's records are not needed)."""
+    from rockslide import files, table1
+
+    class Row:
+        runs = {None: {}}
+
+    def figures(results_, out, overwrite=True, staging=None):
+        with files.atomic_write(out / "fig06.png", overwrite=True, staging=staging) as handle:
+            handle.write(b"new figure")
+        return [out / "fig06.png"]
+
+    def failing_markdown(*args):
+        raise KeyboardInterrupt
+
+    out = ws / "results"
+    out.mkdir()
+    (out / "table1.md").write_text("the previous table")
+    monkeypatch.setattr(table1, "run_table", lambda configs, records_dir: ([Row()], {}))
+    monkeypatch.setattr(table1, "write_figures", figures)
+    monkeypatch.setattr(table1, "csv_text", lambda rows, gravities: "new,csv\n")
+    monkeypatch.setattr(table1, "previous_figures", lambda configs: {})
+    monkeypatch.setattr(table1, "markdown", failing_markdown)
+    with pytest.raises(KeyboardInterrupt):
+        table1.reproduce(ws, ws, out)
+    assert listing(out) == ["table1.md"] and (out / "table1.md").read_text() == "the previous table"
+    monkeypatch.setattr(table1, "markdown", lambda *args: "the new table")
+    monkeypatch.setattr(table1, "row_checks", lambda rows, gravity: [])
+    table1.reproduce(ws, ws, out)
+    assert listing(out) == ["fig06.png", "table1.csv", "table1.md"]
+    assert (out / "table1.md").read_text() == "the new table"
 
 
 def test_input_errors_are_reported_before_an_existing_result(ws):

@@ -7,6 +7,7 @@ tests/test_bad_input.py.
 
 from __future__ import annotations
 
+import json
 import math
 
 import h5py
@@ -295,3 +296,82 @@ def test_spectrum_categories_and_figure_shapes():
         "outside the model"]
     with pytest.raises(ValueError, match="expected maps of shape"):
         spectrum_figure([1.0, 2.0], [1.0], np.zeros((2, 2)), np.zeros((2, 2)))
+
+
+# ------------------------------------------------------------------------------------------------
+# A computation that ends while the block still moves: "undecided", not "standing"
+# ------------------------------------------------------------------------------------------------
+
+#: The helper's case of the new-user review: a 1 m x 0.25 m block, a 0.6 g rectangular pulse of
+#: 0.2 s and no tail. At 0.2 s it rocks at about 1 rad/s; with a tail it overturns at 0.99 s.
+UNDECIDED_CASE = """\
+name: pn
+block:   {height: 1.0 m, width: 0.25 m, mass: 100 kg}
+contact: {mu_static: 0.7, restitution: 0.912}
+ground:
+  horizontal: {pulse: rectangular, amplitude: AMPLITUDE, duration: 0.2 s}
+  tail: TAIL
+"""
+
+
+def test_a_block_moving_at_the_end_with_the_energy_to_overturn_is_undecided(tmp_path):
+    """Without a tail the run ends at the pulse's end with the block rocking: the verdict is
+    'undecided' (in the printout, --json and the file), because the same case with a tail
+    overturns; a weaker pulse that leaves less energy than the potential energy at alpha,
+    g R (1 - cos alpha) per kg, is 'standing' although the block still moves, and stands with a
+    tail too."""
+    def run(amplitude, tail, out):
+        text = UNDECIDED_CASE.replace("AMPLITUDE", amplitude).replace("TAIL", tail)
+        (tmp_path / f"{out}.yaml").write_text(text)
+        done = CliRunner().invoke(main, ["run", str(tmp_path / f"{out}.yaml"), "--out-dir", str(tmp_path / out),
+                                         "--no-plot", "--json"])
+        assert done.exit_code == 0, done.output
+        return json.loads(done.stdout), results.read_result(tmp_path / out / "pn.h5").result.summary
+
+    short, stored = run("0.6 g", "0 s", "short")
+    assert short["undecided"] and stored.undecided and not short["overturned"]
+    assert short["verdict"].startswith("undecided: still moving at the end (t = 0.2000 s)")
+    R, alpha = math.hypot(0.125, 0.5), math.atan(0.25)
+    barrier = 100 * 9.80665 * R * (1 - math.cos(alpha))              # [J]
+    assert short["energy"]["kinetic"] + short["energy"]["potential"] > barrier
+    assert run("0.6 g", "5 s", "long")[0]["overturned"]
+
+    weak, _ = run("0.3 g", "0 s", "weak")              # lifts off (0.3 g > g tan(alpha) = 0.25 g)
+    assert weak["states_seen"][-1] == "ROCK" and weak["end_time"] == pytest.approx(0.2)
+    assert weak["energy"]["kinetic"] > 0 and weak["energy"]["kinetic"] + weak["energy"]["potential"] < barrier
+    assert not weak["undecided"] and weak["verdict"] == "standing"
+    assert not run("0.3 g", "5 s", "weak-long")[0]["overturned"]
+
+
+def test_a_sweep_counts_its_undecided_cases(tmp_path):
+    """The sweep file's ``undecided`` is the run's for every point: amplitudes around the two of
+    the test above, no tail."""
+    text = UNDECIDED_CASE.replace("AMPLITUDE", "0.6 g").replace("TAIL", "0 s")
+    case = parse_case(text, source="pn.yaml")
+    plan = sw.plan_sweep(case, [sw.parse_axis("amplitude", "0.3g,0.45g,0.6g,0.8g")])
+    states = batch.compute(plan.params, plan.states, plan.base, plan.first, plan.count, plan.factor_h,
+                           plan.factor_v)
+    variables = sw.sweep_variables(plan, states)
+    for i, amplitude in enumerate(["0.3 g", "0.45 g", "0.6 g", "0.8 g"]):
+        _, result = runner.run_case(parse_case(UNDECIDED_CASE.replace("AMPLITUDE", amplitude).replace(
+            "TAIL", "0 s")), history=False)
+        assert variables["undecided"][0][i] == result.summary.undecided, amplitude
+    assert variables["undecided"][0][0] == 0 and variables["undecided"][0][2] == 1     # the test above's two
+    done = CliRunner().invoke(main, ["sweep", str(_write(tmp_path, "pn.yaml", text)), "--amplitude", "0.6g",
+                                     "--out-dir", str(tmp_path), "--no-plot", "--no-progress"])
+    assert done.exit_code == 0, done.output
+    assert "1 undecided: still moving at the end with the energy to overturn" in done.output
+
+
+def _write(folder, name, text):
+    (folder / name).write_text(text)
+    return folder / name
+
+
+def test_the_printout_gives_the_peaks_of_a_pulse(tmp_path):
+    """'ground as applied' names the pulse's peaks (0.6 g = 588.4 gal), not 'still'."""
+    text = UNDECIDED_CASE.replace("AMPLITUDE", "0.6 g").replace("TAIL", "1 s")
+    done = CliRunner().invoke(main, ["run", str(_write(tmp_path, "pn.yaml", text)), "--out-dir", str(tmp_path),
+                                     "--no-plot"])
+    assert done.exit_code == 0, done.output
+    assert "  ground as applied: peaks 588.4 gal (0.6 g) H, 0 gal (0 g) V (analytic pulses, not scaled)" in done.output

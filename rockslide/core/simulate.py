@@ -118,6 +118,7 @@ class Summary:
     energy: dict[str, float] = field(default_factory=dict)   # [J]
     alpha: float = math.nan           # [rad] atan(b/h): the rotation past which gravity tips the block over
     max_rotation_ratio: float = math.nan   # max |phi| / alpha: how near overturning (> 1: passed alpha)
+    undecided: bool = False           # ended moving, with the energy or tilt to overturn (`may_still_overturn`)
 
     @property
     def verdict(self) -> str:
@@ -125,6 +126,9 @@ class Summary:
             return f"stopped: the state machine chattered at t = {self.end_time:.4f} s (a bug; please report it)"
         if self.status != "ok":
             return f"outside the model ({self.status} at t = {self.end_time:.4f} s)"
+        if self.undecided:
+            return (f"undecided: still moving at the end (t = {self.end_time:.4f} s) with the energy to "
+                    "overturn; give ground.tail for its free motion")
         return "overturned" if self.overturned else "standing"
 
 
@@ -408,6 +412,7 @@ def summarise(st: np.ndarray, model: Model, record_end: float) -> Summary:
     }
     fall = st[L.S_FALL_START]
     return Summary(
+        undecided=may_still_overturn(st, R, alpha, model.gravity),
         overturned=bool(overturned),
         overturn_time=float(st[L.S_OVERTURN_TIME]) if overturned else None,
         direction=int(st[L.S_DIRECTION]) if overturned else None,
@@ -427,6 +432,28 @@ def summarise(st: np.ndarray, model: Model, record_end: float) -> Summary:
     )
 
 
+def may_still_overturn(st: np.ndarray, R: float, alpha: float, gravity: float) -> bool:
+    """Whether the computation that ended in the state vector ``st`` (status ok, not overturned)
+    left the block moving with what it takes to overturn afterwards: a rotation of ``alpha`` or
+    more, or a mechanical energy at least the potential energy at ``theta = alpha``.
+
+    After the computation the ground is still: nothing adds energy (friction and impacts only take
+    it, model.md decisions 2 and 3), and the block overturns only past ``theta = alpha``, the
+    highest point of its centre of gravity. A block that ends at rest, or moving with less energy
+    and less tilt, stands for good; otherwise whether it stands is decided by the free motion that
+    was not computed (the case's ``ground.tail``).
+    """
+    if (st[L.S_STATUS] != L.STATUS_OK or st[L.S_MODE] == REST or st[L.S_MODE] == OVERTURNED):
+        return False
+    theta = st[L.S_THETA]
+    if theta >= alpha:
+        return True
+    core = native.entry_points()
+    energy = (core.kinetic_energy(theta, st[L.S_THETADOT], st[L.S_XDOT], st[L.S_LAM], R, alpha)
+              + core.potential_energy(theta, gravity, R, alpha))
+    return bool(energy >= core.potential_energy(alpha, gravity, R, alpha))
+
+
 __all__ = ["Model", "Settings", "Summary", "Result", "simulate", "substeps", "parameters", "ground_array",
-           "ground_series",
+           "ground_series", "may_still_overturn",
            "REST", "SLIP", "ROCK", "ROCKSLIP", "OVERTURNED"]
