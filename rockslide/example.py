@@ -11,7 +11,7 @@ from __future__ import annotations
 from importlib import resources
 from pathlib import Path
 
-from .files import atomic_write, check_destination
+from .files import Staging, atomic_write, check_destination
 from .records import write_at2
 from .synthetic import SUITE, example_pair, suite_pair
 
@@ -29,12 +29,12 @@ def case_text(name: str = CASE_FILE) -> str:
     return resources.files("rockslide").joinpath(name).read_text(encoding="utf-8")
 
 
-def write_records(folder) -> list[Path]:
+def write_records(folder, staging=None) -> list[Path]:
     """Write the example's records into ``folder`` (replacing them): PEER AT2 in g, 20 s at 0.01 s."""
     folder = Path(folder)
     paths = []
     for (name, seed, component), values in zip(RECORDS, example_pair(dt=RECORD_DT), strict=True):
-        paths.append(write_at2(folder / name, values, RECORD_DT, component=component,
+        paths.append(write_at2(folder / name, values, RECORD_DT, component=component, staging=staging,
                                title=f"rockslide synthetic Kanai-Tajimi record, seed {seed}"))
     return paths
 
@@ -44,7 +44,7 @@ def suite_record_names() -> list[str]:
     return [f"suite-synthetic/{name}_{part}.at2" for name in SUITE for part in ("h", "v")]
 
 
-def write_suite_records(folder) -> list[Path]:
+def write_suite_records(folder, staging=None) -> list[Path]:
     """Write the synthetic suite's records into ``folder/suite-synthetic`` (replacing them)."""
     records = Path(folder) / "suite-synthetic"
     records.mkdir(parents=True, exist_ok=True)
@@ -53,14 +53,16 @@ def write_suite_records(folder) -> list[Path]:
         for values, part, component, record_seed in zip(suite_pair(name), ("h", "v"), ("horizontal", "vertical"),
                                                         (seed, seed + 100), strict=True):
             paths.append(write_at2(records / f"{name}_{part}.at2", values, RECORD_DT, component=component,
-                                   title=f"rockslide synthetic suite record {name}, seed {record_seed}"))
+                                   title=f"rockslide synthetic suite record {name}, seed {record_seed}",
+                                   staging=staging))
     return paths
 
 
 def write_example(folder, *, overwrite: bool = False) -> list[Path]:
     """Write ``folder/example.yaml`` and its records, ``folder/suite-synthetic.yaml`` and its
-    records, and ``folder/spectrum-one-sine.yaml``; nothing is written if one of them exists and
-    ``overwrite`` is false.
+    records, and ``folder/spectrum-one-sine.yaml``, published together (`files.Staging`): nothing
+    is written if one of them exists and ``overwrite`` is false, and after Ctrl-C or an error the
+    folders this made are removed again.
 
     Raises
     ------
@@ -70,9 +72,23 @@ def write_example(folder, *, overwrite: bool = False) -> list[Path]:
     folder = Path(folder)
     texts = (CASE_FILE, SUITE_FILE, SPECTRUM_FILE)
     names = [*texts, *(name for name, _, _ in RECORDS), *suite_record_names()]
-    for name in names:
-        check_destination(folder / name, overwrite=overwrite, example="example/example.yaml")
-    for name in texts:
-        with atomic_write(folder / name, overwrite=overwrite, mode="w", what="case file") as handle:
-            handle.write(case_text(name))
-    return [folder / name for name in texts] + write_records(folder) + write_suite_records(folder)
+    made = [path for path in (*reversed(folder.parents), folder, folder / "suite-synthetic") if not path.exists()]
+    try:
+        for name in names:
+            check_destination(folder / name, overwrite=overwrite, example="example/example.yaml")
+        with Staging(overwrite=overwrite) as staging:
+            for name in texts:
+                with atomic_write(folder / name, overwrite=overwrite, mode="w", what="case file",
+                                  staging=staging) as handle:
+                    handle.write(case_text(name))
+            paths = ([folder / name for name in texts] + write_records(folder, staging)
+                     + write_suite_records(folder, staging))
+            staging.publish()
+    except BaseException:
+        for path in reversed(made):
+            try:
+                path.rmdir()            # only if empty: never what was there before
+            except OSError:
+                pass
+        raise
+    return paths

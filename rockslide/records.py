@@ -1071,10 +1071,11 @@ def _frozen(array: np.ndarray) -> np.ndarray:
 # Writing
 # --------------------------------------------------------------------------------------------------
 
-def write_at2(path, values_g, dt: float, *, title: str, component: str) -> Path:
+def write_at2(path, values_g, dt: float, *, title: str, component: str, staging=None) -> Path:
     """Write accelerations [g] as a PEER NGA ``.AT2`` file (4-line header, 5 values per line).
 
     Used for the records the project makes itself (``records/``); ``read_record`` reads them back.
+    With ``staging`` (`files.Staging`) the file is published with the rest of a set.
     """
     path = Path(path)
     values = np.asarray(values_g, dtype=np.float64)
@@ -1082,6 +1083,6 @@ def write_at2(path, values_g, dt: float, *, title: str, component: str) -> Path:
              "ACCELERATION TIME SERIES IN UNITS OF G", f"NPTS= {values.size:7d}, DT= {dt:9.4f} SEC,"]
     for i in range(0, values.size, 5):
         lines.append("".join(f"{v:15.7E}" for v in values[i:i + 5]))
-    with atomic_write(path, overwrite=True, mode="w", what="record") as handle:
+    with atomic_write(path, overwrite=True, mode="w", what="record", staging=staging) as handle:
         handle.write("\n".join(lines) + "\n")
     return path

@@ -699,6 +699,25 @@ def test_table1_publishes_its_figures_and_tables_together(ws, monkeypatch):
     assert (out / "table1.md").read_text() == "the new table"
 
 
+def test_an_interrupted_example_leaves_no_file_and_no_folder(ws, monkeypatch):
+    """The review's case: Ctrl-C during `rockslide example` left empty folders (and could leave
+    the case files without their records). The set is staged and published together; the folders
+    it made are removed again."""
+    from rockslide import example
+
+    def interrupted(folder, staging=None):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(example, "write_suite_records", interrupted)
+    before = listing(ws)
+    with pytest.raises(KeyboardInterrupt):
+        example.write_example(ws / "deep" / "ex")
+    assert listing(ws) == before and not (ws / "deep").exists()
+    monkeypatch.undo()
+    written = example.write_example(ws / "deep" / "ex")
+    assert sorted(str(p.relative_to(ws / "deep" / "ex")) for p in written) == listing(ws / "deep" / "ex")
+
+
 def test_input_errors_are_reported_before_an_existing_result(ws):
     write_files(ws, {"out/example.h5": "previous", "case.yaml": horizontal_only("kt_h.at2")})
     assert_clean_error(invoke(["run", "case.yaml"]), ["ground.horizontal.file", "not found"])
