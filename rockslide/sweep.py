@@ -1230,7 +1230,8 @@ def sweep_variables(plan: Plan, states: np.ndarray) -> dict:
     alpha = plan.params[:, K.P_ALPHA]
     undecided = np.zeros(len(st), dtype=bool)
     for i in np.flatnonzero((st[:, K.S_MODE] != K.REST) & ~overturned & (status == 0)):
-        undecided[i] = may_still_overturn(st[i], plan.params[i, K.P_R], alpha[i], plan.params[i, K.P_G])
+        undecided[i] = may_still_overturn(st[i], plan.params[i, K.P_R], alpha[i], plan.params[i, K.P_G],
+                                          plan.params[i, K.P_NU])
 
     def grid(values, dtype):
         return np.asarray(values, dtype=dtype).reshape(shape)

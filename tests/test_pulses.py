@@ -375,3 +375,26 @@ def test_the_printout_gives_the_peaks_of_a_pulse(tmp_path):
                                      "--no-plot"])
     assert done.exit_code == 0, done.output
     assert "  ground as applied: peaks 588.4 gal (0.6 g) H, 0 gal (0 g) V (analytic pulses, not scaled)" in done.output
+
+
+def test_a_block_sliding_at_the_end_that_friction_cannot_tip_is_standing(tmp_path):
+    """A squat block (1 m wide, 0.5 m high: tan(alpha) = 2) driven by a 1 g rectangular pulse with
+    mu = 0.3 slides at about (1 - 0.3) g x 0.5 s = 3.4 m/s when the pulse ends: 5.9 J/kg of kinetic
+    energy, more than the 3.0 J/kg it takes to lift the centre of gravity over the edge, but on
+    still ground friction (nu = 0.3 < tan(alpha), eq. 23) cannot lift it off: it slides to a
+    stop. 'standing', as the same case with a tail shows."""
+    text = """\
+name: squat
+block:   {height: 0.5 m, width: 1.0 m, mass: 1 kg}
+contact: {mu_static: 0.3, restitution: 0.8}
+ground:
+  horizontal: {pulse: rectangular, amplitude: 1 g, duration: 0.5 s}
+  tail: TAIL
+"""
+    _, short = runner.run_case(parse_case(text.replace("TAIL", "0 s")), history=False)
+    s = short.summary
+    R, alpha = math.hypot(0.5, 0.25), math.atan(2.0)
+    assert s.states_seen == ["REST", "SLIP"] and s.energy["kinetic"] > 9.80665 * R * (1 - math.cos(alpha))
+    assert not s.undecided and s.verdict == "standing"
+    _, long = runner.run_case(parse_case(text.replace("TAIL", "3 s")), history=False)
+    assert not long.summary.overturned and long.summary.time_in_state["ROCK"] == 0.0

@@ -38,14 +38,16 @@ ENTRY_POINTS = (
     ("block_constants", "physics", "UniTuple(f8, 3)(f8, f8, f8)"),
     ("kinetic_energy", "physics", "f8(f8, f8, f8, f8, f8, f8)"),
     ("potential_energy", "physics", "f8(f8, f8, f8, f8)"),
+    ("tilt", "physics", "UniTuple(f8, 2)(f8, f8)"),
+    ("slip_liftoff_margin", "physics", "f8(f8, f8, f8, f8, f8, f8)"),
 )
 
 
 @functools.lru_cache(maxsize=1)
 def source_stamp() -> str:
-    """SHA-256 of the sources of `COMPILED_MODULES` (stable across processes and machines), read
-    once per process."""
-    digest = hashlib.sha256()
+    """SHA-256 of `ENTRY_POINTS` and of the sources of `COMPILED_MODULES` (stable across processes
+    and machines), read once per process."""
+    digest = hashlib.sha256(repr(ENTRY_POINTS).encode())
     folder = Path(__file__).parent
     for name in COMPILED_MODULES:
         digest.update((folder / f"{name}.py").read_bytes())

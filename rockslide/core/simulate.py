@@ -412,7 +412,7 @@ def summarise(st: np.ndarray, model: Model, record_end: float) -> Summary:
     }
     fall = st[L.S_FALL_START]
     return Summary(
-        undecided=may_still_overturn(st, R, alpha, model.gravity),
+        undecided=may_still_overturn(st, R, alpha, model.gravity, model.mu_kinetic),
         overturned=bool(overturned),
         overturn_time=float(st[L.S_OVERTURN_TIME]) if overturned else None,
         direction=int(st[L.S_DIRECTION]) if overturned else None,
@@ -432,23 +432,30 @@ def summarise(st: np.ndarray, model: Model, record_end: float) -> Summary:
     )
 
 
-def may_still_overturn(st: np.ndarray, R: float, alpha: float, gravity: float) -> bool:
+def may_still_overturn(st: np.ndarray, R: float, alpha: float, gravity: float, nu: float) -> bool:
     """Whether the computation that ended in the state vector ``st`` (status ok, not overturned)
     left the block moving with what it takes to overturn afterwards: a rotation of ``alpha`` or
-    more, or a mechanical energy at least the potential energy at ``theta = alpha``.
+    more, or a mechanical energy at least the potential energy at ``theta = alpha`` (and, when it
+    ends sliding upright, a kinetic friction ``nu`` that can lift it off on still ground, eq. 23).
 
     After the computation the ground is still: nothing adds energy (friction and impacts only take
     it, model.md decisions 2 and 3), and the block overturns only past ``theta = alpha``, the
-    highest point of its centre of gravity. A block that ends at rest, or moving with less energy
-    and less tilt, stands for good; otherwise whether it stands is decided by the free motion that
-    was not computed (the case's ``ground.tail``).
+    highest point of its centre of gravity; a block sliding on still ground with
+    ``nu <= tan(alpha)`` slides to a stop without lifting off. A block that ends at rest, or moving
+    without any of these, stands for good; otherwise whether it stands is decided by the free
+    motion that was not computed (the case's ``ground.tail``).
     """
-    if (st[L.S_STATUS] != L.STATUS_OK or st[L.S_MODE] == REST or st[L.S_MODE] == OVERTURNED):
+    mode = st[L.S_MODE]
+    if st[L.S_STATUS] != L.STATUS_OK or mode == REST or mode == OVERTURNED:
         return False
     theta = st[L.S_THETA]
     if theta >= alpha:
         return True
     core = native.entry_points()
+    if mode == SLIP:
+        s, c = core.tilt(0.0, alpha)
+        if core.slip_liftoff_margin(s, c, 0.0, gravity, st[L.S_SIGMA], nu) >= 0.0:
+            return False
     energy = (core.kinetic_energy(theta, st[L.S_THETADOT], st[L.S_XDOT], st[L.S_LAM], R, alpha)
               + core.potential_energy(theta, gravity, R, alpha))
     return bool(energy >= core.potential_energy(alpha, gravity, R, alpha))
