@@ -1231,7 +1231,7 @@ def sweep_variables(plan: Plan, states: np.ndarray) -> dict:
     undecided = np.zeros(len(st), dtype=bool)
     for i in np.flatnonzero((st[:, K.S_MODE] != K.REST) & ~overturned & (status == 0)):
         undecided[i] = may_still_overturn(st[i], plan.params[i, K.P_R], alpha[i], plan.params[i, K.P_G],
-                                          plan.params[i, K.P_NU])
+                                          plan.params[i, K.P_NU], plan.params[i, K.P_TAN_ALPHA])
 
     def grid(values, dtype):
         return np.asarray(values, dtype=dtype).reshape(shape)

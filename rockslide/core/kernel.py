@@ -195,7 +195,10 @@ def evaluate(mode, energy, lam, sigma, th, thd, xd, t, a0, sa, v0, sv, p):
     Returns ``(thetaddot, xddot, ground power, friction power, s, c, D, ah, G)``. The powers
     [W/kg] are those of the ground's inertia forces ``-ah``, ``-av`` on the centre of gravity, whose
     velocity relative to the foundation is ``(xdot - lam R c thetadot, R s thetadot)`` (the virtual
-    displacements of eq. 14), and of kinetic friction, ``-nu N |xdot|`` (eqs. 9 and 22); they are
+    displacements of eq. 14), and of kinetic friction, ``-nu N sigma xdot`` (eqs. 9 and 22: the
+    force ``-sigma nu N`` on the slip rate; ``-nu N |xdot|`` while ``xdot`` has the sign
+    ``sigma``, to the bit, and the work friction really does where it has not: past a slip stop
+    found only at a step's end, or inside the reference solver's last step before one); they are
     computed only when the energy ledger is on (``energy``).
 
     ``mode`` and ``energy`` are compile-time constants in the integration loops (`glide_in` passes
@@ -207,7 +210,7 @@ def evaluate(mode, energy, lam, sigma, th, thd, xd, t, a0, sa, v0, sv, p):
     if mode == SLIP:            # upright: theta = 0, no trigonometry needed
         xdd = slip_acceleration(ah, G, p[P_NU], sigma)
         if energy:
-            return 0.0, xdd, -ah * xd, -p[P_NU] * G * abs(xd), 0.0, 0.0, 1.0, ah, G
+            return 0.0, xdd, -ah * xd, -p[P_NU] * G * (sigma * xd), 0.0, 0.0, 1.0, ah, G
         return 0.0, xdd, 0.0, 0.0, 0.0, 0.0, 1.0, ah, G
     s, c = tilt(th, p[P_ALPHA])
     thdd, xdd, D = accelerations_sc(mode, lam, sigma, s, c, thd, ah, G, p)
@@ -218,7 +221,7 @@ def evaluate(mode, energy, lam, sigma, th, thd, xd, t, a0, sa, v0, sv, p):
         pg = -ah * (xd - lam * R * c * thd) - av * R * s * thd
         if mode == ROCKSLIP:
             _, N = contact_forces_sc(s, c, thd, thdd, ah, G, lam, R)
-            pf = -p[P_NU] * N * abs(xd)
+            pf = -p[P_NU] * N * (sigma * xd)
     return thdd, xdd, pg, pf, s, c, D, ah, G
 
 
@@ -331,7 +334,7 @@ def event_functions(mode, lam, sigma, th, thd, xd, ah, G, s, c, thdd, D, p):
     inf = math.inf
     if mode == SLIP:
         s0, c0 = tilt(0.0, p[P_ALPHA])
-        return G, sigma * xd, slip_liftoff_margin(s0, c0, ah, G, sigma, p[P_NU]), inf, inf   # eq. 23
+        return G, sigma * xd, slip_liftoff_margin(s0, c0, ah, G, sigma, p[P_NU], p[P_TAN_ALPHA]), inf, inf
     if mode == ROCK:
         Rx, N = contact_forces_sc(s, c, thd, thdd, ah, G, lam, p[P_R])
         return N, slip_margin(p[P_MU], N, Rx), th, HALF_PI - th, inf                   # eq. 21
@@ -851,7 +854,11 @@ def advance(st, p, tau_a, tau_b, tk, a0, sa, v0, sv, events):
                 land_on_the_ground(st, p, g + v0 + sv * te)
             st[S_THETA] = 0.0
         elif kind == K_SLIP_STOP:
+            # Holding the slip at zero takes kinetic energy (that of the overshoot past the stop when
+            # it is found at a step's end; next to none when located): friction's work.
+            before = mechanical_energy(st, p)
             st[S_XDOT] = 0.0
+            st[S_W_FRICTION] += mechanical_energy(st, p) - before
         ah_e = a0 + sa * te
         av_e = v0 + sv * te
         apply_event(kind, st, p, tk + te, ah_e, g + av_e, events)

@@ -39,7 +39,7 @@ ENTRY_POINTS = (
     ("kinetic_energy", "physics", "f8(f8, f8, f8, f8, f8, f8)"),
     ("potential_energy", "physics", "f8(f8, f8, f8, f8)"),
     ("tilt", "physics", "UniTuple(f8, 2)(f8, f8)"),
-    ("slip_liftoff_margin", "physics", "f8(f8, f8, f8, f8, f8, f8)"),
+    ("slip_liftoff_margin", "physics", "f8(f8, f8, f8, f8, f8, f8, f8)"),
 )
 
 

@@ -186,15 +186,19 @@ def contact_forces(theta, thetadot, thetaddot, ah, G, lam, R, alpha):
 
 
 @njit(cache=True)
-def slip_liftoff_margin(s, c, ah, G, sigma, nu):
-    """Eq. 23 during SLIP, ``tan(alpha) G - abs(xddot + ah)`` with ``abs(xddot + ah) = nu G``, decided
-    as the ROCKSLIP system it would enter decides it: the block lifts off about ``lam = -sigma``
-    (eq. 24: ``xddot + ah = -nu sigma G``) when the rotation it starts grows, ``D thetaddot =
-    b1 + lam c b2 > 0`` at ``theta = thetadot = 0`` (`rockslip_loads`; ``s = sin(alpha)``,
-    ``c = cos(alpha)``, from `tilt`). In exact arithmetic ``b1 + lam c b2 = G (nu c - s)``, so the
-    sign is eq. 23's (``nu > tan(alpha)``); with the same rounding as the state it enters, a
-    friction coefficient equal to ``tan(alpha)`` to the last bit cannot lift off into a rotation that
-    falls back at once. Returns ``-(b1 + lam c b2)`` [m/s^2]: liftoff when negative."""
+def slip_liftoff_margin(s, c, ah, G, sigma, nu, tan_alpha):
+    """Eq. 23 during SLIP, ``tan(alpha) G - abs(xddot + ah)`` with ``abs(xddot + ah) = nu G``: in exact
+    arithmetic ``G (tan(alpha) - nu)``, whatever ``ah``. With ``nu <= tan_alpha`` (``b/h`` as given,
+    compared exactly) the block cannot lift off from SLIP: ``inf``. Otherwise it is decided as the
+    ROCKSLIP system it would enter decides it: the block lifts off about ``lam = -sigma`` (eq. 24:
+    ``xddot + ah = -nu sigma G``) when the rotation it starts grows, ``D thetaddot = b1 + lam c b2 >
+    0`` at ``theta = thetadot = 0`` (`rockslip_loads`; ``s = sin(alpha)``, ``c = cos(alpha)``, from
+    `tilt`; ``b1 + lam c b2 = G (nu c - s)`` in exact arithmetic), so that it never lifts off into a
+    rotation that falls back at once. The ``ah`` terms of ``b1`` and ``b2`` cancel only to their
+    rounding, which alone used to decide the tie ``nu = tan(alpha)``: liftoffs from noise in about a
+    quarter of the states. Returns ``-(b1 + lam c b2)`` [m/s^2]: liftoff when negative."""
+    if not nu > tan_alpha:
+        return math.inf
     lam = -sigma
     b1, b2 = rockslip_loads(s, c, 0.0, ah, G, lam, sigma, nu, 1.0)
     return -(b1 + lam * c * b2)

@@ -263,6 +263,8 @@ def ground_array(horizontal, vertical, dt_record: float, tail: float = 0.0) -> n
     out = np.zeros((4, K))
     _fill_intervals(out, 0, ah, ah_samples)
     _fill_intervals(out, 2, av, av_samples)
+    if not np.isfinite(out).all():       # the readers refuse these; this guards direct calls
+        raise ValueError("the ground motion holds a non-finite value (NaN or infinity)")
     return out
 
 
@@ -412,7 +414,8 @@ def summarise(st: np.ndarray, model: Model, record_end: float) -> Summary:
     }
     fall = st[L.S_FALL_START]
     return Summary(
-        undecided=may_still_overturn(st, R, alpha, model.gravity, model.mu_kinetic),
+        undecided=may_still_overturn(st, R, alpha, model.gravity, model.mu_kinetic,
+                                     model.half_width / model.half_height),
         overturned=bool(overturned),
         overturn_time=float(st[L.S_OVERTURN_TIME]) if overturned else None,
         direction=int(st[L.S_DIRECTION]) if overturned else None,
@@ -432,11 +435,13 @@ def summarise(st: np.ndarray, model: Model, record_end: float) -> Summary:
     )
 
 
-def may_still_overturn(st: np.ndarray, R: float, alpha: float, gravity: float, nu: float) -> bool:
+def may_still_overturn(st: np.ndarray, R: float, alpha: float, gravity: float, nu: float,
+                       tan_alpha: float) -> bool:
     """Whether the computation that ended in the state vector ``st`` (status ok, not overturned)
     left the block moving with what it takes to overturn afterwards: a rotation of ``alpha`` or
     more, or a mechanical energy at least the potential energy at ``theta = alpha`` (and, when it
-    ends sliding upright, a kinetic friction ``nu`` that can lift it off on still ground, eq. 23).
+    ends sliding upright, a kinetic friction ``nu`` above ``tan_alpha`` = b/h, which can lift it
+    off on still ground, eq. 23).
 
     After the computation the ground is still: nothing adds energy (friction and impacts only take
     it, model.md decisions 2 and 3), and the block overturns only past ``theta = alpha``, the
@@ -454,7 +459,7 @@ def may_still_overturn(st: np.ndarray, R: float, alpha: float, gravity: float, n
     core = native.entry_points()
     if mode == SLIP:
         s, c = core.tilt(0.0, alpha)
-        if core.slip_liftoff_margin(s, c, 0.0, gravity, st[L.S_SIGMA], nu) >= 0.0:
+        if core.slip_liftoff_margin(s, c, 0.0, gravity, st[L.S_SIGMA], nu, tan_alpha) >= 0.0:
             return False
     energy = (core.kinetic_energy(theta, st[L.S_THETADOT], st[L.S_XDOT], st[L.S_LAM], R, alpha)
               + core.potential_energy(theta, gravity, R, alpha))
