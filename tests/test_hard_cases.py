@@ -1016,3 +1016,14 @@ def test_table1_verdicts_hold_at_half_the_step(config, mode):
     if base.overturned:
         tolerance = 1e-6 if mode == "located" else 1e-2
         assert half.overturn_time == pytest.approx(base.overturn_time, abs=tolerance)
+
+
+@pytest.mark.parametrize("bad", [math.nan, math.inf])
+def test_the_core_refuses_a_non_finite_ground_motion(bad):
+    """The record readers refuse NaN and infinite samples; a direct call of `simulate` with one
+    used to give 'standing' and NaN energies (physics review). It is a ValueError."""
+    model = Model.from_block(0.2, 0.1, 0.5, 0.5, 0.8)
+    ah = np.zeros(101)
+    ah[50] = bad
+    with pytest.raises(ValueError, match="non-finite"):
+        simulate(model, 0.01, ah, np.zeros(101))

@@ -114,3 +114,18 @@ def test_reference_reports_progress_and_can_be_stopped():
 
     with pytest.raises(Stop):
         simulate_reference(model, dt, ah, av, Settings(history_every=0), progress=stop)
+
+
+def test_the_fall_starts_at_the_same_time_in_the_reference():
+    """The time the rotation last passed alpha before overturning (a 0.1 x 0.2 m block under a
+    0.71 g sine of 0.6 s): the reference solver takes it from its dense output, the kernel from its
+    0.1 ms steps (linear inside a step: off by O(h^2)). The physics review found the reference 4e-5 s
+    off when it interpolated linearly across its long steps; they now agree to 1e-8 s (kernel at
+    1e-4 s and 1e-5 s: 0.5429684801 and 0.5429684844 s)."""
+    model = Model(0.05, 0.1, 0.55, 0.5225, 0.8)
+    t = np.arange(0.0, 2.0, 0.01)
+    ah = 7.0 * np.sin(2 * np.pi * t / 0.6)
+    kernel = simulate(model, 0.01, ah, 0 * t, Settings(history_every=0, dt=1e-5)).summary
+    reference = simulate_reference(model, 0.01, ah, 0 * t, Settings(history_every=0)).summary
+    assert kernel.overturned and reference.overturned
+    assert reference.fall_start_time == pytest.approx(kernel.fall_start_time, abs=1e-8)

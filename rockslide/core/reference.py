@@ -11,6 +11,8 @@ the dense output. Slow (Python in the loop): meant for short inputs and for chec
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
@@ -170,6 +172,7 @@ def _integrate_moving(st, p, tau, tau_end, tk, a0, sa, v0, sv, events,
         K.accept(st, y_i[0], y_i[1], y_i[2], y_i[3], y_i[4], y_i[5], mode, previous, t_i, tk, p, False)
         previous = t_i
     _exact_peaks(st, solution, tk)
+    _exact_fall_start(st, solution, tk, p[K.P_ALPHA])
     if solution.status == -1:
         # The solver could not go on: in this model only the Painleve point (accelerations ~ 1/D as
         # D -> 0 in ROCKSLIP) makes the equations singular. Anything else is a failure to report.
@@ -219,6 +222,21 @@ def _exact_peaks(st, solution, tk):
                     st[slot] = value
                     if slot == K.S_MAX_THETA:
                         st[K.S_THETA_MAX_TIME] = tk + t_peak
+
+
+def _exact_fall_start(st, solution, tk, alpha):
+    """The time theta last passed alpha upwards (`kernel.track` takes it as linear inside a step,
+    which across the solver's long steps was off by up to 1e-4 s), from its dense output."""
+    t, theta = solution.t, solution.y[0]
+    for i in range(len(t) - 2, -1, -1):
+        if theta[i] <= alpha < theta[i + 1]:
+            if not math.isnan(st[K.S_FALL_CANDIDATE]):      # still the fall: theta stayed above alpha
+                try:
+                    st[K.S_FALL_CANDIDATE] = tk + brentq(lambda s: solution.sol(s)[0] - alpha, t[i], t[i + 1],
+                                                         xtol=1e-15)
+                except ValueError:         # the dense output does not bracket it: keep the linear time
+                    pass
+            return
 
 
 def _set_state(st, y):
