@@ -25,16 +25,18 @@ fraction of runs that reach each damage state.
   Earthquake Spectra 31(1): the binomial likelihood of multiple stripes), solved as a probit
   regression on ln(x) by Newton's method with step halving (the log-likelihood is concave); 95 %
   confidence intervals by the percentile bootstrap over records (`BOOTSTRAP_RESAMPLES` resamples
-  of the suite's records with replacement, seed `BOOTSTRAP_SEED`); and the method of moments on
-  each record's first-exceedance level (Baker 2015, as for incremental dynamic analysis: the mean
-  and the standard deviation (n - 1) of the logarithms) as a second estimate, with the same
-  resamples for its intervals. A fit is refused, with the reason, where the data cannot support
-  one: no run or every run exceeds, or the runs separate (every run at or below some level stays
-  below the state and every run above it exceeds: the likelihood grows without bound as beta goes
-  to 0), or the fitted probability falls as the IM rises. Bootstrap resamples that cannot support a
-  fit are left out of the intervals; how many were used is reported. The moments need every
-  record's first exceedance: a record that never exceeds up to the highest level leaves them
-  undefined (censored).
+  of the suite's records with replacement, seed `BOOTSTRAP_SEED`; none for a single record); and
+  the method of moments (Baker 2015, as for incremental dynamic analysis: the mean and the standard
+  deviation (n - 1) of the logarithms of the records' capacities) as a second estimate, each
+  capacity taken at the geometric midpoint of the two levels that bracket the record's first
+  exceedance, with the same resamples for its intervals. A fit is refused, with the reason, where
+  the data cannot support one: no run or every run exceeds, or the runs separate (every run at or
+  below some level stays below the state and every run above it exceeds: the likelihood grows
+  without bound as beta goes to 0), or the fitted probability falls as the IM rises (every run up
+  to some level exceeds and none above it). Bootstrap resamples that cannot support a fit are left
+  out of the intervals; how many were used is reported. The moments need every record's
+  capacity bracketed: a record that never exceeds up to the highest level, or exceeds already at
+  the lowest, leaves them undefined (censored).
 """
 
 from __future__ import annotations
@@ -601,7 +603,7 @@ class StateFit:
     resamples_fitted : int
         Of them, those that supported a maximum-likelihood fit (the intervals are theirs).
     moments_median, moments_beta : float or None
-        The method of moments on the first-exceedance levels.
+        The method of moments on the capacities the stripes bracket (`_first_exceedance`).
     moments_median_ci, moments_beta_ci : tuple of float or None
     moments_note : str
     n_runs, n_outside_model, n_exceeded : int
@@ -663,6 +665,13 @@ def _support_note(levels: np.ndarray, n: np.ndarray, z: np.ndarray, show) -> str
         return (f"the runs separate between {show(levels[high])} and {show(levels[low])} (no run up to "
                 "the first reaches the state, every run from the second on does), so the data cannot "
                 "fix beta (it tends to 0): no fit; add levels between")
+    index = np.arange(levels.size)
+    highest_exceeding = np.where(z > 0, index, -1).max()
+    lowest_surviving = np.where(n - z > 0, index, levels.size).min()
+    if highest_exceeding <= lowest_surviving:        # the separation below, the other way round
+        return (f"the runs reach the state up to {show(levels[highest_exceeding])} and stay below it "
+                f"from {show(levels[lowest_surviving])} on: the probability falls as the intensity rises, "
+                "no fit")
     return ""
 
 
@@ -706,6 +715,13 @@ def probit_mle(s: np.ndarray, n: np.ndarray, z: np.ndarray):
         start_ok = np.isfinite(b) & (b > 0)
         b = np.where(start_ok, b, 2.0)                      # else beta 0.5 about the mean level
         a = np.where(start_ok, (y0 - b * w1) / w0, -b * w1 / w0)
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        # resamples far from any fit overflow on their way to failing (left out); nothing to say
+        return _newton(a, b, s, n, z)
+
+
+def _newton(a, b, s, n, z):
+    """`probit_mle`'s iterations from the start ``(a, b)``."""
     ll = _log_likelihood(a, b, s, n, z)
     converged = np.zeros(a.shape, dtype=bool)
     log_phi_const = 0.5 * math.log(2.0 * math.pi)
@@ -762,6 +778,8 @@ def fit_state(levels, exceeded: np.ndarray, *, resamples: int = BOOTSTRAP_RESAMP
     levels = np.asarray(levels, dtype=np.float64)
     exceeded = np.asarray(exceeded)
     show = show or (lambda x: f"{x:g}")
+    if exceeded.shape[0] < 2:
+        resamples = 0                   # one record: every resample is that record, no interval
     s = np.log(levels)
     n, z = stripe_counts(exceeded)
     out = StateFit(n_runs=int(exceeded.size), n_outside_model=int((exceeded < 0).sum()),
@@ -769,7 +787,7 @@ def fit_state(levels, exceeded: np.ndarray, *, resamples: int = BOOTSTRAP_RESAMP
     out.note = _support_note(levels, n, z, show)
     if not out.note:
         a, b, converged = probit_mle(s, n[None, :], z[None, :])
-        if not converged[0]:                                 # pragma: no cover - concave, overlapping data
+        if not converged[0] and not b[0] < 0:                # pragma: no cover - concave, overlapping data
             out.note = "the maximum-likelihood fit did not converge: no fit"
         elif not b[0] > 0:
             out.note = "the fitted probability falls as the intensity rises: no fit"
@@ -785,18 +803,35 @@ def fit_state(levels, exceeded: np.ndarray, *, resamples: int = BOOTSTRAP_RESAMP
 
 
 def _first_exceedance(levels, exceeded, show):
-    """Each record's first exceeding level (None when some never exceed), the number that never
-    do, and why there are no moments ("" when there are)."""
+    """Each record's capacity as the stripes bracket it (None where the moments are undefined), the
+    number of records that never exceed, and why there are no moments ("" when there are).
+
+    A record that first exceeds the state at level ``k`` has its capacity (the level at which it
+    would first reach the state, as incremental dynamic analysis finds it) in ``(L[k-1], L[k]]``;
+    it is taken at the bracket's geometric midpoint ``sqrt(L[k-1] L[k])``. The first exceeding
+    level itself is an upper bound: a review found it biased the median high by about half the
+    level spacing (+12 % for lognormal capacities of median 1 g, beta 0.3, levels 0.25 g apart;
+    the midpoint: +0.3 %). A record that never exceeds (right-censored) or exceeds already at the
+    lowest level (left-censored) leaves the moments undefined, as does a suite whose records all
+    first exceed at one level (beta 0)."""
     hits = exceeded == 1
     censored = int((~hits.any(axis=1)).sum())
     if censored:
         return None, censored, (f"{censored} of {hits.shape[0]} records never exceed the state up to "
                                 f"{show(levels[-1])}: no moments (they need every record's first "
                                 "exceedance)")
-    capacity = levels[hits.argmax(axis=1)]
-    if capacity.size < 2:
+    first = hits.argmax(axis=1)
+    if first.size < 2:
         return None, 0, "one record: no moments"
-    return capacity, 0, ""
+    at_lowest = int((first == 0).sum())
+    if at_lowest:
+        return None, 0, (f"{at_lowest} of {first.size} records exceed the state already at the lowest "
+                         f"level, {show(levels[0])}: no moments (their capacities are only known to be "
+                         "below it; add lower levels)")
+    if (first == first[0]).all():
+        return None, 0, (f"every record first exceeds the state at {show(levels[first[0]])}: no moments "
+                         "(beta would be 0)")
+    return np.sqrt(levels[first - 1] * levels[first]), 0, ""
 
 
 def _bootstrap(out: StateFit, s, exceeded, capacity, resamples, seed) -> None:

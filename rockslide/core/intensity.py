@@ -3,7 +3,10 @@
 A record is a series of accelerations at a constant step, linear in between: the convention of the
 kernel's input (`simulate.ground_array`, model.md: 'Ground motion between record samples is
 linearly interpolated'). Every measure here is computed exactly for that piecewise-linear record,
-so that a record's intensity and the motion the block feels are one and the same function of time.
+so that a record's intensity and the motion the block feels are one and the same function of time
+(PGV is that of the record with its mean acceleration removed, below; the block feels the record
+as given: for a processed record the two are the same, for the review's raw records PGV moved by
+0.5-1 %).
 
 - **PGA** = max |a| over the samples (the peak of a piecewise-linear function is at a sample); it is
   also what `records.combine` scales to a ``pga_horizontal``.
