@@ -1035,6 +1035,7 @@ def json_summary(fplan: FragilityPlan, analysis: Analysis) -> dict:
         "damage_states": out,
         "n_runs": int(status.size),
         "n_outside_model": int((status != K.STATUS_OK).sum()),
+        "n_undecided": int(analysis.variables["undecided"][0].sum()),
         "bootstrap": {"resamples": analysis.fits[0].resamples if analysis.fits else 0, "seed": BOOTSTRAP_SEED,
                       "confidence": CONFIDENCE},
     }

@@ -11,6 +11,7 @@ from __future__ import annotations
 import json
 import math
 
+import h5py
 import numpy as np
 import pytest
 import yaml
@@ -433,6 +434,9 @@ def test_json_has_every_state_with_fits_and_counts(analysed):
             assert state["note"]
     assert states["overturn"]["median"] is not None
     assert payload["bootstrap"] == {"resamples": 200, "seed": fr.BOOTSTRAP_SEED, "confidence": 0.95}
+    out, _ = analysed
+    with h5py.File(out / "example.fragility.h5") as f:          # runs still moving at the end
+        assert payload["n_undecided"] == int(f["undecided"][:].sum())
 
 
 def test_xarray_opens_the_fragility_file(analysed):
