@@ -53,14 +53,12 @@ def check_destination(path, *, overwrite: bool = False, example: str = "out/case
         raise OutputError(f"is a folder; expected a file name such as {example}", source=str(path))
     refuse_existing(path, overwrite)
     folder = path.parent
-    if folder.exists() and not folder.is_dir():
-        raise OutputError("cannot create the output folder: something that is not a folder has that name",
-                          source=str(folder))
     try:
         folder.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
-        raise OutputError(f"cannot create the output folder: {exc.strerror or exc}",
-                          source=str(folder)) from None
+        if not folder.exists():                       # else: not a folder, said below
+            raise OutputError(f"cannot create the output folder: {exc.strerror or exc}",
+                              source=str(folder)) from None
     if not folder.is_dir():
         raise OutputError("cannot create the output folder: something that is not a folder has that name",
                           source=str(folder))

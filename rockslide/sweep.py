@@ -1229,7 +1229,7 @@ def sweep_variables(plan: Plan, states: np.ndarray) -> dict:
     end = np.where(np.isnan(st[:, K.S_END_TIME]), plan.record_end, st[:, K.S_END_TIME])
     alpha = plan.params[:, K.P_ALPHA]
     undecided = np.zeros(len(st), dtype=bool)
-    for i in np.flatnonzero((st[:, K.S_MODE] != K.REST) & ~overturned & (status == 0)):
+    for i in np.flatnonzero(st[:, K.S_MODE] != K.REST):              # a block at rest stands
         undecided[i] = may_still_overturn(st[i], plan.params[i, K.P_R], alpha[i], plan.params[i, K.P_G],
                                           plan.params[i, K.P_NU], plan.params[i, K.P_TAN_ALPHA])
 

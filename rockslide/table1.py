@@ -23,8 +23,8 @@ import numpy as np
 from . import interrupts, plots, runner
 from .case import case_with, load_case
 from .core import criteria
-from .errors import OutputError, RecordError
-from .files import Staging, atomic_write
+from .errors import RecordError
+from .files import Staging, atomic_write, check_destination
 
 PAPER_G = 9.8
 
@@ -474,10 +474,8 @@ def reproduce(configs: Path, records_dir: Path, out: Path) -> dict:
     started = time.perf_counter()
     rows, results = run_table(configs, records_dir)
     gravities = list(rows[0].runs)
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise OutputError(f"cannot create the output folder: {exc.strerror or exc}", source=str(out)) from None
+    for name in ("table1.csv", "table1.md"):
+        check_destination(out / name, overwrite=True)          # the folder made, or a clear error
     with Staging(overwrite=True) as staging:
         figures = write_figures(results, out, staging=staging)
         for name, text in (("table1.csv", csv_text(rows, gravities)),
