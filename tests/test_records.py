@@ -827,6 +827,24 @@ def test_the_quick_reading_of_numbers_reads_what_the_careful_one_reads(text):
     assert outcomes[0] == outcomes[1]
 
 
+@settings(max_examples=300, deadline=None)
+@given(st.one_of(NUMBERY_TEXT, st.text(max_size=200), st.lists(
+    st.sampled_from(["1_0", "\u0661", "1.5", "-2e3", "1.0D-02", "nan", "inf", "+.5", "5.", "\x0b", "\x1c", "\n"]),
+    max_size=12).map(" ".join)))
+def test_an_at2_body_read_at_once_gives_the_numbers_read_line_by_line(text):
+    """`records._quick_body` (an AT2 file's values in one pass) gives, where it gives anything,
+    the values `records._values_in_order` reads line by line, bit for bit, and gives nothing
+    where a line could hold a comment."""
+    from rockslide import records
+
+    quick = records._quick_body(text.splitlines())
+    if quick is None:
+        return
+    context = records._Context(Path("r.at2"), None, None)
+    careful, _ = records._values_in_order(context, records._content_lines(text))
+    assert quick.view(np.int64).tolist() == careful.view(np.int64).tolist()
+
+
 @pytest.fixture(scope="module")
 def fuzz_dir(tmp_path_factory):
     return tmp_path_factory.mktemp("fuzz")

@@ -290,13 +290,23 @@ def rk4_step(mode, energy, lam, sigma, th, thd, x, xd, wg, wf, tau, hh, a0, sa, 
 
 
 @njit(cache=True)
-def rk4_from(mode, lam, sigma, y, tau, hh, a0, sa, v0, sv, p):
-    """`rk4_step` from the state tuple ``y`` = ``(theta, thetadot, x, xdot, w_ground, w_friction)``,
-    computing its own first stage (event location). Returns the new state tuple and the smallest
-    stage determinant (see `rk4_step`)."""
+def first_stage(mode, lam, sigma, y, tau, a0, sa, v0, sv, p):
+    """RK4's first stage at the state tuple ``y`` and local time ``tau``: ``(thetaddot, xddot,
+    ground power, friction power)`` (`evaluate`). Every step from the same start shares it: event
+    location computes it once for all its trial steps."""
+    energy = p[P_ENERGY] != 0.0
+    a1, b1, pg1, pf1, _, _, _, _, _ = evaluate(mode, energy, lam, sigma, y[0], y[1], y[3], tau, a0, sa, v0, sv, p)
+    return a1, b1, pg1, pf1
+
+
+@njit(cache=True)
+def rk4_from(mode, lam, sigma, y, k1, tau, hh, a0, sa, v0, sv, p):
+    """`rk4_step` from the state tuple ``y`` = ``(theta, thetadot, x, xdot, w_ground, w_friction)``
+    at local time ``tau``, its first stage ``k1`` given (`first_stage`). Returns the new state tuple
+    and the smallest stage determinant (see `rk4_step`)."""
     energy = p[P_ENERGY] != 0.0
     th, thd, x, xd, wg, wf = y
-    a1, b1, pg1, pf1, _, _, _, _, _ = evaluate(mode, energy, lam, sigma, th, thd, xd, tau, a0, sa, v0, sv, p)
+    a1, b1, pg1, pf1 = k1
     th, thd, x, xd, wg, wf, d_min = rk4_step(mode, energy, lam, sigma, th, thd, x, xd, wg, wf, tau, hh,
                                              a0, sa, v0, sv, p, a1, b1, pg1, pf1)
     return (th, thd, x, xd, wg, wf), d_min
@@ -717,16 +727,19 @@ def rest_block_holds(p, bounds, block):
 # ============================================================================================
 
 @njit(cache=True)
-def event_value_at(i, mode, lam, sigma, y0, tau_a, dtau, a0, sa, v0, sv, p):
-    """Event function ``i`` at ``tau_a + dtau``, reached by one RK4 step from the state ``y0``."""
-    y, _ = rk4_from(mode, lam, sigma, y0, tau_a, dtau, a0, sa, v0, sv, p)
+def event_value_at(i, mode, lam, sigma, y0, k1, tau_a, dtau, a0, sa, v0, sv, p):
+    """Event function ``i`` at ``tau_a + dtau``, reached by one RK4 step from the state ``y0``
+    (first stage ``k1``)."""
+    y, _ = rk4_from(mode, lam, sigma, y0, k1, tau_a, dtau, a0, sa, v0, sv, p)
+    if EVENT_KINDS[mode][i] == K_IMPACT:     # the landing's event function is theta itself:
+        return y[0]                          # no trigonometry (most located events are landings)
     t = tau_a + dtau
     g = event_values(mode, lam, sigma, y[0], y[1], y[3], a0 + sa * t, p[P_G] + v0 + sv * t, p)
     return g[i]
 
 
 @njit(cache=True)
-def locate(i, mode, lam, sigma, y0, tau_a, tau_b, g_a, g_b, a0, sa, v0, sv, p):
+def locate(i, mode, lam, sigma, y0, k1, tau_a, tau_b, g_a, g_b, a0, sa, v0, sv, p):
     """Local time of the zero crossing of event function ``i`` in ``(tau_a, tau_b]`` (Illinois).
 
     ``g_a >= 0 > g_b``. Returns the upper end of the final bracket, where the event function is
@@ -753,7 +766,7 @@ def locate(i, mode, lam, sigma, y0, tau_a, tau_b, g_a, g_b, a0, sa, v0, sv, p):
             m = lo + 0.01 * width
         elif hi - m < 0.01 * width:
             m = hi - 0.01 * width
-        gm = event_value_at(i, mode, lam, sigma, y0, tau_a, m, a0, sa, v0, sv, p)
+        gm = event_value_at(i, mode, lam, sigma, y0, k1, tau_a, m, a0, sa, v0, sv, p)
         if gm < 0.0:
             hi = m
             ghi = gm
@@ -770,14 +783,14 @@ def locate(i, mode, lam, sigma, y0, tau_a, tau_b, g_a, g_b, a0, sa, v0, sv, p):
 
 
 @njit(cache=True, inline='always')
-def crossing_time(i, n, g_start, g_end, mode, lam, sigma, y0, tau_a, tau_b, a0, sa, v0, sv, p):
+def crossing_time(i, n, g_start, g_end, mode, lam, sigma, y0, k1, tau_a, tau_b, a0, sa, v0, sv, p):
     """The located crossing of event function ``i`` in ``(tau_a, tau_b]``, or ``inf`` if it stays
     non-negative (or is not one of the state's ``n``). An event function that starts at zero
     (theta after an impact) counts its start as the positive side."""
     if i >= n or not g_end[i] < 0.0:
         return math.inf
     ga = g_start[i] if g_start[i] > 0.0 else 0.0
-    return locate(i, mode, lam, sigma, y0, tau_a, tau_b, ga, g_end[i], a0, sa, v0, sv, p)
+    return locate(i, mode, lam, sigma, y0, k1, tau_a, tau_b, ga, g_end[i], a0, sa, v0, sv, p)
 
 
 @njit(cache=True)
@@ -810,12 +823,16 @@ def advance(st, p, tau_a, tau_b, tk, a0, sa, v0, sv, events):
             if hh > SINGULAR_FRACTION * remaining:
                 tau_end = tau_a + SINGULAR_FRACTION * remaining
         y0 = (st[S_THETA], st[S_THETADOT], st[S_X], st[S_XDOT], st[S_W_GROUND], st[S_W_FRICTION])
-        y1, d_min = rk4_from(mode, lam, sigma, y0, tau_a, tau_end - tau_a, a0, sa, v0, sv, p)
+        if st[S_K1_VALID] != 0.0:      # left by `glide` at this state and time
+            k1 = (st[S_K1_THDD], st[S_K1_XDD], st[S_K1_PG], st[S_K1_PF])
+        else:
+            k1 = first_stage(mode, lam, sigma, y0, tau_a, a0, sa, v0, sv, p)
+        y1, d_min = rk4_from(mode, lam, sigma, y0, k1, tau_a, tau_end - tau_a, a0, sa, v0, sv, p)
         for _ in range(60):                   # a stage past D = 0 (should not happen): shorten
             if d_min > 0.0:
                 break
             tau_end = tau_a + 0.5 * (tau_end - tau_a)
-            y1, d_min = rk4_from(mode, lam, sigma, y0, tau_a, tau_end - tau_a, a0, sa, v0, sv, p)
+            y1, d_min = rk4_from(mode, lam, sigma, y0, k1, tau_a, tau_end - tau_a, a0, sa, v0, sv, p)
         hh = tau_end - tau_a
         n = N_EVENTS[mode]
         g_end = event_values(mode, lam, sigma, y1[0], y1[1], y1[3], a0 + sa * tau_end, g + v0 + sv * tau_end, p)
@@ -830,11 +847,11 @@ def advance(st, p, tau_a, tau_b, tk, a0, sa, v0, sv, events):
         if located:
             # event values at the start of the step (all >= 0 by construction)
             g_start = event_values(mode, lam, sigma, y0[0], y0[1], y0[3], a0 + sa * tau_a, g + v0 + sv * tau_a, p)
-            times = (crossing_time(0, n, g_start, g_end, mode, lam, sigma, y0, tau_a, tau_end, a0, sa, v0, sv, p),
-                     crossing_time(1, n, g_start, g_end, mode, lam, sigma, y0, tau_a, tau_end, a0, sa, v0, sv, p),
-                     crossing_time(2, n, g_start, g_end, mode, lam, sigma, y0, tau_a, tau_end, a0, sa, v0, sv, p),
-                     crossing_time(3, n, g_start, g_end, mode, lam, sigma, y0, tau_a, tau_end, a0, sa, v0, sv, p),
-                     crossing_time(4, n, g_start, g_end, mode, lam, sigma, y0, tau_a, tau_end, a0, sa, v0, sv, p))
+            times = (crossing_time(0, n, g_start, g_end, mode, lam, sigma, y0, k1, tau_a, tau_end, a0, sa, v0, sv, p),
+                     crossing_time(1, n, g_start, g_end, mode, lam, sigma, y0, k1, tau_a, tau_end, a0, sa, v0, sv, p),
+                     crossing_time(2, n, g_start, g_end, mode, lam, sigma, y0, k1, tau_a, tau_end, a0, sa, v0, sv, p),
+                     crossing_time(3, n, g_start, g_end, mode, lam, sigma, y0, k1, tau_a, tau_end, a0, sa, v0, sv, p),
+                     crossing_time(4, n, g_start, g_end, mode, lam, sigma, y0, k1, tau_a, tau_end, a0, sa, v0, sv, p))
             # The earliest wins; crossings within the location tolerance of it are ties, which go
             # to the first row of the table (e.g. flight before the eq. 23 liftoff at G = 0).
             best = min(min(min(times[0], times[1]), min(times[2], times[3])), times[4])
@@ -844,7 +861,7 @@ def advance(st, p, tau_a, tau_b, tk, a0, sa, v0, sv, events):
             te = times[best_i]
             kind = EVENT_KINDS[mode][best_i]
             if te < tau_end:
-                y1, _ = rk4_from(mode, lam, sigma, y0, tau_a, te - tau_a, a0, sa, v0, sv, p)
+                y1, _ = rk4_from(mode, lam, sigma, y0, k1, tau_a, te - tau_a, a0, sa, v0, sv, p)
         else:
             te = tau_end
             kind = EVENT_KINDS[mode][first]
