@@ -16,6 +16,7 @@ from __future__ import annotations
 import gc
 import json
 import math
+import os
 import signal
 import sys
 import time
@@ -1081,7 +1082,13 @@ def entry() -> None:
     the exit (`gc.freeze`: the interpreter's last collections took 0.2 s to walk every object only
     to free what the process gives back anyway). Every file is closed and published before (or
     removed); exit handlers still run.
+
+    numpy's OpenBLAS gets one thread unless ``OPENBLAS_NUM_THREADS`` says otherwise (set before
+    numpy loads): its worker threads spin for about 0.1 s of CPU after loading, a third of a run
+    without figure, and rockslide has no linear algebra large enough for threads (the sweep's
+    threads are its own).
     """
+    os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     gc.set_threshold(10_000, 50, 50)
     try:
         main(prog_name="rockslide")

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -67,6 +68,34 @@ def test_a_run_loads_what_it_needs(tmp_path):
     assert not {"matplotlib", "PIL", "obspy", "dask", "distributed", "tqdm"} & set(no_plot)
     assert "matplotlib" in with_plot
     assert not {"obspy", "dask", "distributed", "tqdm"} & set(with_plot)
+
+
+@pytest.mark.skipif(not Path("/proc/self/task").is_dir(), reason="counts threads in /proc (Linux)")
+@pytest.mark.parametrize("given", [None, "2"])
+def test_the_command_gives_openblas_one_thread_unless_told(given):
+    """The ``rockslide`` command (`cli.entry`) starts numpy's OpenBLAS with one thread, whose
+    workers would otherwise spin for about 0.1 s of CPU after loading (a third of a run without
+    figure): a run's threads are the main one and no BLAS worker. A value the user set is kept."""
+    code = """
+import os, sys
+sys.argv = ["rockslide", "info", "records/synthetic_kt_h.at2"]
+from rockslide import cli
+try:
+    cli.entry()
+except SystemExit:
+    pass
+print(os.environ.get("OPENBLAS_NUM_THREADS"), len(os.listdir("/proc/self/task")))
+"""
+    env = {k: v for k, v in os.environ.items() if k != "OPENBLAS_NUM_THREADS"}
+    if given is not None:
+        env["OPENBLAS_NUM_THREADS"] = given
+    done = subprocess.run([sys.executable, "-c", code], cwd=REPO, capture_output=True, text=True, env=env,
+                          timeout=300)
+    assert done.returncode == 0, done.stderr[-3000:]
+    setting, threads = done.stdout.split()[-2:]
+    assert setting == (given or "1")
+    if given is None:
+        assert threads == "1"
 
 
 def short_example(folder: Path) -> Path:
