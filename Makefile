@@ -53,7 +53,7 @@ example:
 spectrum:
 	$(PYTHON) -m rockslide.cli sweep configs/spectrum-one-sine.yaml --amplitude 0.225g:2.5g:0.05g \
 		--period 0.14:1.7:0.04 --out-dir out --overwrite --no-plot
-	$(PYTHON) -m rockslide.cli plot out/spectrum-one-sine.sweep.h5 -o results/spectrum.png
+	$(PYTHON) -m rockslide.cli plot out/spectrum-one-sine.sweep.h5 -o results/spectrum.png --overwrite
 
 records:
 	$(PYTHON) records/make_example_records.py

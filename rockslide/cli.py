@@ -32,6 +32,7 @@ EXIT_INTERNAL_ERROR = 1
 EXIT_USER_ERROR = 2
 EXIT_INTERRUPTED = 130
 EXIT_TERMINATED = 143
+EXIT_BROKEN_PIPE = 141      # 128 + SIGPIPE: what a Unix tool whose reader went away exits with
 #: Longest message printed [characters]; a longer one keeps its start and its end.
 MESSAGE_LIMIT = 400
 #: A single run expected to take longer than this [s] says so before it starts (and shows a
@@ -106,12 +107,33 @@ class RockslideGroup(click.Group):
             except Exception as exc:  # noqa: BLE001 - anything else is a bug or a system failure
                 if debug:
                     raise
+                if isinstance(exc, BrokenPipeError) and _stdout_gone():   # `rockslide info r.at2 | head -1`
+                    ctx.exit(EXIT_BROKEN_PIPE)
                 if isinstance(exc, ValueError) and "embedded null" in str(exc):   # only from the API
                     click.echo("rockslide: error: a file or folder name holds a NUL character (\\x00)", err=True)
                     ctx.exit(EXIT_USER_ERROR)
                 click.echo(one_line(f"rockslide: {_unexpected(exc)} (run again with --debug for the "
                                     "traceback)"), err=True)
                 ctx.exit(EXIT_INTERNAL_ERROR)
+
+
+def _stdout_gone() -> bool:
+    """Whether the reader of standard output went away (a pipe without reader reports an error
+    to `select.poll`). If so, standard output is pointed at the null device, so that the
+    interpreter's last flush does not complain of it: the command stops quietly, as Unix tools
+    do, and its files are as they would be after Ctrl-C."""
+    import select
+
+    try:
+        fd = sys.stdout.fileno()
+        poller = select.poll()
+        poller.register(fd, select.POLLOUT)
+        gone = any(event & select.POLLERR for _, event in poller.poll(0))
+    except (AttributeError, OSError, ValueError):     # no real file, or no poll on this system
+        return False
+    if gone:
+        os.dup2(os.open(os.devnull, os.O_WRONLY), fd)
+    return gone
 
 
 def one_line(text: str, limit: int = MESSAGE_LIMIT) -> str:

@@ -727,3 +727,23 @@ def test_the_readme_quotes_the_bounds_in_force():
               f"above `p dt` = {runner.MAX_P_DT:g}"]
     for text in quoted:
         assert text in readme, text
+
+
+@pytest.mark.parametrize("command", ["info", "run"])
+def test_a_reader_that_goes_away_ends_the_command_quietly(ws, command):
+    """``rockslide info r.at2 | head -1``: when standard output's reader has gone, the command stops
+    with 141 (128 + SIGPIPE), as Unix tools do, and says nothing (it used to call the closed pipe an
+    internal error, exit 1); a run's result, published before its summary is printed, is complete."""
+    args = (["info", REPO / "records" / SHIPPED[0]] if command == "info"
+            else ["run", REPO / "configs" / "example.yaml", "--no-plot", "--out-dir", ws / "out"])
+    read, write = os.pipe()
+    os.close(read)
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(REPO), os.environ.get("PYTHONPATH", "")])}
+    try:
+        done = subprocess.run([sys.executable, "-m", "rockslide", *map(str, args)], cwd=ws, env=env,
+                              stdout=write, stderr=subprocess.PIPE, text=True, timeout=300)
+    finally:
+        os.close(write)
+    assert (done.returncode, done.stderr) == (141, "")
+    if command == "run":
+        assert results.read_result(ws / "out" / "example.h5").result.summary.status == "ok"
