@@ -25,6 +25,7 @@ in what is stored. The format follows the file name in `save_figure` (PNG, PDF, 
 
 from __future__ import annotations
 
+import logging
 import math
 import os
 import struct
@@ -1129,8 +1130,22 @@ def save_figure(fig: Figure, path, *, overwrite: bool = False, dpi: float | None
             fig.savefig(os.devnull, format="rgba", dpi=dpi)      # drawn on canvas, as savefig draws a PNG
             _write_png(handle, np.asarray(canvas.buffer_rgba()), dpi=dpi)
         else:
-            fig.savefig(handle, format=fmt, dpi=dpi)
+            with _quiet_postscript():
+                fig.savefig(handle, format=fmt, dpi=dpi)
     return path
+
+
+@contextmanager
+def _quiet_postscript():
+    """Without matplotlib's log line that the PostScript backend draws the translucent fills (the
+    state bands) opaque: a .eps or .ps figure is as good as its format allows, and says so here."""
+    logger = logging.getLogger("matplotlib.backends.backend_ps")
+    level = logger.level
+    logger.setLevel(logging.ERROR)
+    try:
+        yield
+    finally:
+        logger.setLevel(level)
 
 
 def _write_png(handle, rgba: np.ndarray, *, dpi: float) -> None:

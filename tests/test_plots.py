@@ -548,10 +548,16 @@ def test_png_holds_the_figure_as_drawn(tmp_path, responses, dpi, facecolor):
     assert np.array_equal(read, drawn)
 
 
-def test_other_formats(tmp_path, responses):
+def test_other_formats(tmp_path, responses, caplog):
+    """PDF, SVG and PostScript; PostScript without matplotlib's log line that it draws the
+    translucent state bands opaque (a user asked for .eps and got a warning about it)."""
     fig = response_figure(responses["rock"])
     assert save_figure(fig, tmp_path / "f.pdf").read_bytes()[:5] == b"%PDF-"
     assert b"<svg" in save_figure(fig, tmp_path / "f.svg").read_bytes()[:2000]
+    with caplog.at_level("WARNING"):
+        assert save_figure(fig, tmp_path / "f.eps").read_bytes()[:10] == b"%!PS-Adobe"
+        assert save_figure(fig, tmp_path / "f.ps").read_bytes()[:10] == b"%!PS-Adobe"
+    assert not [r for r in caplog.records if "transparency" in r.getMessage()]
 
 
 # --------------------------------------------------------------------------------------------------
