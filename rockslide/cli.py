@@ -938,7 +938,7 @@ def _draw(result, name, path, *, overwrite, dpi=None, time_shift=0.0, zoom="auto
 
 def _result_set(h5_path: Path, png_path: Path, *, overwrite: bool, no_plot: bool, leftovers: bool = False,
                 example: str = "out/case") -> bool:
-    """Check the outputs of `run` or `sweep` before the work: a result is the set ``NAME.h5`` and
+    """Check the outputs of `run`, `sweep` or `fragility` before the work: a result is the set ``NAME.h5`` and
     ``NAME.png`` (``NAME.h5`` alone with ``--no-plot``).
 
     Returns True when, without ``overwrite``, ``NAME.h5`` exists but its set is not complete (the

@@ -528,7 +528,7 @@ def plan_fragility(case: Case, suite: Suite, im: IntensityMeasure, levels: sw.Ax
     plan = sw.Plan(case=case, axes=[record_axis, levels], mu_kinetic_ratio=None, params=params,
                    states=states, factor_h=factor_h, factor_v=factor_v,
                    base=np.ascontiguousarray(np.concatenate(bases, axis=1)), first=first, count=count,
-                   record_end=record_end, step=float(params[:, K.P_H].min()), records=entries,
+                   record_end=record_end, step=float(params[:, K.P_STEP].min()), records=entries,
                    chunk_size=chunk_size)
     plan.key = sw.definition_key(plan)
     return FragilityPlan(plan=plan, suite=suite, im=im, levels=levels, record_cases=record_cases,

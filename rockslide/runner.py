@@ -18,7 +18,7 @@ import numpy as np
 from . import pulses
 from . import records as rec
 from .case import Case
-from .core.simulate import Model, Result, Settings, simulate, substeps
+from .core.simulate import Model, Result, Settings, interval_count, simulate, substeps, tail_samples
 from .errors import CaseError, RecordError
 from .pulses import Pulse
 from .units import STANDARD_GRAVITY
@@ -229,12 +229,8 @@ MAX_HISTORY_ROWS = 10**8      # output rows (4.8 GB before compression)
 def check_size(case: Case, ground: rec.GroundMotion, *, history: bool = True) -> None:
     """Refuse a tail, step or output interval that would need absurd memory, time or disk."""
     dt_record, tail, dt = ground.dt, case.ground.tail, case.solver.dt
-    if tail / dt_record > MAX_GROUND_SAMPLES:
-        n_tail = tail / dt_record
-    else:
-        n_tail = math.ceil(tail / dt_record - 1e-9) if tail > 0 else 0
-    # samples (n,), or interval end values (2, n) of a pulse: n intervals, n + 1 samples
-    given = ground.horizontal.shape[-1] + (1 if ground.horizontal.ndim == 2 else 0)
+    n_tail = tail / dt_record if tail / dt_record > MAX_GROUND_SAMPLES else tail_samples(tail, dt_record)
+    given = interval_count(ground.horizontal, dt_record, 0.0) + 1
     samples = given + n_tail
     if samples > MAX_GROUND_SAMPLES:
         longest = (MAX_GROUND_SAMPLES - given) * dt_record
@@ -290,8 +286,7 @@ class Work:
 def work(prepared: Prepared, *, runs: int = 1) -> Work:
     """The work of ``runs`` runs of ``prepared`` (the robustness check makes 3 more, one at dt/2)."""
     s = prepared.settings
-    n = prepared.ground.horizontal.size + (math.ceil(s.tail / prepared.ground.dt - 1e-9) if s.tail > 0 else 0)
-    steps = max(1, n - 1) * substeps(prepared.ground.dt, s.dt)
+    steps = interval_count(prepared.ground.horizontal, prepared.ground.dt, s.tail) * substeps(prepared.ground.dt, s.dt)
     rows = steps // s.history_every + 1 if s.history_every > 0 else 0
     seconds = steps * (runs + (1 if runs > 1 else 0)) / STEPS_PER_SECOND + rows / ROWS_PER_SECOND
     return Work(steps=int(steps), rows=int(rows), runs=runs, seconds=seconds)

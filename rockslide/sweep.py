@@ -111,6 +111,8 @@ PLAN_SECONDS_PER_POINT = 3e-5
 #: Ranges include their stop when it is within this fraction of a step of the grid.
 RANGE_TOLERANCE = 1e-9
 
+#: The sweep file's format, part of a chunk's definition key: `results.SWEEP_FORMAT` and
+#: `results.SWEEP_FORMAT_VERSION`, not imported from there (that would load h5py); a test keeps them equal.
 FORMAT = "rockslide-sweep"
 FORMAT_VERSION = 1
 
@@ -544,7 +546,7 @@ def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = N
     plan = Plan(case=case, axes=axes, mu_kinetic_ratio=ratio, params=params, states=states,
                 factor_h=factor_h, factor_v=factor_v, base=base, first=np.zeros(n, dtype=np.int64),
                 count=np.full(n, base.shape[1], dtype=np.int64), record_end=np.full(n, record_end),
-                step=float(params[0, K.P_H]), records=entries, chunk_size=chunk_size)
+                step=float(params[0, K.P_STEP]), records=entries, chunk_size=chunk_size)
     plan.key = definition_key(plan)
     return plan
 
@@ -637,7 +639,7 @@ def _plan_pulses(case: Case, axes, ratio, chunk_size: int, n: int, progress=None
     _warn_coarse_step(case, axes, params)
     plan = Plan(case=case, axes=list(axes), mu_kinetic_ratio=ratio, params=params, states=states,
                 factor_h=factor_h, factor_v=factor_v, base=np.concatenate(pieces, axis=1), first=first,
-                count=count, record_end=record_end, step=float(params[:, K.P_H].min()), records=[],
+                count=count, record_end=record_end, step=float(params[:, K.P_STEP].min()), records=[],
                 chunk_size=chunk_size)
     plan.key = definition_key(plan)
     return plan
@@ -647,7 +649,7 @@ def _warn_coarse_step(case: Case, axes, params: np.ndarray) -> None:
     """`runner.step_warning` for the point with the fastest rocking (the largest ``p dt``)."""
     p2 = 0.75 * params[:, K.P_G] / params[:, K.P_R]          # p^2 = 3 g / (4 R)
     i = int(np.argmax(p2))
-    warning = step_warning(case.source, math.sqrt(p2[i]), float(params[i, K.P_H]))
+    warning = step_warning(case.source, math.sqrt(p2[i]), float(params[i, K.P_STEP]))
     if warning:
         combo = np.unravel_index(i, tuple(len(a) for a in axes))
         warnings.warn(f"{warning} [at {_point_text(axes, combo)}]", RunWarning, stacklevel=3)
@@ -1170,8 +1172,12 @@ def work_estimate(plan: Plan, n_cases: int, *, workers: int | None = None) -> fl
 def bytes_needed(plan: Plan, n_chunks: int) -> int:
     """Bytes on disk for ``n_chunks`` more chunk files and the result file (both uncompressed)."""
     per_case_chunk = (K.N_STATE + 1) * 8
-    per_case_result = 8 * 9 + 4 + 5          # nine float64, one int32, five int8 variables
-    return n_chunks * plan.chunk_size * per_case_chunk + plan.n_cases * per_case_result + 2**16
+    return n_chunks * plan.chunk_size * per_case_chunk + plan.n_cases * RESULT_BYTES_PER_CASE + 2**16
+
+
+#: Bytes per case of the variables `sweep_variables` writes: 11 float64, one int32, 6 int8 (a test
+#: keeps this in step with them).
+RESULT_BYTES_PER_CASE = 8 * 11 + 4 + 6
 
 
 def missing_chunks(plan: Plan, store: ChunkStore) -> list[int]:

@@ -171,7 +171,7 @@ def test_the_cpu_path_never_imports_numba_cuda(tmp_path):
 def cases(n, *, mu=0.5, n_sub=10.0):
     params = np.zeros((n, K.N_PARAMS))
     params[:, K.P_MU], params[:, K.P_TAN_ALPHA], params[:, K.P_G] = mu, 0.5, 10.0
-    params[:, K.P_N_SUB], params[:, K.P_H] = n_sub, 0.001
+    params[:, K.P_N_SUB], params[:, K.P_STEP] = n_sub, 0.001
     return params
 
 

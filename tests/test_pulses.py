@@ -166,6 +166,19 @@ def test_case_with_pulses_reads_and_round_trips():
     assert changed.ground.horizontal == Pulse("rectangular", 9.80665, duration=0.1)
 
 
+@pytest.mark.parametrize("case_text", [PULSE_CASE, (REPO / "configs" / "example.yaml").read_text()],
+                         ids=["pulses", "records"])
+def test_the_announced_work_is_the_steps_the_run_takes(case_text):
+    """`runner.work` (behind the "up to about" note and the free-space check) counts the RK4 steps
+    a run takes: the intervals of the applied ground, tail included, times the substeps. A pulse's
+    ground is interval end values (2, n), whose size once counted twice the intervals."""
+    case = parse_case(case_text, base_dir=REPO / "configs")
+    prepared = runner.prepare(case)
+    ground = ground_array(prepared.ground.horizontal, prepared.ground.vertical, prepared.ground.dt,
+                          prepared.settings.tail)
+    assert runner.work(prepared).steps == ground.shape[1] * round(prepared.ground.dt / prepared.settings.dt)
+
+
 def test_run_writes_the_pulses_with_their_jumps(tmp_path):
     """`rockslide run` on a case file with pulses: the ground written back is the pulses at their
     amplitudes, the rectangular steps at 0 and 0.2 s given as repeated times, the case's pulse keys

@@ -263,6 +263,17 @@ def test_grid_points_equal_single_runs(example, mixed):
         assert_point_equals_run(plan, variables, index, result.summary)
 
 
+def test_the_chunks_key_names_the_format_of_the_file():
+    assert (sw.FORMAT, sw.FORMAT_VERSION) == (results.SWEEP_FORMAT, results.SWEEP_FORMAT_VERSION)
+
+
+def test_the_free_space_asked_for_counts_every_variable(mixed):
+    """`sweep.bytes_needed` asks for `RESULT_BYTES_PER_CASE` per case of the result file: the bytes
+    of the variables `sweep_variables` writes (it once counted 81 of 98)."""
+    plan, variables = mixed
+    assert sum(values.itemsize for values, _ in variables.values()) == sw.RESULT_BYTES_PER_CASE
+
+
 @pytest.mark.parametrize("axes", [["--vertical-factor", "0,0.6"], ["--gravity", "9.7m/s^2,9.80665m/s^2"]])
 def test_vertical_factor_and_gravity_points_equal_rockslide_run(example, axes, tmp_path):
     """Through the command line both ways: `rockslide sweep` and `rockslide run` on a case file

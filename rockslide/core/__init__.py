@@ -7,10 +7,11 @@ contract in ``pyproject.toml`` enforces it.
 - `layout`: state codes and the layout of the arrays the compiled code shares with its callers.
 - `physics`: the equations of the paper, one implementation each (numba).
 - `kernel`: the compiled fixed-step state machine (RK4, events located inside the step, exact REST).
-- `batch`: the kernel over many cases (sweeps).
+- `batch`: the kernel over many cases (sweeps, fragility); `gpu`: the same on an NVIDIA GPU.
 - `simulate`: ``Model`` + ground motion arrays -> ``Result``.
 - `native`: the kernel's entry points compiled ahead of time by the package build (no numba at run
   time); `compiled`: numba's cache of the core, kept fresh.
 - `reference`: the same state machine on scipy's adaptive DOP853, for checks.
 - `criteria`: mode-initiation maps (eqs. 6, 11, 26).
+- `intensity`: intensity measures of a record (PGA, PGV, Sa(T, 5 %)).
 """

@@ -102,7 +102,7 @@ def warm_up_case():
     p = np.zeros((1, K.N_PARAMS))
     p[0, K.P_R], p[0, K.P_ALPHA], p[0, K.P_TAN_ALPHA] = 0.1, 0.5, np.tan(0.5)
     p[0, K.P_G], p[0, K.P_MU], p[0, K.P_NU], p[0, K.P_E] = 9.80665, 0.5, 0.5, 0.8
-    p[0, K.P_H], p[0, K.P_DT_REC], p[0, K.P_N_SUB], p[0, K.P_LOCATED] = 0.01, 0.01, 1.0, 1.0
+    p[0, K.P_STEP], p[0, K.P_DT_REC], p[0, K.P_N_SUB], p[0, K.P_LOCATED] = 0.01, 0.01, 1.0, 1.0
     states = K.new_state()[None, :]
     return p, states, np.zeros((4, 1)), 0, 1, np.ones(1), np.ones(1)
 

@@ -196,7 +196,7 @@ def warp_efficiency(states, params, order):
         ``(useful steps, issued steps)``.
     """
     moving = states[:, K.S_T_SLIP] + states[:, K.S_T_ROCK] + states[:, K.S_T_ROCKSLIP]
-    steps = (moving / params[:, K.P_H])[np.asarray(order)]
+    steps = (moving / params[:, K.P_STEP])[np.asarray(order)]
     padded = np.zeros(math.ceil(steps.size / WARP_SIZE) * WARP_SIZE)
     padded[:steps.size] = steps
     issued = padded.reshape(-1, WARP_SIZE).max(axis=1).sum() * WARP_SIZE

@@ -1,8 +1,9 @@
 """The compiled fixed-step state machine (docs/model.md, 'Transitions' and 'Integration').
 
-Plain floats and arrays only, no I/O. `simulate.py` builds the inputs and reads the outputs; the
-sweep runs `run` over many cases. Everything is resumable: the integration state lives in the
-array ``st`` (indices ``S_*``), so a long record can be computed in chunks with bounded memory.
+Plain floats and arrays only, no I/O. `simulate.py` builds the inputs and reads the outputs;
+`batch.run_batch` (sweeps, fragility) and `gpu` run `run` over many cases. Everything is
+resumable: the integration state lives in the array ``st`` (indices ``S_*``), so a long record can
+be computed in chunks with bounded memory.
 
 Time is organised by ground-motion samples. The record (with its tail of zeros) is linear between
 samples ``k`` and ``k+1`` (interval ``k``); each interval is cut into ``n_sub`` steps of length
@@ -15,8 +16,8 @@ interval, local time ``tau`` runs from 0 to ``dt_record``.
   blocks of `REST_BLOCK` intervals): a block whose bounds cannot reach the REST thresholds is
   skipped whole, and only a block where an exit can happen is scanned interval by interval.
 - SLIP, ROCK and ROCKSLIP are integrated with the classical fourth-order Runge-Kutta method, with a
-  loop specialised to each state (`glide`: terms that are exactly zero in that state are not
-  computed). After each step the event functions of the state (``g >= 0`` while the state holds,
+  loop specialised to each state (`glide`; `rk4_step` leaves out the terms that are exactly zero
+  in that state). After each step the event functions of the state (``g >= 0`` while the state holds,
   in the order of model.md's table) are evaluated. With located events (``P_LOCATED = 1``) the earliest crossing
   inside the step is found by Illinois regula falsi on RK4 sub-steps from the step's start, the
   transition is applied there and the rest of the step is integrated in the new state. With
@@ -63,7 +64,6 @@ from .layout import (  # noqa: F401  (the array layout, re-exported: `kernel.S_M
     K_PAINLEVE,
     K_SLIP_START,
     K_SLIP_STOP,
-    MAX_EVENTS_PER_MODE,
     N_PARAMS,
     N_STATE,
     OVERTURNED,
@@ -73,7 +73,6 @@ from .layout import (  # noqa: F401  (the array layout, re-exported: `kernel.S_M
     P_ENERGY,
     P_FIRST,
     P_G,
-    P_H,
     P_KH,
     P_KV,
     P_LOCATED,
@@ -81,6 +80,7 @@ from .layout import (  # noqa: F401  (the array layout, re-exported: `kernel.S_M
     P_N_SUB,
     P_NU,
     P_R,
+    P_STEP,
     P_T0,
     P_TAN_ALPHA,
     REST,
@@ -333,7 +333,7 @@ EVENT_KINDS = (
     (K_FLIGHT, K_SLIP_START, K_IMPACT, K_OVERTURN, -1),                 # ROCK (eq. 21)
     (K_FLIGHT, K_PAINLEVE, K_SLIP_STOP, K_IMPACT, K_OVERTURN),          # ROCKSLIP
 )
-N_EVENTS = (3, 3, 4, 5)
+N_EVENTS = tuple(sum(kind >= 0 for kind in row) for row in EVENT_KINDS)     # (3, 3, 4, 5)
 
 
 @njit(cache=True, inline='always')
@@ -586,7 +586,7 @@ def impact_of_the_landing_edge(st, p, t, mode, ah, G, events):
         if p[P_LOCATED] == 0.0 and not too_small:
             sigma_new = 1.0 if xdot >= 0.0 else -1.0
             thdd0, _ = accelerations(new_mode, -lam, sigma_new, 0.0, 0.0, ah, G, p)
-            too_small = thdd0 < 0.0 and 2.0 * w <= STEP_END_FLIGHT_STEPS * p[P_H] * abs(thdd0)
+            too_small = thdd0 < 0.0 and 2.0 * w <= STEP_END_FLIGHT_STEPS * p[P_STEP] * abs(thdd0)
         if too_small:
             thetadot = 0.0
             xdot = lam * (xi_plus if xi_plus >= 0.0 else xi_plus + R * math.cos(alpha) * w)
@@ -940,6 +940,8 @@ def track(mode, th0, thd0, x0, xd0, th1, thd1, x1, xd1, hh, t_start, alpha, max_
 def accept(st, th, thd, x, xd, wg, wf, mode, tau_a, tau_b, tk, p, peaks_inside):
     """Take the state integrated from local time ``tau_a`` to ``tau_b`` into ``st``."""
     st[S_K1_VALID] = 0.0
+    # `track` as for ROCKSLIP whatever the state: both the rotation and the slip are checked (a
+    # single step after an event is not worth a version per state)
     (st[S_MAX_THETA], st[S_THETA_MAX_TIME], st[S_MAX_X], st[S_FALL_CANDIDATE]) = track(
         ROCKSLIP, st[S_THETA], st[S_THETADOT], st[S_X], st[S_XDOT], th, thd, x, xd, tau_b - tau_a, tk + tau_a,
         p[P_ALPHA], st[S_MAX_THETA], st[S_THETA_MAX_TIME], st[S_MAX_X], st[S_FALL_CANDIDATE], peaks_inside)
@@ -1062,7 +1064,7 @@ def run(p, ground, bounds, st, history, every, offset, events, k_end):
     p = (p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], p[12], p[13], p[14],
          p[15])
     n_sub = int(p[P_N_SUB])
-    h = p[P_H]
+    h = p[P_STEP]
     dt_rec = p[P_DT_REC]
     t0 = p[P_T0]
     first = int(p[P_FIRST])

@@ -21,8 +21,9 @@ STATE_NAMES = ("REST", "SLIP", "ROCK", "ROCKSLIP", "OVERTURNED")
 IMPACT_NONE, IMPACT_STICK, IMPACT_SLIP, IMPACT_FLAT, IMPACT_PAINLEVE = 0, 1, 2, 3, 4
 IMPACT_BRANCHES = ("", "stick", "slip", "flat", "painleve")
 
-# --- parameter vector ``p`` -------------------------------------------------------------------
-(P_R, P_ALPHA, P_TAN_ALPHA, P_G, P_MU, P_NU, P_E, P_H, P_DT_REC, P_N_SUB, P_LOCATED, P_T0,
+# --- parameter vector ``p`` (``P_STEP``: the integration step, h in docs/model.md's 'Integration';
+# not the block's half height) ---------------------------------------------------------------
+(P_R, P_ALPHA, P_TAN_ALPHA, P_G, P_MU, P_NU, P_E, P_STEP, P_DT_REC, P_N_SUB, P_LOCATED, P_T0,
  P_ENERGY,
  P_FIRST, P_KH, P_KV) = range(16)   # the case's record: its first column of ``ground``, scale factors
 N_PARAMS = 16   # `kernel.run` unpacks p into a 16-tuple: keep the two in step
@@ -52,7 +53,6 @@ CAUSE_NAMES = ("slip-start", "liftoff", "slip-stop", "slip-reversal", "impact",
 
 # --- event kinds: which condition of model.md's table a crossing is ----------------------------
 K_FLIGHT, K_PAINLEVE, K_SLIP_START, K_LIFTOFF, K_SLIP_STOP, K_IMPACT, K_OVERTURN = range(7)
-MAX_EVENTS_PER_MODE = 5
 
 # rows of the ground array: ah and av at the start and at the end of each record interval
 GROUND_ROWS = ("ah_start", "ah_end", "av_start", "av_end")

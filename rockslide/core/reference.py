@@ -54,7 +54,7 @@ def simulate_reference(model: Model, dt_record: float, horizontal, vertical,
     ground = ground_array(horizontal, vertical, dt_record, settings.tail)
     p = parameters(model, dt_record, settings, start)
     p[K.P_LOCATED] = 1.0
-    h = p[K.P_H]
+    h = p[K.P_STEP]
     n_sub = int(p[K.P_N_SUB])
     every = int(settings.history_every)
     st = initial_state(settings)

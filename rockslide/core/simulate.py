@@ -20,7 +20,7 @@ from .layout import IMPACT_BRANCHES, OVERTURNED, REST, ROCK, ROCKSLIP, SLIP, STA
 
 #: The event log of a result: time [s], the state before and after, the cause, the pivoting edge
 #: (``lam``) and slip direction (``sigma``) after the event, and for an impact the branch of the impact
-#: law (stick, slip, flat; empty for other events) and the kinetic energy it took [J] (>= 0).
+#: law (stick, slip, flat or painleve; empty for other events) and the kinetic energy it took [J] (>= 0).
 EVENT_DTYPE = np.dtype([("time", "f8"), ("from", "S10"), ("to", "S10"), ("cause", "S14"),
                         ("edge", "i1"), ("slip_direction", "i1"), ("impact", "S8"), ("energy_loss", "f8")])
 
@@ -175,7 +175,7 @@ def parameters(model: Model, dt_record: float, settings: Settings, start: float 
     p[L.P_MU] = model.mu_static
     p[L.P_NU] = model.mu_kinetic
     p[L.P_E] = model.restitution
-    p[L.P_H] = dt_record / n_sub
+    p[L.P_STEP] = dt_record / n_sub
     p[L.P_DT_REC] = dt_record
     p[L.P_N_SUB] = n_sub
     p[L.P_LOCATED] = 1.0 if settings.events == "located" else 0.0
@@ -206,6 +206,19 @@ def initial_state(settings: Settings) -> np.ndarray:
         st[L.S_XDOT] = xdot
     st[L.S_MODE] = (ROCKSLIP if xdot != 0.0 else ROCK) if rocking else (SLIP if xdot != 0.0 else REST)
     return st
+
+
+def tail_samples(tail: float, dt_record: float) -> int:
+    """Samples of still ground that a tail of ``tail`` seconds appends at the step ``dt_record``
+    (the tail's end rounded up to the next sample)."""
+    return math.ceil(tail / dt_record - 1e-9) if tail > 0 else 0
+
+
+def interval_count(component, dt_record: float, tail: float) -> int:
+    """Record intervals of one ground component with its tail, as `ground_array` lays them out:
+    ``n - 1 + n_tail`` for samples ``(n,)``, ``n + n_tail`` for interval end values ``(2, n)``."""
+    values, samples = _intervals(component)
+    return _interval_count(values, samples, tail_samples(tail, dt_record))
 
 
 def _intervals(component) -> tuple[np.ndarray, bool]:
@@ -253,7 +266,7 @@ def ground_array(horizontal, vertical, dt_record: float, tail: float = 0.0) -> n
     tail : float
         [s] still ground appended.
     """
-    n_tail = math.ceil(tail / dt_record - 1e-9) if tail > 0 else 0
+    n_tail = tail_samples(tail, dt_record)
     ah, ah_samples = _intervals(horizontal)
     av, av_samples = _intervals(vertical)
     K = _interval_count(ah, ah_samples, n_tail)
@@ -358,7 +371,7 @@ def simulate(model: Model, dt_record: float, horizontal, vertical, settings: Set
         events=event_table(np.concatenate(event_chunks) if event_chunks
                            else np.zeros((0, len(L.EVENT_COLUMNS))), model.mass),
         summary=summarise(st, model, start + n_intervals * dt_record),
-        step=p[L.P_H],
+        step=p[L.P_STEP],
         ground_time=ground_time,
         ground_horizontal=ground_h,
         ground_vertical=ground_v,
@@ -467,5 +480,5 @@ def may_still_overturn(st: np.ndarray, R: float, alpha: float, gravity: float, n
 
 
 __all__ = ["Model", "Settings", "Summary", "Result", "simulate", "substeps", "parameters", "ground_array",
-           "ground_series", "may_still_overturn",
+           "ground_series", "may_still_overturn", "tail_samples", "interval_count",
            "REST", "SLIP", "ROCK", "ROCKSLIP", "OVERTURNED"]
