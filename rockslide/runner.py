@@ -34,12 +34,9 @@ class Prepared:
     settings: Settings
 
 
-def load_ground(case: Case, records_dir: Path | None = None) -> rec.GroundMotion:
-    """Read, scale and align the case's records (``ground.horizontal`` and ``ground.vertical``), or
-    sample its pulses (`pulse_ground`); without either, the still ground sampled at ``solver.dt`` (a
-    free vibration over ``ground.tail``)."""
-    if is_pulse_case(case):
-        return pulse_ground(case)
+def read_records(case: Case, records_dir: Path | None = None) -> dict[str, rec.Record | None]:
+    """The case's records as they are in their files, by role (``horizontal``, ``vertical``; None
+    where the case has none), found through `records.resolve_record_path`."""
     folder = records_dir if records_dir is not None else rec.records_dir()
     records = {}
     for role in ("horizontal", "vertical"):
@@ -47,12 +44,21 @@ def load_ground(case: Case, records_dir: Path | None = None) -> rec.GroundMotion
         if spec is None:
             records[role] = None
             continue
-        field = f"ground.{role}.file"
         path = rec.resolve_record_path(spec.file, case_dir=case.base_dir, records_dir=folder,
-                                       source=case.source, field=field)
+                                       source=case.source, field=f"ground.{role}.file")
         records[role] = rec.load_record(path, format=spec.format, units=spec.units,
                                         time_column=spec.time_column, column=spec.column, dt=spec.dt,
                                         skip_lines=spec.skip_lines)
+    return records
+
+
+def load_ground(case: Case, records_dir: Path | None = None) -> rec.GroundMotion:
+    """Read, scale and align the case's records (``ground.horizontal`` and ``ground.vertical``), or
+    sample its pulses (`pulse_ground`); without either, the still ground sampled at ``solver.dt`` (a
+    free vibration over ``ground.tail``)."""
+    if is_pulse_case(case):
+        return pulse_ground(case)
+    records = read_records(case, records_dir)
     scale = case.ground.scale
     try:
         return rec.combine(records["horizontal"], records["vertical"], pga_horizontal=scale.pga_horizontal,
@@ -190,7 +196,7 @@ def check_against_ground(case: Case, ground: rec.GroundMotion, *, warn: bool = T
             pulse = isinstance(case.ground.vertical, Pulse)
             raise CaseError(
                 f"the scaled vertical acceleration reaches {lowest / 0.01:.1f} gal at "
-                f"t = {ground.start + (k + row) * ground.dt:.3f} s, so g + av = {case.gravity + lowest:.3f} m/s^2 "
+                f"t = {start + (k + row) * ground.dt:.3f} s, so g + av = {case.gravity + lowest:.3f} m/s^2 "
                 f"<= 0 (the block would fly, outside the model); lower "
                 f"{'ground.vertical.amplitude' if pulse else 'ground.scale'}",
                 source=case.source, field="ground.vertical.amplitude" if pulse else "ground.scale")
@@ -392,7 +398,8 @@ def verdict_robustness(prepared: Prepared, overturned: bool, progress=None) -> d
     Returns ``{"holds": bool, "overturned": bool, "variants": {name: {"overturned": bool,
     "overturn_time": float|None, "max_rotation": float, "residual_slip": float}}}``. A verdict
     that does not hold sits on a knife edge: a fraction of a percent in friction, or the step,
-    decides it. ``progress`` is passed to each `simulate`.
+    decides it. ``progress`` is passed to each `simulate`. The variants run on the compiled kernel,
+    whatever ``solver.method`` the case asks for.
     """
     from dataclasses import replace
 

@@ -89,6 +89,7 @@ from .runner import (
     is_pulse_case,
     model_for,
     pulse_ground,
+    read_records,
     settings_for,
     step_warning,
     unit_pulses,
@@ -661,21 +662,10 @@ def _point_text(axes, combo) -> str:
 
 
 def _read_records(case: Case, records_dir: Path | None):
-    """The case's records, read once (as `runner.load_ground` reads them)."""
-    folder = records_dir if records_dir is not None else rec.records_dir()
-    records, entries = {}, []
-    for role in ("horizontal", "vertical"):
-        spec = getattr(case.ground, role)
-        if spec is None:
-            records[role] = None
-            continue
-        path = rec.resolve_record_path(spec.file, case_dir=case.base_dir, records_dir=folder,
-                                       source=case.source, field=f"ground.{role}.file")
-        record = rec.load_record(path, format=spec.format, units=spec.units,
-                                 time_column=spec.time_column, column=spec.column, dt=spec.dt,
-                                 skip_lines=spec.skip_lines)
-        records[role] = record
-        entries.append({"role": role, "path": Path(record.path).name, "sha256": record.sha256})
+    """The case's records, read once (`runner.read_records`), and the provenance entry of each."""
+    records = read_records(case, records_dir)
+    entries = [{"role": role, "path": Path(record.path).name, "sha256": record.sha256}
+               for role, record in records.items() if record is not None]
     return records, entries
 
 

@@ -427,6 +427,10 @@ BAD_INPUTS = [
                                                                            "duration": "0.2 s"}}),
              ["case.yaml: ground.vertical.amplitude: the scaled vertical acceleration reaches -1176.8 gal",
               "lower ground.vertical.amplitude"]),
+    bad_case("pulse-vertical-flies-at-shifted-time",
+             pulse_only({}, **{"ground.vertical": {"pulse": "half-sine", "amplitude": "-1.2 g", "duration": "0.2 s"},
+                               "ground.time_shift": "5 s"}),
+             ["the scaled vertical acceleration reaches -1176.8 gal at t = 5.100 s"]),   # a result's times
     # -- options and outputs -----------------------------------------------------------------------------
     pytest.param({"case.yaml": case_text(), "out/example.h5": "previous result"}, RUN,
                  ["out/example.h5 exists (use --overwrite to replace it)"], id="output-exists"),

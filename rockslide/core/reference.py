@@ -58,7 +58,7 @@ def simulate_reference(model: Model, dt_record: float, horizontal, vertical,
     n_sub = int(p[K.P_N_SUB])
     every = int(settings.history_every)
     st = initial_state(settings)
-    events = np.zeros((100_000, len(K.EVENT_COLUMNS)))
+    events = np.zeros((100_000, len(K.EVENT_COLUMNS)))    # a reference run's log keeps its first 100 000
     rows = []
 
     st[K.S_STARTED] = 1.0
