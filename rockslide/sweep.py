@@ -1213,7 +1213,8 @@ def sweep_variables(plan: Plan, states: np.ndarray) -> dict:
     dict
         ``name -> (array shaped like the grid, attributes)``; attributes ``units`` and
         ``long_name`` (and CF ``flag_*`` for the coded ones). Same values as the summary of
-        ``rockslide run`` (`simulate.summarise`).
+        ``rockslide run`` (`simulate.summarise`, which reads one state vector the same way: a change
+        there is a change here; tests/test_sweep.py compares points with runs).
     """
     shape = plan.shape
     st = states

@@ -405,7 +405,9 @@ def event_table(rows: np.ndarray, mass: float = 1.0) -> np.ndarray:
 
 
 def summarise(st: np.ndarray, model: Model, record_end: float) -> Summary:
-    """The summary from the kernel's final state vector."""
+    """The summary from the kernel's final state vector. `sweep.sweep_variables` reads the same
+    quantities from many state vectors at once: a change here is a change there
+    (tests/test_sweep.py compares sweep points with runs)."""
     R, alpha, _ = model.constants
     time_in = {"REST": st[L.S_T_REST], "SLIP": st[L.S_T_SLIP], "ROCK": st[L.S_T_ROCK],
                "ROCKSLIP": st[L.S_T_ROCKSLIP]}
