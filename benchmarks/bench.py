@@ -24,10 +24,10 @@ from matplotlib.figure import Figure
 from matplotlib.ticker import NullFormatter
 from scipy.integrate import quad
 
-from rockslide import records as rec
 from rockslide.core.reference import simulate_reference
 from rockslide.core.simulate import Model, Settings, ground_array, simulate
-from rockslide.synthetic import kanai_tajimi
+from rockslide.io import records as rec
+from rockslide.io.synthetic import kanai_tajimi
 
 REPO = Path(__file__).resolve().parents[1]
 DTS = (1e-3, 5e-4, 2e-4, 1e-4, 5e-5, 2e-5)

@@ -90,12 +90,13 @@ def phases(case_file: Path, suite: str, suite_options: list[str], levels: str, w
     """Each phase of the command, timed inside this process (the kernel already loaded)."""
     import numba
 
-    from rockslide import fragility as fr
-    from rockslide import results
-    from rockslide import sweep as sw
+    from rockslide.analyses import fragility as fr
     from rockslide.case import load_case
     from rockslide.core import batch
     from rockslide.core import kernel as K
+    from rockslide.engine import chunks
+    from rockslide.engine import execute as ex
+    from rockslide.io import results
     from rockslide.plots import save_figure
 
     clocks = {}
@@ -105,10 +106,10 @@ def phases(case_file: Path, suite: str, suite_options: list[str], levels: str, w
         units = suite_options[1] if suite_options else None
         fplan = fr.plan_fragility(case, fr.suite_from(suite, units=units), im, fr.parse_levels(levels, im))
     plan = fplan.plan
-    store = sw.ChunkStore.beside(out / "bench.fragility.h5", plan.key)
+    store = chunks.ChunkStore.beside(out / "bench.fragility.h5", plan.key)
     with Clock() as clocks["compute the runs (chunks stored)"]:
-        sw.compute(plan, store, range(plan.n_chunks), workers=workers)
-    states = sw.collect(plan, store)
+        ex.compute(plan, store, range(plan.n_chunks), workers=workers)
+    states = chunks.collect(plan, store)
     with Clock() as clocks["fits: maximum likelihood, moments, 1000 bootstrap resamples"]:
         analysis = fr.analyse(fplan, states, fr.damage_states(DAMAGE))
     with Clock() as clocks["write HDF5"]:

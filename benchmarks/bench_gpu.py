@@ -58,7 +58,7 @@ def kobe_records() -> tuple[Path, Path | None, str]:
 
 
 def fragility_plan(tmp: Path):
-    from rockslide import fragility as fr
+    from rockslide.analyses import fragility as fr
     from rockslide.case import load_case
 
     suite, suite_options, what = find_suite()
@@ -74,7 +74,7 @@ def fragility_plan(tmp: Path):
 
 
 def rocking_plan(tmp: Path, cases: int):
-    from rockslide import sweep as sw
+    from rockslide.analyses import sweep as sw
     from rockslide.case import load_case
 
     horizontal, vertical, what = kobe_records()
@@ -89,14 +89,16 @@ def rocking_plan(tmp: Path, cases: int):
 
 
 def timed_sweep(plan, out: Path, device: str):
-    from rockslide import sweep as sw
+    from rockslide.engine import chunks
+    from rockslide.engine import execute as ex
 
-    store = sw.ChunkStore.beside(out / f"{device}.sweep.h5", plan.key)
+
+    store = chunks.ChunkStore.beside(out / f"{device}.sweep.h5", plan.key)
     store.remove()
     started = time.perf_counter()
-    sw.compute(plan, store, range(plan.n_chunks), device=device)
+    ex.compute(plan, store, range(plan.n_chunks), device=device)
     wall = time.perf_counter() - started
-    states = sw.collect(plan, store)
+    states = chunks.collect(plan, store)
     store.remove()
     return wall, states
 

@@ -42,13 +42,15 @@ import numpy as np
 from baseline import plain_rk4_rocking
 from bench_startup import KOBE, find_records, other_busy_processes
 
-from rockslide import records as rec
-from rockslide import results
-from rockslide import sweep as sw
+from rockslide.analyses import sweep as sw
 from rockslide.case import parse_case
 from rockslide.core import batch
 from rockslide.core import kernel as K
 from rockslide.core.simulate import Model, Settings, ground_array, initial_state, parameters, simulate
+from rockslide.engine import chunks
+from rockslide.engine import execute as ex
+from rockslide.io import records as rec
+from rockslide.io import results
 from rockslide.plots import save_figure
 
 REPO = Path(__file__).resolve().parents[1]
@@ -177,11 +179,11 @@ def sweep_work(case, axes, folder: Path, *, workers: int = 1, figure: bool = Fal
     plan = sw.plan_sweep(case, axes, records_dir=folder)
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp)
-        store = sw.ChunkStore.beside(out / "b.sweep.h5", plan.key)
+        store = chunks.ChunkStore.beside(out / "b.sweep.h5", plan.key)
         computing = time.perf_counter()
-        sw.compute(plan, store, range(plan.n_chunks), workers=workers)
+        ex.compute(plan, store, range(plan.n_chunks), workers=workers)
         computing = time.perf_counter() - computing
-        states = sw.collect(plan, store)
+        states = chunks.collect(plan, store)
         variables = sw.sweep_variables(plan, states)
         results.write_sweep(out / "b.sweep.h5", sw.coordinates(plan), variables,
                             attrs=sw.root_attributes(plan, "benchmark"))
@@ -238,7 +240,7 @@ def main(argv=None) -> None:
     args = parser.parse_args(argv)
     repeats = 3 if args.quick else args.repeats
     batch.warm_up()
-    cores = sw.local_threads()
+    cores = ex.local_threads()
     busy = other_busy_processes() or "none above 10 %"
     lines = ["# The kernel against a plain compiled loop (issue 17)", "",
              f"Machine: {os.cpu_count()} cores ({cores} usable), Python {platform.python_version()}, "

@@ -242,9 +242,10 @@ def choices(out: Path, runs: int = 5) -> None:
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from PIL import Image
 
-    from rockslide import plots, results
+    from rockslide import plots
     from rockslide.case import load_case
-    from rockslide.runner import run_case
+    from rockslide.engine.prepare import run_case
+    from rockslide.io import results
 
     _, result = run_case(load_case(REPO / "configs" / "example.yaml"), REPO / "records")
     rows = result.history["time"].size

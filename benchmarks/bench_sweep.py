@@ -85,11 +85,13 @@ def main() -> None:
         import numba
         import numpy as np
 
-        from rockslide import results
-        from rockslide import sweep as sw
+        from rockslide.analyses import sweep as sw
         from rockslide.case import parse_case
         from rockslide.core import batch
         from rockslide.core import kernel as K
+        from rockslide.engine import chunks
+        from rockslide.engine import execute as ex
+        from rockslide.io import results
         from rockslide.plots import SWEEP_CATEGORIES, save_figure
 
     folder, names, what = find_records()
@@ -107,11 +109,11 @@ def main() -> None:
     duration = plan.base.shape[1] * float(plan.params[0, K.P_DT_REC])
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp)
-        store = sw.ChunkStore.beside(out / "bench-sweep.sweep.h5", plan.key)
+        store = chunks.ChunkStore.beside(out / "bench-sweep.sweep.h5", plan.key)
         with Clock() as computing:
-            sw.compute(plan, store, range(plan.n_chunks), workers=args.workers)
+            ex.compute(plan, store, range(plan.n_chunks), workers=args.workers)
         with Clock() as writing:
-            states = sw.collect(plan, store)
+            states = chunks.collect(plan, store)
             variables = sw.sweep_variables(plan, states)
             results.write_sweep(out / "bench-sweep.sweep.h5", sw.coordinates(plan), variables,
                                 attrs=sw.root_attributes(plan, "benchmark"))

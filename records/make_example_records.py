@@ -11,7 +11,7 @@ of the synthetic suite in `suite-synthetic/` (listed by `suite-synthetic.yaml`).
 
 from pathlib import Path
 
-from rockslide.example import write_records, write_suite_records
+from rockslide.io.example import write_records, write_suite_records
 
 HERE = Path(__file__).resolve().parent
 

@@ -2,6 +2,28 @@
 
 Rest, slip, liftoff (rocking with impacts), liftoff-slip interaction and overturning of a block on a
 rigid foundation shaken horizontally and vertically, after Taniguchi (the paper in the README).
+
+The Python API (`rockslide.api`, loaded on first use so that ``import rockslide`` stays cheap):
+
+- `load_case` (a case file or a mapping), `case_with` / ``Case.with_``;
+- `run` -> `RunResult` (``.summary``, ``.history``, ``.events``, ``.to_xarray()``);
+- `sweep` and `fragility` -> ``xarray.Dataset`` (the variables of their files);
+- `read_result`: any file rockslide writes.
 """
 
-__version__ = "0.1.0"
+from ._version import __version__
+
+__all__ = ["__version__", "load_case", "case_with", "run", "sweep", "fragility", "read_result", "RunResult"]
+
+_API = {"load_case", "case_with", "run", "sweep", "fragility", "read_result", "RunResult", "Case", "Summary"}
+
+
+def __getattr__(name: str):
+    if name in _API:
+        from . import api
+        return getattr(api, name)
+    raise AttributeError(f"module 'rockslide' has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | _API)

@@ -50,6 +50,7 @@ __all__ = [
     "Suite",
     "SuiteEntry",
     "case_to_dict",
+    "parse_mapping",
     "case_with",
     "iter_case_keys",
     "load_case",
@@ -288,6 +289,24 @@ class Case:
     text: str = ""
     units: dict = dataclasses.field(default_factory=dict, compare=False)
 
+    def with_(self, changes: Mapping[str, object] | None = None, /, **sections) -> Case:
+        """A new case with some keys changed (`case_with`): dotted keys in ``changes``, or whole
+        keys and sections by name, e.g. ``case.with_({"contact.mu_static": 0.5})`` or
+        ``case.with_(contact={"mu_static": 0.5, "restitution": 0.8}, name="squat")``. Numbers are
+        SI; strings may carry units as in a case file (``"50 mm"``, ``"0.3 g"``)."""
+        flat = dict(changes or {})
+        for key, value in sections.items():
+            if isinstance(value, Mapping) and isinstance(CASE_KEYS.get(key), dict) \
+                    and CASE_KEYS[key].get("type") == "mapping":
+                flat.update({f"{key}.{sub}": v for sub, v in value.items()})
+            else:
+                flat[key] = value
+        return case_with(self, flat)
+
+    def to_dict(self) -> dict:
+        """The case as a plain nested dict that `load_case` reads back (`case_to_dict`)."""
+        return case_to_dict(self)
+
 
 # --------------------------------------------------------------------------------------------------
 # The schema
@@ -445,13 +464,18 @@ def iter_case_keys(keys: Mapping[str, dict] = CASE_KEYS, prefix: str = "") -> It
 # --------------------------------------------------------------------------------------------------
 
 
-def load_case(path) -> Case:
-    """Read and validate a case file.
+def load_case(path, *, base_dir: Path | None = None) -> Case:
+    """Read and validate a case file, or a mapping with the keys and units of one.
 
     Parameters
     ----------
-    path : str or os.PathLike
-        The YAML case file (UTF-8).
+    path : str, os.PathLike or mapping
+        The YAML case file (UTF-8), or the case as a mapping that parses exactly as the same YAML
+        would (`parse_mapping`): accelerations need their unit (``"0.3 g"``), other quantities
+        are SI numbers or strings with units.
+    base_dir : Path, optional
+        For a mapping: the folder its record files resolve against first (default: the current
+        folder).
 
     Returns
     -------
@@ -463,6 +487,8 @@ def load_case(path) -> Case:
     CaseError
         Naming the file when it is missing, unreadable or invalid.
     """
+    if isinstance(path, Mapping):
+        return parse_mapping(path, base_dir=base_dir)
     p = Path(path)
     text = _read_text(p, "case file")
     return parse_case(text, source=str(path), base_dir=p.absolute().parent)
@@ -520,6 +546,39 @@ def parse_case(text: str, *, source: str = "<case>", base_dir: Path | None = Non
                         "(a case file is a page of YAML)", source=source)
     data = _load_yaml(text, source)
     return _build(data, source=source, base_dir=base_dir, text=text)
+
+
+def parse_mapping(data: Mapping, *, source: str = "<mapping>", base_dir: Path | None = None) -> Case:
+    """Validate a case given as a mapping, as `parse_case` validates the same YAML.
+
+    The case's ``text`` is the mapping written as YAML (what a result file stores as the case file),
+    so that a study of it is reproducible from its file alone.
+
+    Raises
+    ------
+    CaseError
+        As `parse_case`; a value YAML cannot hold (an object) is named by its key.
+    """
+    if not isinstance(data, Mapping):
+        raise CaseError(f"expected a mapping with keys {', '.join(CASE_KEYS)}, got {_show(data)}", source=source)
+    plain = _plain_data(data, "", source)
+    text = yaml.safe_dump(plain, sort_keys=False, allow_unicode=True)
+    return _build(plain, source=source, base_dir=Path.cwd() if base_dir is None else Path(base_dir), text=text)
+
+
+def _plain_data(value, path: str, source: str):
+    """``value`` with numpy numbers as Python numbers and paths as strings (what YAML writes)."""
+    if isinstance(value, Mapping):
+        return {key: _plain_data(v, f"{path}.{key}" if path else str(key), source) for key, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain_data(v, path, source) for v in value]
+    if isinstance(value, os.PathLike):
+        return os.fspath(value)
+    if hasattr(value, "item") and callable(value.item) and getattr(value, "shape", None) == ():
+        return value.item()
+    if value is None or isinstance(value, (bool, int, float, str)):
+        return value
+    raise CaseError(f"expected a number, text or mapping, got {_show(value)}", source=source, field=path or None)
 
 
 #: Bounds on a case file, checked before its YAML is built (a few hundred bytes of nested aliases
@@ -1040,19 +1099,19 @@ def _at(tree: dict, path: str):
 # --------------------------------------------------------------------------------------------------
 
 
-def case_to_dict(case: Case, *, case_file: bool = False) -> dict:
+def case_to_dict(case: Case, *, case_file: bool = True) -> dict:
     """The case as a plain nested dict of SI values, keys as in the case file.
 
     Keys whose value is None (not given, no default) are left out, so the dict suits HDF5
-    attributes and JSON. ``parse_case(yaml.safe_dump(case_to_dict(c, case_file=True)))`` gives
-    back ``c`` apart from ``text``, ``source``, ``base_dir`` and ``units``.
+    attributes and JSON. ``load_case(case_to_dict(c))`` (and ``parse_case`` of it written as YAML)
+    gives back ``c`` apart from ``text``, ``source``, ``base_dir`` and ``units``.
 
     Parameters
     ----------
     case : Case
     case_file : bool, optional
         Write accelerations as strings with their unit (``"9.80665 m/s^2"``, exact), as a case file
-        needs them, instead of numbers.
+        needs them (the default); False: every value a number (SI).
 
     Returns
     -------
@@ -1123,7 +1182,7 @@ def case_with(case: Case, changes: Mapping[str, object]) -> Case:
     explicitly different ``mu_kinetic`` is kept, and a ``mu_static`` below it is rejected.
     """
     ctx = _Ctx(case.source, si_numbers=True)
-    data = case_to_dict(case)
+    data = case_to_dict(case, case_file=False)
     if ("contact.mu_static" in changes and "contact.mu_kinetic" not in changes
             and case.contact.mu_kinetic == case.contact.mu_static):
         data["contact"].pop("mu_kinetic", None)

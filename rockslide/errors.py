@@ -42,3 +42,9 @@ class RecordError(RockslideError):
 
 class OutputError(RockslideError):
     """A result cannot be written (exists already, unwritable folder) or read back."""
+
+
+def exception_text(exc: BaseException) -> str:
+    """An exception's message on one line (its whitespace collapsed), or its type's name when it
+    has none: how rockslide quotes a library's error inside its own."""
+    return " ".join(str(exc).split()) or type(exc).__name__

@@ -40,7 +40,7 @@ from matplotlib import rcParams
 
 from .core.layout import OVERTURNED, REST, ROCK, ROCKSLIP, SLIP, STATE_NAMES
 from .errors import OutputError
-from .files import atomic_write, check_destination
+from .io.files import atomic_write, check_destination
 from .units import percent_text
 
 

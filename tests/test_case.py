@@ -203,7 +203,7 @@ class TestValid:
         assert case_to_dict(again) == plain
 
     def test_case_to_dict_is_plain(self):
-        plain = case_to_dict(parse_case(EXAMPLE))
+        plain = case_to_dict(parse_case(EXAMPLE), case_file=False)
         assert plain["ground"]["scale"] == {"pga_horizontal": pytest.approx(8.0), "vertical_factor": 1.0}
         assert plain["solver"]["dt"] == pytest.approx(1e-4)
         assert "text" not in plain and "source" not in plain

@@ -46,10 +46,14 @@ from test_bad_input import QUICK, _default_sigint, case_text, cli_subprocess, ho
 from test_sweep import invoke
 from test_sweep import one_line_error as one_error_line
 
-from rockslide import files, interrupts, results, runner
-from rockslide import sweep as sw
+from rockslide import interrupts
+from rockslide.analyses import sweep as sw
 from rockslide.case import case_with, load_case
 from rockslide.core import batch
+from rockslide.engine import chunks
+from rockslide.engine import execute as ex
+from rockslide.engine import prepare as runner
+from rockslide.io import files, results
 
 posix = pytest.mark.skipif(os.name != "posix", reason="POSIX signals, processes and file systems")
 
@@ -153,7 +157,7 @@ def test_a_chunk_group_computed_when_the_signal_comes_is_kept(ws, monkeypatch):
     (ws / "case.yaml").write_text(case_text(QUICK))
     plan = sw.plan_sweep(load_case(ws / "case.yaml"), [sw.parse_axis("mu", "0.3:0.6:0.1")], records_dir=ws,
                          chunk_size=1)
-    store = sw.ChunkStore.beside(ws / "out" / "example.sweep.h5", plan.key)
+    store = chunks.ChunkStore.beside(ws / "out" / "example.sweep.h5", plan.key)
     compute = batch.compute
 
     signalled = []
@@ -171,11 +175,11 @@ def test_a_chunk_group_computed_when_the_signal_comes_is_kept(ws, monkeypatch):
     previous = signal.signal(signal.SIGINT, signal.default_int_handler)
     try:
         with interrupts.handling_signals(), pytest.raises(interrupts.Interrupted):
-            sw.compute(plan, store, range(plan.n_chunks), workers=1)
+            ex.compute(plan, store, range(plan.n_chunks), workers=1)
     finally:
         signal.signal(signal.SIGINT, previous)
     assert 1 <= store.count() < plan.n_chunks
-    assert sw.missing_chunks(plan, store) == list(range(store.count(), plan.n_chunks))
+    assert chunks.missing_chunks(plan, store) == list(range(store.count(), plan.n_chunks))
 
 
 @posix
@@ -349,8 +353,8 @@ def test_damaged_chunks_are_computed_again_and_named(ws):
     case = load_case(ws / "case.yaml")
     plan = sw.plan_sweep(case, [sw.parse_axis("mu", GRID[1]), sw.parse_axis("pga", GRID[3])],
                          records_dir=ws, chunk_size=1)
-    store = sw.ChunkStore.beside(ws / "out" / "example.sweep.h5", plan.key)
-    sw.compute(plan, store, range(plan.n_chunks))
+    store = chunks.ChunkStore.beside(ws / "out" / "example.sweep.h5", plan.key)
+    ex.compute(plan, store, range(plan.n_chunks))
     data = store.path(0).read_bytes()
     store.path(0).write_bytes(data[:len(data) // 2])
     flipped = bytearray(store.path(1).read_bytes())
@@ -380,7 +384,7 @@ def test_damaged_chunks_are_computed_again_and_named(ws):
             assert np.array_equal(values, variables[name][0], equal_nan=values.dtype.kind == "f"), name
         assert not (ws / "out" / ".example.sweep.chunks").exists()
         if attempt == "first":            # damage again, then --overwrite
-            sw.compute(plan, store, range(plan.n_chunks))
+            ex.compute(plan, store, range(plan.n_chunks))
             store.path(5).write_bytes(b"")
 
 
@@ -398,7 +402,7 @@ def test_http_server_as_scheduler_is_one_bounded_attempt(ws, monkeypatch):
     """An HTTP server on 127.0.0.1 as --scheduler hung for 200 s and more: now one attempt bounded
     by SCHEDULER_TIMEOUT (1 s here), one line, exit 2."""
     pytest.importorskip("distributed")
-    monkeypatch.setattr(sw, "SCHEDULER_TIMEOUT", 1.0)
+    monkeypatch.setattr(ex, "SCHEDULER_TIMEOUT", 1.0)
     server = HTTPServer(("127.0.0.1", 0), _Quiet)
     thread = threading.Thread(target=server.serve_forever, daemon=True)
     thread.start()
@@ -502,7 +506,7 @@ def test_a_sweep_stopped_in_its_final_phase_is_finished_by_a_rerun(ws):
     before = sha256(h5)
     plan = sw.plan_sweep(load_case(ws / "case.yaml"), [sw.parse_axis("mu", GRID[1]), sw.parse_axis("pga", GRID[3])],
                          records_dir=ws, chunk_size=1)
-    sw.compute(plan, sw.ChunkStore.beside(h5, plan.key), [0, 1])
+    ex.compute(plan, chunks.ChunkStore.beside(h5, plan.key), [0, 1])
     result = invoke("sweep", "case.yaml", *GRID, "--chunk-size", "1", "--no-progress")
     assert result.exit_code == 0, result.output
     assert "is this sweep's complete result; drew its missing figure" in result.stdout
@@ -573,11 +577,11 @@ def test_temporary_files_of_dead_processes_go_with_the_next_run(ws):
         assert invoke("run", "case.yaml").exit_code == 0
         assert not any(p.exists() for p in stale) and all(p.exists() for p in kept)
         # and the chunk files of a killed sweep
-        chunks = out / ".example.sweep.chunks" / "0123456789abcdef"
-        chunks.mkdir(parents=True)
-        (chunks / f".chunk-000000.npz.{dead.pid}.140000000000.tmp").write_bytes(b"x")
+        chunk_dir = out / ".example.sweep.chunks" / "0123456789abcdef"
+        chunk_dir.mkdir(parents=True)
+        (chunk_dir / f".chunk-000000.npz.{dead.pid}.140000000000.tmp").write_bytes(b"x")
         plan = sw.plan_sweep(load_case(ws / "case.yaml"), [sw.parse_axis("mu", "0.5")], records_dir=ws)
-        store = sw.ChunkStore(out / ".example.sweep.chunks", "0123456789abcdef" + plan.key[16:])
+        store = chunks.ChunkStore(out / ".example.sweep.chunks", "0123456789abcdef" + plan.key[16:])
         assert [p.name for p in store.remove_stale_temporaries()] == [
             f".chunk-000000.npz.{dead.pid}.140000000000.tmp"]
     finally:
@@ -629,7 +633,7 @@ def test_absurd_scale_is_warned_and_the_work_of_a_large_sweep_is_said(ws, monkey
     result = invoke("run", "case.yaml", "--no-plot")
     assert result.exit_code == 0, result.output
     assert "the scaled ground motion reaches 1000 g (above 10 g)" in result.stderr
-    monkeypatch.setattr(sw, "STEPS_PER_SECOND", 1.0)          # as if the machine were very slow
+    monkeypatch.setattr(ex, "STEPS_PER_SECOND", 1.0)          # as if the machine were very slow
     monkeypatch.setattr(sw, "PLAN_SECONDS_PER_POINT", 10.0)
     result = invoke("sweep", "case.yaml", "--mu", "0.4,0.5", "--no-progress", "--no-plot")
     assert result.exit_code == 0, result.output

@@ -18,13 +18,15 @@ import yaml
 from conftest import REPO, invoke, one_line_error, real_records_dir
 from scipy import optimize, stats
 
-from rockslide import fragility as fr
-from rockslide import results, runner
-from rockslide import sweep as sw
+from rockslide.analyses import fragility as fr
 from rockslide.case import case_to_dict, load_suite
 from rockslide.core import batch, intensity
 from rockslide.core import kernel as K
+from rockslide.engine import chunks
+from rockslide.engine import execute as ex
+from rockslide.engine import prepare as runner
 from rockslide.errors import CaseError, RockslideError
+from rockslide.io import results
 
 EXAMPLE = REPO / "configs" / "example.yaml"
 SUITE = REPO / "records" / "suite-synthetic.yaml"
@@ -384,9 +386,11 @@ def test_a_run_through_rockslide_run_on_its_case_file(planned, tmp_path):
 
 def test_runs_that_leave_the_model_are_counted_and_not_fitted(example):
     """At 2.5 g the synthetic verticals (half the horizontal peak) pass -1 g: the block would fly.
-    Those runs are status flight, -1 in every state, and counted; rockslide run refuses such a case."""
+    Those runs are status flight, -1 in every state, and counted; rockslide run of such a run ends the same way."""
     im = fr.parse_im("pga")
-    fplan = fr.plan_fragility(example, load_suite(SUITE), im, fr.parse_levels("1g,2.5g", im), records_dir=RECORDS)
+    with pytest.warns(runner.RunWarning, match=r"would fly.*\[at record .*, level 2.5g\]; 5 of 12 runs fly"):
+        fplan = fr.plan_fragility(example, load_suite(SUITE), im, fr.parse_levels("1g,2.5g", im),
+                                  records_dir=RECORDS)
     plan = fplan.plan
     states = batch.compute(plan.params, plan.states, plan.base, plan.first, plan.count, plan.factor_h,
                            plan.factor_v)
@@ -396,8 +400,10 @@ def test_runs_that_leave_the_model_are_counted_and_not_fitted(example):
     assert flying[:, 1].any() and not flying[:, 0].any()
     assert (analysis.exceeded[flying] == -1).all() and (analysis.exceeded[~flying] >= 0).all()
     assert analysis.fits[0].n_outside_model == int(flying.sum())
-    with pytest.raises(CaseError, match="would fly"):
-        runner.prepare(fr.point_case(fplan, int(np.flatnonzero(flying[:, 1])[0]), 1), RECORDS)
+    record = int(np.flatnonzero(flying[:, 1])[0])
+    with pytest.warns(runner.RunWarning, match="would fly"):
+        summary = runner.run_case(fr.point_case(fplan, record, 1), RECORDS, history=False)[1].summary
+    assert summary.status == "flight" and summary.end_time == analysis.variables["end_time"][0][record, 1]
 
 
 # --------------------------------------------------------------------------------------------------
@@ -492,8 +498,8 @@ def test_an_interrupted_analysis_resumes_from_its_chunks(example, tmp_path):
     im = fr.parse_im("pga")
     fplan = fr.plan_fragility(example, load_suite(SUITE), im, fr.parse_levels("0.6g,1.2g", im),
                               records_dir=RECORDS, chunk_size=2)
-    store = sw.ChunkStore.beside(tmp_path / "a" / "example.fragility.h5", fplan.plan.key)
-    sw.compute(fplan.plan, store, [0, 1, 2])
+    store = chunks.ChunkStore.beside(tmp_path / "a" / "example.fragility.h5", fplan.plan.key)
+    ex.compute(fplan.plan, store, [0, 1, 2])
     args = ["fragility", EXAMPLE, "--suite", SUITE, "--levels", "0.6g,1.2g", "--chunk-size", "2", "--no-plot",
             "--no-progress", "--bootstrap", "50"]
     resumed = invoke(*args, "--out-dir", tmp_path / "a")
@@ -563,9 +569,9 @@ def test_the_synthetic_suite_is_what_synthetic_py_makes(tmp_path):
     """`records/suite-synthetic/` holds exactly what `synthetic.suite_pair` and `records.write_at2`
     make (so `records/make_example_records.py` regenerates it byte for byte), and the suite file
     lists every pair."""
-    from rockslide.records import write_at2
-    from rockslide.synthetic import SUITE as MADE
-    from rockslide.synthetic import suite_pair
+    from rockslide.io.records import write_at2
+    from rockslide.io.synthetic import SUITE as MADE
+    from rockslide.io.synthetic import suite_pair
 
     suite = load_suite(SUITE)
     assert [e.horizontal.file for e in suite.entries] == [f"suite-synthetic/{n}_h.at2" for n in MADE]

@@ -20,9 +20,9 @@ import numpy as np
 import pytest
 from conftest import invoke, one_line_error
 
-from rockslide import results
 from rockslide.core import batch, gpu
 from rockslide.core import kernel as K
+from rockslide.io import results
 
 REPO = Path(__file__).resolve().parents[1]
 EXAMPLE = REPO / "configs" / "example.yaml"
@@ -64,15 +64,16 @@ EQUALITY_SCRIPT = """
 import json, sys
 import numpy as np
 from pathlib import Path
-from rockslide import sweep as sw
+from rockslide.analyses import sweep as sw
 from rockslide.case import load_case
 from rockslide.core import batch, gpu
+from rockslide.engine import execute as ex
 gpu.THREADS_PER_BLOCK = 4     # several blocks, one partly empty, on a small grid
 case = load_case(Path("configs/example.yaml"))
 axes = [sw.parse_axis("mu", "0.2,0.6"), sw.parse_axis("pga", "50gal,400gal,900gal"),
         sw.parse_axis("vertical_factor", "0,1")]
 plan = sw.plan_sweep(case, axes, records_dir=Path("records"))
-inputs = sw._chunk_inputs(plan, np.arange(plan.n_cases))
+inputs = ex._chunk_inputs(plan, np.arange(plan.n_cases))
 cpu = batch.compute(*inputs)
 device = gpu.compute(*inputs)
 order = gpu.launch_order(plan.params, plan.base, plan.first, plan.count, plan.factor_h)
@@ -116,6 +117,56 @@ def test_fragility_on_the_simulated_device_writes_the_cpu_values(tmp_path):
     for name, (_, values, _) in x.variables.items():
         other = y.variables[name][1]
         assert np.array_equal(values, other, equal_nan=values.dtype.kind == "f"), name
+
+
+# numba's performance warnings are advice to whoever writes a kernel ('Grid size 1 will likely result
+# in GPU under-utilization', highlighted with terminal escape codes); rockslide chose the launch, so
+# none may reach the user. The simulator emits none, so the launch is also made to emit them as
+# numba-cuda's dispatcher does on a GPU (numba-cuda's class and numba's, which are distinct): the
+# device path must swallow them, and only them.
+WARNINGS_SCRIPT = """
+import json, warnings
+import numpy as np
+from numba.core.errors import NumbaPerformanceWarning
+from numba.cuda.core.errors import NumbaPerformanceWarning as CudaPerformanceWarning
+from rockslide.core import batch, gpu
+
+def performance(caught):
+    return [str(w.message) for w in caught if issubclass(w.category, (NumbaPerformanceWarning, CudaPerformanceWarning))]
+
+case = batch.warm_up_case()
+with warnings.catch_warnings(record=True) as plain:
+    warnings.simplefilter("always")
+    first = gpu.compute(*case)
+
+real = gpu._device_kernel()
+emitted = []
+class WarningKernel:
+    def __getitem__(self, config):
+        for category in (CudaPerformanceWarning, NumbaPerformanceWarning):
+            warnings.warn(category("Grid size 1 will likely result in GPU under-utilization due to low occupancy."))
+            emitted.append(category.__module__)
+        warnings.warn(UserWarning("not a performance warning"))
+        return real[config]
+gpu._kernel = WarningKernel()
+with warnings.catch_warnings(record=True) as launched:
+    warnings.simplefilter("always")
+    second = gpu.compute(*case)
+print(json.dumps({"simulator": gpu.cuda_simulator(), "plain": performance(plain), "emitted": emitted,
+                  "escaped": performance(launched), "others": [str(w.message) for w in launched],
+                  "same": bool(np.array_equal(first, batch.compute(*case), equal_nan=True)
+                                 and np.array_equal(first, second, equal_nan=True))}))
+"""
+
+
+@needs_numba_cuda
+def test_no_numba_performance_warning_reaches_the_user():
+    out = json.loads(simulated(code=WARNINGS_SCRIPT).stdout.strip().splitlines()[-1])
+    assert out["simulator"] and out["same"]
+    assert out["plain"] == []
+    assert len(out["emitted"]) == 2, "the stand-in launch should have warned"
+    assert out["escaped"] == [], "numba's performance warnings escaped the device path"
+    assert out["others"] == ["not a performance warning"], "only performance warnings are swallowed"
 
 
 def no_gpu_here() -> bool:

@@ -43,7 +43,7 @@ from rockslide.core import physics as P
 from rockslide.core.kernel import STEP_END_FLIGHT_STEPS, THETA_END
 from rockslide.core.reference import simulate_reference
 from rockslide.core.simulate import Model, Settings, simulate
-from rockslide.records import read_record
+from rockslide.io.records import read_record
 
 G0 = 9.80665
 MODES = ["located", "step-end"]
@@ -301,8 +301,8 @@ TIE_CONFIGS = {"mexico": "fig06a-mu050", "kobe": "fig08a-mu050"}   # the paper's
 def _prepared_table1(stem):
     """A Table 1 case with its records loaded, and the time of its first sample on the case's axis
     (skips, naming the file, without the paper's records)."""
-    from rockslide import runner
     from rockslide.case import load_case
+    from rockslide.engine import prepare as runner
 
     case = load_case(REPO / "configs" / "table1" / f"{stem}.yaml")
     folders = [real_record(spec.file).parent for spec in (case.ground.horizontal, case.ground.vertical)
@@ -917,7 +917,7 @@ def test_outcome_near_a_painleve_point_does_not_depend_on_the_step(width, nu, sl
 HOUR_SCRIPT = textwrap.dedent("""
     import json, resource, sys
     import numpy as np
-    from rockslide.results import ResultWriter
+    from rockslide.io.results import ResultWriter
     from rockslide.core.simulate import Model, Settings, simulate
 
     g = 9.80665

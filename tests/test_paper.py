@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 from conftest import REPO, real_record
 
-from rockslide import table1
+from rockslide.analyses import table1
 from rockslide.errors import RecordError
 
 CONFIGS = REPO / "configs" / "table1"

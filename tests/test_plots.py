@@ -22,8 +22,8 @@ from PIL import Image
 from rockslide import plots
 from rockslide.core.simulate import EVENT_DTYPE, Model, Result, Settings, Summary, simulate
 from rockslide.errors import OutputError
+from rockslide.io.results import read_result, write_result
 from rockslide.plots import response_figure, save_figure, state_segments, zoom_window
-from rockslide.results import read_result, write_result
 
 REPO = Path(__file__).resolve().parents[1]
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"

@@ -25,9 +25,9 @@ from rocking_reference import time_to_angle_under_constant_push
 from scipy.integrate import quad
 from scipy.optimize import brentq
 
-from rockslide import runner
 from rockslide.case import parse_case
 from rockslide.core.simulate import Model, Settings, simulate
+from rockslide.engine import prepare as runner
 
 G0 = 9.80665
 QUAD = {"epsabs": 0.0, "epsrel": 1e-13, "limit": 200}

@@ -16,12 +16,14 @@ import pytest
 from click.testing import CliRunner
 from conftest import REPO
 
-from rockslide import pulses, results, runner
-from rockslide import sweep as sw
+from rockslide import pulses
+from rockslide.analyses import sweep as sw
 from rockslide.case import Pulse, case_to_dict, case_with, parse_case
 from rockslide.cli import main
 from rockslide.core import batch
 from rockslide.core.simulate import ground_array, ground_series
+from rockslide.engine import prepare as runner
+from rockslide.io import results
 from rockslide.plots import SPECTRUM_CATEGORIES, spectrum_category, spectrum_figure
 
 EPS = pulses.INTERPOLATION_TOLERANCE

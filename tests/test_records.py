@@ -17,9 +17,9 @@ from conftest import real_record
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from rockslide import records as records_module
 from rockslide.errors import RecordError
-from rockslide.records import (
+from rockslide.io import records as records_module
+from rockslide.io.records import (
     RECORDS_ENV,
     GroundMotion,
     Record,
@@ -784,7 +784,7 @@ def test_the_printed_exponent_is_the_decimal_one(token):
 def test_fields_are_split_at_commas_and_white_space(text):
     """`records._content_lines` splits a line without commas with ``str.split``: the fields the
     regular expression `records._FIELD_SEPARATOR` gives."""
-    from rockslide import records
+    from rockslide.io import records
 
     expected = []
     for number, line in enumerate(text.splitlines(), start=1):
@@ -803,7 +803,7 @@ def test_the_quick_reading_of_numbers_reads_what_the_careful_one_reads(text):
     """`records._values_in_order` reads a record's numbers with Python's ``float`` where it can:
     same values (bit for bit) and line numbers as `records._numbers` token by token, or the same
     error naming the same field."""
-    from rockslide import records
+    from rockslide.io import records
 
     rows = list(records._content_lines(text))
     context = records._Context(Path("r.txt"), None, None)
@@ -835,7 +835,7 @@ def test_an_at2_body_read_at_once_gives_the_numbers_read_line_by_line(text):
     """`records._quick_body` (an AT2 file's values in one pass) gives, where it gives anything,
     the values `records._values_in_order` reads line by line, bit for bit, and gives nothing
     where a line could hold a comment."""
-    from rockslide import records
+    from rockslide.io import records
 
     quick = records._quick_body(text.splitlines())
     if quick is None:

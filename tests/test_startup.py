@@ -18,8 +18,9 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from rockslide import cli, results
+from rockslide import cli
 from rockslide.cli import main
+from rockslide.io import results
 
 REPO = Path(__file__).resolve().parents[1]
 EXAMPLE = REPO / "configs" / "example.yaml"
@@ -118,7 +119,7 @@ def test_the_run_figure_is_the_figure_of_the_file(tmp_path, monkeypatch, kept):
             raise AssertionError("the run read its result back from the file")
         monkeypatch.setattr(results, "read_result", no_reading_back)
     else:
-        monkeypatch.setattr(cli, "KEEP_HISTORY_ROWS", 1000)
+        monkeypatch.setattr(cli.run, "KEEP_HISTORY_ROWS", 1000)
     run = CliRunner().invoke(main, ["run", str(case), "--out-dir", str(out)])
     assert run.exit_code == 0, run.output
     monkeypatch.undo()

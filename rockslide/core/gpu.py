@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import importlib.util
 import math
+import warnings
 
 import numpy as np
 
@@ -34,12 +35,17 @@ from . import batch
 from . import kernel as K
 
 __all__ = ["DeviceUnavailable", "cuda_module", "require_device", "compute", "warm_up", "launch_order",
-           "warp_efficiency", "THREADS_PER_BLOCK", "WARP_SIZE"]
+           "launch_arguments", "warp_efficiency", "THREADS_PER_BLOCK", "WARP_SIZE"]
 
 #: Threads per block: the state machine needs many registers per thread, so small blocks keep
 #: several blocks resident per multiprocessor (the cases are already ordered by work).
 THREADS_PER_BLOCK = 128
 WARP_SIZE = 32
+#: The length of a case's state vector, as a global of this module: the device kernel's local array
+#: needs its shape as a compile-time constant, and numba-cuda freezes a global int of the kernel's
+#: own module as one, but types an attribute of another module (``K.N_STATE``) as a plain int64,
+#: which ``cuda.local.array`` rejects on a real GPU (numba's CUDA simulator accepts either).
+N_STATE = K.N_STATE
 
 
 class DeviceUnavailable(RuntimeError):
@@ -99,12 +105,12 @@ def run_cases(params, states, base, bounds, count, history, events):
     i = cuda.grid(1)
     if i >= params.shape[0]:
         return
-    st = cuda.local.array(K.N_STATE, np.float64)
-    for j in range(K.N_STATE):
+    st = cuda.local.array(N_STATE, np.float64)
+    for j in range(N_STATE):
         st[j] = states[i, j]
     every = history.shape[1]      # 0, as in `batch.run_batch`
     run_case(params[i], base, bounds, st, history, every, every, events, count[i])
-    for j in range(K.N_STATE):
+    for j in range(N_STATE):
         states[i, j] = st[j]
 
 
@@ -155,6 +161,40 @@ def launch_order(params, base, first, count, kh):
     return np.lexsort((-intensity, -steps)).astype(np.int64)
 
 
+def launch_arguments(params, states, base, count):
+    """The arguments of `run_cases`, as host arrays in the kernel's order, and the case order.
+
+    ``params``, ``states``, ``base`` and ``count`` are `batch.kernel_inputs`; the cases go in
+    `launch_order`. Each array goes to the device as it is (``cuda.to_device``), so these arrays fix
+    the types the kernel is compiled for.
+
+    Returns
+    -------
+    tuple
+        ``(order, (params, states, base, bounds, count, history, events))``.
+    """
+    order = launch_order(params, base, params[:, K.P_FIRST], count, params[:, K.P_KH])
+    return order, (np.ascontiguousarray(params[order]), np.ascontiguousarray(states[order]), base,
+                   K.rest_bounds(base), count[order], np.empty((len(K.HISTORY_COLUMNS), 0)),
+                   np.empty((0, len(K.EVENT_COLUMNS))))
+
+
+def _ignore_performance_warnings():
+    """Ignore numba's performance warnings (in a ``warnings.catch_warnings()`` block).
+
+    They are advice to whoever writes a kernel (e.g. 'Grid size 1 will likely result in GPU
+    under-utilization'); rockslide already chose the launch geometry, and the user can do nothing
+    about them. numba-cuda has a class of its own, not a subclass of numba's: both are ignored.
+    """
+    from numba.core.errors import NumbaPerformanceWarning
+    warnings.simplefilter("ignore", NumbaPerformanceWarning)
+    try:
+        from numba.cuda.core.errors import NumbaPerformanceWarning as CudaPerformanceWarning
+    except ImportError:   # a numba-cuda that uses numba's class
+        return
+    warnings.simplefilter("ignore", CudaPerformanceWarning)
+
+
 def compute(params, states, base, first, count, kh, kv):
     """Run a batch of cases on the GPU and return their final states (the inputs are not changed).
 
@@ -170,14 +210,13 @@ def compute(params, states, base, first, count, kh, kv):
     n = params.shape[0]
     if n == 0:
         return out
-    order = launch_order(params, base, params[:, K.P_FIRST], count, params[:, K.P_KH])
-    d_states = cuda.to_device(np.ascontiguousarray(out[order]))
+    order, host = launch_arguments(params, out, base, count)
     blocks = math.ceil(n / THREADS_PER_BLOCK)
-    kernel[blocks, THREADS_PER_BLOCK](
-        cuda.to_device(np.ascontiguousarray(params[order])), d_states, cuda.to_device(base),
-        cuda.to_device(K.rest_bounds(base)), cuda.to_device(count[order]),
-        cuda.to_device(np.empty((len(K.HISTORY_COLUMNS), 0))), cuda.to_device(np.empty((0, len(K.EVENT_COLUMNS)))))
-    out[order] = d_states.copy_to_host()
+    with warnings.catch_warnings():
+        _ignore_performance_warnings()
+        device = [cuda.to_device(a) for a in host]
+        kernel[blocks, THREADS_PER_BLOCK](*device)
+        out[order] = device[1].copy_to_host()
     return out
 
 

@@ -41,9 +41,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .errors import CaseError, RecordError
+from ..errors import CaseError, RecordError
+from ..units import STANDARD_GRAVITY, unit_factor
 from .files import atomic_write
-from .units import STANDARD_GRAVITY, unit_factor
 
 if TYPE_CHECKING:
     import obspy

@@ -51,14 +51,9 @@ without history or event log.
 
 from __future__ import annotations
 
-import contextlib
-import hashlib
 import itertools
-import json
 import math
-import os
 import re
-import shutil
 import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
@@ -67,43 +62,36 @@ from pathlib import Path
 
 import numpy as np
 
-from . import __version__, interrupts
-from . import records as rec
-from .case import Case, case_with
-from .core import batch, compiled
-from .core import kernel as K
-from .core.physics import OVERTURNED
-from .core.simulate import ground_array, initial_state, may_still_overturn, parameters
-from .errors import CaseError, OutputError
-from .files import atomic_write, remove_stale_temporaries
-from .plots import spectrum_category, spectrum_figure, sweep_category, sweep_figure
-from .pulses import Pulse, linear_overturning_ratio
-from .runner import (
+from .. import interrupts
+from ..case import Case, case_with
+from ..core import kernel as K
+from ..core.physics import OVERTURNED
+from ..core.simulate import ground_array, initial_state, may_still_overturn, parameters
+from ..engine.plan import MAX_POINTS, Plan, default_chunk_size, definition_key
+from ..engine.prepare import (
     ABSURD_ACCELERATION_IN_G,
-    STEPS_PER_SECOND,
     RunWarning,
     absurd_acceleration,
     check_against_ground,
     check_parameters,
     check_size,
+    coarse_step_warning,
+    flight_warning,
     is_pulse_case,
     model_for,
     pulse_ground,
     read_records,
     settings_for,
-    step_warning,
     unit_pulses,
 )
-from .units import STANDARD_GRAVITY, UNIT_REQUIRED, parse_quantity
+from ..errors import CaseError
+from ..io import records as rec
+from ..pulses import Pulse, linear_overturning_ratio
+from ..units import STANDARD_GRAVITY, UNIT_REQUIRED, parse_quantity
 
-__all__ = ["AXES", "AxisKind", "Axis", "Plan", "ChunkStore", "parse_axis", "plan_sweep",
-           "definition_key", "compute", "collect", "sweep_variables", "spectrum_scales", "MAX_POINTS"]
+__all__ = ["AXES", "AxisKind", "Axis", "parse_axis", "plan_sweep", "sweep_variables", "coordinates",
+           "root_attributes", "spectrum_scales", "figure", "stored_figure"]
 
-#: Largest grid (number of cases) a sweep accepts.
-MAX_POINTS = 1_000_000
-#: Chunk sizes: about ``n / CHUNKS_WANTED`` cases, within these bounds (the default).
-CHUNKS_WANTED = 100
-MIN_CHUNK, MAX_CHUNK = 4, 256
 #: Points validated between two checks for Ctrl-C (and two calls of the planning's progress).
 PLAN_BATCH = 2000
 #: [s] Time to plan one point of a grid (`plan_sweep`; 0.025-0.03 ms measured on 2 cores), to say
@@ -112,10 +100,6 @@ PLAN_SECONDS_PER_POINT = 3e-5
 #: Ranges include their stop when it is within this fraction of a step of the grid.
 RANGE_TOLERANCE = 1e-9
 
-#: The sweep file's format, part of a chunk's definition key: `results.SWEEP_FORMAT` and
-#: `results.SWEEP_FORMAT_VERSION`, not imported from there (that would load h5py); a test keeps them equal.
-FORMAT = "rockslide-sweep"
-FORMAT_VERSION = 1
 
 
 @dataclass(frozen=True)
@@ -346,89 +330,8 @@ def kinetic_ratio(case: Case, given: float | None) -> float:
 # --------------------------------------------------------------------------------------------------
 
 
-@dataclass
-class Plan:
-    """Everything needed to compute a sweep, and nothing computed yet.
-
-    Attributes
-    ----------
-    case : Case
-        The case file the points start from.
-    axes : list of Axis
-        In dimension order.
-    mu_kinetic_ratio : float or None
-        ``mu_kinetic / mu_static`` used with ``--mu`` (None without ``--mu``).
-    params, states : float64[n, N_PARAMS], float64[n, N_STATE]
-        Each point's kernel parameters and initial state, flat in C order of the grid.
-    factor_h, factor_v : float64[n]
-        Each point's horizontal and vertical scale factors (`records.combine`).
-    base : float64[4, K]
-        The unscaled ground motion [m/s^2] interval by interval (`simulate.ground_array`), the
-        case's tail of zeros included; several records are concatenated.
-    first, count : int64[n]
-        Each point's record: intervals ``first ... first + count - 1`` of ``base``.
-    record_end : float64[n]
-        [s] time of each point's last ground sample (tail included): the end of a run that ends
-        standing.
-    step : float
-        [s] integration step (the smallest, when the records' sampling steps differ).
-    records : list of dict
-        The records' file names and checksums.
-    chunk_size : int
-        Cases per chunk.
-    key : str
-        `definition_key` of the sweep.
-    """
-
-    case: Case
-    axes: list
-    mu_kinetic_ratio: float | None
-    params: np.ndarray
-    states: np.ndarray
-    factor_h: np.ndarray
-    factor_v: np.ndarray
-    base: np.ndarray
-    first: np.ndarray
-    count: np.ndarray
-    record_end: np.ndarray
-    step: float
-    records: list
-    chunk_size: int
-    key: str = ""
-
-    @property
-    def shape(self) -> tuple:
-        """The grid's shape, one dimension per axis."""
-        return tuple(len(a) for a in self.axes)
-
-    @property
-    def n_cases(self) -> int:
-        """Number of points of the grid."""
-        return int(self.params.shape[0])
-
-    @property
-    def n_chunks(self) -> int:
-        """Number of chunks (the last ones may hold one case less)."""
-        return -(-self.n_cases // self.chunk_size)
-
-    def chunk_indices(self, chunk: int) -> np.ndarray:
-        """Flat grid indices of chunk ``chunk``: ``chunk, chunk + n_chunks, ...``."""
-        return np.arange(chunk, self.n_cases, self.n_chunks, dtype=np.int64)
-
-    @property
-    def steps_per_case(self) -> int:
-        """Integration steps of the longest case that runs to the end of its record and tail."""
-        return int(np.max(self.count * self.params[:, K.P_N_SUB])) if self.n_cases else 0
-
-    def describe(self) -> str:
-        """``41 mu x 37 pga = 1517 cases``."""
-        dims = " x ".join(f"{len(a)} {a.name}" for a in self.axes)
-        return f"{dims} = {self.n_cases} case{'s' if self.n_cases != 1 else ''}"
 
 
-def default_chunk_size(n_cases: int) -> int:
-    """About ``n / CHUNKS_WANTED`` cases per chunk, within ``[MIN_CHUNK, MAX_CHUNK]``."""
-    return int(min(MAX_CHUNK, max(MIN_CHUNK, math.ceil(n_cases / CHUNKS_WANTED))))
 
 
 def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = None,
@@ -513,8 +416,9 @@ def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = N
     factor_h = np.empty(n)
     factor_v = np.empty(n)
     factors: dict[tuple, tuple[float, float]] = {}     # scale section -> (kh, kv)
-    checked: set[tuple] = set()                         # (scale section, gravity) checked
+    checked: dict[tuple, str | None] = {}              # (scale section, gravity) -> flight warning
     highest = (0.0, None)                               # the largest scaled peak, at this point
+    flights = _Flights(axes)
     grounds: dict[tuple, rec.GroundMotion] = {}         # a few scaled records, for the checks
     for i, combo, point in _points(case, axes, ratio, progress):
         s = point.ground.scale
@@ -534,13 +438,15 @@ def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = N
                 raise _point_error(exc, axes, combo) from None
             if peak > highest[0]:
                 highest = (peak, combo)
-            checked.add((scale, point.gravity))
+            checked[(scale, point.gravity)] = flight_warning(point, ground)
             factors[scale] = (ground.horizontal_factor, ground.vertical_factor)
+        flights.add(checked[(scale, point.gravity)], combo)
         point_settings = settings_for(point, history=False, energy=False)
         params[i] = parameters(model_for(point), unscaled.dt, point_settings, start)
         states[i] = initial_state(point_settings)
         factor_h[i], factor_v[i] = factors[scale]
     _warn_coarse_step(case, axes, params)
+    flights.warn(n)
     if highest[0] > ABSURD_ACCELERATION_IN_G * STANDARD_GRAVITY:
         warnings.warn(f"{absurd_acceleration(case.source, highest[0])} [at {_point_text(axes, highest[1])}]",
                       RunWarning, stacklevel=2)
@@ -610,7 +516,8 @@ def _plan_pulses(case: Case, axes, ratio, chunk_size: int, n: int, progress=None
     first, count = np.empty(n, dtype=np.int64), np.empty(n, dtype=np.int64)
     records: dict[tuple, tuple] = {}          # (pulses at amplitude 1, dt, tail) -> (first, count, unit)
     pieces = []
-    checked: set[tuple] = set()
+    checked: dict[tuple, str | None] = {}     # (pulse, vertical amplitude, gravity) -> flight warning
+    flights = _Flights(axes)
     for i, combo, point in _points(case, axes, ratio, progress):
         h, v = point.ground.horizontal, point.ground.vertical
         shape = tuple(None if p is None else replace(p, amplitude=1.0) for p in (h, v))
@@ -625,8 +532,10 @@ def _plan_pulses(case: Case, axes, ratio, chunk_size: int, n: int, progress=None
             offset, length, unit = records[key]
             vertical = (key, None if v is None else v.amplitude, point.gravity)
             if vertical not in checked:               # flight: g + av > 0 (the vertical pulse)
-                check_against_ground(point, pulse_ground(point, unit))
-                checked.add(vertical)
+                ground = pulse_ground(point, unit)
+                check_against_ground(point, ground, warn=False)
+                checked[vertical] = flight_warning(point, ground)
+            flights.add(checked[vertical], combo)
         except CaseError as exc:
             raise _point_error(exc, axes, combo) from None
         point_settings = settings_for(point, history=False, energy=False)
@@ -638,6 +547,7 @@ def _plan_pulses(case: Case, axes, ratio, chunk_size: int, n: int, progress=None
         first[i], count[i] = offset, length
         record_end[i] = start + length * unit.dt
     _warn_coarse_step(case, axes, params)
+    flights.warn(n)
     plan = Plan(case=case, axes=list(axes), mu_kinetic_ratio=ratio, params=params, states=states,
                 factor_h=factor_h, factor_v=factor_v, base=np.concatenate(pieces, axis=1), first=first,
                 count=count, record_end=record_end, step=float(params[:, K.P_STEP].min()), records=[],
@@ -646,14 +556,34 @@ def _plan_pulses(case: Case, axes, ratio, chunk_size: int, n: int, progress=None
     return plan
 
 
+class _Flights:
+    """The points whose scaled vertical motion lifts the block off the ground: they run, and end
+    with the status ``flight`` (outside the model), as a run of the same case does; one warning for
+    all, naming the first (`prepare.flight_warning`)."""
+
+    def __init__(self, axes):
+        self.axes, self.count, self.first = axes, 0, None
+
+    def add(self, warning: str | None, combo) -> None:
+        if warning:
+            self.count += 1
+            if self.first is None:
+                self.first = (warning, combo)
+
+    def warn(self, n: int) -> None:
+        if self.first is not None:
+            warning, combo = self.first
+            warnings.warn(f"{warning} [at {_point_text(self.axes, combo)}; {self.count} of {n} points fly]",
+                          RunWarning, stacklevel=4)
+
+
 def _warn_coarse_step(case: Case, axes, params: np.ndarray) -> None:
-    """`runner.step_warning` for the point with the fastest rocking (the largest ``p dt``)."""
-    p2 = 0.75 * params[:, K.P_G] / params[:, K.P_R]          # p^2 = 3 g / (4 R)
-    i = int(np.argmax(p2))
-    warning = step_warning(case.source, math.sqrt(p2[i]), float(params[i, K.P_STEP]))
+    """`prepare.coarse_step_warning` for the point with the fastest rocking."""
+    shape = tuple(len(a) for a in axes)
+    warning = coarse_step_warning(case.source, params,
+                                  lambda i: _point_text(axes, np.unravel_index(i, shape)))
     if warning:
-        combo = np.unravel_index(i, tuple(len(a) for a in axes))
-        warnings.warn(f"{warning} [at {_point_text(axes, combo)}]", RunWarning, stacklevel=3)
+        warnings.warn(warning, RunWarning, stacklevel=3)
 
 
 def _point_text(axes, combo) -> str:
@@ -675,8 +605,8 @@ def _point_error(exc: CaseError, axes, combo) -> CaseError:
     options = [a.kind.option for a in axes
                if field_name and (field_name.startswith(_key_root(a.name))
                                   or _key_root(a.name).startswith(field_name))]
-    if not options:
-        options = [a.kind.option for a in axes]
+    if not options:              # no axis changes that key: the case file's own error, as run gives it
+        return exc
     return CaseError(f"{exc.message} [at {_point_text(axes, combo)}]", source="/".join(options), field=exc.field)
 
 
@@ -686,25 +616,6 @@ def _key_root(axis: str) -> str:
             "duration": "ground.horizontal"}.get(axis, AXES[axis].key)
 
 
-def definition_key(plan: Plan) -> str:
-    """A hash of everything that defines a sweep's results (chunks are reused only under it).
-
-    The case text, the axes (values as given and in SI), the kinetic friction ratio, the chunk size,
-    every point's kernel parameters, initial state and scale factors, the unscaled ground samples,
-    the package version and the compiled core's sources (`compiled.source_stamp`).
-    """
-    digest = hashlib.sha256()
-    header = {
-        "format": FORMAT, "format_version": FORMAT_VERSION, "rockslide": __version__,
-        "case_text": plan.case.text,
-        "axes": [[a.name, list(a.texts), [repr(v) for v in a.values]] for a in plan.axes],
-        "mu_kinetic_ratio": repr(plan.mu_kinetic_ratio), "chunk_size": plan.chunk_size,
-        "kernel_source": compiled.source_stamp(),
-    }
-    digest.update(json.dumps(header, sort_keys=True).encode())
-    for array in (plan.params, plan.states, plan.factor_h, plan.factor_v, plan.base, plan.first, plan.count):
-        digest.update(np.ascontiguousarray(array, dtype=np.float64).tobytes())
-    return digest.hexdigest()
 
 
 # --------------------------------------------------------------------------------------------------
@@ -712,118 +623,6 @@ def definition_key(plan: Plan) -> str:
 # --------------------------------------------------------------------------------------------------
 
 
-class ChunkStore:
-    """Finished chunks of one sweep definition: ``FOLDER/KEY16/chunk-NNNNNN.npz``.
-
-    ``FOLDER`` is ``.NAME.sweep.chunks`` beside the result file. Each file holds the chunk's flat
-    indices, final kernel states and a checksum (SHA-256 of the sweep's key, the indices and the
-    states), and is written to a temporary name then renamed, so a file with the chunk's name is
-    always complete. A file that cannot be read (truncated, a flipped byte, not an ``.npz``, a
-    folder) or does not match the plan (another key, other indices, a wrong checksum) counts as
-    missing: it is computed again, and `damaged` says which and why.
-    """
-
-    def __init__(self, folder: Path, key: str):
-        self.root = Path(folder)
-        self.key = key
-        self.folder = self.root / key[:16]
-        self.damaged: dict[int, str] = {}
-
-    @classmethod
-    def beside(cls, result_path: Path, key: str) -> ChunkStore:
-        """The store for the result file ``OUT/NAME.sweep.h5``: ``OUT/.NAME.sweep.chunks``."""
-        result_path = Path(result_path)
-        name = result_path.name[:-len(".h5")] if result_path.name.endswith(".h5") else result_path.name
-        return cls(result_path.with_name(f".{name}.chunks"), key)
-
-    def path(self, chunk: int) -> Path:
-        """The file of chunk ``chunk``."""
-        return self.folder / f"chunk-{chunk:06d}.npz"
-
-    def checksum(self, indices: np.ndarray, states: np.ndarray) -> str:
-        """SHA-256 of the sweep's key, a chunk's indices and its states (as stored)."""
-        digest = hashlib.sha256(self.key.encode())
-        digest.update(np.ascontiguousarray(indices, dtype=np.int64).tobytes())
-        digest.update(np.ascontiguousarray(states, dtype=np.float64).tobytes())
-        return digest.hexdigest()
-
-    def load(self, chunk: int, indices: np.ndarray) -> np.ndarray | None:
-        """The final states of ``chunk`` if a matching, intact file is stored, else None (and, for a
-        file that exists but cannot be used, the reason in ``damaged[chunk]``)."""
-        path = self.path(chunk)
-        if not os.path.lexists(path):
-            return None
-        try:
-            with np.load(path, allow_pickle=False) as data:
-                key, stored, states, checksum = (data["key"], data["indices"], data["states"],
-                                                 data["checksum"])
-                key, checksum = str(key), str(checksum)
-                stored = np.array(stored)
-                states = np.array(states, dtype=np.float64)
-        except Exception as exc:  # noqa: BLE001 - any way of not being a readable chunk file
-            self.damaged[chunk] = _one_line(exc) or type(exc).__name__
-            return None
-        if key != self.key:
-            self.damaged[chunk] = "of another sweep definition"
-        elif not np.array_equal(stored, indices) or states.shape != (indices.size, K.N_STATE):
-            self.damaged[chunk] = "other cases than the plan's"
-        elif checksum != self.checksum(stored, states):
-            self.damaged[chunk] = "its checksum does not match its content"
-        else:
-            self.damaged.pop(chunk, None)
-            return states
-        return None
-
-    def save(self, chunk: int, indices: np.ndarray, states: np.ndarray) -> None:
-        """Store a finished chunk (atomically: a temporary file renamed; whatever was at its name,
-        a damaged file or a folder, is replaced)."""
-        try:
-            self.folder.mkdir(parents=True, exist_ok=True)
-        except OSError as exc:
-            raise OutputError(f"cannot create the chunk folder: {exc.strerror or exc}",
-                              source=str(self.folder)) from None
-        path = self.path(chunk)
-        if path.is_dir() and not path.is_symlink():
-            shutil.rmtree(path, ignore_errors=True)
-        indices = np.ascontiguousarray(indices, dtype=np.int64)
-        states = np.ascontiguousarray(states, dtype=np.float64)
-        # not synced to disk: a chunk that a power cut damages fails its checksum and is computed again
-        with atomic_write(path, overwrite=True, per_thread=True, what="chunk", interruptible=False,
-                          sync=False) as handle:
-            np.savez(handle, key=np.array(self.key), indices=indices, states=states,
-                     checksum=np.array(self.checksum(indices, states)))
-        self.damaged.pop(chunk, None)
-
-    def remove_stale_temporaries(self) -> list[Path]:
-        """Delete temporary chunk files of processes that are gone (`files.remove_stale_temporaries`)."""
-        try:
-            names = [p.name for p in self.folder.glob(".chunk-*.tmp")]
-        except OSError:
-            return []
-        finals = {self.folder / (n.split(".npz.")[0][1:] + ".npz") for n in names if ".npz." in n}
-        return remove_stale_temporaries(sorted(finals))
-
-    def count(self) -> int:
-        """Chunk files stored for this definition."""
-        try:
-            return sum(1 for p in self.folder.glob("chunk-*.npz"))
-        except OSError:  # pragma: no cover
-            return 0
-
-    def others(self) -> list[Path]:
-        """Chunk folders of other sweep definitions (never used by this one)."""
-        try:
-            return sorted(p for p in self.root.iterdir() if p.is_dir() and p != self.folder)
-        except OSError:
-            return []
-
-    def remove(self) -> None:
-        """Delete this definition's chunks, and the chunk folder if nothing else is in it."""
-        shutil.rmtree(self.folder, ignore_errors=True)
-        try:
-            self.root.rmdir()
-        except OSError:
-            pass
 
 
 # --------------------------------------------------------------------------------------------------
@@ -831,367 +630,49 @@ class ChunkStore:
 # --------------------------------------------------------------------------------------------------
 
 
-def compute(plan: Plan, store: ChunkStore, chunks: Sequence[int], *, workers: int | None = None,
-            scheduler: str | None = None, progress: Callable[[int], None] | None = None,
-            device: str = "cpu") -> None:
-    """Compute ``chunks`` of ``plan`` and store each as soon as it is done.
-
-    Parameters
-    ----------
-    plan : Plan
-    store : ChunkStore
-        Where finished chunks go.
-    chunks : sequence of int
-        The chunks to compute (the missing ones).
-    workers : int, optional
-        Threads for the local run (default: all cores).
-    scheduler : str, optional
-        Address of a dask.distributed scheduler: the chunks are computed there, one task each.
-    progress : callable, optional
-        Called with the number of cases of each finished chunk.
-    device : {"cpu", "gpu"}
-        Where a local run computes (`DEVICES`): the CPU's cores, or an NVIDIA GPU (`core.gpu`).
-
-    Raises
-    ------
-    CaseError
-        ``workers`` out of range, the scheduler cannot be reached, is lost, or a task fails there
-        (the chunks finished before are stored), or no GPU can be used (`check_device`).
-    interrupts.Interrupted
-        After Ctrl-C or SIGTERM, checked between chunk groups; the chunks finished before it are
-        stored.
-    """
-    check_device(device)
-    if scheduler:
-        _compute_dask(plan, store, chunks, scheduler, progress)
-    elif device == "gpu":
-        _compute_device(plan, store, chunks, progress)
-    else:
-        _compute_local(plan, store, chunks, workers, progress)
 
 
-#: Where a local sweep computes (``--device``).
-DEVICES = ("cpu", "gpu")
-
-#: Cases per launch of the GPU kernel: enough to fill a large GPU many times over (an H100 keeps
-#: some 10^4 to 10^5 threads of a register-heavy kernel resident) and to sort by work over many
-#: chunks, few enough for the progress bar and Ctrl-C to come every launch.
-DEVICE_CASES_PER_LAUNCH = 1 << 16
 
 
-def check_device(device: str) -> None:
-    """Refuse a ``--device`` that is not one of `DEVICES`, or ``gpu`` where no GPU run can be made
-    (numba-cuda not installed, no CUDA GPU or driver), with one line saying why."""
-    if device not in DEVICES:
-        raise CaseError(f"must be one of {', '.join(DEVICES)}, got {device!r}", source="--device")
-    if device == "gpu":
-        from .core import gpu
-        try:
-            gpu.require_device()
-        except gpu.DeviceUnavailable as exc:
-            raise CaseError(str(exc), source="--device gpu") from None
 
 
-def _compute_device(plan, store, chunks, progress):
-    """The chunks on the GPU (`core.gpu.compute`), as many per launch as make up to
-    `DEVICE_CASES_PER_LAUNCH` cases (the device sorts a launch's cases by work); each chunk of a
-    launch is stored when the launch is done. Ctrl-C is checked between launches."""
-    from .core import gpu
-
-    group: list[int] = []
-    cases = 0
-    for position, chunk in enumerate(chunks):
-        group.append(chunk)
-        cases += plan.chunk_indices(chunk).size
-        if cases < DEVICE_CASES_PER_LAUNCH and position + 1 < len(chunks):
-            continue
-        interrupts.check()
-        parts = [plan.chunk_indices(c) for c in group]
-        final = gpu.compute(*_chunk_inputs(plan, np.concatenate(parts)))
-        for c, indices, part in zip(group, parts, np.split(final, np.cumsum([p.size for p in parts])[:-1]),
-                                    strict=True):
-            store.save(c, indices, part)
-        if progress is not None:
-            progress(cases)
-        group, cases = [], 0
-    interrupts.check()
 
 
-def check_workers(workers: int | None) -> None:
-    """Refuse a ``--workers`` outside ``1 ... 4 x the cores`` (before any planning)."""
-    if workers is None:
-        return
-    limit = 4 * local_threads()
-    if isinstance(workers, bool) or not 1 <= int(workers) <= limit:
-        raise CaseError(f"must be within 1 ... {limit} (4 threads per core here), got {workers!r}",
-                        source="--workers")
 
 
-def _compute_local(plan, store, chunks, workers, progress):
-    """The chunks on a pool of threads running the compiled batch (`batch.run_batch` releases the
-    GIL), one chunk per task: each thread takes the next chunk as soon as it is done, so cases that
-    rock for a minute and cases at rest even out and every core is busy to the end. Each chunk is
-    stored as soon as it is done; Ctrl-C is checked while waiting, and the chunks being computed
-    are finished and kept."""
-    from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
-
-    check_workers(workers)
-    threads = int(workers) if workers is not None else local_threads()
-
-    def task(chunk: int) -> int:
-        if interrupts.requested() is not None:      # stopping: start no new chunk
-            return 0
-        indices = plan.chunk_indices(chunk)
-        store.save(chunk, indices, batch.compute(*_chunk_inputs(plan, indices)))
-        return indices.size
-
-    with ThreadPoolExecutor(max_workers=threads, thread_name_prefix="rockslide-sweep") as pool:
-        pending = {pool.submit(task, chunk) for chunk in chunks}
-        try:
-            while pending:
-                interrupts.check()
-                done, pending = wait(pending, timeout=0.2, return_when=FIRST_COMPLETED)
-                for future in done:
-                    cases = future.result()
-                    if progress is not None:
-                        progress(cases)
-        except BaseException:
-            for future in pending:
-                future.cancel()
-            raise
-    interrupts.check()
 
 
-def local_threads() -> int:
-    """Threads a local sweep uses by default: every core this process may run on."""
-    import os
-
-    try:
-        return len(os.sched_getaffinity(0))
-    except AttributeError:                    # not on Linux
-        return os.cpu_count() or 1
 
 
-def _chunk_inputs(plan: Plan, indices: np.ndarray):
-    """`batch.compute`'s arguments for the cases ``indices``."""
-    return (plan.params[indices], plan.states[indices], plan.base, plan.first[indices],
-            plan.count[indices], plan.factor_h[indices], plan.factor_v[indices])
 
 
-#: [s] for the connection to a dask scheduler, and for a lost one to come back.
-SCHEDULER_TIMEOUT = 10.0
 
 
-def _compute_dask(plan, store, chunks, address, progress):
-    """One task per chunk on the cluster (`batch.compute`, serial in the task); each chunk is
-    stored as its result arrives. One bounded connection attempt (`identify_scheduler`), the
-    cluster's log messages kept off the terminal, Ctrl-C checked while waiting."""
-    try:
-        import distributed
-    except ImportError:  # pragma: no cover - a declared dependency
-        raise CaseError("needs dask.distributed (pip install 'dask[distributed]')",
-                        source="--scheduler") from None
-    address = scheduler_address(address)
-    with _quiet_logs("distributed", "tornado", "asyncio"):
-        identify_scheduler(address)
-        try:
-            client = distributed.Client(address, timeout=f"{SCHEDULER_TIMEOUT:g}s", set_as_default=False)
-        except (OSError, TimeoutError, ValueError) as exc:
-            raise CaseError(f"cannot connect to the dask scheduler at {address}: {_one_line(exc)}",
-                            source="--scheduler") from None
-        futures = {}
-        try:
-            base = client.scatter(plan.base, broadcast=True)
-            for chunk in chunks:
-                indices = plan.chunk_indices(chunk)
-                p, s, _, first, count, kh, kv = _chunk_inputs(plan, indices)
-                future = client.submit(batch.compute, p, s, base, first, count, kh, kv, pure=False)
-                futures[future] = (chunk, indices)
-            _collect_futures(client, futures, store, address, progress)
-        finally:
-            with contextlib.suppress(Exception):
-                if futures:
-                    client.cancel(list(futures))
-            with contextlib.suppress(Exception):
-                client.close(timeout=2)
 
 
-def _collect_futures(client, futures: dict, store: ChunkStore, address: str, progress) -> None:
-    """Store each chunk as its task finishes; Ctrl-C and a lost scheduler are noticed within a
-    fraction of a second and `SCHEDULER_TIMEOUT` respectively."""
-    import time
-
-    lost_since = None
-    while futures:
-        interrupts.check()
-        finished = [f for f in futures if f.status in ("finished", "error", "cancelled", "lost")]
-        for future in finished:
-            chunk, indices = futures.pop(future)
-            if future.status != "finished":
-                if future.status == "error":
-                    exc = future.exception()
-                    raise CaseError(f"a task failed on the cluster: {type(exc).__name__}: {_one_line(exc)} "
-                                    "(are rockslide and its dependencies installed on the workers?)",
-                                    source="--scheduler")
-                raise _lost(address, store)
-            try:
-                states = np.asarray(future.result(timeout=SCHEDULER_TIMEOUT), dtype=np.float64)
-            except Exception:  # noqa: BLE001 - the result could not be fetched: the scheduler is gone
-                raise _lost(address, store) from None
-            store.save(chunk, indices, states)
-            if progress is not None:
-                progress(indices.size)
-        if client.status == "running":
-            lost_since = None
-        elif lost_since is None:
-            lost_since = time.monotonic()
-        elif time.monotonic() - lost_since > SCHEDULER_TIMEOUT:
-            raise _lost(address, store)
-        if not finished:
-            time.sleep(0.1)
 
 
-def _lost(address: str, store: ChunkStore) -> CaseError:
-    return CaseError(f"lost the connection to the dask scheduler at {address}; {store.count()} finished "
-                     f"chunks are kept in {store.folder} and the same command resumes from them",
-                     source="--scheduler")
 
 
-def scheduler_address(address: str) -> str:
-    """``tcp://HOST:PORT`` from ``--scheduler`` (``HOST:PORT`` taken as TCP), or a CaseError.
-
-    Only plain TCP: ``tls://`` needs certificates rockslide takes no options for, and ``inproc://``
-    exists only inside one Python process.
-    """
-    from urllib.parse import urlsplit
-
-    text = str(address).strip()
-    if "://" not in text:
-        text = f"tcp://{text}"
-    scheme = text.split("://", 1)[0].lower()
-    if scheme != "tcp":
-        raise CaseError(f"{scheme}:// addresses are not supported; expected tcp://HOST:PORT (a scheduler "
-                        "started with 'dask scheduler'; for TLS, reach it through an SSH tunnel)",
-                        source="--scheduler")
-    try:
-        parts = urlsplit(text)
-        host, port = parts.hostname, parts.port
-    except ValueError:
-        host = port = None
-    if not host or not port:
-        raise CaseError(f"expected an address like tcp://HOST:PORT, got {_shown(address)}",
-                        source="--scheduler")
-    return text
 
 
-def identify_scheduler(address: str, timeout: float | None = None) -> dict:
-    """Ask ``address`` who it is, within ``timeout`` seconds in all (default
-    :data:`SCHEDULER_TIMEOUT`): a dask scheduler answers the ``identity`` request; anything else
-    (nothing listening, an HTTP server) is a CaseError."""
-    timeout = SCHEDULER_TIMEOUT if timeout is None else timeout
-    import asyncio
-    import socket
-    from concurrent.futures import ThreadPoolExecutor
-    from urllib.parse import urlsplit
-
-    from distributed.comm import connect
-
-    parts = urlsplit(address)
-    try:
-        socket.create_connection((parts.hostname, parts.port), timeout=timeout).close()
-    except OSError as exc:       # refused, unreachable: at once (dask itself retries until its timeout)
-        raise CaseError(f"cannot connect to the dask scheduler at {address}: "
-                        f"{exc.strerror or _one_line(exc)}", source="--scheduler") from None
-
-    async def ask():
-        comm = await connect(address, timeout=timeout)
-        try:
-            await comm.write({"op": "identity", "reply": True})
-            return await comm.read()
-        finally:
-            comm.abort()
-
-    try:
-        with ThreadPoolExecutor(1) as pool:         # its own event loop, even under a running one
-            reply = pool.submit(asyncio.run, asyncio.wait_for(ask(), timeout)).result()
-    except (asyncio.TimeoutError, TimeoutError):
-        raise CaseError(f"no dask scheduler answered at {address} within {timeout:g} s (is something "
-                        "else listening there?)", source="--scheduler") from None
-    except Exception as exc:  # noqa: BLE001 - refused, reset, closed, a bad handshake
-        reason = getattr(exc, "strerror", None) or _one_line(exc)
-        raise CaseError(f"cannot connect to the dask scheduler at {address}: {reason}",
-                        source="--scheduler") from None
-    if not (isinstance(reply, dict) and reply.get("type") == "Scheduler"):
-        raise CaseError(f"{address} answers, but not as a dask scheduler", source="--scheduler")
-    return reply
 
 
-@contextlib.contextmanager
-def _quiet_logs(*prefixes: str):
-    """Keep the log messages of these libraries off the terminal (errors are reported in one line)."""
-    import logging
-
-    names = [n for n in list(logging.root.manager.loggerDict) if n.split(".")[0] in prefixes]
-    loggers = [logging.getLogger(n) for n in {*names, *prefixes}]
-    levels = [logger.level for logger in loggers]
-    for logger in loggers:
-        logger.setLevel(logging.CRITICAL + 1)
-    try:
-        yield
-    finally:
-        for logger, level in zip(loggers, levels, strict=True):
-            logger.setLevel(level)
 
 
-def _shown(text: str, limit: int = 80) -> str:
-    text = repr(str(text))
-    return text if len(text) <= limit else text[:limit - 4] + "...'"
 
 
-def _one_line(exc: BaseException) -> str:
-    return " ".join(str(exc).split()) or type(exc).__name__
 
 
-def work_estimate(plan: Plan, n_cases: int, *, workers: int | None = None) -> float:
-    """An upper estimate [s] of the time ``n_cases`` cases of ``plan`` take on this machine's
-    threads (every case moving until the end; cases at rest go about 3000 times faster)."""
-    threads = workers or local_threads()
-    return n_cases * plan.steps_per_case / (STEPS_PER_SECOND * threads)
 
 
-def bytes_needed(plan: Plan, n_chunks: int) -> int:
-    """Bytes on disk for ``n_chunks`` more chunk files and the result file (both uncompressed)."""
-    per_case_chunk = (K.N_STATE + 1) * 8
-    return n_chunks * plan.chunk_size * per_case_chunk + plan.n_cases * RESULT_BYTES_PER_CASE + 2**16
 
 
-#: Bytes per case of the variables `sweep_variables` writes: 11 float64, one int32, 6 int8 (a test
-#: keeps this in step with them).
-RESULT_BYTES_PER_CASE = 8 * 11 + 4 + 6
 
 
-def missing_chunks(plan: Plan, store: ChunkStore) -> list[int]:
-    """The chunks of ``plan`` that ``store`` does not hold (a damaged file counts as missing)."""
-    return [c for c in range(plan.n_chunks) if store.load(c, plan.chunk_indices(c)) is None]
 
 
-def collect(plan: Plan, store: ChunkStore) -> np.ndarray:
-    """The final states of every case, ``float64[n, N_STATE]`` (flat C order), from the store.
 
-    Raises
-    ------
-    OutputError
-        A chunk is missing or damaged (it was deleted meanwhile): rerun to compute it.
-    """
-    out = np.empty((plan.n_cases, K.N_STATE))
-    for chunk in range(plan.n_chunks):
-        indices = plan.chunk_indices(chunk)
-        states = store.load(chunk, indices)
-        if states is None:
-            raise OutputError(f"chunk {chunk} is missing or damaged; rerun the same command to "
-                              "compute it", source=str(store.folder))
-        out[indices] = states
-    return out
 
 
 # --------------------------------------------------------------------------------------------------
@@ -1363,6 +844,8 @@ def spectrum_scales(plan: Plan) -> dict | None:
 
 def categories(variables: dict) -> np.ndarray:
     """The map's category of each point (`plots.sweep_category`) from the result variables."""
+    from ..plots import sweep_category
+
     return sweep_category(variables["overturned"][0], variables["status"][0], variables["modes"][0])
 
 
@@ -1401,6 +884,8 @@ def _spectrum(axes, variables: dict, scales: dict, title: str):
     the theory's curves where they exist: the thresholds of liftoff and slip at rest (exact), and
     the small-angle boundary of overturning without impact (`pulses.linear_overturning_ratio`;
     without a vertical pulse)."""
+    from ..plots import spectrum_category, spectrum_figure
+
     names = [name for name, _ in axes]
     a = names.index("amplitude")
     other = 1 - a
@@ -1433,6 +918,8 @@ def _spectrum(axes, variables: dict, scales: dict, title: str):
 
 
 def _maps(axes, variables: dict, title: str):
+    from ..plots import sweep_figure
+
     over = int(np.asarray(variables["overturned"][0]).sum())
     shown = [(AXES[name].label, np.asarray(values) / AXES[name].display_scale) for name, values in axes]
     return sweep_figure(shown, categories(variables), variables["max_rotation"][0],

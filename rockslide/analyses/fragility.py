@@ -45,22 +45,36 @@ import glob
 import math
 import os
 import re
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 from scipy.special import log_ndtr, ndtr, ndtri
 
-from . import records as rec
+from ..case import Case, RecordSpec, Suite, SuiteEntry, case_with, load_suite
+from ..core import intensity
+from ..core import kernel as K
+from ..core.simulate import ground_array, initial_state, parameters
+from ..engine.plan import MAX_POINTS, Plan, default_chunk_size, definition_key
+from ..engine.prepare import (
+    ABSURD_ACCELERATION_IN_G,
+    RunWarning,
+    absurd_acceleration,
+    check_against_ground,
+    check_parameters,
+    check_size,
+    check_step,
+    coarse_step_warning,
+    flight_warning,
+    load_ground,
+    model_for,
+    settings_for,
+)
+from ..errors import CaseError, RecordError
+from ..io import records as rec
+from ..units import STANDARD_GRAVITY, parse_quantity, unit_factor
 from . import sweep as sw
-from .case import Case, RecordSpec, Suite, SuiteEntry, case_with, load_suite
-from .core import intensity
-from .core import kernel as K
-from .core.simulate import ground_array, initial_state, parameters
-from .errors import CaseError, RecordError
-from .plots import fragility_figure
-from .runner import check_size, check_step, model_for, settings_for
-from .units import STANDARD_GRAVITY, parse_quantity, unit_factor
 
 __all__ = ["IntensityMeasure", "INTENSITY_MEASURES", "parse_im", "parse_levels", "DamageState",
            "parse_damage", "damage_states", "suite_from", "FragilityPlan", "plan_fragility",
@@ -395,9 +409,15 @@ class FragilityPlan:
         Per record: ``horizontal`` and ``vertical`` file names and ``*_sha256`` ("" when absent).
     vertical_factor : float
         The case's ``ground.scale.vertical_factor``.
+    vertical : str
+        Where the vertical motion comes from: ``suite`` (the suite's records, where they have one),
+        ``case`` (the case's vertical record under every horizontal one, ``case_vertical``) or
+        ``none``.
+    vertical_note : str
+        What the user must know about it ("" when nothing): the case's vertical record left out.
     """
 
-    plan: sw.Plan
+    plan: Plan
     suite: Suite
     im: IntensityMeasure
     levels: sw.Axis
@@ -405,6 +425,8 @@ class FragilityPlan:
     measures: dict
     files: list
     vertical_factor: float
+    vertical: str = "suite"
+    vertical_note: str = ""
 
     @property
     def names(self) -> list[str]:
@@ -427,7 +449,8 @@ def _describe(records: int, levels: int, label: str) -> str:
 
 
 def plan_fragility(case: Case, suite: Suite, im: IntensityMeasure, levels: sw.Axis, *,
-                   records_dir: Path | None = None, chunk_size: int | None = None) -> FragilityPlan:
+                   records_dir: Path | None = None, chunk_size: int | None = None,
+                   case_vertical: bool = False) -> FragilityPlan:
     """Read the suite's records, measure them, and build every run's kernel inputs.
 
     Parameters
@@ -442,6 +465,11 @@ def plan_fragility(case: Case, suite: Suite, im: IntensityMeasure, levels: sw.Ax
         Where records are looked for after the suite file's folder (`records.records_dir`).
     chunk_size : int, optional
         Runs per chunk (default `sweep.default_chunk_size`).
+    case_vertical : bool
+        When no record of the suite has a vertical component and the case has a vertical record:
+        run each horizontal record with the case's vertical record, scaled by the same factor
+        (times ``ground.scale.vertical_factor``). Without it the runs are horizontal only, and the
+        plan's ``vertical_note`` says so.
 
     Raises
     ------
@@ -461,16 +489,18 @@ def plan_fragility(case: Case, suite: Suite, im: IntensityMeasure, levels: sw.Ax
                         field="ground.scale.pga_vertical")
     n_records, n_levels = len(suite.entries), len(levels)
     n = n_records * n_levels
-    if n > sw.MAX_POINTS:
-        raise CaseError(f"{n_records} records x {n_levels} levels = {n} runs; at most {sw.MAX_POINTS}",
+    if n > MAX_POINTS:
+        raise CaseError(f"{n_records} records x {n_levels} levels = {n} runs; at most {MAX_POINTS}",
                         source="--suite/--levels")
     if chunk_size is not None and (isinstance(chunk_size, bool) or int(chunk_size) < 1):
         raise CaseError(f"must be a whole number >= 1, got {chunk_size!r}", source="--chunk-size")
-    chunk_size = sw.default_chunk_size(n) if chunk_size is None else int(chunk_size)
+    chunk_size = default_chunk_size(n) if chunk_size is None else int(chunk_size)
+    check_parameters(case)
     folder = records_dir if records_dir is not None else rec.records_dir()
     vertical_factor = float(case.ground.scale.vertical_factor)
     tan_alpha = case.block.width / case.block.height
     level_values = np.asarray(levels.values, dtype=np.float64)
+    vertical, vertical_note, case_record = _vertical_source(case, suite, folder, case_vertical)
 
     params = np.empty((n, K.N_PARAMS))
     states = np.empty((n, K.N_STATE))
@@ -479,8 +509,13 @@ def plan_fragility(case: Case, suite: Suite, im: IntensityMeasure, levels: sw.Ax
     bases, record_cases, files, entries = [], [], [], []
     measures = {key: np.empty(n_records) for key in ("pga", "pgv", "pgv_pga", "im", "dt", "duration")}
     offset = 0
+    highest = (0.0, "")                   # the largest scaled peak, and which run
+    flights = []                          # (warning of the first flying run of a record, its runs that fly)
     for r, entry in enumerate(suite.entries):
         records, specs, found = _read_entry(suite, r, entry, folder)
+        if case_record is not None:
+            records["vertical"], specs["vertical"] = case_record
+            found["vertical"], found["vertical_sha256"] = Path(case_record[0].path).name, case_record[0].sha256
         where = _entry_source(suite, r)
         ground = rec.combine(records["horizontal"], records["vertical"], source=where)
         changes = {"ground.horizontal": specs["horizontal"], "ground.vertical": specs["vertical"],
@@ -518,21 +553,80 @@ def plan_fragility(case: Case, suite: Suite, im: IntensityMeasure, levels: sw.Ax
         factor_h[rows] = factors
         # records.combine's arithmetic: vertical = (k * vertical_factor) * samples
         factor_v[rows] = factors * vertical_factor if specs["vertical"] else 1.0
+        # the checks of `rockslide run` at the highest level (the peaks grow with the level), and
+        # flight at the lowest level that flies: those runs end with the status 'flight'
+        peak = _check_level(record_case, records, factors[-1], where)
+        if peak > highest[0]:
+            highest = (peak, f"record {entry.name}, level {levels.texts[-1]}")
+        if ground.vertical.size:
+            flying = np.flatnonzero(case.gravity + factor_v[rows] * float(np.min(ground.vertical)) <= 0.0)
+            if flying.size:
+                level_case = case_with(record_case, {"ground.scale.factor": float(factors[flying[0]])})
+                text = flight_warning(level_case, load_ground(level_case, folder))
+                flights.append((f"{text} [at record {entry.name}, level {levels.texts[flying[0]]}]", flying.size))
         first[rows], count[rows] = offset, base.shape[1]
         record_end[rows] = start + base.shape[1] * dt
         bases.append(base)
         offset += base.shape[1]
+    warning = coarse_step_warning(case.source, params, lambda i: f"record {suite.entries[i // n_levels].name}")
+    if warning:
+        warnings.warn(warning, RunWarning, stacklevel=2)
+    if flights:
+        warnings.warn(f"{flights[0][0]}; {sum(k for _, k in flights)} of {n} runs fly", RunWarning, stacklevel=2)
+    if highest[0] > ABSURD_ACCELERATION_IN_G * STANDARD_GRAVITY:
+        warnings.warn(f"{absurd_acceleration(case.source, highest[0])} [at {highest[1]}]", RunWarning, stacklevel=2)
     record_kind = sw.AxisKind("record", "--suite", "dimensionless", "", "record of the suite", "1", "record")
     record_axis = sw.Axis("record", tuple(float(i) for i in range(n_records)),
                           tuple(e.name for e in suite.entries), suite.source, record_kind)
-    plan = sw.Plan(case=case, axes=[record_axis, levels], mu_kinetic_ratio=None, params=params,
+    plan = Plan(case=case, axes=[record_axis, levels], mu_kinetic_ratio=None, params=params,
                    states=states, factor_h=factor_h, factor_v=factor_v,
                    base=np.ascontiguousarray(np.concatenate(bases, axis=1)), first=first, count=count,
                    record_end=record_end, step=float(params[:, K.P_STEP].min()), records=entries,
                    chunk_size=chunk_size)
-    plan.key = sw.definition_key(plan)
+    plan.key = definition_key(plan)
     return FragilityPlan(plan=plan, suite=suite, im=im, levels=levels, record_cases=record_cases,
-                         measures=measures, files=files, vertical_factor=vertical_factor)
+                         measures=measures, files=files, vertical_factor=vertical_factor, vertical=vertical,
+                         vertical_note=vertical_note)
+
+
+def _check_level(record_case: Case, records: dict, factor: float, where: str) -> float:
+    """`prepare.check_against_ground` of a record's run scaled by ``factor``, its errors naming the
+    record. Returns the peak scaled acceleration [m/s^2]."""
+    try:
+        level_case = case_with(record_case, {"ground.scale.factor": float(factor)})
+        scale = level_case.ground.scale
+        ground = rec.combine(records["horizontal"], records["vertical"], factor=scale.factor,
+                             vertical_factor=scale.vertical_factor, source=record_case.source,
+                             still_dt=record_case.solver.dt)
+        return check_against_ground(level_case, ground, warn=False)
+    except CaseError as exc:
+        raise CaseError(f"{exc.message} (with the record {where})", source=exc.source, field=exc.field) from None
+
+
+def _vertical_source(case: Case, suite: Suite, folder: Path, case_vertical: bool):
+    """Where the runs' vertical motion comes from: ``(vertical, note, case_record)``, with
+    ``case_record`` the case's vertical record and its spec for `case.case_with` when it stands in for
+    the suite's missing verticals (``case_vertical``)."""
+    suite_has = any(entry.vertical is not None for entry in suite.entries)
+    case_has = isinstance(case.ground.vertical, RecordSpec)
+    if suite_has:
+        return "suite", "", None
+    if not case_has:
+        if case_vertical:
+            raise CaseError("the case has no vertical record to scale with the suite's horizontal ones",
+                            source="--case-vertical")
+        return "none", "", None
+    spec = case.ground.vertical
+    if not case_vertical:
+        return "none", (f"the suite has no vertical records: the runs are horizontal only, without the case's "
+                        f"vertical record {Path(spec.file).name} (--case-vertical scales it with each "
+                        "horizontal record)"), None
+    path = rec.resolve_record_path(spec.file, case_dir=case.base_dir, records_dir=folder, source=case.source,
+                                   field="ground.vertical.file")
+    record = rec.load_record(path, format=spec.format, units=spec.units, time_column=spec.time_column,
+                             column=spec.column, dt=spec.dt, skip_lines=spec.skip_lines)
+    given = {k: v for k, v in vars(spec).items() if v is not None and k != "file"}
+    return "case", "", (record, {**given, "file": str(path.absolute())})
 
 
 def _entry_source(suite: Suite, r: int) -> str:
@@ -1000,6 +1094,8 @@ def dataset(fplan: FragilityPlan, analysis: Analysis, command_line: str = "") ->
         "confidence_level": CONFIDENCE,
         "fragility_key": plan.key,
         "vertical_factor": fplan.vertical_factor,
+        "vertical_motion": fplan.vertical,
+        "vertical_note": fplan.vertical_note,
     })
     return coords, variables, attrs
 
@@ -1032,6 +1128,7 @@ def json_summary(fplan: FragilityPlan, analysis: Analysis) -> dict:
         "intensity_measure": {"name": im.name, "units": im.units, "long_name": im.long_name},
         "levels": [float(v) for v in fplan.levels.values],
         "records": fplan.names,
+        "vertical": {"source": fplan.vertical, "note": fplan.vertical_note or None},
         "damage_states": out,
         "n_runs": int(status.size),
         "n_outside_model": int((status != K.STATUS_OK).sum()),
@@ -1069,6 +1166,8 @@ def _figure(levels, exceeded, states, fits, im: IntensityMeasure, title: str):
             band = fragility(grid[None, :], fit.samples[:, :1], fit.samples[:, 1:])
             curve["band"] = np.percentile(band, [lower_tail, upper_tail], axis=0)
         curves.append(curve)
+    from ..plots import fragility_figure
+
     return fragility_figure(levels / im.display_scale, grid / im.display_scale, curves, xlabel=im.axis_label(),
                             confidence=CONFIDENCE, title=title)
 

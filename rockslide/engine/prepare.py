@@ -15,13 +15,14 @@ from pathlib import Path
 
 import numpy as np
 
-from . import pulses
-from . import records as rec
-from .case import Case
-from .core.simulate import Model, Result, Settings, interval_count, simulate, substeps, tail_samples
-from .errors import CaseError, RecordError
-from .pulses import Pulse
-from .units import STANDARD_GRAVITY
+from .. import pulses
+from ..case import Case
+from ..core.layout import P_G, P_R, P_STEP
+from ..core.simulate import Model, Result, Settings, interval_count, parameters, simulate, substeps, tail_samples
+from ..errors import CaseError, RecordError
+from ..io import records as rec
+from ..pulses import Pulse
+from ..units import STANDARD_GRAVITY
 
 
 @dataclass(frozen=True)
@@ -165,9 +166,11 @@ def check_parameters(case: Case) -> None:
 
 def check_against_ground(case: Case, ground: rec.GroundMotion, *, warn: bool = True) -> float:
     """Checks that need the records: the step is not coarser than the record's sampling
-    (`check_step`), the scaled motion stays within :data:`MAX_ACCELERATION_IN_G` (warned above
-    :data:`ABSURD_ACCELERATION_IN_G`), and the scaled vertical motion never lifts the block off the
-    ground (``g + av > 0``, model.md's 'no free flight'), reported before any computation.
+    (`check_step`), the first sample's time is one float64 resolves the step at, and the scaled
+    motion stays within :data:`MAX_ACCELERATION_IN_G`; with ``warn``, a warning when it passes
+    :data:`ABSURD_ACCELERATION_IN_G` (`absurd_acceleration`) and when the scaled vertical motion
+    lifts the block off the ground (`flight_warning`: the run then ends 'outside the model', a
+    status, as in sweeps and fragility analyses).
 
     Returns the peak scaled acceleration [m/s^2] (``warn=False``: the caller warns, once).
     """
@@ -185,24 +188,35 @@ def check_against_ground(case: Case, ground: rec.GroundMotion, *, warn: bool = T
                         f"expected at most {MAX_ACCELERATION_IN_G:.0e} g (beyond, the computation "
                         "cannot stay finite); check the record's units and ground.scale",
                         source=case.source, field="ground.scale")
-    if ground.vertical.size:
-        lowest = float(np.min(ground.vertical))
-        if case.gravity + lowest <= 0.0:
-            # samples (n,), or interval end values (2, n): the end of interval k is sample k + 1
-            if ground.vertical.ndim == 2:
-                row, k = np.unravel_index(int(np.argmin(ground.vertical)), ground.vertical.shape)
-            else:
-                row, k = 0, int(np.argmin(ground.vertical))
-            pulse = isinstance(case.ground.vertical, Pulse)
-            raise CaseError(
-                f"the scaled vertical acceleration reaches {lowest / 0.01:.1f} gal at "
-                f"t = {start + (k + row) * ground.dt:.3f} s, so g + av = {case.gravity + lowest:.3f} m/s^2 "
-                f"<= 0 (the block would fly, outside the model); lower "
-                f"{'ground.vertical.amplitude' if pulse else 'ground.scale'}",
-                source=case.source, field="ground.vertical.amplitude" if pulse else "ground.scale")
-    if warn and peak > ABSURD_ACCELERATION_IN_G * STANDARD_GRAVITY:
-        warnings.warn(absurd_acceleration(case.source, peak), RunWarning, stacklevel=2)
+    if warn:
+        if peak > ABSURD_ACCELERATION_IN_G * STANDARD_GRAVITY:
+            warnings.warn(absurd_acceleration(case.source, peak), RunWarning, stacklevel=2)
+        text = flight_warning(case, ground)
+        if text:
+            warnings.warn(text, RunWarning, stacklevel=2)
     return peak
+
+
+def flight_warning(case: Case, ground: rec.GroundMotion) -> str | None:
+    """The warning when the scaled vertical acceleration lifts the block off the ground (``g + av
+    <= 0``, model.md's 'no free flight'): the run stops there with the status ``flight``, outside
+    the model. None when it never does."""
+    if not ground.vertical.size:
+        return None
+    lowest = float(np.min(ground.vertical))
+    if case.gravity + lowest > 0.0:
+        return None
+    # samples (n,), or interval end values (2, n): the end of interval k is sample k + 1
+    if ground.vertical.ndim == 2:
+        row, k = np.unravel_index(int(np.argmin(ground.vertical)), ground.vertical.shape)
+    else:
+        row, k = 0, int(np.argmin(ground.vertical))
+    start = ground.start + case.ground.time_shift
+    pulse = isinstance(case.ground.vertical, Pulse)
+    key = "ground.vertical.amplitude" if pulse else "ground.scale"
+    return (f"{case.source}: {key}: the scaled vertical acceleration reaches {lowest / 0.01:.1f} gal at "
+            f"t = {start + (k + row) * ground.dt:.3f} s, so g + av = {case.gravity + lowest:.3f} m/s^2 <= 0: "
+            "the block would fly, outside the model, and the run stops there with the status 'flight'")
 
 
 def absurd_acceleration(source: str, peak: float) -> str:
@@ -309,15 +323,9 @@ def duration_text(seconds: float) -> str:
     return f"{seconds / 86400:.0f} days"
 
 
-def rocking_frequency(model: Model) -> float:
-    """``p = sqrt(3 g / (4 R))`` [rad/s] (model.md), the time scale of rocking."""
-    _, _, p2 = model.constants
-    return math.sqrt(p2)
-
-
 def step_warning(source: str, p: float, step: float) -> str | None:
     """A warning when the integration step ``step`` [s] is too coarse for a block whose rocking
-    frequency is ``p`` [rad/s] (`rocking_frequency`); ``source`` is the case file.
+    frequency is ``p = sqrt(3 g / (4 R))`` [rad/s]; ``source`` is the case file.
 
     Rocking about an edge grows and decays like ``exp(+-p t)``; RK4's error per step on it is
     ``(p dt)^5 / 120``, and the event times it locates err by about ``0.09 (p dt)^4 / p``
@@ -332,6 +340,20 @@ def step_warning(source: str, p: float, step: float) -> str | None:
             f"resolved and the verdict may be wrong; use dt <= {MAX_P_DT / p:.2g} s")
 
 
+def coarse_step_warning(source: str, params: np.ndarray, where=None) -> str | None:
+    """`step_warning` for the case of ``params`` (kernel parameter vectors, one per row) whose
+    rocking is fastest (the largest ``p dt``), or None when every step is fine; ``where(i)`` names
+    case ``i`` in the message (``[at --mu 0.5, --pga 800gal]``). The one check of the step behind
+    runs, sweeps and fragility analyses."""
+    params = np.atleast_2d(params)
+    p2 = 0.75 * params[:, P_G] / params[:, P_R]            # p^2 = 3 g / (4 R), model.md
+    i = int(np.argmax(p2))
+    warning = step_warning(source, math.sqrt(p2[i]), float(params[i, P_STEP]))
+    if warning and where is not None:
+        warning += f" [at {where(i)}]"
+    return warning
+
+
 def prepare(case: Case, records_dir: Path | None = None, *, history: bool = True) -> Prepared:
     """Load the case's records and run every check that needs no computation (the parameters'
     ranges, the ground motion, the sizes), warning when the step is too coarse for the block."""
@@ -341,7 +363,7 @@ def prepare(case: Case, records_dir: Path | None = None, *, history: bool = True
     check_size(case, ground, history=history)
     model = model_for(case)
     settings = settings_for(case, history=history)
-    warning = step_warning(case.source, rocking_frequency(model), ground.dt / substeps(ground.dt, settings.dt))
+    warning = coarse_step_warning(case.source, parameters(model, ground.dt, settings))
     if warning:
         warnings.warn(warning, RunWarning, stacklevel=2)
     return Prepared(case, ground, model, settings)
@@ -358,7 +380,7 @@ def simulate_prepared(prepared: Prepared, on_chunk=None, progress=None) -> Resul
     every hundred record intervals)."""
     g = prepared.ground
     if prepared.case.solver.method == "reference":
-        from .core.reference import simulate_reference
+        from ..core.reference import simulate_reference
         return simulate_reference(prepared.model, g.dt, g.horizontal, g.vertical, prepared.settings,
                                   start=start_time(prepared), progress=progress)
     return simulate(prepared.model, g.dt, g.horizontal, g.vertical, prepared.settings,

@@ -27,8 +27,8 @@ import re
 import threading
 from pathlib import Path
 
-from . import interrupts
-from .errors import OutputError
+from .. import interrupts
+from ..errors import OutputError
 
 #: Longest file name most file systems take [bytes].
 NAME_MAX = 255

@@ -26,6 +26,7 @@ Layout (format ``rockslide-result``, version 1):
 | `/ground/horizontal` | float64[m] | m/s^2 | horizontal ground acceleration |
 | `/ground/vertical` | float64[m] | m/s^2 | vertical ground acceleration (up positive) |
 | `/events` | compound[k] | | the event log (fields below) |
+| `/event` | int64[k] | 1 | the event log's index: its netCDF-4 dimension `event` |
 | `/case` | group (attrs) | | if a case is given: `yaml` (the case file's text) and the case's keys |
 | `/records` | group | | if records are given |
 | `/records/horizontal` | group (attrs) | | the horizontal record file (attributes below) |
@@ -45,7 +46,10 @@ Layout (format ``rockslide-result``, version 1):
   ``contact.mu_static`` (SI values; None stored as "").
 
 Every dataset carries a ``units`` attribute; the time histories are chunked and compressed (gzip
-level 1 with shuffle). Root attributes:
+level 1 with shuffle). The file is a netCDF-4 one: ``time`` of ``/time_history`` and of ``/ground``
+is the dimension scale of its group's columns and ``/event`` that of ``/events``, so that
+``xarray.open_dataset(path, engine="h5netcdf")`` opens the event log (and ``group="time_history"``,
+``group="ground"`` the histories). Root attributes:
 
 - the summary: ``overturned`` (bool), ``overturn_time`` [s], ``direction``, ``fall_start_time`` [s],
   ``max_rotation`` [rad], ``max_rotation_time`` [s], ``max_slip`` [m], ``residual_slip`` [m],
@@ -94,10 +98,11 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from . import __version__, interrupts
-from .core.layout import HISTORY_COLUMNS, STATE_NAMES
-from .core.simulate import EVENT_DTYPE, Result, Summary
-from .errors import OutputError
+from .. import interrupts
+from .._version import __version__
+from ..core.layout import HISTORY_COLUMNS, STATE_NAMES
+from ..core.simulate import EVENT_DTYPE, Result, Summary
+from ..errors import OutputError
 from .files import Staging, check_destination, publish, remove_quietly, temporary_path
 
 FORMAT = "rockslide-result"
@@ -412,6 +417,7 @@ def _write_body(f: h5py.File, result: Result, *, name, case_text, case, records,
         ds.attrs["units"] = GROUND_UNITS[key]
 
     ds = f.create_dataset("events", data=_events_for_file(result.events), dtype=EVENT_FILE_DTYPE)
+    _label_dimensions(f, ds)
     ds.attrs["units"] = "time: s, energy_loss: J"
     ds.attrs["description"] = ("time [s], from/to: state names, cause, edge: pivot lam (+1 left, "
                                "-1 right, 0 none), slip_direction: sigma, impact: branch of the impact "
@@ -440,7 +446,7 @@ def _write_body(f: h5py.File, result: Result, *, name, case_text, case, records,
                 group.attrs[key] = _attr_value(value)
 
     attrs = f.attrs
-    for key, value in _summary_attrs(result.summary).items():
+    for key, value in summary_attributes(result.summary).items():
         attrs[key] = value
     for key in GROUND_KEYS if ground else ():
         value = ground.get(key)
@@ -457,6 +463,26 @@ def _write_body(f: h5py.File, result: Result, *, name, case_text, case, records,
         if key in attrs:
             raise ValueError(f"extra attribute {key!r} would replace a standard attribute")
         attrs[key] = _attr_value(value)
+
+
+def _label_dimensions(f: h5py.File, events) -> None:
+    """Make the file a netCDF-4 one that ``xarray.open_dataset(path, engine="h5netcdf")`` opens (the
+    root: the event log; ``group="time_history"`` or ``group="ground"``: the histories): ``time`` of
+    each group is made the dimension scale of its columns, and the event log gets an ``event``
+    dimension (its index)."""
+    for group in ("time_history", "ground"):
+        if group not in f or "time" not in f[group]:
+            continue
+        time = f[group]["time"]
+        time.make_scale("time")
+        for name, ds in f[group].items():
+            if name != "time":
+                ds.dims[0].attach_scale(time)
+    index = f.create_dataset("event", data=np.arange(events.shape[0], dtype=np.int64))
+    index.attrs["units"] = "1"
+    index.attrs["long_name"] = "index of the event in the log"
+    index.make_scale("event")
+    events.dims[0].attach_scale(index)
 
 
 def _events_for_file(events) -> np.ndarray:
@@ -483,7 +509,8 @@ def _events_from_file(stored: np.ndarray) -> np.ndarray:
     return out
 
 
-def _summary_attrs(summary: Summary) -> dict:
+def summary_attributes(summary: Summary) -> dict:
+    """The summary as the result file's root attributes (None as NaN or 0, lists joined)."""
     out = {}
     for key in _SUMMARY_SCALARS:
         value = getattr(summary, key)
@@ -962,7 +989,7 @@ def write_dataset(path, coords, variables, *, format: str, attrs: dict | None = 
                 ds.attrs["_Netcdf4Dimid"] = np.int32(i)
                 scales[name] = ds
             for name, (dims, values, a) in variables.items():
-                values = _column(values) if np.ndim(values) == 1 else _array(values)
+                values = _array(values)          # a variable keeps its type (flags and counts: integers)
                 options = {"chunks": True, **_COMPRESSION} if values.size > 65536 else {}
                 ds = f.create_dataset(name, data=values, **options)
                 for key, value in a.items():

@@ -20,11 +20,12 @@ from pathlib import Path
 
 import numpy as np
 
-from . import interrupts, plots, runner
-from .case import case_with, load_case
-from .core import criteria
-from .errors import RecordError
-from .files import Staging, atomic_write, check_destination
+from .. import interrupts, plots
+from ..case import case_with, load_case
+from ..core import criteria
+from ..engine import prepare as runner
+from ..errors import RecordError
+from ..io.files import Staging, atomic_write, check_destination
 
 PAPER_G = 9.8
 

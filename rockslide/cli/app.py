@@ -1,0 +1,305 @@
+"""The command line: a thin click layer over the library.
+
+Every `RockslideError` (bad case, record, option or output) becomes one line on stderr,
+``rockslide: error: <file>: <field>: <what is wrong and what is expected>``, and exit code 2, here
+and nowhere else; so do click's usage errors. ``--debug`` shows the traceback instead. Any other
+exception is a bug: one line ``rockslide: internal error: ...`` and exit code 1. Messages are one
+readable line: control characters escaped, at most :data:`MESSAGE_LIMIT` characters.
+
+Ctrl-C and SIGTERM only set a flag (`interrupts`), checked between kernel chunks, between sweep
+chunks and before every write; the command then ends with exit code 130 (143) and the previous
+result intact, since results are published only once complete (`files`).
+"""
+
+from __future__ import annotations
+
+import gc
+import os
+import signal
+import sys
+import warnings
+from pathlib import Path
+
+import click
+
+from .. import interrupts
+from .._version import __version__
+from ..errors import RockslideError
+
+EXIT_INTERNAL_ERROR = 1
+EXIT_USER_ERROR = 2
+EXIT_INTERRUPTED = 130
+EXIT_TERMINATED = 143
+EXIT_BROKEN_PIPE = 141      # 128 + SIGPIPE: what a Unix tool whose reader went away exits with
+#: Longest message printed [characters]; a longer one keeps its start and its end.
+MESSAGE_LIMIT = 400
+
+
+#: click >= 8.2 raises this (a UsageError) for a group called without a command.
+_NO_ARGS_IS_HELP = getattr(click.exceptions, "NoArgsIsHelpError", ())
+
+
+class RockslideGroup(click.Group):
+    """Turns the one exception family, click's usage errors and signals into messages, once;
+    takes ``--debug`` anywhere."""
+
+    def parse_args(self, ctx, args):
+        # --debug is the group's option, but a user adds it to the command that failed: move it
+        # before the command (not past a "--", after which everything is an argument)
+        end = args.index("--") if "--" in args else len(args)
+        if "--debug" in args[1:end]:
+            args = ["--debug"] + [a for a in args[:end] if a != "--debug"] + args[end:]
+        return super().parse_args(ctx, args)
+
+    def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True, **extra):
+        if not standalone_mode:
+            return super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
+        try:
+            with interrupts.handling_signals():
+                code = super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
+        except _NO_ARGS_IS_HELP as exc:       # `rockslide` alone: the help, as click shows it
+            exc.show()
+            sys.exit(exc.exit_code)
+        except click.UsageError as exc:
+            words = exc.ctx.command_path.split()[1:] if exc.ctx is not None else []
+            command = " ".join(["rockslide", *words])
+            click.echo(one_line(f"rockslide: error: {command}: {exc.format_message()} "
+                                f"(see '{command} --help')"), err=True)
+            sys.exit(exc.exit_code)
+        except click.ClickException as exc:
+            click.echo(one_line(f"rockslide: error: {exc.format_message()}"), err=True)
+            sys.exit(exc.exit_code)
+        except click.Abort:
+            click.echo("rockslide: interrupted", err=True)
+            sys.exit(EXIT_INTERRUPTED)
+        sys.exit(code if isinstance(code, int) else 0)
+
+    def invoke(self, ctx):
+        debug = "--debug" in sys.argv[1:] or bool(ctx.params.get("debug"))
+        with warnings.catch_warnings():
+            warnings.showwarning = _hold_warning
+            _held.clear()
+            try:
+                value = super().invoke(ctx)
+                show_warnings()
+                return value
+            except RockslideError as exc:
+                if debug:
+                    raise
+                click.echo(one_line(f"rockslide: error: {exc}"), err=True)
+                ctx.exit(EXIT_USER_ERROR)
+            except KeyboardInterrupt as exc:
+                if debug:
+                    raise
+                stopped = exc if isinstance(exc, interrupts.Interrupted) else interrupts.Interrupted(signal.SIGINT)
+                click.echo(f"rockslide: {stopped.word} (no partial result was written)", err=True)
+                ctx.exit(stopped.exit_code)
+            except (click.exceptions.ClickException, click.exceptions.Exit, click.exceptions.Abort):
+                raise
+            except Exception as exc:  # noqa: BLE001 - anything else is a bug or a system failure
+                if debug:
+                    raise
+                if isinstance(exc, BrokenPipeError) and _stdout_gone():   # `rockslide info r.at2 | head -1`
+                    ctx.exit(EXIT_BROKEN_PIPE)
+                if isinstance(exc, ValueError) and "embedded null" in str(exc):   # only from the API
+                    click.echo("rockslide: error: a file or folder name holds a NUL character (\\x00)", err=True)
+                    ctx.exit(EXIT_USER_ERROR)
+                click.echo(one_line(f"rockslide: {_unexpected(exc)} (run again with --debug for the "
+                                    "traceback)"), err=True)
+                ctx.exit(EXIT_INTERNAL_ERROR)
+
+
+def _stdout_gone() -> bool:
+    """Whether the reader of standard output went away (a pipe without reader reports an error
+    to `select.poll`). If so, standard output is pointed at the null device, so that the
+    interpreter's last flush does not complain of it: the command stops quietly, as Unix tools
+    do, and its files are as they would be after Ctrl-C."""
+    import select
+
+    try:
+        fd = sys.stdout.fileno()
+        poller = select.poll()
+        poller.register(fd, select.POLLOUT)
+        gone = any(event & select.POLLERR for _, event in poller.poll(0))
+    except (AttributeError, OSError, ValueError):     # no real file, or no poll on this system
+        return False
+    if gone:
+        os.dup2(os.open(os.devnull, os.O_WRONLY), fd)
+    return gone
+
+
+def one_line(text: str, limit: int = MESSAGE_LIMIT) -> str:
+    """``text`` as one readable line: control characters escaped (``\\x00``), runs of white space
+    made one space, and at most ``limit`` characters (the middle of a longer text left out)."""
+    text = " ".join("".join(c if c.isprintable() or c in " \t\n" else ascii(c)[1:-1] for c in str(text)).split())
+    if len(text) > limit:
+        tail = limit // 4
+        text = f"{text[:limit - tail - 5]} ... {text[-tail:]}"
+    return text
+
+
+def _unexpected(exc: Exception) -> str:
+    """One line about an exception that is not a RockslideError."""
+    if isinstance(exc, OSError) and exc.strerror:
+        where = f"{exc.filename}: " if exc.filename else ""
+        return f"error: {where}{exc.strerror}"
+    if isinstance(exc, MemoryError):
+        return ("error: out of memory (a larger solver.dt or output.interval, or a shorter ground.tail, "
+                "needs less)")
+    text = " ".join(str(exc).split())
+    if len(text) > 200:
+        text = text[:197] + "..."
+    detail = f"{type(exc).__name__}: {text}" if text else type(exc).__name__
+    return f"internal error: {detail}; this is a bug in rockslide, please report it"
+
+
+_held: list[str] = []
+
+
+def _hold_warning(message, category, filename, lineno, file=None, line=None):
+    """Warnings wait until the input is accepted (`show_warnings`): a command that ends in an
+    input error prints that one line only."""
+    _held.append(one_line(f"rockslide: warning: {message}"))
+
+
+def show_warnings() -> None:
+    """Print the warnings held so far (call it when the input is accepted, before the work)."""
+    for line in _held:
+        click.echo(line, err=True)
+    _held.clear()
+
+
+@click.group(cls=RockslideGroup, context_settings={"help_option_names": ["-h", "--help"]})
+@click.option("--debug", is_flag=True, help="Show Python tracebacks instead of one-line errors.")
+@click.version_option(__version__, prog_name="rockslide")
+def main(debug):
+    """Nonlinear seismic response of free-standing rectangular rigid blocks.
+
+    Rest, slip, liftoff (rocking with impacts), liftoff-slip interaction and overturning of a block
+    on a rigid foundation shaken horizontally and vertically.
+
+    \b
+    Example:
+        rockslide example
+        rockslide run example/example.yaml
+    """
+
+
+records_dir_option = click.option(
+    "--records-dir", type=click.Path(file_okay=False, path_type=Path), default=None,
+    help="Folder of accelerograms (default: $ROCKSLIDE_RECORDS, else ./records). Record files "
+         "resolve against the case file's folder first.")
+
+
+def dpi_option(what: str):
+    """``--dpi``: the resolution of raster figures (PNG); vector formats (PDF, SVG) ignore it. The
+    default is `plots.DPI` (not imported here: matplotlib takes most of a second to load)."""
+    return click.option("--dpi", type=click.IntRange(20, 1200), default=None, metavar="N",
+                        help=f"Resolution of the {what} [dots per inch] (default 150).")
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+def _result_set(h5_path: Path, png_path: Path, *, overwrite: bool, no_plot: bool, leftovers: bool = False,
+                example: str = "out/case") -> bool:
+    """Check the outputs of `run`, `sweep` or `fragility` before the work: a result is the set ``NAME.h5`` and
+    ``NAME.png`` (``NAME.h5`` alone with ``--no-plot``).
+
+    Returns True when, without ``overwrite``, ``NAME.h5`` exists but its set is not complete (the
+    figure is missing, or ``leftovers`` of its run remain): the caller decides whether it is this
+    case's result and finishes it. False when the run is to compute (nothing there, or
+    ``overwrite``).
+
+    Raises
+    ------
+    OutputError
+        Without ``overwrite``: the complete set exists, or a ``NAME.png`` exists without its
+        ``NAME.h5`` (a figure of another result).
+    """
+    from ..io import files
+
+    files.check_destination(h5_path, overwrite=True, example=f"{example}.h5")
+    files.check_destination(png_path, overwrite=True, example=f"{example}.png")
+    if overwrite:
+        return False
+    if not (h5_path.exists() or h5_path.is_symlink()):
+        files.refuse_existing(png_path, overwrite=False)
+        return False
+    if (no_plot or png_path.exists() or png_path.is_symlink()) and not leftovers:
+        files.refuse_existing(h5_path, overwrite=False)
+    return True
+
+
+
+
+
+
+
+
+def _json_default(value):
+    if hasattr(value, "item"):
+        return value.item()
+    if isinstance(value, Path):
+        return str(value)
+    raise TypeError(f"cannot serialise {type(value).__name__}")
+
+
+
+
+
+
+def entry() -> None:
+    """The ``rockslide`` script and ``python -m rockslide``: `main`, in a process of its own.
+
+    A command is a short-lived process, which allows two settings of the garbage collector that
+    save 0.2-0.3 s of a warm run: rarer collections (the libraries loaded make hundreds of
+    thousands of objects that live to the end, and each collection walks them again), and none at
+    the exit (`gc.freeze`: the interpreter's last collections took 0.2 s to walk every object only
+    to free what the process gives back anyway). Every file is closed and published before (or
+    removed); exit handlers still run.
+
+    numpy's OpenBLAS gets one thread unless ``OPENBLAS_NUM_THREADS`` says otherwise (set before
+    numpy loads): its worker threads spin for about 0.1 s of CPU after loading, a third of a run
+    without figure, and rockslide has no linear algebra large enough for threads (the sweep's
+    threads are its own).
+    """
+    os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+    gc.set_threshold(10_000, 50, 50)
+    try:
+        main(prog_name="rockslide")
+    finally:
+        gc.freeze()
+
+

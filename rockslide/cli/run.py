@@ -1,0 +1,329 @@
+"""``rockslide run`` (one case: its result file, figure and printout) and ``rockslide plot``."""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+import time
+from pathlib import Path
+
+import click
+
+from .. import interrupts
+from ..errors import CaseError, OutputError
+from .app import _json_default, _result_set, dpi_option, main, records_dir_option, show_warnings
+
+#: A single run expected to take longer than this [s] says so before it starts (and shows a
+#: progress bar on a terminal).
+LONG_RUN = 10.0
+
+
+#: A run's figure is drawn from its history kept in memory while it has at most this many rows (96
+#: MB; reading the file back would take as much); a longer history is read back from the file.
+KEEP_HISTORY_ROWS = 2_000_000
+
+
+@main.command()
+@click.argument("case_file", type=click.Path(path_type=Path))
+@records_dir_option
+@click.option("--out-dir", type=click.Path(file_okay=False, path_type=Path), default=None,
+              help="Output folder (default: the case's output.dir).")
+@click.option("--json", "as_json", is_flag=True, help="Print the summary as one JSON object on stdout.")
+@click.option("--overwrite", is_flag=True, help="Replace existing results of this case.")
+@click.option("--no-plot", is_flag=True, help="Do not draw the PNG figure (with --overwrite, an earlier "
+              "figure of this case is removed: it showed the result replaced).")
+@click.option("--robustness", is_flag=True,
+              help="Also rerun at dt/2 and with mu 1 % lower and higher, and say whether the verdict holds.")
+@dpi_option("PNG figure")
+def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, robustness, dpi):
+    """Compute one case: CASE_FILE (YAML) -> OUT/NAME.h5 and OUT/NAME.png.
+
+    \b
+    Example:
+        rockslide run example/example.yaml --json
+    """
+    from ..case import case_to_dict, load_case
+    from ..engine import prepare as runner
+    from ..io import files, records, results
+
+    started = time.perf_counter()
+    case = load_case(case_file)
+    folder = (Path(out_dir) if out_dir is not None else Path(case.output.dir)).expanduser()
+    h5_path = folder / f"{case.name}.h5"
+    png_path = folder / f"{case.name}.png"
+    prepared = runner.prepare(case, records.records_dir(records_dir))     # input errors first
+    ground = prepared.ground.as_applied()
+    stored = None        # this case's complete result, of which only the figure is missing
+    if _result_set(h5_path, png_path, overwrite=overwrite, no_plot=no_plot):
+        stored = _same_result(case, prepared, h5_path, robustness=robustness)
+    files.remove_stale_temporaries([h5_path, png_path])
+    show_warnings()
+    if stored is None:
+        work = runner.work(prepared, runs=4 if robustness else 1)
+        if work.seconds > LONG_RUN:
+            click.echo(f"rockslide: note: {work.describe()}", err=True)
+        files.warn_free_space(folder, work.rows * results.BYTES_PER_ROW)
+        from ..core import native
+        if native.ahead_of_time() is None:      # no machine code from the build: numba's JIT
+            from ..core import kernel
+            from ..engine.execute import first_compile_note
+            note = first_compile_note(kernel.run)
+            if note:
+                click.echo(note, err=True)
+        with files.Staging(overwrite=overwrite) as staging:
+            keep = 0 if no_plot else KEEP_HISTORY_ROWS
+            with results.ResultWriter(h5_path, overwrite=overwrite, staging=staging, keep_rows=keep) as writer, \
+                    _RunProgress(case.name, show=work.seconds > LONG_RUN) as progress:
+                streamed = prepared.case.solver.method == "kernel"
+                result = runner.simulate_prepared(prepared, on_chunk=writer.append_history if streamed else None,
+                                                  progress=progress)
+                check = (runner.verdict_robustness(prepared, result.summary.overturned, progress=progress)
+                         if robustness else None)
+                extra = {} if check is None else {
+                    "verdict_robust": check["holds"],
+                    "robustness": json.dumps(results.json_ready(check["variants"]), allow_nan=False)}
+                writer.finish(result, name=case.name, case_text=case.text, case=case_to_dict(case, case_file=False),
+                              records=runner.record_entries(prepared), extra_attrs=extra, ground=ground)
+            if not no_plot:
+                kept = writer.written_result()
+                _draw(kept if kept is not None else results.read_result(writer.tmp).result, case.name,
+                      png_path, overwrite=overwrite, dpi=dpi, staging=staging)
+            staging.publish(remove=[png_path] if no_plot else [])
+        written = f"{h5_path}" + ("" if no_plot else f" and {png_path}")
+    else:
+        with files.Staging(overwrite=False) as staging:
+            _draw(stored.result, stored.name, png_path, overwrite=False, dpi=dpi, staging=staging)
+            staging.publish()
+        result = stored.result
+        check = None if not robustness else {
+            "holds": bool(stored.attrs["verdict_robust"]), "overturned": result.summary.overturned,
+            "variants": json.loads(stored.attrs["robustness"])}
+        written = f"{png_path} (the missing figure of the complete {h5_path})"
+    elapsed = time.perf_counter() - started
+    summary = result.summary
+    if as_json:
+        payload = {"name": case.name, **results.summary_to_json_dict(summary, result.events),
+                   "ground": ground, "robustness": results.json_ready(check),
+                   "files": {"hdf5": str(h5_path), "png": None if no_plot else str(png_path)},
+                   "elapsed_s": round(elapsed, 3)}
+        click.echo(json.dumps(payload, allow_nan=False, default=_json_default))
+    else:
+        click.echo(human_summary(case.name, summary, ground=ground, units=case.units))
+        if check is not None:
+            flips = [name for name, v in check["variants"].items() if v["overturned"] != summary.overturned]
+            click.echo("  verdict robust: holds at dt/2 and mu +-1 %" if check["holds"] else
+                       f"  verdict NOT robust (knife edge): flips with {', '.join(flips)}")
+        click.echo(f"  wrote {written} in {elapsed:.2f} s")
+
+
+@main.command()
+@click.argument("result_file", type=click.Path(path_type=Path))
+@click.option("-o", "--output", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              help="Figure to write; the format follows its extension: .png, .pdf, .svg, .eps... "
+                   "(default: the result's name with .png, next to it).")
+@click.option("--time-shift", default="0 s", show_default=True, metavar="TIME",
+              help="Time added to the time axis, with a unit as in case files (e.g. '-25 s'; a bare "
+                   "number is in s), to lay the figure beside another's.")
+@click.option("--window", default="auto", show_default=True, metavar="START:END|auto|none",
+              help="The magnified window, in the figure's time (e.g. 30:36 or '30 s:36 s'); none: no "
+                   "magnified panel.")
+@click.option("--crop", default="auto", show_default=True, metavar="START:END|auto|all",
+              help="Time range of the response and ground panels (auto: where the ground or the block "
+                   "moves; all: the whole record).")
+@click.option("--overwrite", is_flag=True,
+              help="Replace the file given with -o if it exists (the result's own figure is always "
+                   "redrawn).")
+@dpi_option("figure (PNG)")
+def plot(result_file, output, time_shift, window, crop, dpi, overwrite):
+    """Redraw the figure of a result, sweep or fragility file (replaces it).
+
+    \b
+    Example:
+        rockslide plot out/example.h5
+        rockslide plot out/example.h5 --window 6.6:7.2 -o out/example-impact.pdf
+        rockslide plot out/example.sweep.h5
+        rockslide plot out/example.fragility.h5
+    """
+    from ..io import results
+    from ..units import parse_quantity
+
+    shift = parse_quantity(time_shift, "time", source="--time-shift")
+    zoom = _time_range(window, "--window", {"auto": "auto", "none": None})
+    span = _time_range(crop, "--crop", {"auto": "auto", "all": None})
+    own = Path(result_file).with_suffix(".png")
+    png = output if output is not None else own
+    # the result's own figure is the one redrawn; another file is replaced only when asked to
+    replace = overwrite or png.resolve() == own.resolve()
+    kind = results.file_format(result_file)
+    if kind == results.SWEEP_FORMAT:
+        from ..analyses.sweep import stored_figure
+        from ..plots import save_figure
+        given = [option for option, value, default in (("--time-shift", shift, 0.0), ("--window", zoom, "auto"),
+                                                       ("--crop", span, "auto")) if value != default]
+        if given:
+            raise CaseError("applies to result files, not to sweep files", source=given[0])
+        save_figure(stored_figure(results.read_sweep(result_file)), png, overwrite=replace, dpi=dpi)
+    elif kind == results.FRAGILITY_FORMAT:
+        from ..analyses.fragility import stored_figure as stored_fragility_figure
+        from ..plots import save_figure
+        given = [option for option, value, default in (("--time-shift", shift, 0.0), ("--window", zoom, "auto"),
+                                                       ("--crop", span, "auto")) if value != default]
+        if given:
+            raise CaseError("applies to result files, not to fragility files", source=given[0])
+        stored = results.read_dataset(result_file, format=results.FRAGILITY_FORMAT)
+        save_figure(stored_fragility_figure(stored), png, overwrite=replace, dpi=dpi)
+    else:
+        stored = results.read_result(result_file)
+        times = stored.result.ground_time
+        if times.size:
+            first, last = float(times[0]) + shift, float(times[-1]) + shift
+            for option, pair in (("--window", zoom), ("--crop", span)):
+                if isinstance(pair, tuple) and (pair[1] <= first or pair[0] >= last):
+                    raise CaseError(f"{pair[0]:g} to {pair[1]:g} s is outside the result, which runs from "
+                                    f"{first:g} to {last:g} s (in the figure's time)", source=option)
+        _draw(stored.result, stored.name, png, overwrite=replace, time_shift=shift, zoom=zoom, crop=span, dpi=dpi)
+    click.echo(f"redrew {png}")
+
+
+def _time_range(text: str, option: str, words: dict):
+    """``START:END`` (times with units as in case files, bare numbers in s) as a pair of seconds,
+    or the value of one of ``words``."""
+    from ..units import parse_quantity
+
+    key = text.strip().lower()
+    if key in words:
+        return words[key]
+    parts = text.split(":")
+    if len(parts) != 2:
+        raise CaseError(f"expected START:END (e.g. 30:36 or '30 s:36 s') or one of "
+                        f"{', '.join(words)}, got {text!r}", source=option)
+    start, end = (parse_quantity(p.strip(), "time", source=option) for p in parts)
+    if not end > start:
+        raise CaseError(f"the end must come after the start, got {text!r}", source=option)
+    return start, end
+
+
+def _draw(result, name, path, *, overwrite, dpi=None, time_shift=0.0, zoom="auto", crop="auto", staging=None):
+    """Draw the figure of one run (`plots.response_figure`) and save it (`plots.save_figure`)."""
+    from ..plots import response_figure, save_figure
+
+    figure = response_figure(result, title=name, time_shift=time_shift, zoom=zoom, crop=crop)
+    save_figure(figure, path, overwrite=overwrite, dpi=dpi, staging=staging)
+
+
+def _same_result(case, prepared, h5_path: Path, *, robustness: bool):
+    """The stored result at ``h5_path`` if it is this case's (same case text, same records,
+    robustness if asked), else an OutputError: it exists."""
+    from ..engine import prepare as runner
+    from ..io import files, results
+
+    try:
+        stored = results.read_result(h5_path)
+    except OutputError:
+        stored = None
+    same = (stored is not None and stored.case_text == case.text
+            and [r.get("sha256") for r in stored.records]
+            == [r.get("sha256") for r in runner.record_entries(prepared)]
+            and (not robustness or "robustness" in stored.attrs))
+    if not same:
+        files.refuse_existing(h5_path, overwrite=False)
+    return stored
+
+
+class _RunProgress:
+    """The ``progress`` callback of a single run: checks for Ctrl-C between kernel chunks and, on
+    a terminal, shows a bar of the simulated time (a new pass, the robustness runs, restarts it)."""
+
+    def __init__(self, name: str, *, show: bool):
+        self.name = name
+        self.show = show and sys.stderr.isatty()
+        self.bar = None
+        self.last = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        if self.bar is not None:
+            self.bar.close()
+        return False
+
+    def __call__(self, reached: float, end: float) -> None:
+        interrupts.check()
+        if not self.show:
+            return
+        from tqdm import tqdm
+
+        if self.bar is None or (self.last is not None and reached < self.last):
+            if self.bar is not None:
+                self.bar.close()
+            self.bar = tqdm(total=round(end - reached, 3), unit="s", file=sys.stderr, desc=self.name,
+                            dynamic_ncols=True, bar_format="{l_bar}{bar}| {n:.0f}/{total:.0f} s simulated "
+                            "[{elapsed}<{remaining}]")
+            self.start = reached
+        self.bar.update(round(reached - self.start, 3) - self.bar.n)
+        self.last = reached
+
+
+def human_summary(name, summary, *, ground=None, units=None) -> str:
+    """A short text summary of one run.
+
+    Parameters
+    ----------
+    name : str
+    summary : Summary
+    ground : dict, optional
+        The ground motion as applied (`records.GroundMotion.as_applied`).
+    units : dict, optional
+        The case's units as written (`case.Case.units`): peaks are shown in the unit of
+        ``ground.scale.pga_horizontal`` (the vertical: of ``pga_vertical`` if given), else in gal,
+        and in g.
+    """
+    from ..units import percent_text
+
+    units = units or {}
+    verdict = summary.verdict
+    if (summary.status == "ok" and not summary.overturned and not summary.undecided
+            and math.isfinite(summary.max_rotation_ratio)):
+        verdict += f", {percent_text(summary.max_rotation_ratio)} of alpha"
+    lines = [f"{name}: {verdict}"]
+    if ground is not None:
+        lines.append("  " + _ground_line(ground, units))
+    if summary.overturned:
+        direction = "+" if summary.direction > 0 else "-"
+        fall = ("" if summary.fall_start_time is None
+                else f", falling since {summary.fall_start_time:.4f} s (rotation past alpha)")
+        lines.append(f"  overturned at {summary.overturn_time:.4f} s, rotation {direction}pi/2{fall}")
+    alpha = (f" (alpha {summary.alpha:.4f} rad, {math.degrees(summary.alpha):.2f} deg)"
+             if math.isfinite(summary.alpha) else "")
+    lines.append(f"  max rotation {summary.max_rotation:.5f} rad "
+                 f"({math.degrees(summary.max_rotation):.3f} deg)"
+                 f" at {summary.max_rotation_time:.3f} s{alpha}; impacts {summary.impacts}")
+    lines.append(f"  max slip {1000 * summary.max_slip:.2f} mm; "
+                 f"residual slip {1000 * summary.residual_slip:.2f} mm")
+    seen = ", ".join(f"{s} {summary.time_in_state.get(s, 0.0):.2f} s" if s != "OVERTURNED" else s
+                     for s in summary.states_seen)
+    lines.append(f"  states: {seen}")
+    return "\n".join(lines)
+
+
+def _ground_line(ground: dict, units: dict) -> str:
+    """``ground as applied: peaks 700 gal (0.714 g) H, 350 gal (0.357 g) V (records x1.19)``."""
+    from ..units import acceleration_text
+
+    h_unit = units.get("ground.scale.pga_horizontal")
+    v_unit = units.get("ground.scale.pga_vertical", h_unit)
+    scales = [(role, ground[f"scale_{role}"]) for role in ("horizontal", "vertical")
+              if ground.get(f"scale_{role}") is not None]
+    peaks = (f"peaks {acceleration_text(ground['pga_horizontal'], h_unit)} H, "
+             f"{acceleration_text(ground['pga_vertical'], v_unit)} V")
+    if not scales:
+        if ground["pga_horizontal"] == 0.0 and ground["pga_vertical"] == 0.0:
+            return "ground as applied: still (no record: a free vibration)"
+        return f"ground as applied: {peaks} (analytic pulses, not scaled)"
+    if len(scales) == 2 and f"{scales[0][1]:.4g}" == f"{scales[1][1]:.4g}":
+        factors = f"x{scales[0][1]:.4g}"
+    else:
+        factors = ", ".join(f"x{factor:.4g} {role[0].upper()}" for role, factor in scales)
+    return f"ground as applied: {peaks} (records {factors})"

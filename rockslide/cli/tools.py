@@ -1,0 +1,164 @@
+"""The smaller commands: ``info`` (a record), ``table1`` (the paper's Table 1), ``example`` (the
+shipped example) and ``criteria`` (mode-initiation maps)."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import click
+
+from ..errors import CaseError, OutputError
+from .app import _json_default, dpi_option, main, records_dir_option
+
+
+@main.command()
+@click.argument("record", type=click.Path(path_type=Path))
+@click.option("--format", "fmt", default=None,
+              help="File format (default: detected): at2, knet, column, values, or an obspy format.")
+@click.option("--units", default=None,
+              help="Acceleration unit of the values (g, gal, m/s^2) where the file does not say.")
+@click.option("--time-column", default=None,
+              help="Column text: 1-based number or header name of the time column.")
+@click.option("--column", default=None,
+              help="Column text: 1-based number or header name of the acceleration column.")
+@click.option("--dt", type=float, default=None, help="Sampling step [s] for the values format.")
+@click.option("--skip-lines", type=int, default=0, help="Header lines to skip (values format).")
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object.")
+def info(record, fmt, units, time_column, column, dt, skip_lines, as_json):
+    """Describe an accelerogram: format, dt, duration, units and peaks.
+
+    \b
+    Example:
+        rockslide info example/synthetic_kt_h.at2
+    """
+    from ..io.records import record_info
+
+    details = record_info(record, format=fmt, units=units, time_column=_column(time_column),
+                          column=_column(column), dt=dt, skip_lines=skip_lines)
+    if as_json:
+        click.echo(json.dumps(details, default=_json_default))
+        return
+    click.echo(f"{record}")
+    click.echo(f"  format    {details['format']}")
+    click.echo(f"  units     {details['units']} (converted to m/s^2)")
+    click.echo(f"  samples   {details['npts']}, dt = {details['dt']:g} s, "
+               f"duration {details['duration']:g} s, starts at {details['start']:g} s")
+    click.echo(f"  peak      {details['peak_gal']:.2f} gal = {details['peak_g']:.4f} g "
+               f"({'+' if details['peak_signed'] > 0 else '-'}) at t = {details['peak_time']:g} s")
+    click.echo(f"  mean      {details['mean'] / 0.01:.3f} gal")
+    click.echo(f"  sha256    {details['sha256']}")
+
+
+@main.command()
+@records_dir_option
+@click.option("--configs", type=click.Path(file_okay=False, path_type=Path), default=Path("configs/table1"),
+              show_default=True, help="Folder of the Table 1 case files.")
+@click.option("--out-dir", "out", type=click.Path(file_okay=False, path_type=Path),
+              default=Path("results"), show_default=True,
+              help="Where table1.md, table1.csv and fig05-fig10.png go (replaced).")
+@click.option("--out", "old_out", type=click.Path(file_okay=False, path_type=Path), default=None,
+              hidden=True, help="The former name of --out-dir.")
+def table1(records_dir, configs, out, old_out):
+    """Reproduce the paper's Table 1 and Figures 5-10 from its records (make table1), from the
+    repository's root (the case files are in configs/table1).
+
+    \b
+    Example:
+        rockslide table1 --records-dir ../shared/records --out-dir results
+    """
+    from ..analyses.table1 import reproduce
+    from ..io import records
+
+    if old_out is not None:
+        from click.core import ParameterSource
+
+        if click.get_current_context().get_parameter_source("out") is ParameterSource.COMMANDLINE:
+            raise CaseError("--out is the former name of --out-dir: give one of them", source="--out")
+        out = old_out
+    if not configs.is_dir():
+        raise CaseError("folder not found; expected the folder of the Table 1 case files "
+                        "(configs/table1 in the repository)", source=str(configs), field="--configs")
+    report = reproduce(configs, records.records_dir(records_dir), out)
+    for gravity, s in report["summary"].items():
+        click.echo(f"g = {gravity}: {s['verdicts']}/{s['rows']} verdicts match the paper, "
+                   f"{s['all']}/{s['rows']} verdicts and descriptions")
+    click.echo(f"wrote {', '.join(str(p) for p in report['files'])} and {len(report['figures'])} figures "
+               f"in {report['elapsed']:.1f} s")
+
+
+@main.command()
+@click.argument("folder", type=click.Path(file_okay=False, path_type=Path), default=Path("example"),
+                required=False)
+@click.option("--overwrite", is_flag=True, help="Replace the files if they exist.")
+def example(folder, overwrite):
+    """Write the shipped example into FOLDER (default: ./example): example.yaml, the paper's block on
+    the project's own synthetic records, and those two records (synthetic_kt_h.at2,
+    synthetic_kt_v.at2); suite-synthetic.yaml, a suite of six synthetic record pairs (in
+    suite-synthetic/) for 'rockslide fragility'; spectrum-one-sine.yaml, a block under a one-sine
+    pulse for overturning spectra. The examples of every command's --help work anywhere after it.
+
+    \b
+    Example:
+        rockslide example
+        rockslide run example/example.yaml
+    """
+    from ..io.example import write_example
+
+    paths = write_example(folder, overwrite=overwrite)
+    click.echo(f"wrote {', '.join(str(p) for p in paths)}")
+    click.echo(f"next: rockslide run {paths[0]}")
+
+
+@main.command()
+@click.option("--height", type=str, default="0.2 m", show_default=True, help="Block height.")
+@click.option("--width", type=str, default="0.1 m", show_default=True, help="Block width.")
+@click.option("--av", "vertical", type=str, default="-0.5g,0g,0.5g", show_default=True,
+              help="Vertical accelerations with units (g, gal, m/s^2), comma separated (one panel each).")
+@click.option("--ah-max", type=str, default="1.5g", show_default=True,
+              help="Largest |A_h| on the map, with a unit (g, gal, m/s^2).")
+@click.option("--mu-max", type=float, default=1.2, show_default=True, help="Largest mu on the map.")
+@click.option("-o", "--output", type=click.Path(dir_okay=False, path_type=Path), default=Path("criteria.png"),
+              show_default=True, help="PNG to write.")
+@click.option("--overwrite", is_flag=True, help="Replace an existing PNG.")
+@dpi_option("PNG")
+def criteria(height, width, vertical, ah_max, mu_max, output, overwrite, dpi):
+    """Draw the mode-initiation map (rest / slip / liftoff / liftoff-slip) of a block, from eqs. 6, 11, 26.
+
+    \b
+    Example:
+        rockslide criteria --height 0.2m --width 0.1m --av=-0.5g,0g,0.5g -o criteria.png
+    """
+    import numpy as np
+
+    from ..core import criteria as crit
+    from ..plots import criteria_figure, save_figure
+    from ..units import STANDARD_GRAVITY, parse_quantity
+
+    h = parse_quantity(height, "length", source="--height")
+    w = parse_quantity(width, "length", source="--width")
+    if h <= 0 or w <= 0:
+        raise CaseError("height and width must be positive lengths", source="--height/--width")
+    avs = [parse_quantity(v, "acceleration", source="--av") / STANDARD_GRAVITY
+           for v in vertical.split(",") if v.strip()]
+    ah_max = parse_quantity(ah_max, "acceleration", source="--ah-max") / STANDARD_GRAVITY
+    for option, value in (("--ah-max", ah_max), ("--mu-max", mu_max)):
+        if not (math.isfinite(value) and value > 0):
+            raise CaseError(f"expected a positive finite value, got {value:g}", source=option)
+    if not avs or any(not -1.0 < a for a in avs):
+        raise CaseError("each vertical acceleration must be above -1 g (the block would fly)", source="--av")
+    if not overwrite and (output.exists() or output.is_symlink()):
+        raise OutputError(f"{output} exists (use --overwrite to replace it)")
+    ah = np.linspace(0.0, ah_max, 301)
+    mu = np.linspace(0.0, mu_max, 241)
+    maps = [(f"A_v = {a:+.2f} g", crit.mode_map(ah, mu, a, w / 2, h / 2)) for a in avs]
+    figure = criteria_figure(ah, mu, maps, title=f"modes initiated from rest: {w:g} m wide, {h:g} m high")
+    save_figure(figure, output, overwrite=overwrite, dpi=dpi)
+    click.echo(f"wrote {output}")
+
+
+def _column(value):
+    if value is None:
+        return None
+    return int(value) if str(value).isdigit() else value

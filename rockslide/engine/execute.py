@@ -1,0 +1,494 @@
+"""Computing a plan: threads, an NVIDIA GPU or a dask.distributed cluster; progress and Ctrl-C.
+
+`compute` computes given chunks of a `plan.Plan` and stores each as it is done (`chunks.ChunkStore`
+or `chunks.MemoryStore`); `execute` is the whole orchestration every analysis uses: what a store
+already holds is reused, the free space is checked, the kernel compiled (and said so), a progress
+callback called, and the final states of every case returned.
+
+- **Where.** Locally on a pool of threads, one chunk per task (`batch.compute`, which releases the
+  GIL; a thread takes the next chunk as soon as it is done), or on a dask.distributed cluster: one
+  task per chunk (`batch.compute`) returning plain numpy arrays. Both give identical results. Or on
+  an NVIDIA GPU (``device="gpu"``, the optional extra ``rockslide[gpu]``: `core.gpu`, the same
+  kernel compiled for the device), many chunks per launch (`DEVICE_CASES_PER_LAUNCH`); the device
+  may round the last bits differently (fused multiply-adds).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .. import interrupts
+from ..core import batch
+from ..errors import CaseError, exception_text
+from .chunks import ChunkStore, MemoryStore, collect, missing_chunks
+from .plan import Plan, bytes_needed
+from .prepare import STEPS_PER_SECOND
+
+
+def compute(plan: Plan, store: ChunkStore, chunks: Sequence[int], *, workers: int | None = None,
+            scheduler: str | None = None, progress: Callable[[int], None] | None = None,
+            device: str = "cpu") -> None:
+    """Compute ``chunks`` of ``plan`` and store each as soon as it is done.
+
+    Parameters
+    ----------
+    plan : Plan
+    store : ChunkStore
+        Where finished chunks go.
+    chunks : sequence of int
+        The chunks to compute (the missing ones).
+    workers : int, optional
+        Threads for the local run (default: all cores).
+    scheduler : str, optional
+        Address of a dask.distributed scheduler: the chunks are computed there, one task each.
+    progress : callable, optional
+        Called with the number of cases of each finished chunk.
+    device : {"cpu", "gpu"}
+        Where a local run computes (`DEVICES`): the CPU's cores, or an NVIDIA GPU (`core.gpu`).
+
+    Raises
+    ------
+    CaseError
+        ``workers`` out of range, the scheduler cannot be reached, is lost, or a task fails there
+        (the chunks finished before are stored), or no GPU can be used (`check_device`).
+    interrupts.Interrupted
+        After Ctrl-C or SIGTERM, checked between chunk groups; the chunks finished before it are
+        stored.
+    """
+    check_device(device)
+    if scheduler:
+        _compute_dask(plan, store, chunks, scheduler, progress)
+    elif device == "gpu":
+        _compute_device(plan, store, chunks, progress)
+    else:
+        _compute_local(plan, store, chunks, workers, progress)
+
+
+#: Where a local sweep computes (``--device``).
+DEVICES = ("cpu", "gpu")
+
+
+#: Cases per launch of the GPU kernel: enough to fill a large GPU many times over (an H100 keeps
+#: some 10^4 to 10^5 threads of a register-heavy kernel resident) and to sort by work over many
+#: chunks, few enough for the progress bar and Ctrl-C to come every launch.
+DEVICE_CASES_PER_LAUNCH = 1 << 16
+
+
+def check_device(device: str) -> None:
+    """Refuse a ``--device`` that is not one of `DEVICES`, or ``gpu`` where no GPU run can be made
+    (numba-cuda not installed, no CUDA GPU or driver), with one line saying why."""
+    if device not in DEVICES:
+        raise CaseError(f"must be one of {', '.join(DEVICES)}, got {device!r}", source="--device")
+    if device == "gpu":
+        from ..core import gpu
+        try:
+            gpu.require_device()
+        except gpu.DeviceUnavailable as exc:
+            raise CaseError(str(exc), source="--device gpu") from None
+
+
+def _compute_device(plan, store, chunks, progress):
+    """The chunks on the GPU (`core.gpu.compute`), as many per launch as make up to
+    `DEVICE_CASES_PER_LAUNCH` cases (the device sorts a launch's cases by work); each chunk of a
+    launch is stored when the launch is done. Ctrl-C is checked between launches."""
+    from ..core import gpu
+
+    group: list[int] = []
+    cases = 0
+    for position, chunk in enumerate(chunks):
+        group.append(chunk)
+        cases += plan.chunk_indices(chunk).size
+        if cases < DEVICE_CASES_PER_LAUNCH and position + 1 < len(chunks):
+            continue
+        interrupts.check()
+        parts = [plan.chunk_indices(c) for c in group]
+        final = gpu.compute(*_chunk_inputs(plan, np.concatenate(parts)))
+        for c, indices, part in zip(group, parts, np.split(final, np.cumsum([p.size for p in parts])[:-1]),
+                                    strict=True):
+            store.save(c, indices, part)
+        if progress is not None:
+            progress(cases)
+        group, cases = [], 0
+    interrupts.check()
+
+
+def check_workers(workers: int | None) -> None:
+    """Refuse a ``--workers`` outside ``1 ... 4 x the cores`` (before any planning)."""
+    if workers is None:
+        return
+    limit = 4 * local_threads()
+    if isinstance(workers, bool) or not 1 <= int(workers) <= limit:
+        raise CaseError(f"must be within 1 ... {limit} (4 threads per core here), got {workers!r}",
+                        source="--workers")
+
+
+def _compute_local(plan, store, chunks, workers, progress):
+    """The chunks on a pool of threads running the compiled batch (`batch.run_batch` releases the
+    GIL), one chunk per task: each thread takes the next chunk as soon as it is done, so cases that
+    rock for a minute and cases at rest even out and every core is busy to the end. Each chunk is
+    stored as soon as it is done; Ctrl-C is checked while waiting, and the chunks being computed
+    are finished and kept."""
+    from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
+
+    check_workers(workers)
+    threads = int(workers) if workers is not None else local_threads()
+
+    def task(chunk: int) -> int:
+        if interrupts.requested() is not None:      # stopping: start no new chunk
+            return 0
+        indices = plan.chunk_indices(chunk)
+        store.save(chunk, indices, batch.compute(*_chunk_inputs(plan, indices)))
+        return indices.size
+
+    with ThreadPoolExecutor(max_workers=threads, thread_name_prefix="rockslide-sweep") as pool:
+        pending = {pool.submit(task, chunk) for chunk in chunks}
+        try:
+            while pending:
+                interrupts.check()
+                done, pending = wait(pending, timeout=0.2, return_when=FIRST_COMPLETED)
+                for future in done:
+                    cases = future.result()
+                    if progress is not None:
+                        progress(cases)
+        except BaseException:
+            for future in pending:
+                future.cancel()
+            raise
+    interrupts.check()
+
+
+def local_threads() -> int:
+    """Threads a local sweep uses by default: every core this process may run on."""
+    import os
+
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:                    # not on Linux
+        return os.cpu_count() or 1
+
+
+def _chunk_inputs(plan: Plan, indices: np.ndarray):
+    """`batch.compute`'s arguments for the cases ``indices``."""
+    return (plan.params[indices], plan.states[indices], plan.base, plan.first[indices],
+            plan.count[indices], plan.factor_h[indices], plan.factor_v[indices])
+
+
+#: [s] for the connection to a dask scheduler, and for a lost one to come back.
+SCHEDULER_TIMEOUT = 10.0
+
+
+def _compute_dask(plan, store, chunks, address, progress):
+    """One task per chunk on the cluster (`batch.compute`, serial in the task); each chunk is
+    stored as its result arrives. One bounded connection attempt (`identify_scheduler`), the
+    cluster's log messages kept off the terminal, Ctrl-C checked while waiting."""
+    try:
+        import distributed
+    except ImportError:  # pragma: no cover - a declared dependency
+        raise CaseError("needs dask.distributed (pip install 'dask[distributed]')",
+                        source="--scheduler") from None
+    address = scheduler_address(address)
+    with _quiet_logs("distributed", "tornado", "asyncio"):
+        identify_scheduler(address)
+        try:
+            client = distributed.Client(address, timeout=f"{SCHEDULER_TIMEOUT:g}s", set_as_default=False)
+        except (OSError, TimeoutError, ValueError) as exc:
+            raise CaseError(f"cannot connect to the dask scheduler at {address}: {exception_text(exc)}",
+                            source="--scheduler") from None
+        futures = {}
+        try:
+            base = client.scatter(plan.base, broadcast=True)
+            for chunk in chunks:
+                indices = plan.chunk_indices(chunk)
+                p, s, _, first, count, kh, kv = _chunk_inputs(plan, indices)
+                future = client.submit(batch.compute, p, s, base, first, count, kh, kv, pure=False)
+                futures[future] = (chunk, indices)
+            _collect_futures(client, futures, store, address, progress)
+        finally:
+            with contextlib.suppress(Exception):
+                if futures:
+                    client.cancel(list(futures))
+            with contextlib.suppress(Exception):
+                client.close(timeout=2)
+
+
+def _collect_futures(client, futures: dict, store: ChunkStore, address: str, progress) -> None:
+    """Store each chunk as its task finishes; Ctrl-C and a lost scheduler are noticed within a
+    fraction of a second and `SCHEDULER_TIMEOUT` respectively."""
+
+    lost_since = None
+    while futures:
+        interrupts.check()
+        finished = [f for f in futures if f.status in ("finished", "error", "cancelled", "lost")]
+        for future in finished:
+            chunk, indices = futures.pop(future)
+            if future.status != "finished":
+                if future.status == "error":
+                    exc = future.exception()
+                    raise CaseError(f"a task failed on the cluster: {type(exc).__name__}: {exception_text(exc)} "
+                                    "(are rockslide and its dependencies installed on the workers?)",
+                                    source="--scheduler")
+                raise _lost(address, store)
+            try:
+                states = np.asarray(future.result(timeout=SCHEDULER_TIMEOUT), dtype=np.float64)
+            except Exception:  # noqa: BLE001 - the result could not be fetched: the scheduler is gone
+                raise _lost(address, store) from None
+            store.save(chunk, indices, states)
+            if progress is not None:
+                progress(indices.size)
+        if client.status == "running":
+            lost_since = None
+        elif lost_since is None:
+            lost_since = time.monotonic()
+        elif time.monotonic() - lost_since > SCHEDULER_TIMEOUT:
+            raise _lost(address, store)
+        if not finished:
+            time.sleep(0.1)
+
+
+def _lost(address: str, store: ChunkStore) -> CaseError:
+    return CaseError(f"lost the connection to the dask scheduler at {address}; {store.count()} finished "
+                     f"chunks are kept in {store.folder} and the same command resumes from them",
+                     source="--scheduler")
+
+
+def scheduler_address(address: str) -> str:
+    """``tcp://HOST:PORT`` from ``--scheduler`` (``HOST:PORT`` taken as TCP), or a CaseError.
+
+    Only plain TCP: ``tls://`` needs certificates rockslide takes no options for, and ``inproc://``
+    exists only inside one Python process.
+    """
+    from urllib.parse import urlsplit
+
+    text = str(address).strip()
+    if "://" not in text:
+        text = f"tcp://{text}"
+    scheme = text.split("://", 1)[0].lower()
+    if scheme != "tcp":
+        raise CaseError(f"{scheme}:// addresses are not supported; expected tcp://HOST:PORT (a scheduler "
+                        "started with 'dask scheduler'; for TLS, reach it through an SSH tunnel)",
+                        source="--scheduler")
+    try:
+        parts = urlsplit(text)
+        host, port = parts.hostname, parts.port
+    except ValueError:
+        host = port = None
+    if not host or not port:
+        raise CaseError(f"expected an address like tcp://HOST:PORT, got {_shown(address)}",
+                        source="--scheduler")
+    return text
+
+
+def identify_scheduler(address: str, timeout: float | None = None) -> dict:
+    """Ask ``address`` who it is, within ``timeout`` seconds in all (default
+    :data:`SCHEDULER_TIMEOUT`): a dask scheduler answers the ``identity`` request; anything else
+    (nothing listening, an HTTP server) is a CaseError."""
+    timeout = SCHEDULER_TIMEOUT if timeout is None else timeout
+    import asyncio
+    import socket
+    from concurrent.futures import ThreadPoolExecutor
+    from urllib.parse import urlsplit
+
+    from distributed.comm import connect
+
+    parts = urlsplit(address)
+    try:
+        socket.create_connection((parts.hostname, parts.port), timeout=timeout).close()
+    except OSError as exc:       # refused, unreachable: at once (dask itself retries until its timeout)
+        raise CaseError(f"cannot connect to the dask scheduler at {address}: "
+                        f"{exc.strerror or exception_text(exc)}", source="--scheduler") from None
+
+    async def ask():
+        comm = await connect(address, timeout=timeout)
+        try:
+            await comm.write({"op": "identity", "reply": True})
+            return await comm.read()
+        finally:
+            comm.abort()
+
+    try:
+        with ThreadPoolExecutor(1) as pool:         # its own event loop, even under a running one
+            reply = pool.submit(asyncio.run, asyncio.wait_for(ask(), timeout)).result()
+    except (asyncio.TimeoutError, TimeoutError):
+        raise CaseError(f"no dask scheduler answered at {address} within {timeout:g} s (is something "
+                        "else listening there?)", source="--scheduler") from None
+    except Exception as exc:  # noqa: BLE001 - refused, reset, closed, a bad handshake
+        reason = getattr(exc, "strerror", None) or exception_text(exc)
+        raise CaseError(f"cannot connect to the dask scheduler at {address}: {reason}",
+                        source="--scheduler") from None
+    if not (isinstance(reply, dict) and reply.get("type") == "Scheduler"):
+        raise CaseError(f"{address} answers, but not as a dask scheduler", source="--scheduler")
+    return reply
+
+
+@contextlib.contextmanager
+def _quiet_logs(*prefixes: str):
+    """Keep the log messages of these libraries off the terminal (errors are reported in one line)."""
+    import logging
+
+    names = [n for n in list(logging.root.manager.loggerDict) if n.split(".")[0] in prefixes]
+    loggers = [logging.getLogger(n) for n in {*names, *prefixes}]
+    levels = [logger.level for logger in loggers]
+    for logger in loggers:
+        logger.setLevel(logging.CRITICAL + 1)
+    try:
+        yield
+    finally:
+        for logger, level in zip(loggers, levels, strict=True):
+            logger.setLevel(level)
+
+
+def _shown(text: str, limit: int = 80) -> str:
+    text = repr(str(text))
+    return text if len(text) <= limit else text[:limit - 4] + "...'"
+
+
+def work_estimate(plan: Plan, n_cases: int, *, workers: int | None = None) -> float:
+    """An upper estimate [s] of the time ``n_cases`` cases of ``plan`` take on this machine's
+    threads (every case moving until the end; cases at rest go about 3000 times faster)."""
+    threads = workers or local_threads()
+    return n_cases * plan.steps_per_case / (STEPS_PER_SECOND * threads)
+
+
+@dataclass
+class Execution:
+    """What `execute` did.
+
+    Attributes
+    ----------
+    states : float64[n, N_STATE]
+        The final kernel state of every case of the plan, in its flat order.
+    computed : int
+        Cases computed now (the others were in the store).
+    seconds : float
+        [s] Wall time spent computing them.
+    store : ChunkStore or MemoryStore
+        Where the chunks are (the caller removes an on-disk store once its result is written).
+    """
+
+    states: np.ndarray
+    computed: int
+    seconds: float
+    store: object
+
+
+def check_where(*, workers: int | None = None, scheduler: str | None = None, device: str = "cpu") -> str | None:
+    """Refuse ``workers``, ``scheduler`` and ``device`` that do not go together, ``workers`` out of
+    range, and ``device="gpu"`` where no GPU can be used, before any planning (one line each,
+    naming the command-line option). Returns the scheduler's address as ``tcp://HOST:PORT``."""
+    if workers is not None and scheduler:
+        raise CaseError("sets the local threads; with --scheduler the cluster's workers compute",
+                        source="--workers")
+    if device != "cpu" and scheduler:
+        raise CaseError("with --scheduler the cluster's workers compute, on their CPUs", source="--device")
+    if device != "cpu" and workers is not None:
+        raise CaseError("sets the CPU threads; with --device gpu the GPU computes", source="--workers")
+    check_workers(workers)
+    check_device(device)
+    return scheduler_address(scheduler) if scheduler else None
+
+
+def execute(plan: Plan, store=None, *, workers: int | None = None, scheduler: str | None = None,
+            device: str = "cpu", progress: Callable[[int], None] | None = None,
+            report: Callable[[str], None] | None = None, what: str = "study", label: str = "",
+            description: str = "", unit: str = "case", free_space_at: Path | None = None) -> Execution:
+    """Compute what ``store`` does not hold yet of ``plan``, and return every case's final state.
+
+    The one orchestration of every analysis: the chunks ``store`` holds are reused (a damaged one is
+    computed again), the free space for the rest is checked, the kernel is compiled if it must be
+    (said through ``report``), and ``progress`` is told of each finished chunk.
+
+    Parameters
+    ----------
+    plan : Plan
+    store : ChunkStore or MemoryStore, optional
+        Where finished chunks go (default: a `MemoryStore`, nothing written to disk).
+    workers, scheduler, device
+        Where to compute (`compute`).
+    progress : callable, optional
+        Called with the number of cases of each finished chunk (and once with those reused).
+    report : callable, optional
+        Called with each note for the user (what is reused, a first compile, a long study).
+    what, label, description, unit : str
+        How the notes name the study (``"sweep"``, the case's name, ``"41 mu x 37 pga = 1517
+        cases"``, ``"case"``).
+    free_space_at : Path, optional
+        The folder whose disk must hold the chunks and the result.
+
+    Raises
+    ------
+    CaseError
+        As `compute`.
+    OutputError
+        Too little free space; a chunk vanished from the store meanwhile.
+    interrupts.Interrupted
+        Ctrl-C or SIGTERM: the chunks finished before are in ``store``.
+    """
+    say = report if report is not None else (lambda text: None)
+    store = MemoryStore(plan.key) if store is None else store
+    store.remove_stale_temporaries()
+    for other in store.others():
+        say(f"  note: {other} holds chunks of another {what} definition (not used; delete it to free the space)")
+    missing = missing_chunks(plan, store)
+    for chunk, reason in sorted(store.damaged.items()):
+        say(f"  note: {store.path(chunk)} cannot be used ({reason}); computing it again")
+    reused = plan.n_chunks - len(missing)
+    reused_cases = plan.n_cases - sum(plan.chunk_indices(c).size for c in missing)
+    where = (f"on the dask scheduler {scheduler}" if scheduler else
+             "on this machine's GPU" if device == "gpu" else "on this machine")
+    if description:
+        say(f"{what} {label}: {description} in {plan.n_chunks} chunks, {where}")
+    if reused:
+        say(f"  reused {reused} of {plan.n_chunks} chunks ({reused_cases} {unit}s) from {store.folder}")
+    if work_estimate(plan, plan.n_cases - reused_cases, workers=workers) > 60:
+        say(f"  up to {plan.steps_per_case:.3g} integration steps per {unit} (far fewer for {unit}s at rest "
+            "or overturned): the progress bar shows the time left")
+    if free_space_at is not None:
+        from ..io import files
+        files.require_free_space(Path(free_space_at), bytes_needed(plan, len(missing)), f"the {what}")
+    if not scheduler and missing:
+        warm_up(device, say)
+    if progress is not None and reused_cases:
+        progress(reused_cases)
+    started = time.perf_counter()
+    compute(plan, store, missing, workers=workers, scheduler=scheduler, progress=progress, device=device)
+    seconds = time.perf_counter() - started
+    return Execution(collect(plan, store), plan.n_cases - reused_cases, seconds, store)
+
+
+def warm_up(device: str, say: Callable[[str], None]) -> None:
+    """Compile the batch kernel (or the device kernel) before the clock starts, saying so when it
+    takes a while: a first compile on a new CPU, a new numba or an edited kernel."""
+    if device == "gpu":
+        from ..core import gpu
+        compiling = time.perf_counter()
+        gpu.warm_up()
+        if time.perf_counter() - compiling > 3.0:
+            say(f"  compiled the device kernel in {time.perf_counter() - compiling:.0f} s (once after "
+                "each change of the kernel)")
+        return
+    note = first_compile_note(batch.run_batch, "the batch kernel")
+    if note:
+        say(note)
+    batch.warm_up()
+
+
+def first_compile_note(dispatcher, what: str = "the numerical kernel") -> str | None:
+    """What to say before a compile: when ``dispatcher``'s machine code is not in numba's cache yet
+    (`compiled.is_warm`: the package build puts it there, so this is a new CPU, a new numba or an
+    edited kernel), or when no cache folder can be written at all; None when it is cached."""
+    from ..core import compiled
+
+    if compiled.CACHE_IS_TEMPORARY:
+        return (f"rockslide: compiling {what} in memory, for this process only (about a minute): neither the "
+                "installation nor the user's cache folder can be written; set NUMBA_CACHE_DIR to a writable "
+                "folder to keep it")
+    if not compiled.is_warm(dispatcher):
+        return (f"rockslide: compiling {what} for this machine (once, about a minute on 2 cores; cached in "
+                f"{compiled.cache_folder(dispatcher)})")
+    return None
