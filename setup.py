@@ -5,7 +5,7 @@ Everything else about the package is in ``pyproject.toml``. After setuptools has
 package (in its build folder, or in place for an editable install), `CompileCore` runs two steps
 there, each in a child process:
 
-1. `rockslide.core.compiled.precompile`: numba's cache of the core, in ``rockslide/core/__pycache__``,
+1. `rockslide.core.build.precompile`: numba's cache of the core, in ``rockslide/core/__pycache__``,
    for the sweeps, the fragility analyses and the GPU path (numba's JIT). numba (0.68 on) keys that
    cache on the content of the source files, the numba version and the CPU, so it serves the
    installation on this machine as long as pip gives the build and the installation the same numba
@@ -30,7 +30,7 @@ from setuptools.command.build_py import build_py
 from setuptools.dist import Distribution
 
 STEPS = (
-    ("numba's cache of the numerical core", "from rockslide.core import compiled; compiled.precompile()"),
+    ("numba's cache of the numerical core", "from rockslide.core import build; build.precompile()"),
     ("the ahead-of-time module of a single run", "from rockslide.core import native; native.build()"),
 )
 

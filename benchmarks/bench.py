@@ -51,7 +51,7 @@ def cpu(fn, repeat=3):
 
 def speed(quick: bool) -> dict:
     out = {}
-    R, alpha, _ = Model.from_block(0.2, 0.1, 1, 1, 1).constants
+    R, alpha, _ = Model.from_block(0.1, 0.2, 1, 1, 1).constants
     still = ground_array(np.zeros(2501), np.zeros(2501), 0.02)                # 50 s, 200 steps per interval
     n_plain = still.shape[1] * 200
     plain_rk4_rocking(still[:, :1], 200, 1e-4, 0.02, R, alpha, 9.80665, 1.0, 0.1, 0.0, 1.0)     # compile or load
@@ -59,7 +59,7 @@ def speed(quick: bool) -> dict:
     out["baseline: a plain compiled RK4 rocking loop (no events, no bookkeeping; benchmarks/baseline.py)"] = (
         n_plain / seconds, "steps/s")
     duration = 20.0 if quick else 60.0
-    rocking = Model.from_block(0.2, 0.1, 10.0, 10.0, 1.0)          # e = 1: rocks the whole time
+    rocking = Model.from_block(0.1, 0.2, 10.0, 10.0, 1.0)          # e = 1: rocks the whole time
     n = int(duration / 0.02) + 1
     zeros = np.zeros(n)
     simulate(rocking, 0.02, zeros[:11], zeros[:11], Settings(rotation=0.1))     # compile / load cache
@@ -73,7 +73,7 @@ def speed(quick: bool) -> dict:
     # at rest: 600 s of weak motion below every threshold
     t = np.arange(0.0, 600.0, 0.01)
     weak = 0.5 * np.sin(2 * np.pi * 2.0 * t)
-    standing = Model.from_block(0.2, 0.1, 0.5, 0.5, 0.8)
+    standing = Model.from_block(0.1, 0.2, 0.5, 0.5, 0.8)
     seconds, r = cpu(lambda: simulate(standing, 0.01, weak, 0.3 * weak, Settings(history_every=0)))
     assert r.summary.states_seen == ["REST"]
     out["at rest: CPU time per second of record"] = (seconds / 600.0 * 1e6, "us")
@@ -112,7 +112,7 @@ def full_run_wall_time() -> dict:
 
 def case_free_rocking():
     """(a) Free rocking from 0.1 rad, e = 1: time of the 10th impact, exact by quadrature."""
-    model = Model.from_block(0.2, 0.1, 10.0, 10.0, 1.0)
+    model = Model.from_block(0.1, 0.2, 10.0, 10.0, 1.0)
     R, alpha, p2 = model.constants
     # Exact quarter period: cos(alpha - th0) - cos(alpha - th) = 2 sin(alpha - (th0 + th)/2) sin((th0 - th)/2)
     # (no cancellation near th0); the 1/sqrt(th0 - th) singularity is quad's algebraic weight.
@@ -141,7 +141,7 @@ def _sine_pulse(amplitude, frequency, cycles=1.0, dt=0.005, tail=1.5):
 
 def case_overturning_pulse():
     """(b) One-sine pulse that overturns the paper's block (high friction): overturn time."""
-    model = Model.from_block(0.2, 0.1, 0.9, 0.855, 0.8)
+    model = Model.from_block(0.1, 0.2, 0.9, 0.855, 0.8)
     dt_rec, ah, _ = _sine_pulse(0.9 * 9.80665, 2.0)
     av = np.zeros_like(ah)
     ref = simulate_reference(model, dt_rec, ah, av, Settings(history_every=0)).summary
@@ -157,7 +157,7 @@ def case_overturning_pulse():
 def case_interaction_pulse():
     """(c) Two-cycle pulse with vertical motion: liftoff-slip interaction; residual slip and max
     rotation against the reference solver."""
-    model = Model.from_block(0.2, 0.1, 0.52, 0.494, 0.8)
+    model = Model.from_block(0.1, 0.2, 0.52, 0.494, 0.8)
     dt_rec, ah, t = _sine_pulse(0.62 * 9.80665, 2.5, cycles=2.0)
     av = np.where(t <= 0.8, 0.3 * 9.80665 * np.sin(2 * np.pi * 5.0 * t), 0.0)
     ref = simulate_reference(model, dt_rec, ah, av, Settings(history_every=0)).summary
@@ -190,7 +190,7 @@ def case_real_record(mu=0.55, label="(d)"):
     ground = rec.combine(h, v, pga_horizontal=8.0)
     n = int(20.0 / ground.dt) + 1
     ah, av = ground.horizontal[:n], ground.vertical[:n]
-    model = Model.from_block(0.2, 0.1, mu, 0.95 * mu, 0.8)
+    model = Model.from_block(0.1, 0.2, mu, 0.95 * mu, 0.8)
     ref = simulate_reference(model, ground.dt, ah, av, Settings(history_every=0)).summary
     exact = {"max rotation": ref.max_rotation, "residual slip": ref.residual_slip,
              "overturn time": ref.overturn_time if ref.overturned else math.nan}

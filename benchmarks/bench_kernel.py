@@ -111,7 +111,7 @@ def baseline_on(ground: np.ndarray, model: Model, steps: float = 0.0):
 # --------------------------------------------------------------------------------------------------
 
 def rocking(repeats: int, duration: float) -> dict:
-    model = Model.from_block(0.2, 0.1, 10.0, 10.0, 1.0)          # no slip; e = 1: rocks throughout
+    model = Model.from_block(0.1, 0.2, 10.0, 10.0, 1.0)          # no slip; e = 1: rocks throughout
     zeros = np.zeros(int(round(duration / DT_REC)) + 1)
     ground = still(duration)
     out = {}
@@ -134,7 +134,7 @@ def rest(repeats: int) -> dict:
     `simulate` from the samples."""
     t = np.arange(0.0, 600.0, DT_REC)
     weak = 0.5 * np.sin(2 * np.pi * 2.0 * t)                      # 0.05 g: far below mu g, g tan(alpha)
-    model = Model.from_block(0.2, 0.1, 0.5, 0.5, 0.8)
+    model = Model.from_block(0.1, 0.2, 0.5, 0.5, 0.8)
     settings = Settings(history_every=0)
     ground = ground_array(weak, 0.3 * weak, DT_REC)
     bounds = K.rest_bounds(ground)
@@ -267,7 +267,7 @@ def main(argv=None) -> None:
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
         case, axes = rocking_grid(folder)
-        model = Model.from_block(0.2, 0.1, 1.0, 0.95, 0.8)
+        model = Model.from_block(0.1, 0.2, 1.0, 0.95, 0.8)
         (median, low, high, speed), run = sweep_ratio(case, axes, folder, still(60.0), model,
                                                       repeats)
         moving = 1.0 - run["shares"]["REST"] / (run["cases"] * run["duration"])
@@ -282,7 +282,7 @@ def main(argv=None) -> None:
                      "Kobe figures are left out.")
     else:
         case, axes = kobe_grid(kobe)
-        kobe_model = Model.from_block(0.2, 0.1, 0.52, 0.494, 0.8)
+        kobe_model = Model.from_block(0.1, 0.2, 0.52, 0.494, 0.8)
         ground = still(run_duration(case))
         (median, low, high, speed), run = sweep_ratio(case, axes, kobe, ground, kobe_model, repeats)
         table.append(f"| `sweep --workers 1`, the paper's Kobe grid ({run['cases']} cases, {run['steps']:.3g} "

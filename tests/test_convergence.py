@@ -46,7 +46,7 @@ def _smooth_input(duration):
 def _smooth_final_state(dt, mode):
     """Released at 0.1 rad rising at 1 rad/s under a sine input; state at t = 0.2 s, before the
     first impact (no event at all: checked)."""
-    model = Model.from_block(0.2, 0.1, 10.0, 10.0, 0.8)
+    model = Model.from_block(0.1, 0.2, 10.0, 10.0, 0.8)
     ah, av = _smooth_input(0.2)
     result = simulate(model, DT_RECORD, ah, av, Settings(dt=dt, events=mode, rotation=0.1,
                                                          rotation_rate=1.0))
@@ -79,7 +79,7 @@ def test_liftoff_from_rest_located_stays_fourth_order():
     """From rest under a sine input stronger than tan(alpha) g: the liftoff is found exactly (REST's
     exits are linear in time) and the ROCK integration restarts mid-step, so located events keep
     RK4's order on a state at a fixed time after the liftoff."""
-    model = Model.from_block(0.2, 0.1, 10.0, 10.0, 0.8)
+    model = Model.from_block(0.1, 0.2, 10.0, 10.0, 0.8)
     t = np.arange(0.0, 0.3 + 0.5 * DT_RECORD, DT_RECORD)
     ah = 0.9 * G0 * np.sin(2 * np.pi * 2.0 * t)
     av = 0.2 * G0 * np.sin(2 * np.pi * 3.0 * t + 0.4)
@@ -106,7 +106,7 @@ IMPACT_STEPS = [2e-3, 1e-3, 5e-4, 2.5e-4, 1.25e-4, 6.25e-5]
 
 
 def _third_impact_errors(mode, steps, theta0s):
-    model = Model.from_block(0.2, 0.1, 10.0, 10.0, 1.0)
+    model = Model.from_block(0.1, 0.2, 10.0, 10.0, 1.0)
     R, alpha, p2 = model.constants
     errors = np.zeros((len(theta0s), len(steps)))
     for i, theta0 in enumerate(theta0s):
@@ -128,7 +128,7 @@ def test_impact_times_located_are_accurate_at_any_step():
     steps = IMPACT_STEPS[:4]
     theta0s = THETA0S[::3]
     errors = np.abs(_third_impact_errors("located", steps, theta0s))
-    model = Model.from_block(0.2, 0.1, 10.0, 10.0, 1.0)
+    model = Model.from_block(0.1, 0.2, 10.0, 10.0, 1.0)
     R, alpha, p2 = model.constants
     for i, theta0 in enumerate(theta0s):
         t_event = 5 * quarter_period(theta0, alpha, p2)

@@ -22,8 +22,24 @@ LINT_IMPORTS = shutil.which("lint-imports", path=str(Path(sys.executable).parent
 def test_import_contracts_hold():
     """The numerical core imports no outer layer and no I/O library; layers go one way
     (pyproject.toml, [tool.importlinter])."""
-    done = subprocess.run([LINT_IMPORTS], cwd=REPO, capture_output=True, text=True)
+    done = subprocess.run([LINT_IMPORTS, "--no-cache"], cwd=REPO, capture_output=True, text=True)
     assert done.returncode == 0, done.stdout[-2000:]
+
+
+def test_no_package_of_rockslide_imports_itself_in_a_circle():
+    """Within each package (the core, the engine, the analyses, the files, the command line), no
+    module imports another that imports it back, directly or not, at any level of the code
+    (function-level imports count: they are dependencies too)."""
+    grimp = pytest.importorskip("grimp")
+    graph = grimp.build_graph("rockslide")
+    circles = []
+    for package in ("rockslide.core", "rockslide.engine", "rockslide.analyses", "rockslide.io", "rockslide.cli"):
+        modules = sorted(m for m in graph.modules if m.startswith(package + "."))
+        for a in modules:
+            for b in graph.find_modules_directly_imported_by(a):
+                if b in modules and graph.find_shortest_chain(importer=b, imported=a):
+                    circles.append((a, b))
+    assert circles == []
 
 
 def test_the_core_imports_without_io_libraries():

@@ -267,3 +267,63 @@ def test_a_vertical_pulse_that_lifts_the_block_is_a_status_with_its_time(tmp_pat
     stored = results.read_dataset(tmp_path / "example.sweep.h5", format=results.SWEEP_FORMAT).variables
     assert summary.status == "flight" and 5.0 < summary.end_time < 5.1
     assert float(np.ravel(stored["end_time"][1])[0]) == summary.end_time
+
+
+# ------------------------------------------------------------------------------------------------
+# Where a study computes (issue 26): the device gets big launches; --device auto
+# ------------------------------------------------------------------------------------------------
+
+
+def test_the_device_gets_many_chunks_per_launch(monkeypatch):
+    """The example's 1517-case grid in chunks of 16 (95 chunks) goes to the device in one launch,
+    and each chunk is still stored on its own (resume works as on the CPU)."""
+    from rockslide.analyses import sweep as sw
+    from rockslide.core import batch, gpu
+    from rockslide.engine import chunks
+    from rockslide.engine import execute as ex
+
+    case = rockslide.load_case(REPO / "configs" / "example.yaml")
+    plan = sw.plan_sweep(case, [sw.parse_axis("mu", "0.30:0.70:0.01"), sw.parse_axis("pga", "100gal:1000gal:25gal")],
+                         records_dir=REPO / "records", chunk_size=16)
+    launches = []
+
+    def device(*inputs):
+        launches.append(inputs[0].shape[0])
+        return batch.compute(*inputs)
+
+    monkeypatch.setattr(ex, "check_device", lambda device: None)
+    monkeypatch.setattr(gpu, "compute", device)
+    store = chunks.MemoryStore(plan.key)
+    ex.compute(plan, store, range(plan.n_chunks), device="gpu")
+    assert plan.n_chunks == 95 and launches == [1517]
+    assert store.count() == 95
+    cpu = chunks.MemoryStore(plan.key)
+    ex.compute(plan, cpu, range(plan.n_chunks), workers=1)
+    assert np.array_equal(chunks.collect(plan, store), chunks.collect(plan, cpu), equal_nan=True)
+
+
+def test_device_auto_takes_the_gpu_only_where_it_pays(monkeypatch):
+    from rockslide.core import gpu
+    from rockslide.engine import execute as ex
+
+    def missing():
+        raise gpu.DeviceUnavailable("no CUDA GPU found")
+
+    monkeypatch.setattr(gpu, "require_device", missing)
+    assert ex.choose_device("auto", 10**6) == ("cpu", "no usable GPU: no CUDA GPU found")
+    monkeypatch.setattr(gpu, "require_device", lambda: object())
+    monkeypatch.setattr(gpu, "cuda_simulator", lambda: True)
+    assert ex.choose_device("auto", 10**6)[0] == "cpu"
+    monkeypatch.setattr(gpu, "cuda_simulator", lambda: False)
+    assert ex.choose_device("auto", ex.AUTO_GPU_CASES) == ("gpu", f"{ex.AUTO_GPU_CASES} cases, enough to fill it")
+    device, why = ex.choose_device("auto", ex.AUTO_GPU_CASES - 1)
+    assert device == "cpu" and f"pays from about {ex.AUTO_GPU_CASES}" in why
+    assert ex.choose_device("cpu", 10**6) == ("cpu", "") and ex.choose_device("gpu", 1) == ("gpu", "")
+
+
+def test_device_auto_says_where_and_why(tmp_path):
+    write_case(tmp_path, {})
+    result = invoke("sweep", tmp_path / "case.yaml", "--mu", "0.3,0.5", "--device", "auto", "--out-dir", tmp_path,
+                    "--no-plot", "--no-progress")
+    assert result.exit_code == 0, result.output
+    assert "on this machine (--device auto: " in result.output

@@ -58,7 +58,7 @@ FREE_CASES = [  # (height, width, theta0)
 @pytest.mark.parametrize("height,width,theta0", FREE_CASES)
 def test_free_rocking_elastic_impacts_at_odd_multiples_of_the_quarter_period(height, width, theta0):
     """e = 1: impacts at T, 3T, 5T, ... (100 impacts = 50 cycles), alternating edges, within 1e-8 s."""
-    model = Model.from_block(height, width, 10.0, 10.0, 1.0)
+    model = Model.from_block(width, height, 10.0, 10.0, 1.0)
     R, alpha, p2 = model.constants
     T = quarter_period(abs(theta0), alpha, p2)
     n = 100
@@ -81,7 +81,7 @@ def test_free_rocking_elastic_peak_never_changes(height, width, theta0):
     (1/2) |thetaddot_peak| (h/2)^2 with thetaddot_peak = -p^2 sin(alpha - theta0) (+1% margin);
     it may exceed theta0 only by the integration error: ~1e5 steps of RK4 at local error
     (p h)^5 theta0 < 1e-15 theta0 plus rounding (<= 1e5 eps theta0 = 2e-11 theta0): 1e-10 theta0."""
-    model = Model.from_block(height, width, 10.0, 10.0, 1.0)
+    model = Model.from_block(width, height, 10.0, 10.0, 1.0)
     R, alpha, p2 = model.constants
     T = quarter_period(abs(theta0), alpha, p2)
     n = 100
@@ -106,7 +106,7 @@ def test_free_rocking_elastic_peak_never_changes(height, width, theta0):
 def test_free_rocking_inelastic_impact_sequence(e, theta0):
     """e < 1: each impact multiplies the rate by e; the time between impacts k and k+1 is twice
     the quarter period of the peak reached with the reduced rate. All impact times within 1e-8 s."""
-    model = Model.from_block(0.2, 0.1, 10.0, 10.0, e)
+    model = Model.from_block(0.1, 0.2, 10.0, 10.0, e)
     R, alpha, p2 = model.constants
     result = _free(model, 3.0, rotation=theta0)
     ev = result.events
@@ -130,7 +130,7 @@ def test_free_rocking_inelastic_ends_at_rest(mode, e, theta0):
     1e-12 rad (for e = 0.8 from 0.2 rad, ~115 impacts: the count is finite and bounded). With
     e = 0 there is no rebound: the first impact is a flat landing (decision 2) that stops the block
     (mu = 10 > 1 / tan(alpha), the friction a plastic landing needs)."""
-    model = Model.from_block(0.2, 0.1, 10.0, 10.0, e)
+    model = Model.from_block(0.1, 0.2, 10.0, 10.0, e)
     R, alpha, p2 = model.constants
     result = _free(model, 4.0, mode=mode, rotation=theta0)
     s, hist = result.summary, result.history
@@ -179,7 +179,7 @@ ENERGY_CASES = {   # name: (mu, e, rotation, slip_rate)
 
 def _energy_run(name, mode):
     mu, e, rot, xd = ENERGY_CASES[name]
-    model = Model.from_block(0.2, 0.1, mu, mu, e)
+    model = Model.from_block(0.1, 0.2, mu, mu, e)
     return model, _free(model, 2.0, mode=mode, rotation=rot, slip_rate=xd)
 
 
@@ -228,7 +228,7 @@ def test_energy_never_rises_at_rockslip_impacts_with_restitution(mu, e, rotation
     """Free liftoff-slip interaction with impacts (the cases that found the 0.1 impact rule adding
     energy when the block slid toward the landing edge): the mechanical energy never rises, impacts
     included (per sample, 1e-12 E0: RK4's energy error), and the run has impacts of the slip branch."""
-    model = Model.from_block(0.2, 0.1, mu, mu, e)
+    model = Model.from_block(0.1, 0.2, mu, mu, e)
     result = _free(model, 1.0, rotation=rotation, slip_rate=slip_rate)
     E = mechanical_energy(model, result.history)
     assert np.diff(E).max() <= 1e-12 * E[0]
@@ -241,7 +241,7 @@ def test_impact_loss_is_the_sum_of_per_impact_losses_each_non_negative(mu, e, ro
     """The ledger's impact loss is the sum of the event log's per-impact losses (to rounding,
     1e-12 of the initial energy), each >= 0: a negative loss would be an impact that creates energy,
     a bug. The balance closes (1e-10 E0, the RK4 ledger)."""
-    model = Model.from_block(0.2, 0.1, mu, mu, e)
+    model = Model.from_block(0.1, 0.2, mu, mu, e)
     result = _free(model, 1.0, rotation=rotation, slip_rate=slip_rate)
     energy, ev = result.summary.energy, result.events
     impacts = ev[ev["impact"] != b""]
@@ -265,7 +265,7 @@ def test_a_peak_exactly_at_the_liftoff_threshold_does_not_lift_off(mode, sign):
     binary) touches the threshold without passing it, and the block stays at rest. (v0.1 took the
     touch at the end of the rising interval for a crossing: liftoff and liftoff-end at one instant.)
     A peak one ulp above lifts it off."""
-    model = Model.from_block(0.2, 0.1, 10.0, 10.0, 0.8)
+    model = Model.from_block(0.1, 0.2, 10.0, 10.0, 0.8)
     peak = 0.5 * G0
     for value, lifts in ((peak, False), (np.nextafter(peak, np.inf), True)):
         ah = sign * np.array([0.0, 0.3 * G0, value, 0.2 * G0, 0.0])
@@ -281,7 +281,7 @@ def test_ramp_thresholds_located(k, av, kind):
     within 1e-8 s (REST's exits are computed in closed form: observed error ~1e-16 s). lam =
     sign(ah) (eq. 7), sigma = -sign(ah) (model.md)."""
     mu = 10.0 if kind == "liftoff" else 0.2
-    model = Model.from_block(0.2, 0.1, mu, 0.8 * mu, 0.8)
+    model = Model.from_block(0.1, 0.2, mu, 0.8 * mu, 0.8)
     ratio = 0.5 if kind == "liftoff" else mu
     exact = ratio * (G0 + av) / abs(k)
     dt_record = 1e-3
@@ -301,7 +301,7 @@ def test_ramp_thresholds_located(k, av, kind):
 def test_ramp_thresholds_step_end(k, mu):
     """Step-end switching moves the threshold crossing to the end of its step (decision 1: with
     mu = tan(alpha) = 0.5 the block slips): t_event = ceil(t_exact / h) h (to 1e-12 s rounding)."""
-    model = Model.from_block(0.2, 0.1, mu, 0.8 * mu, 0.8)
+    model = Model.from_block(0.1, 0.2, mu, 0.8 * mu, 0.8)
     exact = min(mu, 0.5) * G0 / abs(k)
     dt_record = 1e-3
     t = np.arange(0.0, exact + 0.05, dt_record)
@@ -324,7 +324,7 @@ def test_pure_slip_under_constant_acceleration_is_a_parabola(mode, ah, av):
     off during SLIP: |xddot + ah| = nu G < tan(alpha) G). RK4 integrates the parabola exactly:
     rounding only, 1e4 steps x a few eps relative: 1e-11 of the largest |x| and |xdot|."""
     mu, nu = 0.3, 0.25
-    model = Model.from_block(0.2, 0.1, mu, nu, 0.8)
+    model = Model.from_block(0.1, 0.2, mu, nu, 0.8)
     result = simulate(model, 0.01, np.full(101, ah), np.full(101, av), Settings(events=mode))
     hist = result.history
     assert _causes(result) == ["slip-start"] and result.events[0]["time"] == 0.0
@@ -370,7 +370,7 @@ def test_stepped_acceleration_slip_stops_exactly_located(A):
     at nu g and sticks: slip-stop time and final slip in closed form (cubic in time: RK4 exact;
     root finder to 1e-13 h). Tolerances 1e-10 s and 1e-12 m (rounding of ~5e3 steps)."""
     mu, nu, t1, dt_record = 0.4, 0.3, 0.3, 1e-3
-    model = Model.from_block(0.2, 0.1, mu, nu, 0.8)
+    model = Model.from_block(0.1, 0.2, mu, nu, 0.8)
     result = simulate(model, dt_record, _pulse(A, t1, dt_record, 1.5), np.zeros(1501), Settings())
     t_stop, x_end = _pulse_slip_exact(A, t1, dt_record, nu)
     assert _causes(result) == ["slip-start", "slip-stop"]
@@ -386,7 +386,7 @@ def test_stepped_acceleration_slip_stops_step_end(A):
     """Step-end: the stop is taken at the end of its step; in between the block has accelerated
     backwards at nu g for delta < h, so the slip differs by (1/2) nu g delta^2 <= (1/2) nu g h^2."""
     mu, nu, t1, dt_record = 0.4, 0.3, 0.3, 1e-3
-    model = Model.from_block(0.2, 0.1, mu, nu, 0.8)
+    model = Model.from_block(0.1, 0.2, mu, nu, 0.8)
     result = simulate(model, dt_record, _pulse(A, t1, dt_record, 1.5), np.zeros(1501),
                       Settings(events="step-end"))
     h = result.step
@@ -406,7 +406,7 @@ def test_newmark_rectangular_pulse(A_over_mu_g, sign):
     relative (1.05 d / t1). The exact piecewise-linear answer holds to 1e-12 relative."""
     mu, t1, d = 0.3, 0.2, 1e-3
     A = sign * A_over_mu_g * mu * G0
-    model = Model.from_block(0.1, 1.0, mu, mu, 0.8)
+    model = Model.from_block(1.0, 0.1, mu, mu, 0.8)
     duration = t1 * A_over_mu_g + 0.5
     ah = _pulse(A, t1, d, duration)
     result = simulate(model, d, ah, np.zeros(ah.size), Settings())
@@ -434,7 +434,7 @@ def test_newmark_exact_rectangular_pulse_as_interval_values(A_over_mu_g, sign):
     as written back (`simulate.ground_series`) repeats the jump times with both values."""
     mu, t1, d = 0.3, 0.2, 1e-3
     A = sign * A_over_mu_g * mu * G0
-    model = Model.from_block(0.1, 1.0, mu, mu, 0.8)
+    model = Model.from_block(1.0, 0.1, mu, mu, 0.8)
     n_pulse = round(t1 / d)
     values = np.zeros((2, n_pulse + round((t1 * A_over_mu_g + 0.5) / d)))
     values[:, :n_pulse] = A
@@ -469,7 +469,7 @@ def test_mirror_symmetry(mode):
     involve rocking, the slip direction for events that involve slipping (otherwise they are the
     kernel's unused defaults)."""
     dt_record, ah, av = _mirror_input()
-    model = Model.from_block(0.2, 0.1, 0.53, 0.8 * 0.53, 0.8)
+    model = Model.from_block(0.1, 0.2, 0.53, 0.8 * 0.53, 0.8)
     settings = Settings(events=mode, tail=0.5)
     a = simulate(model, dt_record, ah, av, settings)
     b = simulate(model, dt_record, -ah, av, settings)
@@ -513,7 +513,7 @@ def test_overturning_under_a_long_constant_pulse(mode, A):
     so that time is a quadrature of the energy equation under a constant push. The kernel
     interpolates it linearly within the step: error <= thetaddot h^2 / (8 thetadot) at alpha
     (+10%), with thetaddot = p^2 |ah| / g there."""
-    model = Model.from_block(0.2, 0.1, 10.0, 10.0, 0.8)
+    model = Model.from_block(0.1, 0.2, 10.0, 10.0, 0.8)
     R, alpha, p2 = model.constants
     dt_record = 1e-3
     n = 2001
@@ -554,7 +554,7 @@ def _flight_input(k, ah, duration=1.0, dt_record=1e-3):
 def test_flight_from_rest(k):
     """av = -k t: G = g - k t reaches 0 at g/k; located: exactly (REST's exits are in closed form,
     1e-12 s); the run stops there, outside the model."""
-    model = Model.from_block(0.2, 0.1, 0.3, 0.3, 0.8)
+    model = Model.from_block(0.1, 0.2, 0.3, 0.3, 0.8)
     dt_record, ah, av = _flight_input(k, 0.0)
     result = simulate(model, dt_record, ah, av, Settings())
     s = result.summary
@@ -567,7 +567,7 @@ def test_flight_from_rest(k):
 
 @pytest.mark.parametrize("k", [15.0, 20.0, 40.0])
 def test_flight_from_rest_step_end(k):
-    model = Model.from_block(0.2, 0.1, 0.3, 0.3, 0.8)
+    model = Model.from_block(0.1, 0.2, 0.3, 0.3, 0.8)
     dt_record, ah, av = _flight_input(k, 0.0)
     result = simulate(model, dt_record, ah, av, Settings(events="step-end"))
     h = result.step
@@ -596,7 +596,7 @@ def test_flight_while_slipping(k, A):
     """Slip starts at (g - |A|/mu)/k, the run stops at g/k: nothing is integrated beyond it, so the
     final slip is the exact cubic at g/k (RK4 exact for cubics: rounding only, 1e-12 m)."""
     mu = nu = 0.3
-    model = Model.from_block(0.2, 0.1, mu, nu, 0.8)
+    model = Model.from_block(0.1, 0.2, mu, nu, 0.8)
     dt_record, ah, av = _flight_input(k, A)
     result = simulate(model, dt_record, ah, av, Settings())
     s = result.summary
@@ -612,7 +612,7 @@ def test_flight_while_slipping(k, A):
 def test_flight_while_slipping_logs_no_liftoff():
     """At G = 0 the eq. 23 liftoff margin (tan(alpha) - nu) G vanishes with the flight function G;
     the tie goes to flight (the first row), never an impossible SLIP -> ROCKSLIP liftoff first."""
-    model = Model.from_block(0.2, 0.1, 0.3, 0.3, 0.8)
+    model = Model.from_block(0.1, 0.2, 0.3, 0.3, 0.8)
     logs = []
     for k in (10.0, 15.0, 20.0, 25.0, 30.0, 40.0):
         dt_record, ah, av = _flight_input(k, 0.2 * G0, duration=1.2)
@@ -628,7 +628,7 @@ ZENO_CASES = [(0.25, -0.1, 0.3), (0.25, 0.1, -0.3), (0.2, -0.1, 0.3)]
 
 
 def _rockslip_free(mode, mu, rotation, slip_rate, tail):
-    model = Model.from_block(0.2, 0.1, mu, 0.95 * mu, 0.8)
+    model = Model.from_block(0.1, 0.2, mu, 0.95 * mu, 0.8)
     return simulate(model, 0.01, *STILL, Settings(events=mode, tail=tail, rotation=rotation,
                                                   slip_rate=slip_rate, history_every=0))
 

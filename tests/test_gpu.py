@@ -139,7 +139,7 @@ with warnings.catch_warnings(record=True) as plain:
     warnings.simplefilter("always")
     first = gpu.compute(*case)
 
-real = gpu._device_kernel()
+real = gpu.device_kernel()
 emitted = []
 class WarningKernel:
     def __getitem__(self, config):

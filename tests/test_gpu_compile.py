@@ -70,7 +70,7 @@ def recording_compile_device(self, args, return_type=None):
 
 dispatcher.CUDADispatcher.compile_device = recording_compile_device
 
-gpu.cuda = cuda    # as `gpu._device_kernel` sets it (which needs a GPU: `require_device`)
+gpu.cuda = cuda    # as `gpu.device_kernel` sets it (which needs a GPU: `require_device`)
 
 
 def device_type(host):

@@ -169,7 +169,7 @@ def test_free_rocking_impacts_end_after_the_predicted_count(e, theta0, duration,
     Energy: per-sample rise <= 1e-12 E0 (RK4 energy error on free rocking is ~(p h)^5 E0 per
     step plus ~10 roundings; located impacts only lower the rate; step-end late landings are
     brought back to theta = 0 at constant energy)."""
-    model = Model.from_block(0.2, 0.1, 10.0, 10.0, e)
+    model = Model.from_block(0.1, 0.2, 10.0, 10.0, e)
     result = simulate(model, 1e-3, np.zeros(2), np.zeros(2),
                       Settings(events=mode, tail=duration, rotation=theta0))
     s, hist = result.summary, result.history
@@ -202,7 +202,7 @@ def test_free_rocking_without_restitution_stops_at_the_first_impact(theta0, mode
     (located: within 1e-8 s of the quadrature; step-end: at the end of the step in which theta went
     below 0), then REST with everything 0. All the initial energy is booked as impact loss (1e-10
     E0, the RK4 ledger), and the event log says so."""
-    model = Model.from_block(0.2, 0.1, 10.0, 10.0, 0.0)
+    model = Model.from_block(0.1, 0.2, 10.0, 10.0, 0.0)
     _, alpha, p2 = model.constants
     result = simulate(model, 1e-3, np.zeros(2), np.zeros(2), Settings(events=mode, tail=1.0, rotation=theta0))
     s = result.summary
@@ -238,7 +238,7 @@ def test_free_rocking_elastic_keeps_its_energy_for_50_cycles(mode, theta0):
     (+1%), above it only by the integration error (1e-10 relative, cf. tests/test_exact.py);
     step-end: the late landing is corrected at constant energy, so the same bounds hold (measured
     2e-9 relative below)."""
-    model = Model.from_block(0.2, 0.1, 10.0, 10.0, 1.0)
+    model = Model.from_block(0.1, 0.2, 10.0, 10.0, 1.0)
     _, alpha, p2 = model.constants
     T = quarter_period(abs(theta0), alpha, p2)
     n = 100
@@ -272,7 +272,7 @@ MU_ABOVE = 0.5000001
 
 
 def _paper_block(mu):
-    return Model.from_block(0.2, 0.1, mu, 0.95 * mu, 0.8)
+    return Model.from_block(0.1, 0.2, mu, 0.95 * mu, 0.8)
 
 
 @pytest.mark.parametrize("mode", MODES)
@@ -415,7 +415,7 @@ def _stick_slip_input(kind):
         dt, duration, mean, amp, f, nu = 0.001, 2.0, 0.985, 0.025, 40.0, 0.99 * MU_SS
     t = np.arange(0.0, duration + dt / 2, dt)
     ah = MU_SS * G0 * (mean + amp * np.sin(2 * np.pi * f * t))
-    model = Model.from_block(0.2, 0.1, MU_SS, nu, 0.8)
+    model = Model.from_block(0.1, 0.2, MU_SS, nu, 0.8)
     # independent bound of the slip rate: for these inputs |xddot| = |ah - nu g| <= g (mu (mean +
     # amp) - nu + mu amp) (it covers both ends of the range of ah), during at most one period 1/f
     # (a slip starts at a crossing and stops before the next one)
@@ -485,7 +485,7 @@ def test_slender_block_agrees_with_the_reference(peak):
     0.03 g (rocks, ~145 impacts, stands) and 0.1 g (overturns after ~30 impacts): no NaN, the
     energy ledger closes (1e-9 of the work, RK4 on the ledger), and the kernel agrees with the
     reference solver on the verdict and on every event (1e-9 s: measured 3e-12 s)."""
-    model = Model.from_block(2.0, 0.04, 0.6, 0.57, 0.9)
+    model = Model.from_block(0.04, 2.0, 0.6, 0.57, 0.9)
     dt, ah, av = _synthetic_scaled(peak, 0.25)
     settings = Settings(tail=2.0, history_every=10)
     kernel = simulate(model, dt, ah, av, settings)
@@ -504,7 +504,7 @@ def test_squat_block_slips_and_agrees_with_the_reference():
     (vertical 0.5 g): it only slips (liftoff would need |ah| > 5 G from REST, or nu > 5 from SLIP);
     no NaN; the ledger closes (1e-9 of the work); kernel and reference agree event by event
     (1e-10 s: measured 1e-15 s, slip is a cubic)."""
-    model = Model.from_block(0.2, 1.0, 0.5, 0.475, 0.8)
+    model = Model.from_block(1.0, 0.2, 0.5, 0.475, 0.8)
     dt, ah, av = _synthetic_scaled(1.0, 0.5)
     kernel = simulate(model, dt, ah, av, Settings(tail=2.0))
     reference = simulate_reference(model, dt, ah, av, Settings(tail=2.0, history_every=0))
@@ -527,7 +527,7 @@ def test_squat_block_stays_at_rest_below_its_liftoff_threshold():
     """b/h = 5 with mu = 6 > tan(alpha): below |ah| = 5 G (98 % of it at the worst sample; peak
     4.8 g, with the record's vertical motion of 0.3 g) nothing happens at all: no event, no
     rotation, no slip. The margin 5 G - |ah| is piecewise linear: its minimum is at a sample."""
-    model = Model.from_block(0.2, 1.0, 6.0, 5.7, 0.8)
+    model = Model.from_block(1.0, 0.2, 6.0, 5.7, 0.8)
     dt, ah, av = _squat_input(0.98)
     result = simulate(model, dt, ah, av, Settings(tail=1.0))
     assert len(result.events) == 0
@@ -539,7 +539,7 @@ def test_squat_block_lifts_off_exactly_at_its_threshold():
     """The same block at 110 % of the threshold (peak 5.4 g): the first event is the liftoff (eq. 6) at the
     first crossing of 5 (g + av) = |ah| computed from the samples (linear within an interval),
     within 1e-12 s, about the edge sign(ah)."""
-    model = Model.from_block(0.2, 1.0, 6.0, 5.7, 0.8)
+    model = Model.from_block(1.0, 0.2, 6.0, 5.7, 0.8)
     dt, ah, av = _squat_input(1.1)
     margin = 5.0 * (G0 + av) - np.abs(ah)
     k = int(np.nonzero(margin < 0)[0][0]) - 1
@@ -565,7 +565,7 @@ def test_no_restitution_under_ground_motion():
     rests. Checked at every impact from the ground at its time (margins within 1e-9 g). The block
     ends at rest; all the work of the ground is lost at the impacts (no friction): the ledger closes
     to 1e-9. Kernel and reference agree on every event (1e-9 s)."""
-    model = Model.from_block(2.0, 1.0, 10.0, 9.5, 0.0)
+    model = Model.from_block(1.0, 2.0, 10.0, 9.5, 0.0)
     dt, ah, av = _synthetic_scaled(1.5, 0.25)
     result = simulate(model, dt, ah, av, Settings(tail=3.0))
     s, ev = result.summary, result.events
@@ -596,7 +596,7 @@ def test_no_restitution_under_ground_motion():
     _assert_same_events(result, reference, 1e-9)
 
 
-@pytest.mark.parametrize("block,mu,peak", [((2.0, 1.0), 10.0, 1.5), ((0.2, 0.1), 0.52, 0.8)])
+@pytest.mark.parametrize("block,mu,peak", [((1.0, 2.0), 10.0, 1.5), ((0.1, 0.2), 0.52, 0.8)])   # (width, height)
 def test_elastic_impacts_under_ground_motion(block, mu, peak):
     """e = 1 under the synthetic record (pure rocking on a 2 m block; rocking with slip on the
     paper's block): after the first liftoff the block never comes back to REST (no liftoff-end:
@@ -649,7 +649,7 @@ def test_a_block_with_nu_above_tan_alpha_does_not_chatter(block, peak):
     every landing, end it: under the synthetic record at 0.35-1.2 g every run finishes 'ok' with
     finitely many events, and no cluster of more than 10 events shares a nanosecond."""
     height, width, mu, nu, e = block
-    model = Model.from_block(height, width, mu, nu, e)
+    model = Model.from_block(width, height, mu, nu, e)
     dt, ah, av = _synthetic_scaled(peak, 0.3)
     result = simulate(model, dt, ah, av, Settings(tail=2.0, history_every=0))
     assert result.summary.status == "ok", result.summary.verdict
@@ -665,7 +665,7 @@ def _random_blocks(n, seed):
         height = float(np.exp(rng.uniform(np.log(0.1), np.log(3.0))))
         width = height * float(rng.uniform(0.15, 1.0))
         mu = float(rng.uniform(0.1, 1.0))
-        yield (Model.from_block(height, width, mu, mu * float(rng.uniform(0.7, 1.0)), float(rng.uniform(0, 1))),
+        yield (Model.from_block(width, height, mu, mu * float(rng.uniform(0.7, 1.0)), float(rng.uniform(0, 1))),
                float(rng.uniform(0.2, 1.2)), float(rng.uniform(0.0, 0.7)))
 
 
@@ -745,9 +745,9 @@ def _flight_run(start_state, mode):
     if start_state == "REST":
         model, initial = _paper_block(0.52), {}
     elif start_state == "SLIP":
-        model, initial = Model.from_block(0.2, 0.1, 0.3, 0.285, 0.8), {"slip_rate": 1.0}
+        model, initial = Model.from_block(0.1, 0.2, 0.3, 0.285, 0.8), {"slip_rate": 1.0}
     else:
-        model, initial = Model.from_block(0.2, 0.1, 10.0, 10.0, 0.8), {"rotation": 0.1}
+        model, initial = Model.from_block(0.1, 0.2, 10.0, 10.0, 0.8), {"rotation": 0.1}
     settings = Settings(events=mode, **initial)
     return model, dt, np.zeros_like(t), av, settings
 
@@ -806,7 +806,7 @@ def test_vertical_acceleration_approaching_minus_g(mu, mode):
     t = np.arange(0.0, 4.0 + dt / 2, dt)
     av = -0.999 * G0 * np.sin(np.pi * t / 4.0) ** 2
     ah = 0.02 * G0 * np.sin(2 * np.pi * 1.5 * t)
-    result = simulate(Model.from_block(0.2, 0.1, mu, 0.95 * mu, 0.8), dt, ah, av,
+    result = simulate(Model.from_block(0.1, 0.2, mu, 0.95 * mu, 0.8), dt, ah, av,
                       Settings(events=mode, tail=1.0))
     s = result.summary
     assert s.status == "ok" and not s.overturned
@@ -833,7 +833,7 @@ def test_vertical_acceleration_approaching_minus_g(mu, mode):
 
 
 def _painleve_case(width, nu, slip_rate=4.0, tail=0.1):
-    model = Model.from_block(0.2, width, nu, nu, 0.8)
+    model = Model.from_block(width, 0.2, nu, nu, 0.8)
     return model, 1e-3, np.zeros(2), np.zeros(2), Settings(tail=tail, slip_rate=slip_rate)
 
 
@@ -927,7 +927,7 @@ HOUR_SCRIPT = textwrap.dedent("""
     ah = 1.2 * g * envelope * (np.sin(2 * np.pi * 4.0 * t) + 0.3 * np.sin(2 * np.pi * 6.8 * t + 1.0))
     av = 0.5 * g * envelope * np.sin(2 * np.pi * 9.2 * t)
     del t, envelope
-    model = Model.from_block(1.0, 0.5, 0.51, 0.505, 0.8)
+    model = Model.from_block(0.5, 1.0, 0.51, 0.505, 0.8)
     simulate(model, dt, ah[:3000], av[:3000], Settings())      # compile or load the kernel first
     baseline_kb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
     with ResultWriter(sys.argv[1]) as writer:
@@ -1022,7 +1022,7 @@ def test_table1_verdicts_hold_at_half_the_step(config, mode):
 def test_the_core_refuses_a_non_finite_ground_motion(bad):
     """The record readers refuse NaN and infinite samples; a direct call of `simulate` with one
     used to give 'standing' and NaN energies (physics review). It is a ValueError."""
-    model = Model.from_block(0.2, 0.1, 0.5, 0.5, 0.8)
+    model = Model.from_block(0.1, 0.2, 0.5, 0.5, 0.8)
     ah = np.zeros(101)
     ah[50] = bad
     with pytest.raises(ValueError, match="non-finite"):

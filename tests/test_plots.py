@@ -33,7 +33,7 @@ def pulse(amplitude, mu, *, vertical=0.3, frequency=1.5, vertical_abs=False, **s
     t = np.arange(0, 10, 0.01)
     ah = amplitude * np.sin(2 * np.pi * frequency * t) * np.exp(-((t - 4) / 2) ** 2)
     av = vertical * (np.abs(ah) if vertical_abs else ah)
-    return simulate(Model.from_block(0.2, 0.1, mu, 0.95 * mu, 0.8), 0.01, ah, av,
+    return simulate(Model.from_block(0.1, 0.2, mu, 0.95 * mu, 0.8), 0.01, ah, av,
                     Settings(tail=2.0, **settings))
 
 
@@ -586,7 +586,7 @@ def test_rendering_does_not_load_pyplot(tmp_path):
         from rockslide.core.simulate import Model, Settings, simulate
         t = np.arange(0, 10, 0.01)
         ah = 6.0 * np.sin(2 * np.pi * 1.5 * t) * np.exp(-((t - 4) / 2) ** 2)
-        r = simulate(Model.from_block(0.2, 0.1, 0.52, 0.494, 0.8), 0.01, ah, 0.3 * ah, Settings(tail=2.0))
+        r = simulate(Model.from_block(0.1, 0.2, 0.52, 0.494, 0.8), 0.01, ah, 0.3 * ah, Settings(tail=2.0))
         save_figure(response_figure(r, title="x"), sys.argv[1])
         loaded = sorted(m for m in sys.modules if m.startswith("matplotlib.backends.backend_"))
         print("pyplot" if "matplotlib.pyplot" in sys.modules else "no pyplot", loaded)

@@ -314,7 +314,7 @@ def test_double_impulse_critical_velocity():
     h, w, dt = 1.0, 0.25, 1e-4
     R, alpha = math.hypot(w / 2, h / 2), math.atan2(w, h)
     e = 1.0 - 1.5 * math.sin(alpha) ** 2
-    model = Model.from_block(h, w, 1e3, 1e3, e)
+    model = Model.from_block(w, h, 1e3, 1e3, e)
     Vc = double_impulse_critical_velocity(alpha, R, e)
 
     def ground(V, second=None, n=20_000):

@@ -28,12 +28,12 @@ def pulse_input(seed, duration=6.0, dt=0.01, peak_h=7.0, peak_v=2.5):
 
 
 CASES = {
-    "paper block, slip + rock + interaction": (Model.from_block(0.2, 0.1, 0.52, 0.494, 0.8), 3),
-    "high friction, rocking only": (Model.from_block(0.2, 0.1, 0.9, 0.85, 0.8), 5),
-    "low friction, slip only": (Model.from_block(0.2, 0.1, 0.3, 0.28, 0.8), 7),
-    "nu above tan(alpha): slip lifts off": (Model.from_block(0.3, 0.1, 0.6, 0.5, 0.7), 11),
-    "plastic impacts: flat landings, nu above tan(alpha)": (Model.from_block(0.2, 0.1, 0.6, 0.57, 0.0), 19),
-    "slender block, slip branch at impacts": (Model.from_block(0.5, 0.15, 0.35, 0.32, 0.8), 17),
+    "paper block, slip + rock + interaction": (Model.from_block(0.1, 0.2, 0.52, 0.494, 0.8), 3),
+    "high friction, rocking only": (Model.from_block(0.1, 0.2, 0.9, 0.85, 0.8), 5),
+    "low friction, slip only": (Model.from_block(0.1, 0.2, 0.3, 0.28, 0.8), 7),
+    "nu above tan(alpha): slip lifts off": (Model.from_block(0.1, 0.3, 0.6, 0.5, 0.7), 11),
+    "plastic impacts: flat landings, nu above tan(alpha)": (Model.from_block(0.1, 0.2, 0.6, 0.57, 0.0), 19),
+    "slender block, slip branch at impacts": (Model.from_block(0.15, 0.5, 0.35, 0.32, 0.8), 17),
 }
 
 

@@ -31,7 +31,7 @@ TEMP_NAME = re.compile(r"^\..+\.\d+\.tmp$")
 def pulse_result(amplitude=6.0, mu=0.52, vertical=0.3, frequency=1.5, on_chunk=None, **settings):
     t = np.arange(0, 10, 0.01)
     ah = amplitude * np.sin(2 * np.pi * frequency * t) * np.exp(-((t - 4) / 2) ** 2)
-    model = Model.from_block(0.2, 0.1, mu, 0.95 * mu, 0.8)
+    model = Model.from_block(0.1, 0.2, mu, 0.95 * mu, 0.8)
     return simulate(model, 0.01, ah, vertical * ah, Settings(tail=2.0, **settings), on_chunk=on_chunk)
 
 
@@ -296,7 +296,7 @@ def test_streaming_gives_the_same_file(tmp_path, result):
     with ResultWriter(tmp_path / "streamed.h5") as writer:
         t = np.arange(0, 10, 0.01)
         ah = 6.0 * np.sin(2 * np.pi * 1.5 * t) * np.exp(-((t - 4) / 2) ** 2)
-        streamed_result = simulate(Model.from_block(0.2, 0.1, 0.52, 0.494, 0.8), 0.01, ah, 0.3 * ah,
+        streamed_result = simulate(Model.from_block(0.1, 0.2, 0.52, 0.494, 0.8), 0.01, ah, 0.3 * ah,
                                    Settings(tail=2.0, chunk_steps=97 * 100),
                                    on_chunk=writer.append_history)
         assert streamed_result.history["time"].size == 0          # streamed, not kept

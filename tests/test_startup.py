@@ -131,13 +131,13 @@ def test_the_run_figure_is_the_figure_of_the_file(tmp_path, monkeypatch, kept):
 
 
 def compiled_by_commands(*commands) -> dict[str, int]:
-    """Run `compiled.precompile` (what the package build does), then each command line in one
+    """Run `build.precompile` (what the package build does), then each command line in one
     fresh interpreter; give the core's functions that numba had to compile for the commands
     (cache misses), by name."""
     code = """
 import json, sys
-from rockslide.core import compiled
-compiled.precompile()
+from rockslide.core import build
+build.precompile()
 from numba.core.registry import CPUDispatcher
 from rockslide.core import batch, intensity, kernel, physics
 modules = (batch, intensity, kernel, physics)
@@ -158,7 +158,7 @@ print(json.dumps({name: n - before[name] for name, n in missed.items() if n > be
 
 @pytest.mark.slow
 def test_after_the_build_compile_a_run_and_a_sweep_compile_nothing(tmp_path):
-    """What the package build compiles (`compiled.precompile`) is every compiled function a run
+    """What the package build compiles (`build.precompile`) is every compiled function a run
     and a sweep call, with the argument types they call it with: a new user's first commands load
     machine code and compile nothing (cache misses are counted by numba per function)."""
     compiled = compiled_by_commands(
@@ -211,7 +211,7 @@ def _ground_cases():
             ("rests", 0.5, 0.5, 0.9, 0.9, 0.0)]:
         ah = peak * envelope * np.sin(2 * np.pi * t / period)
         av = vertical * peak * envelope * np.sin(2 * np.pi * t / (0.7 * period))
-        model = Model.from_block(0.8, 0.3, mu, 0.9 * mu, e)
+        model = Model.from_block(0.3, 0.8, mu, 0.9 * mu, e)
         for settings in (Settings(), Settings(events="step-end", energy=False, history_every=3)):
             cases.append((f"{name}, {settings.events}", model, dt, ah, av, settings))
     return cases

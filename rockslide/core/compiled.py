@@ -6,8 +6,8 @@ so an edited ``physics.py`` would leave a stale compiled kernel behind. `freshen
 compares a hash of their sources (`source_stamp`) with the one recorded beside the cache, and
 removes the core's cached code when they differ; the next call compiles it again.
 
-The package build compiles the core into this cache before installation (`precompile`, called by
-``setup.py``), so that the first command after ``pip install`` loads machine code instead of
+The package build compiles the core into this cache before installation (`build.precompile`,
+called by ``setup.py``), so that the first command after ``pip install`` loads machine code instead of
 spending a minute compiling it. Where no folder numba would cache in can be written (a read-only
 installation and a read-only home), the core caches in a temporary folder that the process
 removes at exit: it compiles in memory, once per process (`CACHE_IS_TEMPORARY`), instead of
@@ -94,40 +94,7 @@ def is_warm(dispatcher) -> bool:
     return fresh and any(folder.glob(f"{module}.{name}-*.nbi"))
 
 
-def precompile() -> None:
-    """Compile the core into numba's cache: `native.ENTRY_POINTS` with the argument types `simulate`
-    gives them (`kernel.run` compiles every state's loop and every physics function it calls), the
-    batch driver, and the intensity measures' oscillator when scipy is there. The package build runs
-    this in the freshly built package (``setup.py``), before `native.build`; it is also what
-    ``rockslide`` would otherwise do on its first run without the build's machine code."""
-    import numpy as np
-
-    from . import batch, layout, native, simulate
-
-    jit = native.just_in_time()
-    model = simulate.Model.from_block(0.2, 0.1, 0.5, 0.5, 0.8)
-    settings = simulate.Settings(rotation=0.01)
-    still = np.zeros(11)
-    ground = simulate.ground_array(still, still, 0.01)
-    st = simulate.initial_state(settings)
-    history = np.empty((len(layout.HISTORY_COLUMNS), 16))
-    events = np.zeros((16, len(layout.EVENT_COLUMNS)))
-    jit.run(simulate.parameters(model, 0.01, settings), ground, jit.rest_bounds(ground), st, history, 1, 0, events,
-            0)                     # the start only (every=1 would need a longer history): all is compiled
-    jit.finished(st)
-    R, alpha, _ = jit.block_constants(0.1, 0.2, 9.8)
-    jit.kinetic_energy(0.0, 0.0, 0.0, 1.0, R, alpha)
-    jit.potential_energy(0.0, 9.8, R, alpha)
-    batch.warm_up()
-    try:
-        from . import intensity
-    except ImportError:            # scipy is not needed to build the package
-        return
-    intensity.spectral_acceleration(still, 0.01, 0.5)
-
-
 #: True when no folder numba caches in can be written: the core compiles in memory, in every process.
 CACHE_IS_TEMPORARY = _cache_is_temporary()
 
-__all__ = ["COMPILED_MODULES", "CACHE_IS_TEMPORARY", "source_stamp", "cache_folder", "freshen", "is_warm",
-           "precompile"]
+__all__ = ["COMPILED_MODULES", "CACHE_IS_TEMPORARY", "source_stamp", "cache_folder", "freshen", "is_warm"]

@@ -34,8 +34,8 @@ import numpy as np
 from . import batch
 from . import kernel as K
 
-__all__ = ["DeviceUnavailable", "cuda_module", "require_device", "compute", "warm_up", "launch_order",
-           "launch_arguments", "warp_efficiency", "THREADS_PER_BLOCK", "WARP_SIZE"]
+__all__ = ["DeviceUnavailable", "cuda_module", "require_device", "device_kernel", "compute", "warm_up",
+           "launch_order", "launch_arguments", "warp_efficiency", "THREADS_PER_BLOCK", "WARP_SIZE"]
 
 #: Threads per block: the state machine needs many registers per thread, so small blocks keep
 #: several blocks resident per multiprocessor (the cases are already ordered by work).
@@ -52,8 +52,8 @@ class DeviceUnavailable(RuntimeError):
     """No device run is possible here: numba-cuda is not installed, or it finds no CUDA GPU."""
 
 
-cuda = None      # numba.cuda, set by `_device_kernel` before `run_cases` is compiled (a global of it)
-_kernel = None   # the CUDA kernel, built on first use (`_device_kernel`)
+cuda = None      # numba.cuda, set by `device_kernel` before `run_cases` is compiled (a global of it)
+_kernel = None   # the CUDA kernel, built on first use (`device_kernel`)
 
 
 def cuda_module():
@@ -126,7 +126,7 @@ def simulated_run(p, ground, bounds, st, history, every, offset, events, k_end):
 run_case = K.run   # what `run_cases` calls: `kernel.run` itself, compiled for the device
 
 
-def _device_kernel():
+def device_kernel():
     """`run_cases` compiled for the device (once per process; numba-cuda caches the machine code
     beside the sources, and `compiled.freshen` drops it when the core's sources change)."""
     global _kernel, cuda, run_case
@@ -205,7 +205,7 @@ def compute(params, states, base, first, count, kh, kv):
     DeviceUnavailable
         numba-cuda is not installed or finds no GPU.
     """
-    kernel = _device_kernel()
+    kernel = device_kernel()
     params, out, base, count = batch.kernel_inputs(params, states, base, first, count, kh, kv)
     n = params.shape[0]
     if n == 0:

@@ -8,7 +8,7 @@ the build's architecture, and records the `source_stamp` of the sources it compi
 `entry_points` returns that module when it imports and its stamp is the stamp of the sources
 beside it (they were not edited since), else numba's JIT dispatchers of the same functions. Both
 run the same code: results are identical to the last bit (tests/test_startup.py). The batch, GPU
-and fragility paths keep numba's JIT, whose cache the build fills as well (`compiled.precompile`).
+and fragility paths keep numba's JIT, whose cache the build fills as well (`build.precompile`).
 
 Plain standard library at import: numba is imported only by `build` and by the JIT fallback.
 """

@@ -52,8 +52,9 @@ class Model:
     mass: float = 1.0
 
     @classmethod
-    def from_block(cls, height, width, mu_static, mu_kinetic, restitution, gravity=9.80665, mass=1.0):
-        """From the full ``height`` and ``width`` [m] of the block."""
+    def from_block(cls, width, height, mu_static, mu_kinetic, restitution, gravity=9.80665, mass=1.0):
+        """From the full ``width`` and ``height`` [m] of the block (``2 b`` and ``2 h``: the same
+        order as the half sizes of `Model` itself)."""
         return cls(0.5 * width, 0.5 * height, mu_static, mu_kinetic, restitution, gravity, mass)
 
     @property

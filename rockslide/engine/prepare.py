@@ -114,7 +114,7 @@ def pulse_ground(case: Case, unit: pulses.Sampled | None = None) -> rec.GroundMo
 
 
 def model_for(case: Case) -> Model:
-    return Model.from_block(case.block.height, case.block.width, case.contact.mu_static,
+    return Model.from_block(case.block.width, case.block.height, case.contact.mu_static,
                             case.contact.mu_kinetic, case.contact.restitution, case.gravity,
                             case.block.mass)
 
