@@ -7,15 +7,17 @@ The Python API (`rockslide.api`, loaded on first use so that ``import rockslide`
 
 - `load_case` (a case file or a mapping), `case_with` / ``Case.with_``;
 - `run` -> `RunResult` (``.summary``, ``.history``, ``.events``, ``.to_xarray()``);
-- `sweep` and `fragility` -> ``xarray.Dataset`` (the variables of their files);
+- `sweep`, `fragility` and `ensemble` (a verdict's neighbourhood) -> ``xarray.Dataset``;
 - `read_result`: any file rockslide writes.
 """
 
 from ._version import __version__
 
-__all__ = ["__version__", "load_case", "case_with", "run", "sweep", "fragility", "read_result", "RunResult"]
+__all__ = ["__version__", "load_case", "case_with", "run", "sweep", "fragility", "ensemble", "read_result",
+           "RunResult"]
 
-_API = {"load_case", "case_with", "run", "sweep", "fragility", "read_result", "RunResult", "Case", "Summary"}
+_API = {"load_case", "case_with", "run", "sweep", "fragility", "ensemble", "read_result", "RunResult", "Case",
+        "Summary"}
 
 
 def __getattr__(name: str):

@@ -23,11 +23,13 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import numpy as np
+
 from .case import Case, case_with, load_case
 from .core.simulate import Result, Summary
 
-__all__ = ["load_case", "case_with", "run", "sweep", "fragility", "read_result", "RunResult", "Case",
-           "Summary"]
+__all__ = ["load_case", "case_with", "run", "sweep", "fragility", "ensemble", "read_result", "RunResult",
+           "Case", "Summary"]
 
 
 @dataclass
@@ -226,6 +228,55 @@ def fragility(case: Case | Mapping | str | Path, suite: str | Path, *, im: str =
     done = execute(fplan.plan, store, workers=workers, scheduler=scheduler, device=device, progress=progress)
     analysis = fr.analyse(fplan, done.states, states, resamples=resamples)
     return datasets.study_dataset(*fr.dataset(fplan, analysis))
+
+
+def ensemble(case: Case | Mapping | str | Path, n: int = 200, *, seed: int = 1,
+             records_dir: str | Path | None = None, device: str = "cpu", workers: int | None = None,
+             scheduler: str | None = None, store=None, progress: Callable[[int], None] | None = None):
+    """A verdict's neighbourhood: ``n`` cases drawn around ``case`` over what is uncertain, as
+    ``rockslide run --ensemble n`` computes them (`analyses.ensemble`).
+
+    Parameters
+    ----------
+    case : Case, mapping or path
+        Its ``uncertain`` section says what varies (intensity, restitution, friction, size,
+        slenderness); without one, the stated defaults (`analyses.ensemble.DEFAULTS`).
+    n : int
+        Members.
+    seed : int
+        Seed of the Latin hypercube (the same seed gives the same members).
+    records_dir, device, workers, scheduler, store, progress
+        As in `sweep`.
+
+    Returns
+    -------
+    xarray.Dataset
+        Per member (dimension ``member``): the sampled quantities (``sample_intensity``...), and
+        ``overturned``, ``max_rotation`` [rad], ``max_rotation_ratio``, ``status``, ...; the
+        summary as attributes: ``p_overturn``, ``interval_low``, ``interval_high`` (95 % Wilson),
+        ``flips`` (members whose verdict differs from the nominal run's), ``robust``, and the whole
+        summary as JSON in ``ensemble``.
+    """
+    import json
+
+    from .analyses import ensemble as ens
+    from .analyses.sweep import sweep_variables
+    from .engine.execute import check_where, execute
+    from .io import datasets, records
+
+    case = _case(case)
+    nominal = run(case, records_dir=records_dir, history=False)
+    scheduler = check_where(workers=workers, scheduler=scheduler, device=device)
+    eplan = ens.plan_ensemble(case, n, seed=seed, records_dir=records.records_dir(records_dir))
+    done = execute(eplan.plan, store, workers=workers, scheduler=scheduler, device=device, progress=progress)
+    variables = sweep_variables(eplan.plan, done.states)
+    summary = ens.summarise(eplan, variables, nominal.summary.overturned)
+    attrs = {"name": case.name, "nominal_verdict": nominal.summary.verdict, "p_overturn": summary["p_overturn"],
+             "interval_low": summary["interval"][0], "interval_high": summary["interval"][1],
+             "flips": summary["flips"], "robust": int(summary["robust"]), "seed": seed,
+             "ensemble": json.dumps(summary)}
+    coords = [("member", np.arange(eplan.n), {"units": "1", "long_name": "member of the ensemble"})]
+    return datasets.study_dataset(coords, ens.member_variables(eplan, variables), attrs)
 
 
 def read_result(path: str | Path):

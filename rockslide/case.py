@@ -51,6 +51,8 @@ __all__ = [
     "SuiteEntry",
     "case_to_dict",
     "parse_mapping",
+    "Distribution",
+    "Uncertain",
     "case_with",
     "iter_case_keys",
     "load_case",
@@ -254,6 +256,73 @@ class Output:
 
 
 @dataclass(frozen=True)
+class Distribution:
+    """What is known of an uncertain quantity (the case's ``uncertain`` section).
+
+    Parameters
+    ----------
+    kind : {"fixed", "uniform", "normal", "lognormal"}
+    a, b : float
+        ``fixed``: the value (``b`` unused); ``uniform``: the lowest and highest values;
+        ``normal``: the mean and the standard deviation; ``lognormal``: the median and
+        ``beta``, the standard deviation of the logarithm.
+    """
+
+    kind: str
+    a: float
+    b: float = 0.0
+
+    @property
+    def spread(self) -> bool:
+        """Whether the quantity varies at all (False: one value)."""
+        return self.kind != "fixed" and not (self.b == self.a if self.kind == "uniform" else self.b == 0.0)
+
+    @property
+    def nominal(self) -> float:
+        """The value the nominal case stands for: the value, the mid-range, the mean or the median."""
+        return 0.5 * (self.a + self.b) if self.kind == "uniform" else self.a
+
+    def spec(self):
+        """The distribution as the case file writes it."""
+        if self.kind == "fixed":
+            return self.a
+        if self.kind == "uniform":
+            return {"uniform": [self.a, self.b]}
+        if self.kind == "normal":
+            return {"normal": {"mean": self.a, "std": self.b}}
+        return {"lognormal": {"median": self.a, "beta": self.b}}
+
+
+@dataclass(frozen=True)
+class Uncertain:
+    """What is not known exactly: the quantities an ensemble (``rockslide run --ensemble``) varies.
+
+    Parameters
+    ----------
+    intensity : Distribution or None
+        A factor on the scaled ground motion (horizontal and vertical alike).
+    restitution : Distribution or None
+        The coefficient of restitution itself (samples outside [0, 1] are clipped to it).
+    friction : Distribution or None
+        A factor on ``mu_static`` and ``mu_kinetic`` together.
+    size : Distribution or None
+        A factor on the block's height and width together (its slenderness kept).
+    slenderness : Distribution or None
+        A factor on the block's width, its height kept.
+    """
+
+    intensity: Distribution | None = None
+    restitution: Distribution | None = None
+    friction: Distribution | None = None
+    size: Distribution | None = None
+    slenderness: Distribution | None = None
+
+    def given(self) -> dict[str, Distribution]:
+        """The quantities given, by name."""
+        return {f.name: getattr(self, f.name) for f in dataclasses.fields(self) if getattr(self, f.name) is not None}
+
+
+@dataclass(frozen=True)
 class Case:
     """A validated case, all quantities in SI.
 
@@ -265,6 +334,8 @@ class Case:
         Gravitational acceleration [m/s^2], > 0.
     block, contact, ground, initial, solver, output
         The sections.
+    uncertain : Uncertain
+        What is not known exactly (for ensembles); empty when the file has no ``uncertain``.
     source : str
         The case file's name as used in messages.
     base_dir : Path or None
@@ -284,6 +355,7 @@ class Case:
     initial: Initial
     solver: Solver
     output: Output
+    uncertain: Uncertain = Uncertain()
     source: str = "<case>"
     base_dir: Path | None = None
     text: str = ""
@@ -433,12 +505,24 @@ CASE_KEYS: dict[str, dict] = {
         "interval": _key("time", "output interval, a whole multiple of solver.dt "
                          "(default: every step)"),
     }),
+    "uncertain": _key("mapping", "what is not known exactly, varied by an ensemble (run --ensemble): each a "
+                      "number (fixed) or one of {uniform: [low, high]}, {normal: {mean:, std:}}, "
+                      "{lognormal: {median:, beta:}}", keys={
+        "intensity": _key("distribution", "factor on the scaled ground motion, e.g. {uniform: [0.95, 1.05]}",
+                          bounds=[(">", 0.0)]),
+        "restitution": _key("distribution", "coefficient of restitution, e.g. {uniform: [0.80, 0.90]}",
+                            bounds=[(">=", 0.0), ("<=", 1.0)]),
+        "friction": _key("distribution", "factor on mu_static and mu_kinetic together", bounds=[(">", 0.0)]),
+        "size": _key("distribution", "factor on height and width together, e.g. {lognormal: {median: 1, "
+                     "beta: 0.3}}", bounds=[(">", 0.0)]),
+        "slenderness": _key("distribution", "factor on the width, the height kept", bounds=[(">", 0.0)]),
+    }),
 }
 
 # The dataclass built from each section (by dotted path) and from each record spec.
 _SECTIONS: dict[str, type] = {
     "block": Block, "contact": Contact, "ground.scale": Scale, "initial": Initial,
-    "solver": Solver, "output": Output,
+    "solver": Solver, "output": Output, "uncertain": Uncertain,
 }
 
 
@@ -897,6 +981,8 @@ def _read_value(value, spec: dict, path: str, ctx: _Ctx):
         if not isinstance(value, int) or isinstance(value, bool) or value < 0:
             ctx.fail(path, f"expected a whole number >= 0, got {_show(value)}")
         return value
+    if kind == "distribution":
+        return _read_distribution(value, spec, path, ctx)
     if kind == "column":
         if isinstance(value, int) and not isinstance(value, bool):
             if value < 1:
@@ -908,6 +994,64 @@ def _read_value(value, spec: dict, path: str, ctx: _Ctx):
                      f"got {_show(value)}")
         return value
     raise AssertionError(f"schema error: unknown type {kind!r} at {path}")  # pragma: no cover
+
+
+#: The distributions of the ``uncertain`` section, with the names of their two parameters.
+DISTRIBUTIONS = {"fixed": (), "uniform": ("low", "high"), "normal": ("mean", "std"),
+                 "lognormal": ("median", "beta")}
+
+
+def _read_distribution(value, spec: dict, path: str, ctx: _Ctx) -> Distribution:
+    """A number (fixed) or ``{uniform: [low, high]}``, ``{normal: {mean:, std:}}`` (or ``[mean, std]``),
+    ``{lognormal: {median:, beta:}}`` (or ``[median, beta]``); dimensionless. The values a
+    distribution gives must lie within the key's bounds (a factor > 0, a restitution within [0, 1]):
+    checked on the range of a uniform, on the mean of a normal (a factor's normal must stay 4
+    standard deviations above 0: else lognormal), on the median of a lognormal."""
+    example = ("a number, or {uniform: [0.95, 1.05]}, {normal: {mean: 1, std: 0.02}}, "
+               "{lognormal: {median: 1, beta: 0.3}}")
+
+    def number(v, where):
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+            ctx.fail(path, f"expected a finite number for {where}, got {_show(v)} ({example})")
+        return float(v)
+
+    if not isinstance(value, Mapping):
+        dist = Distribution("fixed", number(value, "the value"))
+    else:
+        if len(value) != 1 or next(iter(value)) not in DISTRIBUTIONS:
+            ctx.fail(path, f"expected one of {', '.join(DISTRIBUTIONS)}, got {_show(value)} ({example})")
+        kind, params = next(iter(value.items()))
+        names = DISTRIBUTIONS[kind]
+        if kind == "fixed":
+            dist = Distribution("fixed", number(params, "fixed"))
+        else:
+            if isinstance(params, Mapping):
+                unknown = [k for k in params if k not in names]
+                if unknown or len(params) != 2:
+                    ctx.fail(path, f"{kind} takes {names[0]} and {names[1]}, got {_show(params)}")
+                pair = [params[n] for n in names]
+            elif isinstance(params, (list, tuple)) and len(params) == 2:
+                pair = list(params)
+            else:
+                ctx.fail(path, f"{kind} takes [{names[0]}, {names[1]}] or {{{names[0]}:, {names[1]}:}}, "
+                         f"got {_show(params)}")
+            a, b = (number(v, f"{kind}'s {n}") for v, n in zip(pair, names, strict=True))
+            if kind == "uniform" and b < a:
+                ctx.fail(path, f"uniform: the highest value {_num(b)} is below the lowest {_num(a)}")
+            if kind in ("normal", "lognormal") and b < 0.0:
+                ctx.fail(path, f"{kind}: {names[1]} must be >= 0, got {_num(b)}")
+            dist = Distribution(kind, a, b)
+    checked = {"fixed": [dist.a], "uniform": [dist.a, dist.b], "normal": [dist.a], "lognormal": [dist.a]}[dist.kind]
+    for op, limit in spec.get("bounds", ()):
+        for v in checked:
+            if not {">": v > limit, ">=": v >= limit, "<=": v <= limit, "<": v < limit}[op]:
+                ctx.fail(path, f"its values must be {op} {_num(limit)}, got {_num(v)} in {_show(value)}")
+    if dist.kind == "normal" and any(op == ">" for op, _ in spec.get("bounds", ())) and dist.a - 4 * dist.b <= 0:
+        ctx.fail(path, f"a normal factor with mean {_num(dist.a)} and std {_num(dist.b)} reaches 0 and below; "
+                 "use a lognormal (e.g. {lognormal: {median: 1, beta: 0.1}})")
+    if dist.kind == "lognormal" and not dist.a > 0.0:
+        ctx.fail(path, f"lognormal: the median must be > 0, got {_num(dist.a)}")
+    return dist
 
 
 def _read_record(value, path: str, ctx: _Ctx) -> dict:
@@ -1084,7 +1228,7 @@ def _build(data, *, source: str, base_dir: Path | None, text: str, si_numbers: b
         ground=Ground(scale=sections["ground.scale"], tail=ground["tail"],
                       time_shift=ground["time_shift"], **records),
         initial=sections["initial"], solver=sections["solver"], output=sections["output"],
-        source=source, base_dir=base_dir, text=text, units=ctx.units,
+        uncertain=sections["uncertain"], source=source, base_dir=base_dir, text=text, units=ctx.units,
     )
 
 
@@ -1136,6 +1280,9 @@ def case_to_dict(case: Case, *, case_file: bool = True) -> dict:
         "solver": plain(case.solver),
         "output": plain(case.output),
     }
+    uncertain = {name: d.spec() for name, d in case.uncertain.given().items()}
+    if uncertain:
+        out["uncertain"] = uncertain
     if case_file:
         for path, spec in iter_case_keys():
             *parents, leaf = path.split(".")

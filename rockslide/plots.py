@@ -1185,3 +1185,50 @@ def _write_png(handle, rgba: np.ndarray, *, dpi: float) -> None:
 __all__ = ["response_figure", "save_figure", "zoom_window", "state_segments", "sweep_figure",
            "sweep_category", "SWEEP_CATEGORIES", "fragility_figure", "spectrum_figure", "spectrum_category",
            "SPECTRUM_CATEGORIES"]
+
+
+def ensemble_figure(ratios, overturned, nominal_ratio: float, *, summary_text: str, title: str = "") -> Figure:
+    """A verdict's neighbourhood: the empirical CDF of the members' largest rotation over alpha (an
+    overturned member counts as beyond the axis), the nominal run marked, the probability of
+    overturning and its interval in the legend.
+
+    Parameters
+    ----------
+    ratios : array_like
+        Each member's max rotation / alpha (within the model).
+    overturned : array_like of bool
+        Each member's verdict.
+    nominal_ratio : float
+        The nominal run's max rotation / alpha (``inf`` when it overturned).
+    summary_text : str
+        The probability line (``overturns in 38 % [31, 45] of 200``).
+    title : str
+    """
+    fig = Figure(figsize=(8.0, 5.0), dpi=DPI, layout="constrained")
+    ax = fig.subplots()
+    ratios = np.asarray(ratios, dtype=float)
+    overturned = np.asarray(overturned, dtype=bool)
+    n = ratios.size
+    standing = np.sort(ratios[~overturned])
+    top = max(1.2, float(standing.max(initial=0.0)) * 1.05)
+    if standing.size:
+        x = np.concatenate([[0.0], standing, [top]])
+        y = np.concatenate([[0.0], np.arange(1, standing.size + 1) / n, [standing.size / n]])
+        ax.step(x, y, where="post", color="#1f77b4", lw=2.0, label="members standing: P(max rotation / α ≤ x)")
+    if overturned.any():
+        ax.axhspan(standing.size / n, 1.0, color="#d62728", alpha=0.15, lw=0,
+                   label=f"members overturned ({overturned.sum()} of {n})")
+    ax.axvline(1.0, color="0.4", lw=1.0, ls=":", label="α: past it gravity tips the block over")
+    if np.isfinite(nominal_ratio):
+        ax.axvline(min(nominal_ratio, top), color="k", lw=1.5, ls="--", label=f"nominal run: {nominal_ratio:.3g}")
+    else:
+        ax.plot([], [], color="k", lw=1.5, ls="--", label="nominal run: overturned")
+    ax.set_xlim(0.0, top)
+    ax.set_ylim(0.0, 1.0)
+    ax.set_xlabel("largest rotation / α")
+    ax.set_ylabel("fraction of the members")
+    ax.grid(True, alpha=0.3)
+    ax.legend(loc="lower right", fontsize="small", title=summary_text, title_fontsize="small")
+    if title:
+        ax.set_title(title)
+    return fig

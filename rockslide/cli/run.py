@@ -33,16 +33,25 @@ KEEP_HISTORY_ROWS = 2_000_000
 @click.option("--overwrite", is_flag=True, help="Replace existing results of this case.")
 @click.option("--no-plot", is_flag=True, help="Do not draw the PNG figure (with --overwrite, an earlier "
               "figure of this case is removed: it showed the result replaced).")
+@click.option("--ensemble", "members", type=int, default=None, metavar="N",
+              help="Also run N neighbours of the case, drawn over what is uncertain (the case's uncertain "
+                   "section, or intensity +-5 %, restitution +-0.05, friction +-5 %, size and slenderness "
+                   "+-2 %), and report the probability of overturning with its 95 % interval.")
+@click.option("--seed", type=click.IntRange(0, 2**63 - 1), default=1, show_default=True,
+              help="Seed of the ensemble's Latin hypercube.")
 @click.option("--robustness", is_flag=True,
-              help="Also rerun at dt/2 and with mu 1 % lower and higher, and say whether the verdict holds.")
+              help="The verdict's robustness: an ensemble of 200 neighbours (--ensemble 200); robust when "
+                   "none of them flips it.")
 @dpi_option("PNG figure")
-def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, robustness, dpi):
+def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, members, seed, robustness, dpi):
     """Compute one case: CASE_FILE (YAML) -> OUT/NAME.h5 and OUT/NAME.png.
 
     \b
     Example:
         rockslide run example/example.yaml --json
+        rockslide run example/example.yaml --ensemble 200
     """
+    from ..analyses import ensemble as ens
     from ..case import case_to_dict, load_case
     from ..engine import prepare as runner
     from ..io import files, records, results
@@ -53,14 +62,18 @@ def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, robustness
     h5_path = folder / f"{case.name}.h5"
     png_path = folder / f"{case.name}.png"
     prepared = runner.prepare(case, records.records_dir(records_dir))     # input errors first
+    if members is None and robustness:
+        members = ens.DEFAULT_MEMBERS
+    eplan = (ens.plan_ensemble(case, members, seed=seed, records_dir=records.records_dir(records_dir))
+             if members is not None else None)
     ground = prepared.ground.as_applied()
     stored = None        # this case's complete result, of which only the figure is missing
     if _result_set(h5_path, png_path, overwrite=overwrite, no_plot=no_plot):
-        stored = _same_result(case, prepared, h5_path, robustness=robustness)
+        stored = _same_result(case, prepared, h5_path, eplan=eplan)
     files.remove_stale_temporaries([h5_path, png_path])
     show_warnings()
     if stored is None:
-        work = runner.work(prepared, runs=4 if robustness else 1)
+        work = runner.work(prepared)
         if work.seconds > LONG_RUN:
             click.echo(f"rockslide: note: {work.describe()}", err=True)
         files.warn_free_space(folder, work.rows * results.BYTES_PER_ROW)
@@ -78,43 +91,64 @@ def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, robustness
                 streamed = prepared.case.solver.method == "kernel"
                 result = runner.simulate_prepared(prepared, on_chunk=writer.append_history if streamed else None,
                                                   progress=progress)
-                check = (runner.verdict_robustness(prepared, result.summary.overturned, progress=progress)
-                         if robustness else None)
-                extra = {} if check is None else {
-                    "verdict_robust": check["holds"],
-                    "robustness": json.dumps(results.json_ready(check["variants"]), allow_nan=False)}
+                check = None if eplan is None else _ensemble(eplan, result.summary.overturned)
                 writer.finish(result, name=case.name, case_text=case.text, case=case_to_dict(case, case_file=False),
-                              records=runner.record_entries(prepared), extra_attrs=extra, ground=ground)
+                              records=runner.record_entries(prepared), ground=ground,
+                              extra_attrs={} if check is None else ens.attributes(check[0]),
+                              extra_groups=None if check is None else {"ensemble": check[1]})
+            ensemble_png = folder / f"{case.name}.ensemble.png"
             if not no_plot:
                 kept = writer.written_result()
                 _draw(kept if kept is not None else results.read_result(writer.tmp).result, case.name,
                       png_path, overwrite=overwrite, dpi=dpi, staging=staging)
-            staging.publish(remove=[png_path] if no_plot else [])
+                if check is not None:
+                    _draw_ensemble(check, result.summary, case.name, ensemble_png, overwrite=overwrite, dpi=dpi,
+                                   staging=staging)
+            stale = [png_path] if no_plot else []
+            if overwrite and (no_plot or check is None):
+                stale.append(ensemble_png)          # it showed the neighbourhood of the result replaced
+            staging.publish(remove=stale)
         written = f"{h5_path}" + ("" if no_plot else f" and {png_path}")
+        if check is not None and not no_plot:
+            written += f" and {ensemble_png}"
+        check = None if check is None else check[0]
     else:
         with files.Staging(overwrite=False) as staging:
             _draw(stored.result, stored.name, png_path, overwrite=False, dpi=dpi, staging=staging)
             staging.publish()
         result = stored.result
-        check = None if not robustness else {
-            "holds": bool(stored.attrs["verdict_robust"]), "overturned": result.summary.overturned,
-            "variants": json.loads(stored.attrs["robustness"])}
+        check = None if eplan is None else json.loads(stored.attrs["ensemble"])
         written = f"{png_path} (the missing figure of the complete {h5_path})"
     elapsed = time.perf_counter() - started
     summary = result.summary
     if as_json:
         payload = {"name": case.name, **results.summary_to_json_dict(summary, result.events),
-                   "ground": ground, "robustness": results.json_ready(check),
+                   "ground": ground, "ensemble": results.json_ready(check),
                    "files": {"hdf5": str(h5_path), "png": None if no_plot else str(png_path)},
                    "elapsed_s": round(elapsed, 3)}
         click.echo(json.dumps(payload, allow_nan=False, default=_json_default))
     else:
-        click.echo(human_summary(case.name, summary, ground=ground, units=case.units))
+        lines = human_summary(case.name, summary, ground=ground, units=case.units).split("\n")
         if check is not None:
-            flips = [name for name, v in check["variants"].items() if v["overturned"] != summary.overturned]
-            click.echo("  verdict robust: holds at dt/2 and mu +-1 %" if check["holds"] else
-                       f"  verdict NOT robust (knife edge): flips with {', '.join(flips)}")
+            described = ens.describe(check, lines[0].split(": ", 1)[1])
+            lines = [f"{case.name}: {described[0]}", *lines[1:], *described[1:]]
+        click.echo("\n".join(lines))
         click.echo(f"  wrote {written} in {elapsed:.2f} s")
+
+
+def _ensemble(eplan, nominal_overturned: bool):
+    """Compute the ensemble on this machine's cores (`engine.execute.execute`, in memory): its
+    summary (`ensemble.summarise`) and its members' group for the result file."""
+    import numpy as np
+
+    from ..analyses import ensemble as ens
+    from ..analyses.sweep import sweep_variables
+    from ..engine.execute import execute
+
+    done = execute(eplan.plan, progress=lambda cases: interrupts.check())
+    variables = sweep_variables(eplan.plan, done.states)
+    members = ("member", np.arange(eplan.n), {"units": "1", "long_name": "member of the ensemble"})
+    return ens.summarise(eplan, variables, nominal_overturned), (members, ens.member_variables(eplan, variables))
 
 
 @main.command()
@@ -212,9 +246,9 @@ def _draw(result, name, path, *, overwrite, dpi=None, time_shift=0.0, zoom="auto
     save_figure(figure, path, overwrite=overwrite, dpi=dpi, staging=staging)
 
 
-def _same_result(case, prepared, h5_path: Path, *, robustness: bool):
-    """The stored result at ``h5_path`` if it is this case's (same case text, same records,
-    robustness if asked), else an OutputError: it exists."""
+def _same_result(case, prepared, h5_path: Path, *, eplan=None):
+    """The stored result at ``h5_path`` if it is this case's (same case text, same records, the
+    same ensemble if one is asked), else an OutputError: it exists."""
     from ..engine import prepare as runner
     from ..io import files, results
 
@@ -225,10 +259,36 @@ def _same_result(case, prepared, h5_path: Path, *, robustness: bool):
     same = (stored is not None and stored.case_text == case.text
             and [r.get("sha256") for r in stored.records]
             == [r.get("sha256") for r in runner.record_entries(prepared)]
-            and (not robustness or "robustness" in stored.attrs))
+            and (eplan is None or _same_ensemble(stored.attrs.get("ensemble"), eplan)))
     if not same:
         files.refuse_existing(h5_path, overwrite=False)
     return stored
+
+
+def _draw_ensemble(check, nominal, name: str, path: Path, *, overwrite: bool, dpi, staging) -> None:
+    """The neighbourhood's figure (`plots.ensemble_figure`): its members' largest rotations."""
+    from ..analyses import ensemble as ens
+    from ..plots import ensemble_figure, save_figure
+
+    summary, (_, variables) = check
+    ok = variables["status"][1] == 0
+    ratio = variables["max_rotation_ratio"][1][ok]
+    over = variables["overturned"][1][ok].astype(bool)
+    headline = ens.describe(summary, nominal.verdict)[0]
+    figure = ensemble_figure(ratio, over, math.inf if nominal.overturned else nominal.max_rotation_ratio,
+                             summary_text=headline.split("; ", 1)[-1],
+                             title=f"{name}: {summary['n']} neighbours (seed {summary['seed']})")
+    save_figure(figure, path, overwrite=overwrite, dpi=dpi, staging=staging)
+
+
+def _same_ensemble(text, eplan) -> bool:
+    """Whether a result file's ``ensemble`` attribute is the ensemble ``eplan`` would compute."""
+    try:
+        stored = json.loads(text)
+    except (TypeError, ValueError):
+        return False
+    quantities = {name: d.spec() for name, d in eplan.distributions.items()}
+    return stored.get("n") == eplan.n and stored.get("seed") == eplan.seed and stored.get("quantities") == quantities
 
 
 class _RunProgress:

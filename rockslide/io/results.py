@@ -277,7 +277,8 @@ class ResultWriter:
                 self._kept = None                    # too long to keep: the caller reads the file
 
     def finish(self, result: Result, *, name: str, case_text: str = "", case: dict | None = None,
-               records=(), extra_attrs: dict | None = None, ground: dict | None = None) -> Path:
+               records=(), extra_attrs: dict | None = None, ground: dict | None = None,
+               extra_groups: dict | None = None) -> Path:
         """Write the ground motion, events, summary and metadata, then publish the file (or leave it
         to the writer's ``staging``).
 
@@ -296,7 +297,7 @@ class ResultWriter:
             if not streamed and result.history and len(result.history.get("time", ())):
                 self._write_history_dict(result.history)
             _write_body(self._file, result, name=name, case_text=case_text, case=case,
-                        records=records, extra_attrs=extra_attrs, ground=ground)
+                        records=records, extra_attrs=extra_attrs, ground=ground, extra_groups=extra_groups)
             self._file.flush()
             self._file.close()
             self._raw.close()
@@ -407,7 +408,7 @@ def write_result(path, result: Result, *, name: str, case_text: str = "", case: 
 
 
 def _write_body(f: h5py.File, result: Result, *, name, case_text, case, records, extra_attrs,
-                ground=None) -> None:
+                ground=None, extra_groups=None) -> None:
     group = f.create_group("ground", track_order=True)
     for key, values in (("time", result.ground_time), ("horizontal", result.ground_horizontal),
                         ("vertical", result.ground_vertical)):
@@ -445,6 +446,9 @@ def _write_body(f: h5py.File, result: Result, *, name, case_text, case, records,
                     value = _file_name(value)
                 group.attrs[key] = _attr_value(value)
 
+    for group_name, (dimension, variables) in (extra_groups or {}).items():
+        _write_labelled_group(f, group_name, dimension, variables)
+
     attrs = f.attrs
     for key, value in summary_attributes(result.summary).items():
         attrs[key] = value
@@ -463,6 +467,23 @@ def _write_body(f: h5py.File, result: Result, *, name, case_text, case, records,
         if key in attrs:
             raise ValueError(f"extra attribute {key!r} would replace a standard attribute")
         attrs[key] = _attr_value(value)
+
+
+def _write_labelled_group(f: h5py.File, name: str, dimension: tuple, variables: dict) -> None:
+    """A group of 1-D variables on one dimension (netCDF-4: ``xarray.open_dataset(path,
+    engine="h5netcdf", group=name)`` opens it): ``dimension`` is ``(its name, its values, its
+    attributes)``, ``variables`` ``name -> (dims, values, attributes)`` as `write_dataset` takes them."""
+    group = f.create_group(name, track_order=True)
+    dim_name, dim_values, dim_attrs = dimension
+    scale = group.create_dataset(dim_name, data=_column(dim_values))
+    for key, value in dim_attrs.items():
+        scale.attrs[key] = _attr_value(value)
+    scale.make_scale(dim_name)
+    for var, (_, values, var_attrs) in variables.items():
+        ds = group.create_dataset(var, data=_array(values))
+        for key, value in var_attrs.items():
+            ds.attrs[key] = value if isinstance(value, np.ndarray) else _attr_value(value)
+        ds.dims[0].attach_scale(scale)
 
 
 def _label_dimensions(f: h5py.File, events) -> None:
