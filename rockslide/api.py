@@ -178,7 +178,8 @@ def sweep(case: Case | Mapping | str | Path, *, mu_kinetic_ratio: float | None =
 
 def fragility(case: Case | Mapping | str | Path, suite: str | Path, *, im: str = "pga",
               levels: str | Sequence, damage: Sequence[str] = (), units: str | None = None,
-              resamples: int = 1000, case_vertical: bool = False, records_dir: str | Path | None = None,
+              resamples: int = 1000, case_vertical: bool = False, samples: int = 0, seed: int = 1,
+              records_dir: str | Path | None = None,
               device: str = "cpu", workers: int | None = None, scheduler: str | None = None,
               chunk_size: int | None = None, store=None, progress: Callable[[int], None] | None = None):
     """Fragility curves of the case's block over a record suite, as ``rockslide fragility``.
@@ -203,6 +204,12 @@ def fragility(case: Case | Mapping | str | Path, suite: str | Path, *, im: str =
     case_vertical : bool
         When the suite has no vertical records, scale the case's vertical record with each
         horizontal one (default: horizontal only; the dataset's ``vertical_note`` says so).
+    samples : int
+        Parameter sets drawn per record from the case's ``uncertain`` section (size, slenderness,
+        friction, restitution), each run at every level: the fits then include the parameter
+        uncertainty; ``median_without_samples`` and ``beta_without_samples`` are the case's own.
+    seed : int
+        Seed of their Latin hypercube.
     records_dir, device, workers, scheduler, chunk_size, store, progress
         As in `sweep`.
 
@@ -224,7 +231,7 @@ def fragility(case: Case | Mapping | str | Path, suite: str | Path, *, im: str =
     scheduler = check_where(workers=workers, scheduler=scheduler, device=device)
     fplan = fr.plan_fragility(case, fr.suite_from(str(suite), units=units), measure, parsed,
                               records_dir=records.records_dir(records_dir), chunk_size=chunk_size,
-                              case_vertical=case_vertical)
+                              case_vertical=case_vertical, samples=samples, seed=seed)
     done = execute(fplan.plan, store, workers=workers, scheduler=scheduler, device=device, progress=progress)
     analysis = fr.analyse(fplan, done.states, states, resamples=resamples)
     return datasets.study_dataset(*fr.dataset(fplan, analysis))

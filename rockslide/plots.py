@@ -953,7 +953,8 @@ def fragility_figure(levels, grid, curves, *, xlabel: str, confidence: float, ti
         One per damage state: ``label`` (legend text), ``fraction`` (observed fraction per level,
         NaN where no run counts), and optionally ``fitted`` (the maximum-likelihood curve on
         ``grid``), ``band`` (``[2, grid]``: lower and upper bound of the confidence band),
-        ``moments`` (the method-of-moments curve on ``grid``).
+        ``moments`` (the method-of-moments curve on ``grid``), ``nominal`` (the fit without
+        parameter uncertainty, on ``grid``).
     xlabel : str
         The intensity measure and its unit.
     confidence : float
@@ -971,12 +972,16 @@ def fragility_figure(levels, grid, curves, *, xlabel: str, confidence: float, ti
             ax.plot(grid, curve["fitted"], color=colour, lw=2.0)
         if curve.get("moments") is not None:
             ax.plot(grid, curve["moments"], color=colour, lw=1.0, ls="--")
+        if curve.get("nominal") is not None:
+            ax.plot(grid, curve["nominal"], color=colour, lw=1.2, ls=":")
         ax.plot(levels, curve["fraction"], "o", color=colour, ms=6, mfc="white" if curve.get("fitted") is None
                 else colour, label=curve["label"])
     handles, labels = ax.get_legend_handles_labels()
     for key, handle, label in (
             ("fitted", Line2D([], [], color="0.3", lw=2.0), "maximum-likelihood lognormal fit"),
             ("moments", Line2D([], [], color="0.3", lw=1.0, ls="--"), "method of moments (first exceedances)"),
+            ("nominal", Line2D([], [], color="0.3", lw=1.2, ls=":"),
+             "without parameter uncertainty (the case's values)"),
             ("band", Patch(facecolor="0.3", alpha=0.15), f"{100 * confidence:g} % bootstrap band over records")):
         if any(curve.get(key) is not None for curve in curves):
             handles.append(handle)

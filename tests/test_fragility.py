@@ -597,3 +597,83 @@ def test_a_record_sampled_more_coarsely_than_the_step_allows_is_named(tmp_path):
     result = invoke("fragility", case, "--suite", suite, "--levels", "0.5g", "--out-dir", tmp_path / "p",
                     "--no-progress")
     one_line_error(result, "coarse.yaml", "solver.dt", "suite.yaml: records[0] (fine)")
+
+
+# --------------------------------------------------------------------------------------------------
+# Fragility with uncertain parameters (--samples)
+# --------------------------------------------------------------------------------------------------
+
+UNCERTAIN = {"size": {"lognormal": {"median": 1.0, "beta": 0.3}}, "restitution": {"uniform": [0.7, 0.9]},
+             "friction": {"uniform": [0.9, 1.1]}}
+
+
+def _sampled(example, samples, levels="0.3g:1.5g:0.4g"):
+    case = example.with_(uncertain=UNCERTAIN)
+    im = fr.parse_im("pga")
+    fplan = fr.plan_fragility(case, load_suite(SUITE), im, fr.parse_levels(levels, im), records_dir=RECORDS,
+                              samples=samples, seed=5)
+    p = fplan.plan
+    states = batch.compute(p.params, p.states, p.base, p.first, p.count, p.factor_h, p.factor_v)
+    return fplan, states
+
+
+def test_parameter_samples_keep_the_cases_own_values_as_sample_zero(example):
+    """Sample 0 of every record and level is the run without samples, bit for bit; the fits with
+    samples use the drawn sets only, and the fits of sample 0 are those of the plain analysis."""
+    plain, plain_states = _sampled(example, 0)
+    sampled, sampled_states = _sampled(example, 4)
+    assert sampled.plan.shape == (*plain.plan.shape, 5)
+    zero = sampled_states.reshape(*plain.plan.shape, 5, -1)[:, :, 0, :]
+    assert np.array_equal(zero.reshape(plain_states.shape), plain_states, equal_nan=True)
+    a = fr.analyse(plain, plain_states, fr.damage_states(), resamples=50)
+    b = fr.analyse(sampled, sampled_states, fr.damage_states(), resamples=50)
+    assert np.array_equal(b.exceeded[:, :, 0, :], a.exceeded)
+    assert b.nominal_fits[0].median == a.fits[0].median and b.nominal_fits[0].beta == a.fits[0].beta
+    assert b.fitted.shape == (6 * 4, 4, 1) and b.fits[0].n_runs == 6 * 4 * 4
+
+
+def test_each_sampled_run_is_the_run_of_its_block(example):
+    """A drawn run computes what ``rockslide run`` computes for the record's case at that level
+    with the drawn block (height and width times the size factor), friction and restitution."""
+    fplan, states = _sampled(example, 3)
+    values = fplan.parameter_values
+    assert values["size"].shape == (6, 4) and (values["size"][:, 0] == 1.0).all()
+    assert (values["restitution"][:, 0] == example.contact.restitution).all()
+    record, level, k = 2, 1, 3
+    case = fr.point_case(fplan, record, level)
+    f, size, e = values["friction"][record, k], values["size"][record, k], values["restitution"][record, k]
+    drawn = case.with_({"block.height": example.block.height * size, "block.width": example.block.width * size,
+                        "contact.mu_static": example.contact.mu_static * f,
+                        "contact.mu_kinetic": example.contact.mu_kinetic * f, "contact.restitution": e})
+    summary = runner.run_case(drawn, RECORDS, history=False)[1].summary
+    row = states.reshape(6, 4, 4, -1)[record, level, k]
+    assert row[K.S_MAX_THETA] == summary.max_rotation and row[K.S_MAX_X] == summary.max_slip
+
+
+def test_parameter_samples_are_in_the_file_the_json_and_the_figure(tmp_path, example):
+    data = case_to_dict(example)
+    data["uncertain"] = UNCERTAIN
+    for role in ("horizontal", "vertical"):
+        data["ground"][role]["file"] = str(RECORDS / data["ground"][role]["file"].split("/")[-1])
+    (tmp_path / "case.yaml").write_text(yaml.safe_dump(data))
+    args = ["fragility", tmp_path / "case.yaml", "--suite", SUITE, "--levels", "0.3g:1.5g:0.4g", "--samples", "3",
+            "--bootstrap", "20", "--out-dir", tmp_path, "--no-progress"]
+    done = invoke(*args, "--json")
+    assert done.exit_code == 0, done.output
+    payload = json.loads(done.stdout)
+    assert payload["parameter_samples"]["n"] == 3 and payload["n_runs"] == 6 * 4 * 4
+    assert "without_parameter_uncertainty" in payload["damage_states"]["overturn"]
+    stored = results.read_dataset(tmp_path / "example.fragility.h5", format=results.FRAGILITY_FORMAT)
+    assert stored.variables["parameter_size"][0] == ("record", "sample")
+    assert stored.variables["overturned"][0] == ("record", "level", "sample")
+    assert stored.attrs["parameter_samples"] == 3
+    assert invoke("plot", tmp_path / "example.fragility.h5", "-o", tmp_path / "again.png").exit_code == 0
+
+
+def test_parameter_samples_need_an_uncertain_section_without_intensity(example):
+    im = fr.parse_im("pga")
+    with pytest.raises(CaseError, match="needs the case's uncertain section"):
+        fr.plan_fragility(example, load_suite(SUITE), im, fr.parse_levels("1g", im), records_dir=RECORDS, samples=2)
+    with pytest.raises(CaseError, match="uncertain.intensity: does not apply"):
+        fr.plan_fragility(example.with_(uncertain={"intensity": {"uniform": [0.9, 1.1]}}), load_suite(SUITE), im,
+                          fr.parse_levels("1g", im), records_dir=RECORDS, samples=2)

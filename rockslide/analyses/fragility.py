@@ -42,11 +42,12 @@ fraction of runs that reach each damage state.
 from __future__ import annotations
 
 import glob
+import json
 import math
 import os
 import re
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -415,6 +416,16 @@ class FragilityPlan:
         ``none``.
     vertical_note : str
         What the user must know about it ("" when nothing): the case's vertical record left out.
+    samples : int
+        Parameter samples per record and level (0: the case's values only). With samples the plan
+        has a third axis ``sample``: 0 is the case's own values, 1 ... samples the draws.
+    parameter_values : dict
+        Per quantity of the case's ``uncertain`` section: float64[records, samples + 1], each
+        sample's value (factors; the restitution itself), column 0 the case's own.
+    distributions : dict
+        The distributions sampled (`case.Distribution`), by quantity.
+    seed : int
+        Seed of the Latin hypercube (record ``r``'s design uses ``seed + r``).
     """
 
     plan: Plan
@@ -427,6 +438,10 @@ class FragilityPlan:
     vertical_factor: float
     vertical: str = "suite"
     vertical_note: str = ""
+    samples: int = 0
+    parameter_values: dict = field(default_factory=dict)
+    distributions: dict = field(default_factory=dict)
+    seed: int = 0
 
     @property
     def names(self) -> list[str]:
@@ -434,11 +449,16 @@ class FragilityPlan:
 
     @property
     def shape(self) -> tuple[int, int]:
-        return self.plan.shape
+        """``(records, levels)``."""
+        return self.plan.shape[:2]
 
     def describe(self) -> str:
-        """``18 records x 15 levels of PGA = 270 runs``."""
-        return _describe(*self.shape, self.im.label)
+        """``18 records x 15 levels of PGA = 270 runs`` (and ``x 21 parameter sets`` with samples)."""
+        text = _describe(*self.shape, self.im.label)
+        if self.samples:
+            text = (f"{text.rsplit(' = ', 1)[0]} x {self.samples + 1} parameter sets (the case's and "
+                    f"{self.samples} drawn) = {self.plan.n_cases} runs")
+        return text
 
 
 def _describe(records: int, levels: int, label: str) -> str:
@@ -450,7 +470,7 @@ def _describe(records: int, levels: int, label: str) -> str:
 
 def plan_fragility(case: Case, suite: Suite, im: IntensityMeasure, levels: sw.Axis, *,
                    records_dir: Path | None = None, chunk_size: int | None = None,
-                   case_vertical: bool = False) -> FragilityPlan:
+                   case_vertical: bool = False, samples: int = 0, seed: int = 1) -> FragilityPlan:
     """Read the suite's records, measure them, and build every run's kernel inputs.
 
     Parameters
@@ -470,6 +490,11 @@ def plan_fragility(case: Case, suite: Suite, im: IntensityMeasure, levels: sw.Ax
         run each horizontal record with the case's vertical record, scaled by the same factor
         (times ``ground.scale.vertical_factor``). Without it the runs are horizontal only, and the
         plan's ``vertical_note`` says so.
+    samples : int
+        Draw this many sets of the block's and contact's parameters per record, from the case's
+        ``uncertain`` section (size, slenderness, friction, restitution; Latin hypercube, ``seed``),
+        and run each at every level beside the case's own values (`with_parameter_samples`).
+    seed : int
 
     Raises
     ------
@@ -584,9 +609,70 @@ def plan_fragility(case: Case, suite: Suite, im: IntensityMeasure, levels: sw.Ax
                    record_end=record_end, step=float(params[:, K.P_STEP].min()), records=entries,
                    chunk_size=chunk_size)
     plan.key = definition_key(plan)
-    return FragilityPlan(plan=plan, suite=suite, im=im, levels=levels, record_cases=record_cases,
-                         measures=measures, files=files, vertical_factor=vertical_factor, vertical=vertical,
-                         vertical_note=vertical_note)
+    fplan = FragilityPlan(plan=plan, suite=suite, im=im, levels=levels, record_cases=record_cases,
+                          measures=measures, files=files, vertical_factor=vertical_factor, vertical=vertical,
+                          vertical_note=vertical_note)
+    return with_parameter_samples(fplan, samples, seed, chunk_size) if samples else fplan
+
+
+def with_parameter_samples(fplan: FragilityPlan, samples: int, seed: int, chunk_size: int | None = None
+                           ) -> FragilityPlan:
+    """The plan with ``samples`` draws of the case's uncertain parameters at every record and
+    level (issue: fragility with uncertain parameters). Record ``r`` gets its own Latin hypercube
+    of ``samples`` draws (seed ``seed + r``), the same draws at every level, so that each (record,
+    draw) is one realisation whose capacity the method of moments reads, and sample 0 keeps the
+    case's own values (the curve without parameter uncertainty, computed beside it).
+
+    Raises
+    ------
+    CaseError
+        ``samples`` out of range, no ``uncertain`` section, or ``uncertain.intensity`` (the
+        levels set the intensity).
+    """
+    from . import ensemble as ens
+
+    case, plan = fplan.plan.case, fplan.plan
+    if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or samples < 0:
+        raise CaseError(f"expected a whole number >= 0, got {samples!r}", source="--samples")
+    dists = case.uncertain.given()
+    if not dists:
+        raise CaseError("needs the case's uncertain section (size, slenderness, friction, restitution) to draw from",
+                        source="--samples")
+    if "intensity" in dists:
+        raise CaseError("does not apply to a fragility analysis, whose levels set the intensity (remove it, or "
+                        "run the case's neighbourhood with rockslide run --ensemble)", source=case.source,
+                        field="uncertain.intensity")
+    n_records, n_levels = plan.shape
+    width = samples + 1
+    n = plan.n_cases * width
+    if n > MAX_POINTS:
+        raise CaseError(f"{n_records} records x {n_levels} levels x {width} parameter sets = {n} runs; at most "
+                        f"{MAX_POINTS}", source="--samples")
+    own = {name: (case.contact.restitution if name == "restitution" else 1.0) for name in dists}
+    values = {name: np.empty((n_records, width)) for name in dists}
+    for r in range(n_records):
+        drawn = ens.sample(dists, samples, seed + r)
+        for name in dists:
+            values[name][r, 0] = own[name]
+            values[name][r, 1:] = drawn[name]
+    row = np.repeat(np.arange(plan.n_cases), width)                  # (record, level, sample), C order
+    record, draw = row // n_levels, np.tile(np.arange(width), plan.n_cases)
+    params, restitution = ens.member_parameters(case, plan.params[row],
+                                                {name: v[record, draw] for name, v in values.items()})
+    if "restitution" in values:
+        values["restitution"] = restitution[np.arange(n_records)[:, None] * n_levels * width + np.arange(width)]
+    kind = sw.AxisKind("sample", "--samples", "dimensionless", "", "parameter sample (0: the case's own values)",
+                       "1", "sample")
+    axis = sw.Axis("sample", tuple(float(k) for k in range(width)), tuple(str(k) for k in range(width)),
+                   str(samples), kind)
+    expanded = Plan(case=case, axes=[*plan.axes, axis], mu_kinetic_ratio=None, params=params,
+                    states=plan.states[row], factor_h=plan.factor_h[row], factor_v=plan.factor_v[row], base=plan.base,
+                    first=plan.first[row], count=plan.count[row], record_end=plan.record_end[row],
+                    step=float(params[:, K.P_STEP].min()), records=plan.records,
+                    chunk_size=default_chunk_size(n) if chunk_size is None else int(chunk_size))
+    expanded.key = definition_key(expanded)
+    return replace(fplan, plan=expanded, samples=int(samples), parameter_values=values, distributions=dists,
+                   seed=int(seed))
 
 
 def _check_level(record_case: Case, records: dict, factor: float, where: str) -> float:
@@ -671,7 +757,8 @@ def _read_entry(suite: Suite, r: int, entry: SuiteEntry, folder: Path):
 def point_case(fplan: FragilityPlan, record: int, level: int) -> Case:
     """The case file of one run, as a user would give it to ``rockslide run``: the record's case
     (`FragilityPlan.record_cases`) with ``ground.scale.factor`` = the run's factor."""
-    factor = float(fplan.plan.factor_h[record * len(fplan.levels) + level])
+    width = fplan.samples + 1
+    factor = float(fplan.plan.factor_h[(record * len(fplan.levels) + level) * width])
     return case_with(fplan.record_cases[record], {"ground.scale.factor": factor})
 
 
@@ -849,7 +936,7 @@ def _newton(a, b, s, n, z):
 
 
 def fit_state(levels, exceeded: np.ndarray, *, resamples: int = BOOTSTRAP_RESAMPLES,
-              seed: int = BOOTSTRAP_SEED, show=None) -> StateFit:
+              seed: int = BOOTSTRAP_SEED, show=None, per_record: int = 1) -> StateFit:
     """The fits of one damage state.
 
     Parameters
@@ -864,6 +951,9 @@ def fit_state(levels, exceeded: np.ndarray, *, resamples: int = BOOTSTRAP_RESAMP
         Seed of the resampling.
     show : callable, optional
         Formats a level for the notes (default ``{:g}``).
+    per_record : int
+        Rows of ``exceeded`` per record, consecutive (parameter samples of one record: R is then
+        records x per_record): the bootstrap resamples records, each with all its rows.
 
     Returns
     -------
@@ -872,7 +962,7 @@ def fit_state(levels, exceeded: np.ndarray, *, resamples: int = BOOTSTRAP_RESAMP
     levels = np.asarray(levels, dtype=np.float64)
     exceeded = np.asarray(exceeded)
     show = show or (lambda x: f"{x:g}")
-    if exceeded.shape[0] < 2:
+    if exceeded.shape[0] // per_record < 2:
         resamples = 0                   # one record: every resample is that record, no interval
     s = np.log(levels)
     n, z = stripe_counts(exceeded)
@@ -892,7 +982,7 @@ def fit_state(levels, exceeded: np.ndarray, *, resamples: int = BOOTSTRAP_RESAMP
         logs = np.log(capacity)
         out.moments_median, out.moments_beta = float(np.exp(logs.mean())), float(logs.std(ddof=1))
     if resamples > 0 and (out.median is not None or out.moments_median is not None):
-        _bootstrap(out, s, exceeded, capacity, resamples, seed)
+        _bootstrap(out, s, exceeded, capacity, resamples, seed, per_record)
     return out
 
 
@@ -928,13 +1018,17 @@ def _first_exceedance(levels, exceeded, show):
     return np.sqrt(levels[first - 1] * levels[first]), 0, ""
 
 
-def _bootstrap(out: StateFit, s, exceeded, capacity, resamples, seed) -> None:
-    """Percentile intervals of both fits over resamples of the records."""
+def _bootstrap(out: StateFit, s, exceeded, capacity, resamples, seed, per_record: int = 1) -> None:
+    """Percentile intervals of both fits over resamples of the records (each record with its
+    ``per_record`` consecutive rows)."""
     rng = np.random.default_rng(seed)
-    records = exceeded.shape[0]
+    records = exceeded.shape[0] // per_record
     picks = rng.integers(0, records, size=(resamples, records))
     weights = np.zeros((resamples, records))
     np.add.at(weights, (np.repeat(np.arange(resamples), records), picks.ravel()), 1.0)
+    if per_record > 1:
+        weights = np.repeat(weights, per_record, axis=1)
+        picks = (picks[:, :, None] * per_record + np.arange(per_record)).reshape(resamples, -1)
     inside = (exceeded >= 0).astype(np.float64)
     hits = (exceeded == 1).astype(np.float64)
     n, z = weights @ inside, weights @ hits
@@ -980,12 +1074,24 @@ class Analysis:
     states : list of DamageState
     fits : list of StateFit
         One per state.
+    rows : numpy.ndarray or None
+        With parameter samples: `fitted`'s array (else None).
+    nominal_fits : list of StateFit
+        With parameter samples: the fits of the case's own values alone (no parameter uncertainty).
     """
 
     variables: dict
     exceeded: np.ndarray
     states: list
     fits: list
+    rows: np.ndarray | None = None
+    nominal_fits: list = field(default_factory=list)
+
+    @property
+    def fitted(self) -> np.ndarray:
+        """int8[realisations, levels, states]: the exceedances the fits use (with parameter samples:
+        each record's drawn samples, record by record; else `exceeded`)."""
+        return self.exceeded if self.rows is None else self.rows
 
 
 def analyse(fplan: FragilityPlan, final_states: np.ndarray, states, *, resamples: int = BOOTSTRAP_RESAMPLES,
@@ -1001,9 +1107,19 @@ def analyse(fplan: FragilityPlan, final_states: np.ndarray, states, *, resamples
                                   f"vertical's is this times {fplan.vertical_factor:g})"})
     exceeded = exceedances(variables, alpha, states)
     levels = np.asarray(fplan.levels.values)
-    fits = [fit_state(levels, exceeded[..., i], resamples=resamples, seed=seed, show=fplan.im.show)
-            for i in range(len(states))]
-    return Analysis(variables=variables, exceeded=exceeded, states=list(states), fits=fits)
+    if not fplan.samples:
+        fits = [fit_state(levels, exceeded[..., i], resamples=resamples, seed=seed, show=fplan.im.show)
+                for i in range(len(states))]
+        return Analysis(variables=variables, exceeded=exceeded, states=list(states), fits=fits)
+    records, n_levels = fplan.shape
+    rows = np.ascontiguousarray(np.moveaxis(exceeded[:, :, 1:, :], 2, 1).reshape(records * fplan.samples,
+                                                                                   n_levels, len(states)))
+    fits = [fit_state(levels, rows[..., i], resamples=resamples, seed=seed, show=fplan.im.show,
+                      per_record=fplan.samples) for i in range(len(states))]
+    nominal = [fit_state(levels, exceeded[:, :, 0, i], resamples=resamples, seed=seed, show=fplan.im.show)
+               for i in range(len(states))]
+    return Analysis(variables=variables, exceeded=exceeded, states=list(states), fits=fits, rows=rows,
+                    nominal_fits=nominal)
 
 
 _FIT_FIELDS = (("median", "m"), ("beta", "b"), ("moments_median", "m"), ("moments_beta", "b"))
@@ -1021,12 +1137,17 @@ def dataset(fplan: FragilityPlan, analysis: Analysis, command_line: str = "") ->
          {"long_name": "damage state"}),
     ]
     run = ("record", "level")
+    if fplan.samples:
+        coords.append(("sample", np.arange(fplan.samples + 1, dtype=np.float64),
+                       {"long_name": "parameter sample of the record: 0 the case's own values, 1 ... drawn "
+                        "from the case's uncertain section (Latin hypercube)"}))
+        run = ("record", "level", "sample")
     variables = {name: (run, values, attrs) for name, (values, attrs) in analysis.variables.items()}
-    variables["exceeded"] = (("record", "level", "damage_state"), analysis.exceeded,
+    variables["exceeded"] = ((*run, "damage_state"), analysis.exceeded,
                              {"units": "1", "long_name": "the run reached the damage state",
                               "flag_values": np.array([-1, 0, 1], dtype=np.int8),
                               "flag_meanings": "outside_the_model not_exceeded exceeded"})
-    n, z = stripe_counts(np.moveaxis(analysis.exceeded, -1, 0))
+    n, z = stripe_counts(np.moveaxis(analysis.fitted, -1, 0))
     with np.errstate(invalid="ignore", divide="ignore"):
         fraction = np.where(n > 0, z / n, np.nan)
     variables["fraction_exceeded"] = (("damage_state", "level"), fraction,
@@ -1051,6 +1172,15 @@ def dataset(fplan: FragilityPlan, analysis: Analysis, command_line: str = "") ->
             variables[f"{name}_{side}"] = (per_state, bounds, {
                 "units": units[unit], "long_name": f"{side} bound of the {CONFIDENCE:.0%} bootstrap "
                 f"interval of {name} (NaN: none)"})
+    if fplan.samples:
+        for name, unit in (("median", "m"), ("beta", "b")):
+            values = np.array([_nan(getattr(f, name)) for f in analysis.nominal_fits])
+            variables[f"{name}_without_samples"] = (per_state, values, {
+                "units": units[unit], "long_name": f"{words[name]} over the case's own values alone (sample "
+                "0: without parameter uncertainty; NaN: no fit)"})
+        for name, values in fplan.parameter_values.items():
+            what = "coefficient of restitution" if name == "restitution" else f"factor on the {name}"
+            variables[f"parameter_{name}"] = (("record", "sample"), values, {"units": "1", "long_name": what})
     for name, text in (("note", "fit_note"), ("moments_note", "moments_note")):
         variables[text] = (per_state, np.array([getattr(f, name) for f in analysis.fits], dtype=object),
                            {"long_name": "why there is no fit (empty: there is)"})
@@ -1097,6 +1227,9 @@ def dataset(fplan: FragilityPlan, analysis: Analysis, command_line: str = "") ->
         "vertical_motion": fplan.vertical,
         "vertical_note": fplan.vertical_note,
     })
+    if fplan.samples:
+        attrs.update({"parameter_samples": fplan.samples, "parameter_seed": fplan.seed,
+                      "parameter_distributions": json.dumps({k: d.spec() for k, d in fplan.distributions.items()})})
     return coords, variables, attrs
 
 
@@ -1107,9 +1240,10 @@ def _nan(value) -> float:
 def json_summary(fplan: FragilityPlan, analysis: Analysis) -> dict:
     """The ``--json`` object (SI units; null where there is no fit)."""
     im = fplan.im
-    n, z = stripe_counts(np.moveaxis(analysis.exceeded, -1, 0))
+    n, z = stripe_counts(np.moveaxis(analysis.fitted, -1, 0))
     out = {}
-    for state, fit, ns, zs in zip(analysis.states, analysis.fits, n, z, strict=True):
+    nominal = analysis.nominal_fits or [None] * len(analysis.fits)
+    for state, fit, ns, zs, own in zip(analysis.states, analysis.fits, n, z, nominal, strict=True):
         out[state.name] = {
             "definition": state.long_name,
             "median": fit.median, "beta": fit.beta,
@@ -1122,6 +1256,9 @@ def json_summary(fplan: FragilityPlan, analysis: Analysis) -> dict:
                         "n_censored": fit.n_censored, "note": fit.moments_note or None},
             "fraction_exceeded": [None if k == 0 else float(x / k) for x, k in zip(zs, ns, strict=True)],
         }
+        if own is not None:
+            out[state.name]["without_parameter_uncertainty"] = {"median": own.median, "beta": own.beta,
+                                                                "note": own.note or None}
     status = analysis.variables["status"][0]
     return {
         "name": fplan.plan.case.name,
@@ -1133,6 +1270,9 @@ def json_summary(fplan: FragilityPlan, analysis: Analysis) -> dict:
         "n_runs": int(status.size),
         "n_outside_model": int((status != K.STATUS_OK).sum()),
         "n_undecided": int(analysis.variables["undecided"][0].sum()),
+        "parameter_samples": None if not fplan.samples else {
+            "n": fplan.samples, "seed": fplan.seed,
+            "quantities": {k: d.spec() for k, d in fplan.distributions.items()}},
         "bootstrap": {"resamples": analysis.fits[0].resamples if analysis.fits else 0, "seed": BOOTSTRAP_SEED,
                       "confidence": CONFIDENCE},
     }
@@ -1145,11 +1285,11 @@ def _pair(pair):
 def figure(fplan: FragilityPlan, analysis: Analysis):
     """The PNG: fitted curves, the stripes' observed fractions and the confidence bands."""
     title = f"{fplan.plan.case.name}: {fplan.describe()}"
-    return _figure(np.asarray(fplan.levels.values), analysis.exceeded, analysis.states, analysis.fits,
-                   fplan.im, title)
+    return _figure(np.asarray(fplan.levels.values), analysis.fitted, analysis.states, analysis.fits,
+                   fplan.im, title, analysis.nominal_fits)
 
 
-def _figure(levels, exceeded, states, fits, im: IntensityMeasure, title: str):
+def _figure(levels, exceeded, states, fits, im: IntensityMeasure, title: str, nominal_fits=()):
     grid = np.linspace(levels[-1] * 1e-3, levels[-1] * 1.1, 300)
     lower_tail, upper_tail = 50.0 * (1.0 - CONFIDENCE), 100.0 - 50.0 * (1.0 - CONFIDENCE)
     curves = []
@@ -1165,6 +1305,9 @@ def _figure(levels, exceeded, states, fits, im: IntensityMeasure, title: str):
         if fit.samples.shape[0] >= 2:
             band = fragility(grid[None, :], fit.samples[:, :1], fit.samples[:, 1:])
             curve["band"] = np.percentile(band, [lower_tail, upper_tail], axis=0)
+        own = nominal_fits[i] if nominal_fits else None
+        if own is not None and own.median is not None:
+            curve["nominal"] = fragility(grid, own.median, own.beta)
         curves.append(curve)
     from ..plots import fragility_figure
 
@@ -1218,7 +1361,15 @@ def stored_figure(stored) -> object:
                           float(attrs.get("intensity_measure_display_scale", 1.0)))
     resamples = int(attrs.get("bootstrap_resamples", BOOTSTRAP_RESAMPLES))
     seed = int(attrs.get("bootstrap_seed", BOOTSTRAP_SEED))
-    fits = [fit_state(levels, exceeded[..., i], resamples=resamples, seed=seed, show=im.show)
-            for i in range(len(states))]
     title = f"{attrs.get('name', 'fragility')}: {_describe(*exceeded.shape[:2], im.label)}"
-    return _figure(levels, exceeded, states, fits, im, title)
+    if "sample" not in coords:
+        fits = [fit_state(levels, exceeded[..., i], resamples=resamples, seed=seed, show=im.show)
+                for i in range(len(states))]
+        return _figure(levels, exceeded, states, fits, im, title)
+    records, n_levels, width = exceeded.shape[:3]
+    rows = np.moveaxis(exceeded[:, :, 1:, :], 2, 1).reshape(records * (width - 1), n_levels, len(states))
+    fits = [fit_state(levels, rows[..., i], resamples=resamples, seed=seed, show=im.show, per_record=width - 1)
+            for i in range(len(states))]
+    nominal = [fit_state(levels, exceeded[:, :, 0, i], resamples=resamples, seed=seed, show=im.show)
+               for i in range(len(states))]
+    return _figure(levels, rows, states, fits, im, f"{title} x {width} parameter sets", nominal)

@@ -188,11 +188,18 @@ def sweep(case_file, mu_kinetic_ratio, records_dir, out_dir, overwrite, no_plot,
               help="When the suite has no vertical records: scale the case's vertical record with each "
                    "horizontal one (by its factor times ground.scale.vertical_factor) instead of leaving "
                    "the vertical out.")
+@click.option("--samples", type=click.IntRange(0, 100_000), default=0, show_default=True, metavar="N",
+              help="Draw N sets of the block's and contact's parameters per record from the case's uncertain "
+                   "section (size, slenderness, friction, restitution) and run each at every level: the curves "
+                   "then include the parameter uncertainty (drawn beside the case's own).")
+@click.option("--seed", type=click.IntRange(0, 2**62), default=1, show_default=True,
+              help="Seed of the parameter samples' Latin hypercube (record r uses seed + r).")
 @click.option("--json", "as_json", is_flag=True, help="Print the fits as one JSON object on stdout.")
 @records_dir_option
 @where_options("fragility analysis", "run")
-def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, resamples, case_vertical, as_json,
-              records_dir, out_dir, overwrite, no_plot, workers, scheduler, device, chunk_size, no_progress, dpi):
+def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, resamples, case_vertical, samples,
+              seed, as_json, records_dir, out_dir, overwrite, no_plot, workers, scheduler, device, chunk_size,
+              no_progress, dpi):
     """Fragility curves of a block over a record suite scaled to levels of an intensity measure:
     CASE_FILE (YAML) -> OUT/NAME.fragility.h5 and OUT/NAME.fragility.png.
 
@@ -225,7 +232,7 @@ def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, 
     scheduler = check_where(workers=workers, scheduler=scheduler, device=device)
     suite = fr.suite_from(suite_spec, units=units)
     fplan = fr.plan_fragility(case, suite, im, levels, records_dir=records.records_dir(records_dir),
-                              chunk_size=chunk_size, case_vertical=case_vertical)
+                              chunk_size=chunk_size, case_vertical=case_vertical, samples=samples, seed=seed)
     h5_path, png_path = _outputs(case, out_dir, ".fragility")
     if _result_set(h5_path, png_path, overwrite=overwrite, no_plot=no_plot, example="out/case.fragility"):
         files.refuse_existing(h5_path, overwrite=False)           # input errors first, then outputs
@@ -259,8 +266,11 @@ def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, 
     if undecided:
         click.echo(f"  {undecided} undecided: still moving at the end with the energy to overturn, counted as "
                    "not overturned (give the case a ground.tail for their free motion)")
-    for state, fit in zip(analysis.states, analysis.fits, strict=True):
+    for i, (state, fit) in enumerate(zip(analysis.states, analysis.fits, strict=True)):
         click.echo("  " + fr.describe_fit(state, fit, im))
+        if analysis.nominal_fits:
+            click.echo("    without parameter uncertainty (the case's values): "
+                       + fr.describe_fit(state, analysis.nominal_fits[i], im).split(": ", 1)[1])
     click.echo(f"  wrote {_written(h5_path, png_path, no_plot)} in {elapsed:.1f} s")
 
 
