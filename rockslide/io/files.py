@@ -123,6 +123,27 @@ def refuse_existing(path: Path, overwrite: bool) -> None:
         raise OutputError(f"{path} exists (use --overwrite to replace it)")
 
 
+def open_new(path, mode: str = "wb", *, buffering: int = -1):
+    """Create ``path`` for writing as a new regular file of this process, never through a link and
+    never into an existing file (``O_CREAT | O_EXCL | O_NOFOLLOW``): in an output folder that others
+    can write, a link planted at the predictable name of a temporary file cannot redirect
+    rockslide's writes to another file. Whatever stands at the name (a planted link, the leftover of
+    a process that had this pid) is unlinked first, which removes a link, never its target; a name
+    that keeps being taken is an OSError.
+    """
+    flags = os.O_CREAT | os.O_EXCL | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_CLOEXEC", 0)
+    flags |= os.O_RDWR if "+" in mode else os.O_WRONLY
+    for attempt in range(3):
+        try:
+            fd = os.open(path, flags, 0o666)
+            break
+        except FileExistsError:
+            if attempt == 2:
+                raise
+            os.unlink(path)
+    return os.fdopen(fd, mode, buffering=buffering)
+
+
 def temporary_path(path, *, per_thread: bool = False) -> Path:
     """The temporary file ``path`` is written to before it is renamed onto it."""
     path = Path(path)
@@ -306,7 +327,7 @@ def atomic_write(path, *, overwrite: bool, mode: str = "wb", per_thread: bool = 
         if interruptible:
             interrupts.check()
         try:
-            with open(tmp, mode) as handle:
+            with open_new(tmp, mode) as handle:
                 yield handle
         except OSError as exc:
             raise OutputError(f"cannot write the {what}: {exc.strerror or exc}", source=str(path)) from None

@@ -103,7 +103,7 @@ from .._version import __version__
 from ..core.layout import HISTORY_COLUMNS, STATE_NAMES
 from ..core.simulate import EVENT_DTYPE, Result, Summary
 from ..errors import OutputError
-from .files import Staging, check_destination, publish, remove_quietly, temporary_path
+from .files import Staging, check_destination, open_new, publish, remove_quietly, temporary_path
 
 FORMAT = "rockslide-result"
 FORMAT_VERSION = 1
@@ -637,7 +637,7 @@ class _RawFile:
     """
 
     def __init__(self, path: Path):
-        self._file = open(path, "w+b", buffering=0)  # noqa: SIM115 - closed by close()
+        self._file = open_new(path, "w+b", buffering=0)  # closed by close()
         self.error: OSError | None = None
 
     def check(self) -> None:
@@ -747,6 +747,7 @@ def read_result(path) -> StoredResult:
         if _plain(f.attrs.get("format")) != FORMAT:
             raise OutputError(f"not a rockslide result (an HDF5 file without format = {FORMAT!r})",
                               source=source)
+        _data_only(f, source)
         version = _plain(f.attrs.get("format_version"))
         if version != FORMAT_VERSION:
             raise OutputError(f"result format version {version!r} is not supported "
@@ -755,6 +756,27 @@ def read_result(path) -> StoredResult:
             return _read_body(f)
         except (KeyError, ValueError, TypeError, OSError) as exc:
             raise OutputError(f"damaged rockslide result ({_reason(exc)})", source=source) from None
+
+
+def _data_only(f: h5py.File, source: str) -> None:
+    """Refuse a file that would make rockslide read anything but itself: a link to another place
+    (soft or external link) or a dataset whose values live elsewhere (external storage, a virtual
+    dataset). A result handed over by someone else is read as data only, never as a way to read
+    (or block on) another file of the reader's machine."""
+    problems = []
+
+    def visit(name, link):
+        if not isinstance(link, h5py.HardLink):
+            problems.append(f"{name} is a {type(link).__name__} (a link to elsewhere)")
+            return None
+        obj = f.get(name)
+        if isinstance(obj, h5py.Dataset) and (obj.external or obj.is_virtual):
+            problems.append(f"{name}'s values live in another file")
+        return None
+
+    f.visititems_links(visit)
+    if problems:
+        raise OutputError(f"not read: {problems[0]}; a rockslide file holds all its data itself", source=source)
 
 
 def _read_body(f: h5py.File) -> StoredResult:
@@ -1101,6 +1123,7 @@ def read_dataset(path, *, format: str) -> StoredDataset:
             raise OutputError(f"{short} format version {_plain(f.attrs.get('format_version'))!r} is "
                               f"not supported (this rockslide reads {FORMATS[format]})",
                               source=source)
+        _data_only(f, source)
         scales = {name: ds for name, ds in f.items()
                   if isinstance(ds, h5py.Dataset) and ds.is_scale}
         order = sorted(scales, key=lambda n: int(scales[n].attrs.get("_Netcdf4Dimid", 0)))
