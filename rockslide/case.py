@@ -625,6 +625,10 @@ def parse_case(text: str, *, source: str = "<case>", base_dir: Path | None = Non
         On YAML syntax errors (with line and column), object tags, unknown or missing keys, wrong
         types or units, and values out of their physical range.
     """
+    if isinstance(text, Mapping):         # a case as data: parsed as the same YAML would be
+        return parse_mapping(text, source=source if source != "<case>" else "<mapping>", base_dir=base_dir)
+    if not isinstance(text, str):
+        raise CaseError(f"expected the YAML text of a case (or a mapping), got {_show(text)}", source=source)
     if len(text) > MAX_CASE_BYTES:
         raise CaseError(f"the case text has {len(text)} characters; expected at most {MAX_CASE_BYTES} "
                         "(a case file is a page of YAML)", source=source)

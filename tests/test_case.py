@@ -633,3 +633,19 @@ def test_random_case_with(changes):
     assert isinstance(new, Case)
     again = parse_case(yaml.safe_dump(case_to_dict(new, case_file=True)))
     assert dataclasses.replace(again, text=new.text, source=new.source, base_dir=new.base_dir) == new
+
+
+def test_a_mapping_parses_as_the_same_yaml_and_round_trips():
+    """`parse_case` and `load_case` take a mapping as the YAML it would be written as: the same
+    case, the same errors (an acceleration without its unit), and `case_to_dict` reads back."""
+    text = (Path(__file__).resolve().parents[1] / "configs" / "example.yaml").read_text()
+    from_text = parse_case(text, base_dir=Path("configs"))
+    data = yaml.safe_load(text)
+    from_data = parse_case(data, base_dir=Path("configs"))
+    assert case_to_dict(from_data) == case_to_dict(from_text)
+    assert case_to_dict(load_case(case_to_dict(from_text), base_dir=Path("configs"))) == case_to_dict(from_text)
+    data["ground"]["scale"]["pga_horizontal"] = 8.0
+    with pytest.raises(CaseError, match="ground.scale.pga_horizontal"):
+        parse_case(data)
+    with pytest.raises(CaseError, match="expected the YAML text of a case"):
+        parse_case(42)

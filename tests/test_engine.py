@@ -47,16 +47,16 @@ def write_case(folder, changes: dict) -> None:
             shutil.copy(REPO / "records" / name, folder / name)
 
 
-def three_ways(folder):
-    """``run``, ``sweep`` and ``fragility`` of ``folder/case.yaml``, each into its own folder."""
+def three_ways(folder, level: str = PGA.replace(" ", "")):
+    """``run``, ``sweep`` and ``fragility`` of ``folder/case.yaml``, each into its own folder (the
+    fragility analysis at ``level``, by default the case's own PGA)."""
     common = ["--no-plot", "--records-dir", folder]
     return {
         "run": invoke("run", folder / "case.yaml", "--out-dir", folder / "run", *common),
         "sweep": invoke("sweep", folder / "case.yaml", "--mu", str(MU), "--out-dir", folder / "sweep",
                         "--no-progress", *common),
-        "fragility": invoke("fragility", folder / "case.yaml", "--suite", folder / "suite.yaml", "--levels",
-                            PGA.replace(" ", ""), "--bootstrap", "0", "--out-dir", folder / "fragility",
-                            "--no-progress", *common),
+        "fragility": invoke("fragility", folder / "case.yaml", "--suite", folder / "suite.yaml", "--levels", level,
+                            "--bootstrap", "0", "--out-dir", folder / "fragility", "--no-progress", *common),
     }
 
 
@@ -105,23 +105,11 @@ WARNED = {
 def test_a_borderline_case_gives_the_same_warning_from_every_analysis(tmp_path, name):
     changes, expected = WARNED[name]
     write_case(tmp_path, changes)
-    results_by_command = three_ways(tmp_path) if name != "absurd-acceleration" else _three_at(tmp_path, "15g")
+    results_by_command = three_ways(tmp_path, "15g" if name == "absurd-acceleration" else PGA.replace(" ", ""))
     for command, result in results_by_command.items():
         assert result.exit_code == 0, (command, result.output)
         warned = [line for line in result.stderr.splitlines() if line.startswith("rockslide: warning: ")]
         assert len(warned) == 1 and expected in warned[0], (command, result.stderr)
-
-
-def _three_at(folder, pga: str):
-    """`three_ways` with the fragility analysis at the level ``pga`` (the case's own)."""
-    common = ["--no-plot", "--records-dir", folder]
-    return {
-        "run": invoke("run", folder / "case.yaml", "--out-dir", folder / "run", *common),
-        "sweep": invoke("sweep", folder / "case.yaml", "--mu", str(MU), "--out-dir", folder / "sweep",
-                        "--no-progress", *common),
-        "fragility": invoke("fragility", folder / "case.yaml", "--suite", folder / "suite.yaml", "--levels", pga,
-                            "--bootstrap", "0", "--out-dir", folder / "fragility", "--no-progress", *common),
-    }
 
 
 def test_a_block_that_would_fly_is_a_status_everywhere_with_the_same_warning(tmp_path):

@@ -147,3 +147,23 @@ def test_uncertain_section_is_validated_like_the_rest_of_the_case():
                        ({"mass": 1.0}, "unknown key")):
         with pytest.raises(CaseError, match=words):
             rockslide.load_case({**base, "uncertain": bad}, base_dir=REPO / "configs")
+
+
+def test_the_statue_under_kobe_is_neither_safe_nor_doomed():
+    """The issue's marble statue on a plinth (1.8 m x 0.45 m, 900 kg, mu 0.6/0.55, e 0.85) under
+    the Kobe JMA N-S + U-D record at 0.5 g: one run says 'overturned', another at 0.6 g 'standing';
+    the neighbourhood says what can be said, a probability strictly between 0 and 1, its interval
+    away from both."""
+    from conftest import real_record
+
+    horizontal = real_record("kobe_jma_1995_ns_peer_rsn1106_kjm000.at2")
+    vertical = real_record("kobe_jma_1995_ud_peer_rsn1106_kjmup.at2")
+    case = rockslide.load_case({
+        "name": "statue", "block": {"height": "1.8 m", "width": "0.45 m", "mass": "900 kg"},
+        "contact": {"mu_static": 0.6, "mu_kinetic": 0.55, "restitution": 0.85},
+        "ground": {"horizontal": {"file": str(horizontal)}, "vertical": {"file": str(vertical)},
+                   "scale": {"pga_horizontal": "0.5 g"}, "tail": "5 s"},
+        "solver": {"dt": "0.1 ms"}})
+    members = rockslide.ensemble(case, 200)
+    assert 0.0 < members.attrs["interval_low"] and members.attrs["interval_high"] < 1.0
+    assert members.attrs["robust"] == 0 and members.attrs["flips"] > 0

@@ -31,7 +31,7 @@ import numpy as np
 
 from ..case import Case, Distribution
 from ..core import kernel as K
-from ..core.simulate import Model
+from ..core.simulate import Model, set_model
 from ..engine.plan import MAX_POINTS, Plan, default_chunk_size, definition_key
 from ..engine.prepare import RunWarning, coarse_step_warning
 from ..errors import CaseError
@@ -183,12 +183,8 @@ def member_parameters(case: Case, params: np.ndarray, values: dict) -> tuple[np.
     restitution = (np.clip(values["restitution"], 0.0, 1.0) if "restitution" in values
                    else np.full(n, case.contact.restitution))
     for i in range(n):
-        model = Model.from_block(float(width[i]), float(height[i]), float(mu[i]), float(nu[i]),
-                                 float(restitution[i]), case.gravity, case.block.mass)
-        R, alpha, _ = model.constants
-        params[i, K.P_R], params[i, K.P_ALPHA] = R, alpha
-        params[i, K.P_TAN_ALPHA] = model.half_width / model.half_height
-        params[i, K.P_MU], params[i, K.P_NU], params[i, K.P_E] = mu[i], nu[i], restitution[i]
+        set_model(params[i], Model.from_block(float(width[i]), float(height[i]), float(mu[i]), float(nu[i]),
+                                              float(restitution[i]), case.gravity, case.block.mass))
     return params, restitution
 
 

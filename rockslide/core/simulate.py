@@ -164,11 +164,11 @@ def substeps(dt_record: float, dt: float) -> int:
     return max(1, math.ceil(dt_record / dt * (1.0 - 1e-9)))
 
 
-def parameters(model: Model, dt_record: float, settings: Settings, start: float = 0.0) -> np.ndarray:
-    """The kernel's parameter vector ``p`` (indices ``kernel.P_*``)."""
+def set_model(p: np.ndarray, model: Model) -> np.ndarray:
+    """Write ``model`` into the kernel's parameter vector ``p`` (in place; returned): the block's
+    ``R``, ``alpha`` and ``tan(alpha) = b/h``, gravity and the contact. The one place a `Model` becomes
+    kernel parameters (`parameters`, and the members of an ensemble)."""
     R, alpha, _ = model.constants
-    n_sub = substeps(dt_record, settings.dt)
-    p = np.zeros(L.N_PARAMS)
     p[L.P_R] = R
     p[L.P_ALPHA] = alpha
     p[L.P_TAN_ALPHA] = model.half_width / model.half_height
@@ -176,6 +176,13 @@ def parameters(model: Model, dt_record: float, settings: Settings, start: float 
     p[L.P_MU] = model.mu_static
     p[L.P_NU] = model.mu_kinetic
     p[L.P_E] = model.restitution
+    return p
+
+
+def parameters(model: Model, dt_record: float, settings: Settings, start: float = 0.0) -> np.ndarray:
+    """The kernel's parameter vector ``p`` (indices ``kernel.P_*``)."""
+    n_sub = substeps(dt_record, settings.dt)
+    p = set_model(np.zeros(L.N_PARAMS), model)
     p[L.P_STEP] = dt_record / n_sub
     p[L.P_DT_REC] = dt_record
     p[L.P_N_SUB] = n_sub
