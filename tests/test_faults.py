@@ -755,3 +755,33 @@ def test_a_reader_that_goes_away_ends_the_command_quietly(ws, command):
     assert (done.returncode, done.stderr) == (141, "")
     if command == "run":
         assert results.read_result(ws / "out" / "example.h5").result.summary.status == "ok"
+
+
+@pytest.mark.slow
+def test_a_damaged_numba_cache_is_removed_and_compiled_again(ws, tmp_path):
+    """A truncated cache file of the batch kernel (a full disk, a killed compile, a flipped
+    byte) made every sweep fail for good with an internal error; now the sweep says so in one note,
+    removes the core's cache, compiles it again and succeeds, and the next sweep loads the new cache.
+    The cache lives in a folder of the test's own (NUMBA_CACHE_DIR), so the project's stays as it is."""
+    (ws / "case.yaml").write_text(case_text(QUICK))
+    cache = tmp_path / "numba-cache"
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(cache), "PYTHONPATH": os.pathsep.join(
+        [str(REPO), os.environ.get("PYTHONPATH", "")])}
+    env.pop("ROCKSLIDE_RECORDS", None)
+
+    def sweep():
+        return subprocess.run([sys.executable, "-m", "rockslide.cli", "sweep", "case.yaml", "--mu", "0.3,0.5",
+                               "--overwrite", "--no-plot", "--no-progress"], cwd=ws, env=env, capture_output=True,
+                              text=True, timeout=900)
+
+    first = sweep()
+    assert first.returncode == 0, first.stderr
+    damaged = sorted(cache.rglob("batch.run_batch-*.nbc"))
+    assert damaged, "the batch kernel was not cached where NUMBA_CACHE_DIR says"
+    for path in damaged:
+        path.write_bytes(path.read_bytes()[:100])
+    repaired = sweep()
+    assert repaired.returncode == 0, repaired.stderr
+    assert "numba's cache of the core could not be read" in repaired.stderr and "Traceback" not in repaired.stderr
+    again = sweep()
+    assert again.returncode == 0 and "could not be read" not in again.stderr and "compiling" not in again.stderr

@@ -51,7 +51,6 @@ def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, members, s
         rockslide run example/example.yaml --json
         rockslide run example/example.yaml --ensemble 200
     """
-    from ..analyses import ensemble as ens
     from ..case import case_to_dict, load_case
     from ..engine import prepare as runner
     from ..io import files, records, results
@@ -62,10 +61,11 @@ def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, members, s
     h5_path = folder / f"{case.name}.h5"
     png_path = folder / f"{case.name}.png"
     prepared = runner.prepare(case, records.records_dir(records_dir))     # input errors first
-    if members is None and robustness:
-        members = ens.DEFAULT_MEMBERS
-    eplan = (ens.plan_ensemble(case, members, seed=seed, records_dir=records.records_dir(records_dir))
-             if members is not None else None)
+    ens = eplan = None
+    if members is not None or robustness:       # the ensemble's modules (numba's JIT) only when asked
+        from ..analyses import ensemble as ens
+        members = ens.DEFAULT_MEMBERS if members is None else members
+        eplan = ens.plan_ensemble(case, members, seed=seed, records_dir=records.records_dir(records_dir))
     ground = prepared.ground.as_applied()
     stored = None        # this case's complete result, of which only the figure is missing
     if _result_set(h5_path, png_path, overwrite=overwrite, no_plot=no_plot):

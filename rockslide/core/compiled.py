@@ -80,6 +80,26 @@ def freshen(dispatcher) -> bool:
     return True
 
 
+def discard(dispatcher) -> bool:
+    """Delete the core's cached compiled code beside ``dispatcher``'s and its stamp (a damaged cache:
+    a truncated or altered file that numba cannot load); the next call compiles afresh. Returns
+    whether there was anything to delete."""
+    folder = cache_folder(dispatcher)
+    if folder is None:
+        return False
+    removed = False
+    try:
+        for path in folder.iterdir():
+            if (path.suffix in (".nbi", ".nbc") and path.name.split(".", 1)[0] in COMPILED_MODULES) \
+                    or path.name == STAMP_FILE:
+                path.unlink(missing_ok=True)
+                removed = True
+    except OSError:
+        return False
+    freshen(dispatcher)
+    return removed
+
+
 def is_warm(dispatcher) -> bool:
     """Whether ``dispatcher``'s compiled code is in the cache and fresh (no compile at first call)."""
     folder = cache_folder(dispatcher)
@@ -97,4 +117,5 @@ def is_warm(dispatcher) -> bool:
 #: True when no folder numba caches in can be written: the core compiles in memory, in every process.
 CACHE_IS_TEMPORARY = _cache_is_temporary()
 
-__all__ = ["COMPILED_MODULES", "CACHE_IS_TEMPORARY", "source_stamp", "cache_folder", "freshen", "is_warm"]
+__all__ = ["COMPILED_MODULES", "CACHE_IS_TEMPORARY", "source_stamp", "cache_folder", "freshen", "discard",
+           "is_warm"]

@@ -505,7 +505,15 @@ def warm_up(device: str, say: Callable[[str], None]) -> None:
     note = first_compile_note(batch.run_batch, "the batch kernel")
     if note:
         say(note)
-    batch.warm_up()
+    try:
+        batch.warm_up()
+    except Exception as exc:  # noqa: BLE001 - whatever numba raises on a cache file it cannot load
+        from ..core import compiled
+        if not compiled.discard(batch.run_batch):
+            raise
+        say(f"rockslide: note: numba's cache of the core could not be read ({exception_text(exc)}); removed it, "
+            "compiling again (about a minute on 2 cores)")
+        batch.warm_up()
 
 
 def first_compile_note(dispatcher, what: str = "the numerical kernel",
