@@ -366,3 +366,18 @@ def test_case_to_dict_for_a_case_file_round_trips_through_yaml(tmp_path):
 
 def test_example_module_names_its_records():
     assert [name for name, _, _ in example.RECORDS] == ["synthetic_kt_h.at2", "synthetic_kt_v.at2"]
+
+
+def test_criteria_takes_the_block_of_a_case_file(tmp_path):
+    """``rockslide criteria CASE.yaml`` maps the case's block (its title names its size); an option
+    given beside it wins; a bad case file is the usual one-line error."""
+    from conftest import invoke
+
+    done = invoke("criteria", REPO / "configs" / "example.yaml", "-o", tmp_path / "c.png")
+    assert done.exit_code == 0, done.output
+    wider = invoke("criteria", REPO / "configs" / "example.yaml", "--width", "0.2 m", "-o", tmp_path / "w.png")
+    assert wider.exit_code == 0 and (tmp_path / "w.png").read_bytes() != (tmp_path / "c.png").read_bytes()
+    plain = invoke("criteria", "-o", tmp_path / "p.png")       # the defaults are the example's block
+    assert plain.exit_code == 0 and (tmp_path / "p.png").read_bytes() == (tmp_path / "c.png").read_bytes()
+    missing = invoke("criteria", tmp_path / "nope.yaml", "-o", tmp_path / "n.png")
+    assert missing.exit_code == 2 and "case file not found" in missing.stderr

@@ -112,8 +112,9 @@ def example(folder, overwrite):
 
 
 @main.command()
-@click.option("--height", type=str, default="0.2 m", show_default=True, help="Block height.")
-@click.option("--width", type=str, default="0.1 m", show_default=True, help="Block width.")
+@click.argument("case_file", type=click.Path(path_type=Path), required=False)
+@click.option("--height", type=str, default=None, help="Block height (default: the case's, else 0.2 m).")
+@click.option("--width", type=str, default=None, help="Block width (default: the case's, else 0.1 m).")
 @click.option("--av", "vertical", type=str, default="-0.5g,0g,0.5g", show_default=True,
               help="Vertical accelerations with units (g, gal, m/s^2), comma separated (one panel each).")
 @click.option("--ah-max", type=str, default="1.5g", show_default=True,
@@ -123,12 +124,14 @@ def example(folder, overwrite):
               show_default=True, help="PNG to write.")
 @click.option("--overwrite", is_flag=True, help="Replace an existing PNG.")
 @dpi_option("PNG")
-def criteria(height, width, vertical, ah_max, mu_max, output, overwrite, dpi):
-    """Draw the mode-initiation map (rest / slip / liftoff / liftoff-slip) of a block, from eqs. 6, 11, 26.
+def criteria(case_file, height, width, vertical, ah_max, mu_max, output, overwrite, dpi):
+    """Draw the mode-initiation map (rest / slip / liftoff / liftoff-slip) of a block, from eqs. 6, 11, 26:
+    of CASE_FILE's block if given, else of --height and --width.
 
     \b
     Example:
         rockslide criteria --height 0.2m --width 0.1m --av=-0.5g,0g,0.5g -o criteria.png
+        rockslide criteria example/example.yaml -o criteria.png
     """
     import numpy as np
 
@@ -136,8 +139,14 @@ def criteria(height, width, vertical, ah_max, mu_max, output, overwrite, dpi):
     from ..plots import criteria_figure, save_figure
     from ..units import STANDARD_GRAVITY, parse_quantity
 
-    h = parse_quantity(height, "length", source="--height")
-    w = parse_quantity(width, "length", source="--width")
+    block = None
+    if case_file is not None:
+        from ..case import load_case
+        block = load_case(case_file).block
+    h = block.height if block is not None and height is None else \
+        parse_quantity(height or "0.2 m", "length", source="--height")
+    w = block.width if block is not None and width is None else \
+        parse_quantity(width or "0.1 m", "length", source="--width")
     if h <= 0 or w <= 0:
         raise CaseError("height and width must be positive lengths", source="--height/--width")
     avs = [parse_quantity(v, "acceleration", source="--av") / STANDARD_GRAVITY
