@@ -315,3 +315,24 @@ def test_device_auto_says_where_and_why(tmp_path):
                     "--no-plot", "--no-progress")
     assert result.exit_code == 0, result.output
     assert "on this machine (--device auto: " in result.output
+
+
+def test_info_reads_a_results_summary_without_computing_again(tmp_path):
+    """``rockslide info OUT/NAME.h5 --json`` gives the summary ``run --json`` printed (from the
+    file), the human form the run's printout; a sweep and a fragility file give their counts and fits."""
+    import json
+
+    write_case(tmp_path, {})
+    ran = invoke("run", tmp_path / "case.yaml", "--out-dir", tmp_path, "--no-plot", "--json")
+    assert ran.exit_code == 0, ran.output
+    printed = json.loads(ran.stdout)
+    stored = json.loads(invoke("info", tmp_path / "example.h5", "--json").stdout)
+    for key in ("verdict", "max_rotation", "max_slip", "impacts", "events", "ground", "status"):
+        assert stored[key] == printed[key], key
+    human = invoke("info", tmp_path / "example.h5").stdout
+    assert human.splitlines()[0] == invoke("run", tmp_path / "case.yaml", "--out-dir", tmp_path / "again",
+                                           "--no-plot").stdout.splitlines()[0]
+    assert invoke("fragility", tmp_path / "case.yaml", "--suite", tmp_path / "suite.yaml", "--levels", "0.2g,0.6g",
+                  "--bootstrap", "0", "--out-dir", tmp_path, "--no-plot", "--no-progress").exit_code == 0
+    fits = json.loads(invoke("info", tmp_path / "example.fragility.h5", "--json").stdout)
+    assert fits["kind"] == "fragility" and fits["n_cases"] == 2 and "overturn" in fits["fits"]

@@ -27,13 +27,28 @@ from .app import _json_default, dpi_option, main, records_dir_option
 @click.option("--skip-lines", type=int, default=0, help="Header lines to skip (values format).")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object.")
 def info(record, fmt, units, time_column, column, dt, skip_lines, as_json):
-    """Describe an accelerogram: format, dt, duration, units and peaks.
+    """Describe an accelerogram (format, dt, duration, units and peaks), or what a result, sweep or
+    fragility file of rockslide holds (its summary, read back: nothing is computed again).
 
     \b
     Example:
         rockslide info example/synthetic_kt_h.at2
+        rockslide info out/example.h5 --json
     """
     from ..io.records import record_info
+
+    if _is_hdf5(record):
+        details = _stored_summary(record)
+        if as_json:
+            click.echo(json.dumps(details, allow_nan=False, default=_json_default))
+        elif details["kind"] == "result":
+            click.echo(_stored_run_text(record))
+        else:
+            lines = [f"{record}", *(f"  {k:<18}{v}" for k, v in details.items() if not isinstance(v, (dict, list)))]
+            lines += [f"  {state}: median {fit['median']}, beta {fit['beta']}" for state, fit in
+                      details.get("fits", {}).items()]
+            click.echo("\n".join(lines))
+        return
 
     details = record_info(record, format=fmt, units=units, time_column=_column(time_column),
                           column=_column(column), dt=dt, skip_lines=skip_lines)
@@ -171,3 +186,66 @@ def _column(value):
     if value is None:
         return None
     return int(value) if str(value).isdigit() else value
+
+
+def _is_hdf5(path: Path) -> bool:
+    """Whether ``path`` starts with HDF5's signature (a result file; a record never does)."""
+    try:
+        with open(path, "rb") as handle:
+            return handle.read(8) == b"\x89HDF\r\n\x1a\n"
+    except OSError:
+        return False
+
+
+def _stored_summary(path: Path) -> dict:
+    """What a rockslide file holds, from its stored values: a run's summary (as ``run --json`` gives
+    it, and its ensemble), a sweep's counts, a fragility analysis's fits."""
+    import numpy as np
+
+    from ..io import results
+
+    kind = results.file_format(path)
+    if kind in (results.SWEEP_FORMAT, results.FRAGILITY_FORMAT):
+        stored = results.read_dataset(path, format=kind)
+        v, attrs = stored.variables, stored.attrs
+        out = {"file": str(path), "kind": "sweep" if kind == results.SWEEP_FORMAT else "fragility",
+               "name": attrs.get("name"), "command_line": attrs.get("command_line"),
+               "dimensions": {name: int(np.size(values)) for name, values, _ in stored.coords}}
+        status = np.asarray(v["status"][1])
+        out.update(n_cases=int(status.size), n_overturned=int(np.asarray(v["overturned"][1]).sum()),
+                   n_outside_model=int((status != 0).sum()), n_undecided=int(np.asarray(v["undecided"][1]).sum()))
+        if kind == results.FRAGILITY_FORMAT:
+            states = [str(s) for s in dict((n, vals) for n, vals, _ in stored.coords)["damage_state"]]
+            out["fits"] = {state: {key: _number(np.asarray(v[key][1])[i])
+                                   for key in ("median", "median_lower", "median_upper", "beta", "beta_lower",
+                                               "beta_upper")}
+                           for i, state in enumerate(states)}
+            out["intensity_measure"] = attrs.get("intensity_measure")
+        out["rockslide_version"] = attrs.get("rockslide_version")
+        return out
+    stored = results.read_result(path)
+    out = {"file": str(path), "kind": "result", "name": stored.name,
+           **results.summary_to_json_dict(stored.result.summary, stored.result.events),
+           "ground": stored.ground, "rockslide_version": stored.attrs.get("rockslide_version")}
+    if "ensemble" in stored.attrs:
+        out["ensemble"] = results.json_ready(json.loads(stored.attrs["ensemble"]))
+    return out
+
+
+def _number(value):
+    value = float(value)
+    return None if math.isnan(value) else value
+
+
+def _stored_run_text(path: Path) -> str:
+    """A result file's summary as ``rockslide run`` printed it (and its ensemble's lines)."""
+    from ..io import results
+    from .run import human_summary
+
+    stored = results.read_result(path)
+    lines = human_summary(stored.name, stored.result.summary, ground=stored.ground or None).split("\n")
+    if "ensemble" in stored.attrs:
+        from ..analyses import ensemble as ens
+        described = ens.describe(json.loads(stored.attrs["ensemble"]), lines[0].split(": ", 1)[1])
+        lines = [f"{stored.name}: {described[0]}", *lines[1:], *described[1:]]
+    return "\n".join([*lines, f"  (read from {path}; rockslide {stored.attrs.get('rockslide_version', '?')})"])
