@@ -1015,9 +1015,13 @@ def _read_distribution(value, spec: dict, path: str, ctx: _Ctx) -> Distribution:
                "{lognormal: {median: 1, beta: 0.3}}")
 
     def number(v, where):
-        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+        try:
+            x = float(v) if isinstance(v, (int, float)) and not isinstance(v, bool) else math.nan
+        except OverflowError:                       # an integer beyond float64
+            x = math.inf
+        if not math.isfinite(x):
             ctx.fail(path, f"expected a finite number for {where}, got {_show(v)} ({example})")
-        return float(v)
+        return x
 
     if not isinstance(value, Mapping):
         dist = Distribution("fixed", number(value, "the value"))
@@ -1179,6 +1183,9 @@ def _cross_checks(raw: dict, ctx: _Ctx) -> None:
     interval = raw["output"]["interval"]
     if interval is not None:
         ratio = interval / dt
+        if not math.isfinite(ratio):
+            ctx.fail("output.interval", f"{_with_unit(interval, 's')} is not a countable number of steps of "
+                     f"solver.dt ({_with_unit(dt, 's')}); expected a whole multiple of solver.dt")
         if ratio < 1.0 - 1e-9:
             ctx.fail("output.interval", f"must be at least solver.dt ({_with_unit(dt, 's')}), "
                      f"got {_with_unit(interval, 's')}")

@@ -123,7 +123,8 @@ def test_run_with_an_ensemble_reports_it_everywhere(tmp_path):
     printed = invoke(*args, "--ensemble", "60", "--seed", "7")
     assert printed.exit_code == 0, printed.output
     first = printed.output.splitlines()[0]
-    summary = json.loads(h5py.File(tmp_path / "example.h5")["/"].attrs["ensemble"])
+    with h5py.File(tmp_path / "example.h5", "r") as f:
+        summary = json.loads(f.attrs["ensemble"])
     if summary["robust"]:
         assert "robust, every one of 60 neighbours agrees" in first
     else:

@@ -598,3 +598,38 @@ def test_the_versions_stored_are_those_importlib_metadata_gives():
                 for package in results.VERSIONED_PACKAGES if package != "python"}
     assert results.versions() == {**expected, "python_version": platform.python_version()}
     assert set(results.VERSIONED_PACKAGES) - {"python"} <= set(results.installed_versions())
+
+
+def test_after_the_disk_fills_hdf5_reads_back_what_it_wrote(tmp_path):
+    """`_RawFile` once a write failed (the disk full): every later write is kept in memory and
+    laid over what is read back, and reading past the end gives zeros, so libhdf5 never reads stale
+    or missing bytes (it once crashed doing so); the first error is kept for `check`."""
+    import errno
+
+    from rockslide.io.results import _RawFile
+
+    raw = _RawFile(tmp_path / "f.tmp")
+    raw.write(b"A" * 10)
+
+    class Full:
+        def __init__(self, inner):
+            self.inner = inner
+
+        def write(self, data):
+            raise OSError(errno.ENOSPC, "No space left on device")
+
+        def __getattr__(self, name):
+            return getattr(self.inner, name)
+
+    raw._file = Full(raw._file)
+    raw.seek(5)
+    assert raw.write(b"BBBBBBBBBB") == 10            # reported as done
+    raw.seek(30)
+    raw.write(b"CC")
+    raw.seek(0)
+    assert raw.read(32) == b"AAAAA" + b"B" * 10 + b"\0" * 15 + b"CC"
+    assert raw.seek(0, 2) == 32 and raw.tell() == 32
+    with pytest.raises(OSError, match="No space left"):
+        raw.check()
+    raw.close()
+    assert (tmp_path / "f.tmp").read_bytes() == b"A" * 10      # nothing after the failure reached the disk

@@ -634,11 +634,19 @@ class _RawFile:
     the calls that follow. So a write that fails is recorded (`error`, the first one) and reported
     as done: HDF5 goes on, unaware, and closes the file normally. The writer checks `error` after
     each of its steps (`check`) and discards the file.
+
+    What HDF5 writes after the failure is kept in memory (`_patches`, the bytes of each write at its
+    offset) and laid over what it reads back, and a read past the end of what the disk holds gives
+    zeros: HDF5 then always reads what it wrote, never stale or missing bytes, which it could
+    misread into a crash (seen once as a segfault while creating a dataset after the disk filled).
+    Only what is written after the failure is held, until the writer discards the file.
     """
 
     def __init__(self, path: Path):
         self._file = open_new(path, "w+b", buffering=0)  # closed by close()
         self.error: OSError | None = None
+        self._pos = 0
+        self._patches: list[tuple[int, bytes]] = []
 
     def check(self) -> None:
         """Raise the first write error, if any."""
@@ -650,31 +658,62 @@ class _RawFile:
         if self.error is None:
             done = 0
             try:
+                self._file.seek(self._pos)
                 while done < view.nbytes:
                     done += self._file.write(view[done:])
             except OSError as exc:
                 self.error = exc
+        if self.error is not None:
+            self._patches.append((self._pos, bytes(view)))
+        self._pos += view.nbytes
         return view.nbytes
 
     def truncate(self, size=None):
+        size = self._pos if size is None else size
         if self.error is None:
             try:
-                return self._file.truncate(size)
+                self._file.truncate(size)
             except OSError as exc:
                 self.error = exc
+        self._patches = [(offset, data[:max(0, size - offset)]) for offset, data in self._patches if offset < size]
         return size
 
-    def read(self, size=-1):
-        return self._file.read(size)
+    def readinto(self, buffer) -> int:
+        view = memoryview(buffer).cast("B")
+        self._file.seek(self._pos)
+        got = 0
+        while got < view.nbytes:
+            n = self._file.readinto(view[got:])
+            if not n:
+                break
+            got += n
+        view[got:] = bytes(view.nbytes - got)          # past the end of the disk's file: zeros
+        start, end = self._pos, self._pos + view.nbytes
+        for offset, data in self._patches:               # in order: a later write wins
+            low, high = max(start, offset), min(end, offset + len(data))
+            if low < high:
+                view[low - start:high - start] = data[low - offset:high - offset]
+        self._pos = end
+        return view.nbytes
 
-    def readinto(self, buffer):
-        return self._file.readinto(buffer)
+    def read(self, size=-1):
+        if size is None or size < 0:
+            size = max(0, self._size() - self._pos)
+        buffer = bytearray(size)
+        self.readinto(buffer)
+        return bytes(buffer)
+
+    def _size(self) -> int:
+        on_disk = os.fstat(self._file.fileno()).st_size
+        return max([on_disk] + [offset + len(data) for offset, data in self._patches])
 
     def seek(self, offset, whence=0):
-        return self._file.seek(offset, whence)
+        base = {0: 0, 1: self._pos, 2: self._size()}[whence]
+        self._pos = base + offset
+        return self._pos
 
     def tell(self):
-        return self._file.tell()
+        return self._pos
 
     def flush(self):
         pass
