@@ -982,3 +982,33 @@ def test_random_record_text_through_run_gives_a_result_or_a_clean_error(fuzz_roo
     result = invoke(["run", folder / "case.yaml", "--no-plot", "--out-dir", folder / "out"])
     assert_result_or_clean_error(result, folder)
     shutil.rmtree(folder)
+
+
+@pytest.mark.parametrize("args, env, expected", [
+    (["run", "case.yaml", "--out-dir", "~nosuchuser-rockslide/out"], {},
+     "rockslide: error: --out-dir: '~nosuchuser-rockslide' names no user's home folder here"),
+    (["run", "case.yaml", "--records-dir", "~nosuchuser-rockslide"], {},
+     "rockslide: error: --records-dir: '~nosuchuser-rockslide' names no user's home folder here"),
+    (["run", "case.yaml"], {"ROCKSLIDE_RECORDS": "~nosuchuser-rockslide/records"},
+     "rockslide: error: ROCKSLIDE_RECORDS: '~nosuchuser-rockslide' names no user's home folder here"),
+    (["run", "--", "--debug"], {}, "rockslide: error: --debug: case file not found"),
+], ids=["out-dir-no-such-user", "records-dir-no-such-user", "env-no-such-user", "debug-after-double-dash"])
+def test_bad_environment_and_options_are_one_line(ws, args, env, expected):
+    """Issue 28's exit-1 cases: a home folder of nobody, and '--debug' after '--' (an argument then,
+    a case file that does not exist, not the debug switch): one line, exit 2, in a process of its own."""
+    (ws / "case.yaml").write_text(case_text())
+    done = subprocess.run([sys.executable, "-m", "rockslide", *args], cwd=ws, capture_output=True, text=True,
+                          env={**os.environ, "PYTHONPATH": str(REPO), **env}, timeout=120)
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.splitlines() == [expected]
+
+
+def test_a_matplotlib_backend_in_the_environment_does_not_stop_a_run(ws):
+    """MPLBACKEND=nonsense made matplotlib's import fail (exit 1, internal error): rockslide draws on
+    Agg whatever the environment names."""
+    (ws / "case.yaml").write_text(case_text(QUICK))
+    done = subprocess.run([sys.executable, "-m", "rockslide", "run", "case.yaml"], cwd=ws, capture_output=True,
+                          text=True, env={**os.environ, "PYTHONPATH": str(REPO), "MPLBACKEND": "nonsense"},
+                          timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert (ws / "out" / "example.png").stat().st_size > 0

@@ -75,7 +75,9 @@ class RockslideGroup(click.Group):
         sys.exit(code if isinstance(code, int) else 0)
 
     def invoke(self, ctx):
-        debug = "--debug" in sys.argv[1:] or bool(ctx.params.get("debug"))
+        given = sys.argv[1:]
+        given = given[:given.index("--")] if "--" in given else given    # after "--", "--debug" is an argument
+        debug = "--debug" in given or bool(ctx.params.get("debug"))
         with warnings.catch_warnings():
             warnings.showwarning = _hold_warning
             _held.clear()
@@ -293,9 +295,12 @@ def entry() -> None:
     numpy's OpenBLAS gets one thread unless ``OPENBLAS_NUM_THREADS`` says otherwise (set before
     numpy loads): its worker threads spin for about 0.1 s of CPU after loading, a third of a run
     without figure, and rockslide has no linear algebra large enough for threads (the sweep's
-    threads are its own).
+    threads are its own). matplotlib's backend is Agg, whatever ``MPLBACKEND`` says.
     """
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+    # rockslide draws on matplotlib's Agg canvas only: a backend named in the environment (a GUI one,
+    # or a misspelt one, which stops matplotlib's import) has nothing to do with its figures
+    os.environ["MPLBACKEND"] = "agg"
     gc.set_threshold(10_000, 50, 50)
     try:
         main(prog_name="rockslide")

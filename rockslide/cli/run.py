@@ -57,7 +57,8 @@ def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, members, s
 
     started = time.perf_counter()
     case = load_case(case_file)
-    folder = (Path(out_dir) if out_dir is not None else Path(case.output.dir)).expanduser()
+    folder = files.expand_user(out_dir if out_dir is not None else case.output.dir,
+                               source="--out-dir" if out_dir is not None else f"{case.source}: output.dir")
     h5_path = folder / f"{case.name}.h5"
     png_path = folder / f"{case.name}.png"
     prepared = runner.prepare(case, records.records_dir(records_dir))     # input errors first

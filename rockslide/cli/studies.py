@@ -276,7 +276,10 @@ def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, 
 
 def _outputs(case, out_dir, suffix: str) -> tuple[Path, Path]:
     """``OUT/NAME<suffix>.h5`` and ``.png``; OUT is ``--out-dir`` or the case's ``output.dir``."""
-    folder = (Path(out_dir) if out_dir is not None else Path(case.output.dir)).expanduser()
+    from ..io.files import expand_user
+
+    folder = expand_user(out_dir if out_dir is not None else case.output.dir,
+                         source="--out-dir" if out_dir is not None else f"{case.source}: output.dir")
     return folder / f"{case.name}{suffix}.h5", folder / f"{case.name}{suffix}.png"
 
 

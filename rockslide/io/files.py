@@ -123,6 +123,15 @@ def refuse_existing(path: Path, overwrite: bool) -> None:
         raise OutputError(f"{path} exists (use --overwrite to replace it)")
 
 
+def expand_user(path, *, source: str) -> Path:
+    """``path`` with a leading ``~`` or ``~user`` expanded, or a one-line `OutputError` naming
+    ``source`` (the option, variable or key that gave it) when there is no such home folder."""
+    try:
+        return Path(path).expanduser()
+    except RuntimeError:
+        raise OutputError(f"{str(path).split('/', 1)[0]!r} names no user's home folder here", source=source) from None
+
+
 def open_new(path, mode: str = "wb", *, buffering: int = -1):
     """Create ``path`` for writing as a new regular file of this process, never through a link and
     never into an existing file (``O_CREAT | O_EXCL | O_NOFOLLOW``): in an output folder that others

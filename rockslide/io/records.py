@@ -43,7 +43,7 @@ import numpy as np
 
 from ..errors import CaseError, RecordError
 from ..units import STANDARD_GRAVITY, unit_factor
-from .files import atomic_write
+from .files import atomic_write, expand_user
 
 if TYPE_CHECKING:
     import obspy
@@ -108,10 +108,10 @@ def records_dir(option: str | os.PathLike | None = None) -> Path:
         ``option``, else ``$ROCKSLIDE_RECORDS`` when set and not empty, else ``Path("records")``.
     """
     if option is not None and str(option) != "":
-        return Path(option).expanduser()
+        return expand_user(option, source="--records-dir")
     env = os.environ.get(RECORDS_ENV)
     if env:
-        return Path(env).expanduser()
+        return expand_user(env, source=RECORDS_ENV)
     return Path("records")
 
 
