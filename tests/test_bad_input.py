@@ -1012,3 +1012,23 @@ def test_a_matplotlib_backend_in_the_environment_does_not_stop_a_run(ws):
                           timeout=300)
     assert done.returncode == 0, done.stderr
     assert (ws / "out" / "example.png").stat().st_size > 0
+
+
+def test_unbounded_work_is_refused_before_it_starts(ws, monkeypatch):
+    """Issue 28's unbounded inputs: sa(T) at 1e-9 s (7 TiB of oscillator response), an oscillator
+    response above the bound on a real record, and 300 criteria panels are refused in one line
+    before any work; a 2-case sweep with a huge --chunk-size asks for the disk its 2 cases need."""
+    from rockslide.analyses import fragility as fr
+
+    (ws / "case.yaml").write_text(case_text(QUICK))
+    shutil.copy(REPO / "records" / "suite-synthetic.yaml", ws / "suite.yaml")
+    shutil.copytree(REPO / "records" / "suite-synthetic", ws / "suite-synthetic")
+    fragility = ["fragility", "case.yaml", "--suite", "suite.yaml", "--levels", "0.1g,0.2g", "--no-plot"]
+    assert_clean_error(invoke([*fragility, "--im", "sa(1e-9s)"]), ["--im", "within 0.001 s ... 100 s", "1e-09 s"])
+    monkeypatch.setattr(fr, "MAX_OSCILLATOR_POINTS", 1000)
+    assert_clean_error(invoke([*fragility, "--im", "sa(0.5s)"]), ["--im", "points of the oscillator's response"])
+    panels = ",".join(f"{k / 1000:.3f}g" for k in range(300))
+    assert_clean_error(invoke(["criteria", f"--av={panels}", "-o", "c.png"]), ["--av", "at most 12"])
+    assert not (ws / "c.png").exists()
+    done = invoke(["sweep", "case.yaml", "--mu", "0.3,0.5", "--chunk-size", "1000000000", "--no-plot"])
+    assert done.exit_code == 0, done.stderr

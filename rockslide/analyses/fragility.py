@@ -173,6 +173,12 @@ _SA = re.compile(r"^\s*sa\s*\(\s*(?P<period>[^()]*?)\s*\)\s*$", re.IGNORECASE)
 _IM_CHOICES = "pga, pgv, pga_rocking or sa(T) with a period, e.g. 'sa(0.5s)'"
 
 
+#: [s] Periods of ``sa(T)``: the range of response spectra (NGA-West2 tabulates 0.01 s to 20 s).
+SA_PERIODS = (1e-3, 100.0)
+#: Points of the oscillator's response on one record, at most (16 bytes each: 0.8 GB).
+MAX_OSCILLATOR_POINTS = 5 * 10**7
+
+
 def parse_im(text: str) -> IntensityMeasure:
     """Read ``--im``: ``pga``, ``pgv``, ``pga_rocking`` or ``sa(T)`` (``sa(0.5s)``, ``sa(300 ms)``).
 
@@ -196,6 +202,10 @@ def parse_im(text: str) -> IntensityMeasure:
     if not period > 0:
         raise CaseError(f"the period of sa(T) must be a positive time, got {match.group('period')!r}",
                         source="--im")
+    low, high = SA_PERIODS
+    if not low <= period <= high:
+        raise CaseError(f"the period of sa(T) must be within {low:g} s ... {high:g} s (a response spectrum's "
+                        f"range: below it Sa is the PGA), got {period:g} s", source="--im")
     shown, damping = f"{period:g} s", f"{100 * intensity.DAMPING:g} %"
     return IntensityMeasure(f"sa({shown})", "acceleration", "m/s^2",
                             f"pseudo-spectral acceleration of the horizontal record at T = {shown}, "
@@ -557,6 +567,12 @@ def plan_fragility(case: Case, suite: Suite, im: IntensityMeasure, levels: sw.Ax
         measures["pga"][r] = intensity.peak_acceleration(h)
         measures["pgv"][r] = intensity.peak_velocity(h, dt)
         measures["pgv_pga"][r] = measures["pgv"][r] / measures["pga"][r] if measures["pga"][r] else math.nan
+        if im.period is not None:                      # the oscillator's memory, known before it runs
+            points = (h.size - 1) * max(1, math.ceil(intensity.POINTS_PER_PERIOD * dt / im.period - 1e-9)) + 1
+            if points > MAX_OSCILLATOR_POINTS:
+                raise CaseError(f"{im.label} of the record {where} takes {points:.3g} points of the oscillator's "
+                                f"response; expected at most {MAX_OSCILLATOR_POINTS:.0e} (a longer period, or a "
+                                "shorter record)", source="--im")
         measures["im"][r] = value = im.of_record(h, dt, case.gravity, tan_alpha)
         measures["dt"][r], measures["duration"][r] = dt, (h.size - 1) * dt
         if not (math.isfinite(value) and value > 0):

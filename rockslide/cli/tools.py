@@ -126,6 +126,10 @@ def example(folder, overwrite):
     click.echo(f"next: rockslide run {paths[0]}")
 
 
+#: Panels of the criteria map (one per --av value): more are unreadable, and each takes a while.
+MAX_CRITERIA_PANELS = 12
+
+
 @main.command()
 @click.argument("case_file", type=click.Path(path_type=Path), required=False)
 @click.option("--height", type=str, default=None, help="Block height (default: the case's, else 0.2 m).")
@@ -170,6 +174,9 @@ def criteria(case_file, height, width, vertical, ah_max, mu_max, output, overwri
     for option, value in (("--ah-max", ah_max), ("--mu-max", mu_max)):
         if not (math.isfinite(value) and value > 0):
             raise CaseError(f"expected a positive finite value, got {value:g}", source=option)
+    if len(avs) > MAX_CRITERIA_PANELS:
+        raise CaseError(f"{len(avs)} vertical accelerations give as many panels; expected at most "
+                        f"{MAX_CRITERIA_PANELS}", source="--av")
     if not avs or any(not -1.0 < a for a in avs):
         raise CaseError("each vertical acceleration must be above -1 g (the block would fly)", source="--av")
     if not overwrite and (output.exists() or output.is_symlink()):

@@ -154,7 +154,8 @@ def definition_key(plan: Plan) -> str:
 def bytes_needed(plan: Plan, n_chunks: int) -> int:
     """Bytes on disk for ``n_chunks`` more chunk files and the result file (both uncompressed)."""
     per_case_chunk = (K.N_STATE + 1) * 8
-    return n_chunks * plan.chunk_size * per_case_chunk + plan.n_cases * RESULT_BYTES_PER_CASE + 2**16
+    cases = min(n_chunks * plan.chunk_size, plan.n_cases)     # a chunk holds at most the plan's cases
+    return cases * per_case_chunk + plan.n_cases * RESULT_BYTES_PER_CASE + 2**16
 
 
 #: Bytes per case of the variables `sweep_variables` writes: 11 float64, one int32, 6 int8 (a test
