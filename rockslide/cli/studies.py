@@ -61,6 +61,10 @@ def where_options(what: str, unit: str):
         click.option("--no-progress", is_flag=True,
                      help="No progress bar on stderr (there is none anyway when stderr is not a terminal)."),
         dpi_option("PNG figure"),
+        click.option("--csv", "as_csv", is_flag=True,
+                     help=f"Also write OUT/NAME.{'sweep' if what == 'sweep' else 'fragility'}.csv: one row per "
+                          f"{unit} with its coordinates and results (units in the header), for a spreadsheet or "
+                          "pandas."),
     ]
 
     def decorate(command):
@@ -95,7 +99,7 @@ def where_options(what: str, unit: str):
 @records_dir_option
 @where_options("sweep", "case")
 def sweep(case_file, mu_kinetic_ratio, records_dir, out_dir, overwrite, no_plot, workers, scheduler, device,
-          chunk_size, no_progress, dpi, **_axes):
+          chunk_size, no_progress, dpi, as_csv, **_axes):
     """Grid of cases over friction, intensity, vertical factor, restitution, slenderness or gravity,
     or over a pulse's amplitude and period or duration: CASE_FILE (YAML) -> OUT/NAME.sweep.h5 and
     OUT/NAME.sweep.png.
@@ -152,6 +156,10 @@ def sweep(case_file, mu_kinetic_ratio, records_dir, out_dir, overwrite, no_plot,
                             attrs=sw.root_attributes(plan, _command_line(ctx, case_file)))
         if not no_plot:
             save_figure(sw.figure(plan, variables), png_path, overwrite=overwrite, dpi=dpi, staging=staging)
+        if as_csv:
+            from ..io.datasets import sweep_dataset
+            _write_csv(sweep_dataset(sw.coordinates(plan), variables), [a.name for a in plan.axes],
+                       h5_path.with_suffix(".csv"), overwrite=overwrite, staging=staging)
         staging.publish(remove=[png_path] if no_plot else [])
     done.store.remove()
     over = int(variables["overturned"][0].sum())
@@ -162,7 +170,7 @@ def sweep(case_file, mu_kinetic_ratio, records_dir, out_dir, overwrite, no_plot,
     if undecided:
         click.echo(f"  {undecided} undecided: still moving at the end with the energy to overturn "
                    "(give the case a ground.tail for their free motion)")
-    click.echo(f"  wrote {_written(h5_path, png_path, no_plot)} in {time.perf_counter() - started:.1f} s")
+    click.echo(f"  wrote {_written(h5_path, png_path, no_plot, as_csv)} in {time.perf_counter() - started:.1f} s")
 
 
 @main.command()
@@ -199,7 +207,7 @@ def sweep(case_file, mu_kinetic_ratio, records_dir, out_dir, overwrite, no_plot,
 @where_options("fragility analysis", "run")
 def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, resamples, case_vertical, samples,
               seed, as_json, records_dir, out_dir, overwrite, no_plot, workers, scheduler, device, chunk_size,
-              no_progress, dpi):
+              no_progress, dpi, as_csv):
     """Fragility curves of a block over a record suite scaled to levels of an intensity measure:
     CASE_FILE (YAML) -> OUT/NAME.fragility.h5 and OUT/NAME.fragility.png.
 
@@ -250,6 +258,10 @@ def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, 
                               overwrite=overwrite, staging=staging)
         if not no_plot:
             save_figure(fr.figure(fplan, analysis), png_path, overwrite=overwrite, dpi=dpi, staging=staging)
+        if as_csv:
+            from ..io.datasets import study_dataset
+            _write_csv(study_dataset(coords, variables), [name for name, _, _ in coords if name != "damage_state"],
+                       h5_path.with_suffix(".csv"), overwrite=overwrite, staging=staging)
         staging.publish(remove=[png_path] if no_plot else [])
     done.store.remove()
     elapsed = time.perf_counter() - started
@@ -271,7 +283,16 @@ def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, 
         if analysis.nominal_fits:
             click.echo("    without parameter uncertainty (the case's values): "
                        + fr.describe_fit(state, analysis.nominal_fits[i], im).split(": ", 1)[1])
-    click.echo(f"  wrote {_written(h5_path, png_path, no_plot)} in {elapsed:.1f} s")
+    click.echo(f"  wrote {_written(h5_path, png_path, no_plot, as_csv)} in {elapsed:.1f} s")
+
+
+def _write_csv(dataset, dims, path: Path, *, overwrite: bool, staging) -> None:
+    """``io.datasets.tidy_table`` of a study, written with the rest of its set."""
+    from ..io.datasets import tidy_table
+    from ..io.files import atomic_write
+
+    with atomic_write(path, overwrite=overwrite, mode="w", what="table", staging=staging) as handle:
+        handle.write(tidy_table(dataset, dims))
 
 
 def _outputs(case, out_dir, suffix: str) -> tuple[Path, Path]:
@@ -283,8 +304,10 @@ def _outputs(case, out_dir, suffix: str) -> tuple[Path, Path]:
     return folder / f"{case.name}{suffix}.h5", folder / f"{case.name}{suffix}.png"
 
 
-def _written(h5_path: Path, png_path: Path, no_plot: bool) -> str:
-    return f"{h5_path}" + ("" if no_plot else f" and {png_path}")
+def _written(h5_path: Path, png_path: Path, no_plot: bool, as_csv: bool = False) -> str:
+    names = [str(h5_path), *([] if no_plot else [str(png_path)]),
+             *([str(h5_path.with_suffix(".csv"))] if as_csv else [])]
+    return ", ".join(names[:-1]) + " and " + names[-1] if len(names) > 1 else names[0]
 
 
 def _rate(done, unit: str) -> str:

@@ -84,3 +84,25 @@ def _attribute(value):
     if value is None:
         return math.nan
     return value
+
+
+def tidy_table(dataset, dims) -> str:
+    """The variables of ``dataset`` on the dimensions ``dims`` as a tidy CSV table: one row per
+    point of those dimensions (a sweep's case; a fragility analysis's record and level), a column
+    per coordinate and per variable (variables on other dimensions are left out). Numbers are
+    written with every digit (Python's shortest exact form), so the table reads back to the file's
+    values exactly; each column's unit is in its header (``max_rotation [rad]``)."""
+    import io
+
+    names = [name for name, var in dataset.data_vars.items() if tuple(var.dims) == tuple(dims)]
+    frame = dataset[names].to_dataframe().reset_index()
+    frame = frame[[*dims, *names]]
+
+    def header(name):
+        unit = (dataset[name].attrs.get("units") if name in dataset.variables else None) or ""
+        return f"{name} [{unit}]" if unit and unit != "1" else name
+
+    frame.columns = [header(name) for name in frame.columns]
+    out = io.StringIO()
+    frame.to_csv(out, index=False, lineterminator="\n", float_format=None)
+    return out.getvalue()
