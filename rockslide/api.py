@@ -23,8 +23,6 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import numpy as np
-
 from .case import Case, case_with, load_case
 from .core.simulate import Result, Summary
 
@@ -166,8 +164,8 @@ def sweep(case: Case | Mapping | str | Path, *, mu_kinetic_ratio: float | None =
     from .io import datasets, records
 
     case = _case(case)
-    parsed = [sw.parse_axis(name, _axis_text(name, values, sw)) for name, values in axes.items()
-              if values is not None]
+    parsed = [sw.parse_axis(name, _axis_text(values, sw.AXES[name].kind if name in sw.AXES else "dimensionless"))
+              for name, values in axes.items() if values is not None]
     scheduler = check_where(workers=workers, scheduler=scheduler, device=device)
     plan = sw.plan_sweep(case, parsed, records_dir=records.records_dir(records_dir),
                          mu_kinetic_ratio=mu_kinetic_ratio, chunk_size=chunk_size)
@@ -226,7 +224,7 @@ def fragility(case: Case | Mapping | str | Path, suite: str | Path, *, im: str =
 
     case = _case(case)
     measure = fr.parse_im(im)
-    parsed = fr.parse_levels(_axis_text("levels", levels, None, measure.kind), measure)
+    parsed = fr.parse_levels(_axis_text(levels, measure.kind), measure)
     states = fr.damage_states(damage)
     scheduler = check_where(workers=workers, scheduler=scheduler, device=device)
     fplan = fr.plan_fragility(case, fr.suite_from(str(suite), units=units), measure, parsed,
@@ -267,23 +265,20 @@ def ensemble(case: Case | Mapping | str | Path, n: int = 200, *, seed: int = 1,
     import json
 
     from .analyses import ensemble as ens
-    from .analyses.sweep import sweep_variables
-    from .engine.execute import check_where, execute
+    from .engine.execute import check_where
     from .io import datasets, records
 
     case = _case(case)
     nominal = run(case, records_dir=records_dir, history=False)
     scheduler = check_where(workers=workers, scheduler=scheduler, device=device)
     eplan = ens.plan_ensemble(case, n, seed=seed, records_dir=records.records_dir(records_dir))
-    done = execute(eplan.plan, store, workers=workers, scheduler=scheduler, device=device, progress=progress)
-    variables = sweep_variables(eplan.plan, done.states)
-    summary = ens.summarise(eplan, variables, nominal.summary.overturned)
+    summary, members, variables = ens.compute(eplan, nominal.summary.overturned, store=store, workers=workers,
+                                              scheduler=scheduler, device=device, progress=progress)
     attrs = {"name": case.name, "nominal_verdict": nominal.summary.verdict, "p_overturn": summary["p_overturn"],
              "interval_low": summary["interval"][0], "interval_high": summary["interval"][1],
              "flips": summary["flips"], "robust": int(summary["robust"]), "seed": seed,
              "ensemble": json.dumps(summary)}
-    coords = [("member", np.arange(eplan.n), {"units": "1", "long_name": "member of the ensemble"})]
-    return datasets.study_dataset(coords, ens.member_variables(eplan, variables), attrs)
+    return datasets.study_dataset([members], variables, attrs)
 
 
 def read_result(path: str | Path):
@@ -318,15 +313,12 @@ def _case(case) -> Case:
     return case if isinstance(case, Case) else load_case(case)
 
 
-def _axis_text(name: str, values, sw, kind: str | None = None) -> str:
-    """An axis given as text (as on the command line) or as values: a comma list, numbers in SI."""
+def _axis_text(values, kind: str) -> str:
+    """An axis given as text (as on the command line) or as values of the unit kind ``kind``: a
+    comma list, numbers in SI."""
     if isinstance(values, str):
         return values
     from .units import SI_UNITS
 
-    kind = kind if kind is not None else sw.AXES[name].kind if name in sw.AXES else "dimensionless"
     unit = SI_UNITS.get(kind, "") if kind != "dimensionless" else ""
-    texts = []
-    for value in values:
-        texts.append(value if isinstance(value, str) else f"{float(value)!r}{unit}")
-    return ",".join(texts)
+    return ",".join(value if isinstance(value, str) else f"{float(value)!r}{unit}" for value in values)

@@ -1052,7 +1052,7 @@ def _read_distribution(value, spec: dict, path: str, ctx: _Ctx) -> Distribution:
     checked = {"fixed": [dist.a], "uniform": [dist.a, dist.b], "normal": [dist.a], "lognormal": [dist.a]}[dist.kind]
     for op, limit in spec.get("bounds", ()):
         for v in checked:
-            if not {">": v > limit, ">=": v >= limit, "<=": v <= limit, "<": v < limit}[op]:
+            if not _OPS[op][0](v, limit):
                 ctx.fail(path, f"its values must be {op} {_num(limit)}, got {_num(v)} in {_show(value)}")
     if dist.kind == "normal" and any(op == ">" for op, _ in spec.get("bounds", ())) and dist.a - 4 * dist.b <= 0:
         ctx.fail(path, f"a normal factor with mean {_num(dist.a)} and std {_num(dist.b)} reaches 0 and below; "

@@ -24,7 +24,7 @@ from __future__ import annotations
 import json
 import math
 import warnings
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -32,12 +32,13 @@ import numpy as np
 from ..case import Case, Distribution
 from ..core import kernel as K
 from ..core.simulate import Model, set_model
+from ..engine.execute import execute
 from ..engine.plan import MAX_POINTS, Plan, default_chunk_size, definition_key
 from ..engine.prepare import RunWarning, coarse_step_warning
 from ..errors import CaseError
 from . import sweep as sw
 
-__all__ = ["DEFAULTS", "DEFAULT_MEMBERS", "distributions", "sample", "plan_ensemble", "summarise",
+__all__ = ["DEFAULTS", "DEFAULT_MEMBERS", "distributions", "sample", "plan_ensemble", "compute", "summarise",
            "wilson_interval", "EnsemblePlan"]
 
 #: Members of an ensemble without ``--ensemble N``'s N (``--robustness``).
@@ -188,6 +189,20 @@ def member_parameters(case: Case, params: np.ndarray, values: dict) -> tuple[np.
     return params, restitution
 
 
+#: The attributes of the ensemble's dimension ``member`` in its files and datasets.
+MEMBER_ATTRS = {"units": "1", "long_name": "member of the ensemble"}
+
+
+def compute(eplan: EnsemblePlan, nominal_overturned: bool, **where) -> tuple[dict, tuple, dict]:
+    """Compute the members on the engine (`engine.execute.execute`, with ``where``: the store,
+    workers, scheduler, device, progress). Returns the summary (`summarise`), the dimension
+    ``member`` as ``(name, values, attributes)`` and the members' variables (`member_variables`)."""
+    done = execute(eplan.plan, **where)
+    variables = sw.sweep_variables(eplan.plan, done.states)
+    members = ("member", np.arange(eplan.n), dict(MEMBER_ATTRS))
+    return summarise(eplan, variables, nominal_overturned), members, member_variables(eplan, variables)
+
+
 def wilson_interval(k: int, n: int, confidence: float = CONFIDENCE) -> tuple[float, float]:
     """The Wilson score interval of a proportion ``k / n`` (Wilson 1927; Brown, Cai and DasGupta
     2001 recommend it over the normal approximation, which collapses at 0 and n): with ``z`` the
@@ -313,9 +328,3 @@ def member_variables(eplan: EnsemblePlan, variables: dict) -> dict:
         values, attrs = variables[name]
         out[name] = (("member",), np.ravel(values), attrs)
     return out
-
-
-def with_defaults_in(case: Case) -> Case:
-    """``case`` with its ensemble's distributions written into its ``uncertain`` section."""
-    dists, _ = distributions(case)
-    return replace(case, uncertain=replace(case.uncertain, **dists))

@@ -68,7 +68,6 @@ from ..engine.prepare import (
     check_step,
     coarse_step_warning,
     flight_warning,
-    load_ground,
     model_for,
     settings_for,
 )
@@ -602,8 +601,7 @@ def plan_fragility(case: Case, suite: Suite, im: IntensityMeasure, levels: sw.Ax
         if ground.vertical.size:
             flying = np.flatnonzero(case.gravity + factor_v[rows] * float(np.min(ground.vertical)) <= 0.0)
             if flying.size:
-                level_case = case_with(record_case, {"ground.scale.factor": float(factors[flying[0]])})
-                text = flight_warning(level_case, load_ground(level_case, folder))
+                text = flight_warning(*_at_level(record_case, records, factors[flying[0]]))
                 flights.append((f"{text} [at record {entry.name}, level {levels.texts[flying[0]]}]", flying.size))
         first[rows], count[rows] = offset, base.shape[1]
         record_end[rows] = start + base.shape[1] * dt
@@ -691,16 +689,22 @@ def with_parameter_samples(fplan: FragilityPlan, samples: int, seed: int, chunk_
                    seed=int(seed))
 
 
+def _at_level(record_case: Case, records: dict, factor: float):
+    """A record's run at the scale ``factor``: ``(its case, its ground motion)``, from the records
+    already read (`records.combine`, as ``rockslide run`` of that case scales them)."""
+    level_case = case_with(record_case, {"ground.scale.factor": float(factor)})
+    scale = level_case.ground.scale
+    ground = rec.combine(records["horizontal"], records["vertical"], factor=scale.factor,
+                         vertical_factor=scale.vertical_factor, source=record_case.source,
+                         still_dt=record_case.solver.dt)
+    return level_case, ground
+
+
 def _check_level(record_case: Case, records: dict, factor: float, where: str) -> float:
     """`prepare.check_against_ground` of a record's run scaled by ``factor``, its errors naming the
     record. Returns the peak scaled acceleration [m/s^2]."""
     try:
-        level_case = case_with(record_case, {"ground.scale.factor": float(factor)})
-        scale = level_case.ground.scale
-        ground = rec.combine(records["horizontal"], records["vertical"], factor=scale.factor,
-                             vertical_factor=scale.vertical_factor, source=record_case.source,
-                             still_dt=record_case.solver.dt)
-        return check_against_ground(level_case, ground, warn=False)
+        return check_against_ground(*_at_level(record_case, records, factor), warn=False)
     except CaseError as exc:
         raise CaseError(f"{exc.message} (with the record {where})", source=exc.source, field=exc.field) from None
 

@@ -15,7 +15,7 @@ without history or event log.
 - **Points.** Every point is the case with the axis values replaced through `case.case_with`
   (validated like a case file, each section once per distinct combination of the values that
   change it; a bad value is a one-line `CaseError` naming the option) and its
-  ground motion checked like ``rockslide run`` checks it (`runner.check_against_ground`). ``--mu``
+  ground motion checked like ``rockslide run`` checks it (`prepare.check_against_ground`). ``--mu``
   sets ``mu_static`` and ``mu_kinetic = ratio * mu_static`` with the case's ratio
   ``mu_kinetic / mu_static`` (rounded to 12 significant digits, so that 0.494 / 0.52 is 0.95)
   unless ``--mu-kinetic-ratio`` gives it; ``--pga`` sets ``ground.scale.pga_horizontal`` (removing
@@ -27,26 +27,14 @@ without history or event log.
   `records.combine` does. A sweep point and ``rockslide run`` on the same case give identical
   numbers.
 - **Pulses.** A pulse case's points hold one record per distinct pulse (shape, period or
-  duration: `runner.unit_pulses`, sampled at amplitude 1, each with its own sampling step and
+  duration: `prepare.unit_pulses`, sampled at amplitude 1, each with its own sampling step and
   start), and the amplitudes are the scale factors, exactly as ``rockslide run`` multiplies them.
   A sweep over ``--amplitude`` and ``--period`` (or ``--duration``) is an overturning spectrum: its
   figure is drawn in the dimensionless plane of the literature (`spectrum_scales`,
   `plots.spectrum_figure`).
-- **Chunks.** The grid is cut into chunks of ``chunk_size`` cases, chunk ``c`` holding the flat
-  indices ``c, c + n_chunks, c + 2 n_chunks, ...`` (a mix of cheap and costly cases in each).
-  Each finished chunk is saved at once (`ChunkStore`: ``.NAME.sweep.chunks/KEY/chunk-NNNNNN.npz``
-  beside the result, written to a temporary name and renamed), ``KEY`` being a hash of the sweep's
-  definition (:func:`definition_key`: case text, axes, ratio, chunk size, every point's kernel
-  inputs, the ground samples, the package version and the kernel's source). A rerun of the same
-  definition computes only the missing chunks; another definition never sees them. The chunk
-  folder is removed once the result file is written.
-- **Where.** Locally on a pool of threads, one chunk per task (`batch.compute`, which releases the
-  GIL; a thread takes the next chunk as soon as it is done), or
-  on a dask.distributed cluster: one task per chunk (`batch.compute`)
-  returning plain numpy arrays. Both give identical results. Or on an NVIDIA GPU (``--device gpu``,
-  the optional extra ``rockslide[gpu]``: `core.gpu`, the same kernel compiled for the device),
-  many chunks per launch (`DEVICE_CASES_PER_LAUNCH`); the device may round the last bits
-  differently (fused multiply-adds).
+- **Computing.** The plan goes to the engine (`engine.execute.execute`): chunks of cases, kept on
+  disk beside the result under the plan's definition key (`engine.chunks.ChunkStore`, resumable
+  after Ctrl-C or a crash) or in memory, computed on threads, a dask cluster or a GPU.
 """
 
 from __future__ import annotations
@@ -99,7 +87,6 @@ PLAN_BATCH = 2000
 PLAN_SECONDS_PER_POINT = 3e-5
 #: Ranges include their stop when it is within this fraction of a step of the grid.
 RANGE_TOLERANCE = 1e-9
-
 
 
 @dataclass(frozen=True)
@@ -330,10 +317,6 @@ def kinetic_ratio(case: Case, given: float | None) -> float:
 # --------------------------------------------------------------------------------------------------
 
 
-
-
-
-
 def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = None,
                mu_kinetic_ratio: float | None = None, chunk_size: int | None = None,
                progress: Callable[[int], None] | None = None) -> Plan:
@@ -460,7 +443,7 @@ def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = N
 
 def _points(case: Case, axes, ratio, progress=None):
     """Every point of the grid in flat C order: ``(index, combo, case)``, validated as a case file
-    (`case_with`) and by `runner.check_parameters` (a bad point is a CaseError naming the options
+    (`case_with`) and by `prepare.check_parameters` (a bad point is a CaseError naming the options
     responsible). Ctrl-C is noticed, and ``progress`` told, every `PLAN_BATCH` points (a large grid
     takes a while).
 
@@ -508,7 +491,7 @@ def section_of(axis: Axis) -> str:
 
 def _plan_pulses(case: Case, axes, ratio, chunk_size: int, n: int, progress=None) -> Plan:
     """`plan_sweep` for a case whose ground motion is analytic pulses: one record per distinct
-    pulse shape and length (the amplitudes are the scale factors, as `runner.pulse_ground` applies
+    pulse shape and length (the amplitudes are the scale factors, as `prepare.pulse_ground` applies
     them), each with its own sampling step and start."""
     params = np.empty((n, K.N_PARAMS))
     states = np.empty((n, K.N_STATE))
@@ -592,7 +575,7 @@ def _point_text(axes, combo) -> str:
 
 
 def _read_records(case: Case, records_dir: Path | None):
-    """The case's records, read once (`runner.read_records`), and the provenance entry of each."""
+    """The case's records, read once (`prepare.read_records`), and the provenance entry of each."""
     records = read_records(case, records_dir)
     entries = [{"role": role, "path": Path(record.path).name, "sha256": record.sha256}
                for role, record in records.items() if record is not None]
@@ -614,65 +597,6 @@ def _key_root(axis: str) -> str:
     return {"mu": "contact.mu", "pga": "ground.scale", "vertical_factor": "ground.scale",
             "slenderness": "block", "amplitude": "ground.horizontal", "period": "ground.horizontal",
             "duration": "ground.horizontal"}.get(axis, AXES[axis].key)
-
-
-
-
-# --------------------------------------------------------------------------------------------------
-# Chunks on disk
-# --------------------------------------------------------------------------------------------------
-
-
-
-
-# --------------------------------------------------------------------------------------------------
-# Computing
-# --------------------------------------------------------------------------------------------------
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
 
 
 # --------------------------------------------------------------------------------------------------

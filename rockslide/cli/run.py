@@ -92,64 +92,47 @@ def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, members, s
                 streamed = prepared.case.solver.method == "kernel"
                 result = runner.simulate_prepared(prepared, on_chunk=writer.append_history if streamed else None,
                                                   progress=progress)
-                check = None if eplan is None else _ensemble(eplan, result.summary.overturned)
+                neighbourhood = group = None
+                if eplan is not None:               # on this machine's cores, in memory
+                    neighbourhood, dimension, group = ens.compute(eplan, result.summary.overturned,
+                                                                  progress=lambda cases: interrupts.check())
                 writer.finish(result, name=case.name, case_text=case.text, case=case_to_dict(case, case_file=False),
                               records=runner.record_entries(prepared), ground=ground,
-                              extra_attrs={} if check is None else ens.attributes(check[0]),
-                              extra_groups=None if check is None else {"ensemble": check[1]})
+                              extra_attrs={} if neighbourhood is None else ens.attributes(neighbourhood),
+                              extra_groups=None if group is None else {"ensemble": (dimension, group)})
             ensemble_png = folder / f"{case.name}.ensemble.png"
             if not no_plot:
                 kept = writer.written_result()
                 _draw(kept if kept is not None else results.read_result(writer.tmp).result, case.name,
                       png_path, overwrite=overwrite, dpi=dpi, staging=staging)
-                if check is not None:
-                    _draw_ensemble(check, result.summary, case.name, ensemble_png, overwrite=overwrite, dpi=dpi,
-                                   staging=staging)
+                if neighbourhood is not None:
+                    _draw_ensemble(neighbourhood, group, result.summary, case.name, ensemble_png,
+                                   overwrite=overwrite, dpi=dpi, staging=staging)
             stale = [png_path] if no_plot else []
-            if overwrite and (no_plot or check is None):
+            if overwrite and (no_plot or neighbourhood is None):
                 stale.append(ensemble_png)          # it showed the neighbourhood of the result replaced
             staging.publish(remove=stale)
         written = f"{h5_path}" + ("" if no_plot else f" and {png_path}")
-        if check is not None and not no_plot:
+        if neighbourhood is not None and not no_plot:
             written += f" and {ensemble_png}"
-        check = None if check is None else check[0]
     else:
         with files.Staging(overwrite=False) as staging:
             _draw(stored.result, stored.name, png_path, overwrite=False, dpi=dpi, staging=staging)
             staging.publish()
         result = stored.result
-        check = None if eplan is None else json.loads(stored.attrs["ensemble"])
+        neighbourhood = None if eplan is None else json.loads(stored.attrs["ensemble"])
         written = f"{png_path} (the missing figure of the complete {h5_path})"
     elapsed = time.perf_counter() - started
     summary = result.summary
     if as_json:
         payload = {"name": case.name, **results.summary_to_json_dict(summary, result.events),
-                   "ground": ground, "ensemble": results.json_ready(check),
+                   "ground": ground, "ensemble": results.json_ready(neighbourhood),
                    "files": {"hdf5": str(h5_path), "png": None if no_plot else str(png_path)},
                    "elapsed_s": round(elapsed, 3)}
         click.echo(json.dumps(payload, allow_nan=False, default=_json_default))
     else:
-        lines = human_summary(case.name, summary, ground=ground, units=case.units).split("\n")
-        if check is not None:
-            described = ens.describe(check, lines[0].split(": ", 1)[1])
-            lines = [f"{case.name}: {described[0]}", *lines[1:], *described[1:]]
-        click.echo("\n".join(lines))
+        click.echo(run_text(case.name, summary, neighbourhood, ground=ground, units=case.units))
         click.echo(f"  wrote {written} in {elapsed:.2f} s")
-
-
-def _ensemble(eplan, nominal_overturned: bool):
-    """Compute the ensemble on this machine's cores (`engine.execute.execute`, in memory): its
-    summary (`ensemble.summarise`) and its members' group for the result file."""
-    import numpy as np
-
-    from ..analyses import ensemble as ens
-    from ..analyses.sweep import sweep_variables
-    from ..engine.execute import execute
-
-    done = execute(eplan.plan, progress=lambda cases: interrupts.check())
-    variables = sweep_variables(eplan.plan, done.states)
-    members = ("member", np.arange(eplan.n), {"units": "1", "long_name": "member of the ensemble"})
-    return ens.summarise(eplan, variables, nominal_overturned), (members, ens.member_variables(eplan, variables))
 
 
 @main.command()
@@ -266,12 +249,23 @@ def _same_result(case, prepared, h5_path: Path, *, eplan=None):
     return stored
 
 
-def _draw_ensemble(check, nominal, name: str, path: Path, *, overwrite: bool, dpi, staging) -> None:
+def run_text(name: str, summary, neighbourhood: dict | None = None, *, ground=None, units=None) -> str:
+    """The printout of a run (`human_summary`); with its ensemble's summary (`ensemble.summarise`),
+    led by the probability of overturning when a neighbour flips the verdict (`ensemble.describe`)."""
+    lines = human_summary(name, summary, ground=ground, units=units).split("\n")
+    if neighbourhood is not None:
+        from ..analyses import ensemble as ens
+        described = ens.describe(neighbourhood, lines[0].split(": ", 1)[1])
+        lines = [f"{name}: {described[0]}", *lines[1:], *described[1:]]
+    return "\n".join(lines)
+
+
+def _draw_ensemble(summary: dict, variables: dict, nominal, name: str, path: Path, *, overwrite: bool, dpi,
+                   staging) -> None:
     """The neighbourhood's figure (`plots.ensemble_figure`): its members' largest rotations."""
     from ..analyses import ensemble as ens
     from ..plots import ensemble_figure, save_figure
 
-    summary, (_, variables) = check
     ok = variables["status"][1] == 0
     ratio = variables["max_rotation_ratio"][1][ok]
     over = variables["overturned"][1][ok].astype(bool)

@@ -247,12 +247,9 @@ def _number(value):
 def _stored_run_text(path: Path) -> str:
     """A result file's summary as ``rockslide run`` printed it (and its ensemble's lines)."""
     from ..io import results
-    from .run import human_summary
+    from .run import run_text
 
     stored = results.read_result(path)
-    lines = human_summary(stored.name, stored.result.summary, ground=stored.ground or None).split("\n")
-    if "ensemble" in stored.attrs:
-        from ..analyses import ensemble as ens
-        described = ens.describe(json.loads(stored.attrs["ensemble"]), lines[0].split(": ", 1)[1])
-        lines = [f"{stored.name}: {described[0]}", *lines[1:], *described[1:]]
-    return "\n".join([*lines, f"  (read from {path}; rockslide {stored.attrs.get('rockslide_version', '?')})"])
+    neighbourhood = json.loads(stored.attrs["ensemble"]) if "ensemble" in stored.attrs else None
+    text = run_text(stored.name, stored.result.summary, neighbourhood, ground=stored.ground or None)
+    return f"{text}\n  (read from {path}; rockslide {stored.attrs.get('rockslide_version', '?')})"

@@ -81,23 +81,17 @@ def freshen(dispatcher) -> bool:
 
 
 def discard(dispatcher) -> bool:
-    """Delete the core's cached compiled code beside ``dispatcher``'s and its stamp (a damaged cache:
-    a truncated or altered file that numba cannot load); the next call compiles afresh. Returns
-    whether there was anything to delete."""
+    """Delete the core's cached compiled code beside ``dispatcher``'s (a damaged cache: a truncated
+    or altered file that numba cannot load), by forgetting its stamp so that `freshen` removes it;
+    the next call compiles afresh. Returns whether the cache could be cleared."""
     folder = cache_folder(dispatcher)
     if folder is None:
         return False
-    removed = False
     try:
-        for path in folder.iterdir():
-            if (path.suffix in (".nbi", ".nbc") and path.name.split(".", 1)[0] in COMPILED_MODULES) \
-                    or path.name == STAMP_FILE:
-                path.unlink(missing_ok=True)
-                removed = True
+        (folder / STAMP_FILE).unlink(missing_ok=True)
     except OSError:
         return False
-    freshen(dispatcher)
-    return removed
+    return freshen(dispatcher)
 
 
 def is_warm(dispatcher) -> bool:

@@ -914,7 +914,7 @@ class GroundMotion:
         [s] time of the first sample.
     horizontal, vertical : numpy.ndarray
         [m/s^2] accelerations as applied (scaled); zeros when the record is absent. Read-only.
-        Samples ``(n,)``; for analytic pulses (`runner.pulse_ground`) interval end values
+        Samples ``(n,)``; for analytic pulses (`prepare.pulse_ground`) interval end values
         ``(2, n)`` that may jump at the samples (`rockslide.core.simulate.ground_array`).
     horizontal_factor, vertical_factor : float
         Scale factors applied to each record (1.0 when the record is absent).

@@ -447,7 +447,7 @@ def _write_body(f: h5py.File, result: Result, *, name, case_text, case, records,
                 group.attrs[key] = _attr_value(value)
 
     for group_name, (dimension, variables) in (extra_groups or {}).items():
-        _write_labelled_group(f, group_name, dimension, variables)
+        _write_labelled(f.create_group(group_name, track_order=True), [dimension], variables)
 
     attrs = f.attrs
     for key, value in summary_attributes(result.summary).items():
@@ -469,21 +469,26 @@ def _write_body(f: h5py.File, result: Result, *, name, case_text, case, records,
         attrs[key] = _attr_value(value)
 
 
-def _write_labelled_group(f: h5py.File, name: str, dimension: tuple, variables: dict) -> None:
-    """A group of 1-D variables on one dimension (netCDF-4: ``xarray.open_dataset(path,
-    engine="h5netcdf", group=name)`` opens it): ``dimension`` is ``(its name, its values, its
-    attributes)``, ``variables`` ``name -> (dims, values, attributes)`` as `write_dataset` takes them."""
-    group = f.create_group(name, track_order=True)
-    dim_name, dim_values, dim_attrs = dimension
-    scale = group.create_dataset(dim_name, data=_column(dim_values))
-    for key, value in dim_attrs.items():
-        scale.attrs[key] = _attr_value(value)
-    scale.make_scale(dim_name)
-    for var, (_, values, var_attrs) in variables.items():
-        ds = group.create_dataset(var, data=_array(values))
-        for key, value in var_attrs.items():
+def _write_labelled(group, coords, variables) -> None:
+    """Labelled arrays into ``group`` in the netCDF-4 data model (`write_dataset`'s body; a run
+    file's ``/ensemble``): each coordinate a dimension scale (with ``_Netcdf4Dimid``), each variable
+    attached to its dimensions' scales in order."""
+    scales = {}
+    for i, (name, values, a) in enumerate(coords):
+        ds = group.create_dataset(name, data=_column(values))
+        for key, value in a.items():
+            ds.attrs[key] = _attr_value(value)
+        ds.make_scale(name)
+        ds.attrs["_Netcdf4Dimid"] = np.int32(i)
+        scales[name] = ds
+    for name, (dims, values, a) in variables.items():
+        values = _array(values)          # a variable keeps its type (flags and counts: integers)
+        options = {"chunks": True, **_COMPRESSION} if values.size > 65536 else {}
+        ds = group.create_dataset(name, data=values, **options)
+        for key, value in a.items():
             ds.attrs[key] = value if isinstance(value, np.ndarray) else _attr_value(value)
-        ds.dims[0].attach_scale(scale)
+        for i, dim in enumerate(dims):
+            ds.dims[i].attach_scale(scales[dim])
 
 
 def _label_dimensions(f: h5py.File, events) -> None:
@@ -1062,22 +1067,7 @@ def write_dataset(path, coords, variables, *, format: str, attrs: dict | None = 
             root["created"] = datetime.now(timezone.utc).isoformat(timespec="seconds")
             for key, value in {**versions(), **(attrs or {})}.items():
                 root[key] = _attr_value(value)
-            scales = {}
-            for i, (name, values, a) in enumerate(coords):
-                ds = f.create_dataset(name, data=values)
-                for key, value in a.items():
-                    ds.attrs[key] = _attr_value(value)
-                ds.make_scale(name)
-                ds.attrs["_Netcdf4Dimid"] = np.int32(i)
-                scales[name] = ds
-            for name, (dims, values, a) in variables.items():
-                values = _array(values)          # a variable keeps its type (flags and counts: integers)
-                options = {"chunks": True, **_COMPRESSION} if values.size > 65536 else {}
-                ds = f.create_dataset(name, data=values, **options)
-                for key, value in a.items():
-                    ds.attrs[key] = value if isinstance(value, np.ndarray) else _attr_value(value)
-                for i, dim in enumerate(dims):
-                    ds.dims[i].attach_scale(scales[dim])
+            _write_labelled(f, coords, variables)
             f.flush()
         raw.close()
         raw.check()
