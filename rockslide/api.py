@@ -25,6 +25,7 @@ from pathlib import Path
 
 from .case import Case, case_with, load_case
 from .core.simulate import Result, Summary
+from .errors import CaseError
 
 __all__ = ["load_case", "case_with", "run", "sweep", "fragility", "ensemble", "read_result", "RunResult",
            "Case", "Summary"]
@@ -164,8 +165,12 @@ def sweep(case: Case | Mapping | str | Path, *, mu_kinetic_ratio: float | None =
     from .io import datasets, records
 
     case = _case(case)
-    parsed = [sw.parse_axis(name, _axis_text(values, sw.AXES[name].kind if name in sw.AXES else "dimensionless"))
-              for name, values in axes.items() if values is not None]
+    unknown = [name for name in axes if name not in sw.AXES]
+    if unknown:
+        raise CaseError(f"unknown axis {unknown[0]!r}; expected one of {', '.join(sw.AXES)}",
+                        source="rockslide.sweep")
+    parsed = [sw.parse_axis(name, _axis_text(values, sw.AXES[name].kind)) for name, values in axes.items()
+              if values is not None]
     scheduler = check_where(workers=workers, scheduler=scheduler, device=device)
     plan = sw.plan_sweep(case, parsed, records_dir=records.records_dir(records_dir),
                          mu_kinetic_ratio=mu_kinetic_ratio, chunk_size=chunk_size)

@@ -364,3 +364,9 @@ def test_csv_tables_read_back_to_the_files_values(tmp_path):
             parsed = np.array([float(v) if v else np.nan for v in column]).reshape(shape)
             assert np.array_equal(parsed, values.astype(float), equal_nan=True), (name, variable)
         assert "max_rotation [rad]" in rows[0]
+
+
+def test_the_api_names_an_unknown_axis():
+    case = rockslide.load_case(REPO / "configs" / "example.yaml")
+    with pytest.raises(rockslide.errors.CaseError, match="unknown axis 'friction'; expected one of mu, pga"):
+        rockslide.sweep(case, friction="0.3,0.5", records_dir=REPO / "records")
