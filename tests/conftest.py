@@ -43,7 +43,7 @@ def real_record(name: str) -> Path:
     folder = real_records_dir()
     if folder is None or not (folder / name).is_file():
         pytest.skip(f"needs the real record {name}: not found in $ROCKSLIDE_RECORDS or ../shared/records "
-                    "(see README, 'The paper's records')")
+                    "(see docs/guide/records.md, 'The paper's records')")
     return folder / name
 
 

@@ -1,6 +1,10 @@
 """What keeps the project understandable: the import layers hold, every command has help with an
-example, and the README documents every case key and every command."""
+example, the documentation (docs/) documents every case key and every command, and the README's
+first session runs as written."""
 
+import os
+import re
+import shlex
 import shutil
 import subprocess
 import sys
@@ -62,18 +66,67 @@ def test_every_command_has_help_with_an_example(command):
 
 
 @pytest.mark.parametrize("command", sorted(main.commands))
-def test_readme_lists_every_command(command):
-    assert f"rockslide {command}" in README
+def test_the_guide_lists_every_command(command):
+    assert f"rockslide {command}" in (REPO / "docs" / "guide" / "commands.md").read_text()
 
 
 @pytest.mark.parametrize("key", [path for path, spec in iter_case_keys() if spec.get("type") != "mapping"
                                  and not path.startswith("ground.vertical.")])
-def test_readme_documents_every_case_key(key):
-    assert f"`{key}`" in README
+def test_the_guide_documents_every_case_key(key):
+    assert f"`{key}`" in (REPO / "docs" / "guide" / "case-file.md").read_text()
 
 
 def test_readme_set_up_is_two_commands_that_ci_runs():
     ci = (REPO / ".ci" / "run").read_text()
     for command in ('python -m pip install -e ".[test]"', "python -m pytest"):
         assert command in ci
-    assert 'pip install -e ".[test]"' in README and "python -m pytest" in README
+    for command in ('python -m pip install -e ".[test]"', "python -m pytest", "rockslide run configs/example.yaml"):
+        assert command in README, command
+
+
+def first_session() -> tuple[str, list[tuple[str, str]]]:
+    """The README's section 'A first session' and its fenced blocks, in order, as (language, text)."""
+    section = README.split("\n## A first session\n", 1)[1].split("\n## ", 1)[0]
+    return section, re.findall(r"^```(\w*)\n(.*?)^```", section, flags=re.S | re.M)
+
+
+def without_timings(text: str) -> list[str]:
+    """Printed lines with the times a run took put aside (``in 0.51 s``, ``in 0.1 s (1037 runs/s)``)."""
+    return [re.sub(r" in [0-9.]+ s( \([0-9.]+ \w+/s\))?", " in T s", line) for line in text.strip().splitlines()]
+
+
+@pytest.mark.slow
+def test_the_readmes_first_session_runs_as_written(tmp_path):
+    """Every command of the README's 'A first session', in order, from a folder laid out as the
+    repository's root (configs/ and records/ copied), exits 0; a printout the README quotes after a
+    command is what the command prints (the time it took aside); the files the section names are
+    written; and its Python runs. Without ROCKSLIDE_RECORDS, as a new user has it."""
+    section, blocks = first_session()
+    assert [language for language, _ in blocks].count("sh") >= 4 and ("python", blocks[-1][1]) in blocks
+    for folder in ("configs", "records"):
+        shutil.copytree(REPO / folder, tmp_path / folder)
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(REPO), os.environ.get("PYTHONPATH", "")])}
+    env.pop("ROCKSLIDE_RECORDS", None)
+    printed = None
+    compared = 0
+    for language, text in blocks:
+        if language == "sh":
+            for line in filter(None, (line.strip() for line in text.splitlines())):
+                # a line of the section's shell blocks that this test would not run has no place there
+                assert line.startswith("rockslide "), line
+                done = subprocess.run([sys.executable, "-m", "rockslide", *shlex.split(line)[1:]], cwd=tmp_path,
+                                      env=env, capture_output=True, text=True, timeout=600)
+                assert done.returncode == 0, (line, done.stderr[-3000:])
+                printed = done.stdout
+        elif language == "python":
+            done = subprocess.run([sys.executable, "-c", text], cwd=tmp_path, env=env, capture_output=True,
+                                  text=True, timeout=600)
+            assert done.returncode == 0, done.stderr[-3000:]
+        elif printed is not None:          # a printout quoted right after its command
+            assert without_timings(printed) == without_timings(text)
+            compared += 1
+        printed = None if language != "sh" else printed
+    assert compared >= 2
+    named = set(re.findall(r"`(out/[\w./-]+\.(?:h5|png|pdf))`", section))
+    assert {"out/example.h5", "out/example.png", "out/example.sweep.h5"} <= named
+    assert sorted(name for name in named if not (tmp_path / name).is_file()) == []

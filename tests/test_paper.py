@@ -1,6 +1,6 @@
 """The paper's results: Table 1 and its remarks, on the paper's real records.
 
-These tests need the third-party records (see README, 'The paper's records'); without them they
+These tests need the third-party records (see docs/guide/records.md, 'The paper's records'); without them they
 skip with a message naming the file. The comparison is with the paper itself: its overturning
 verdicts and descriptions (Table 1), its remarks in the text, and its event times (Figures 8(b),
 9(b)) on its time axis.

@@ -132,7 +132,7 @@ def check_records(configs: Path, records_dir: Path) -> None:
         if not (records_dir / name).is_file():
             source = RECORD_SOURCES["kobe" if "kobe" in name else "mexico"]
             raise RecordError(f"the paper's record {name} is not in {records_dir}; get it from {source} "
-                              "(README, 'The paper's records') and point --records-dir or "
+                              "(docs/guide/records.md, 'The paper's records') and point --records-dir or "
                               "ROCKSLIDE_RECORDS at its folder")
 
 

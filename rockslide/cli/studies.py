@@ -53,7 +53,7 @@ def where_options(what: str, unit: str):
                           "one task per chunk."),
         click.option("--device", type=click.Choice(["cpu", "gpu", "auto"]), default="cpu", show_default=True,
                      help="Compute a local run on the CPU's cores or on an NVIDIA GPU (needs the extra: "
-                          "pip install 'rockslide[gpu]'; README, 'GPU'); auto: the GPU when one is usable "
+                          "pip install 'rockslide[gpu]'; docs/guide/gpu.md); auto: the GPU when one is usable "
                           "and the study has 10000 cases or more, else the CPU (the printout says why)."),
         click.option("--chunk-size", type=int, default=None, metavar="N",
                      help=f"{unit.capitalize()}s per chunk (default: about 1/100 of them, 4 to 256). Part of the "
