@@ -42,10 +42,13 @@ highlight_language = "text"
 # the API: numpydoc docstrings through napoleon, members in the order they are written
 autodoc_member_order = "bysource"
 autodoc_typehints = "description"
+autodoc_typehints_description_target = "documented"   # types beside what the docstring documents
 autodoc_preserve_defaults = True
 napoleon_google_docstring = False
 napoleon_numpy_docstring = True
 napoleon_use_rtype = False
+# `name` in a docstring (numpydoc's habit) links to that object where Sphinx knows it, else shows as code
+default_role = "py:obj"
 
 html_theme = "alabaster"
 html_title = f"rockslide {release}"

@@ -66,8 +66,8 @@ class RunResult:
 
     @property
     def summary(self) -> Summary:
-        """What happened (`core.simulate.Summary`): ``overturned``, ``max_rotation`` [rad],
-        ``max_rotation_ratio`` (of alpha), ``max_slip`` [m], ``impacts``, ``status``, ``verdict``..."""
+        """What happened, a `Summary`, with ``overturned``, ``max_rotation`` [rad], ``max_rotation_ratio``
+        (of alpha), ``max_slip`` [m], ``impacts``, ``status``, ``verdict`` and more."""
         return self.result.summary
 
     @property
@@ -77,7 +77,7 @@ class RunResult:
 
     @property
     def events(self):
-        """The event log (a numpy structured array: time [s], from, to, cause, edge, ...)."""
+        """The event log, a numpy structured array with the fields time [s], from, to, cause, edge..."""
         return self.result.events
 
     def to_xarray(self):

@@ -333,7 +333,7 @@ class Case:
     gravity : float
         Gravitational acceleration [m/s^2], > 0.
     block, contact, ground, initial, solver, output
-        The sections.
+        The case file's sections of these names, each a dataclass of SI values.
     uncertain : Uncertain
         What is not known exactly (for ensembles); empty when the file has no ``uncertain``.
     source : str

@@ -103,26 +103,27 @@ class Settings:
 class Summary:
     """What happened, as plain data (the fields of ``rockslide run --json``)."""
 
-    overturned: bool
-    overturn_time: float | None       # [s] when theta reached pi/2
-    direction: int | None             # sign of the rotation phi at overturning (+1: about the left edge)
-    fall_start_time: float | None     # [s] when theta last passed alpha before overturning
-    max_rotation: float               # [rad] max |phi|
-    max_rotation_time: float          # [s]
-    max_slip: float                   # [m] max |x|
-    residual_slip: float              # [m] x at the end
-    impacts: int
-    states_seen: list[str]
-    time_in_state: dict[str, float]   # [s]
-    status: str                       # ok | flight | painleve | chatter
-    end_time: float                   # [s] when the computation ended
-    energy: dict[str, float] = field(default_factory=dict)   # [J]
-    alpha: float = math.nan           # [rad] atan(b/h): the rotation past which gravity tips the block over
-    max_rotation_ratio: float = math.nan   # max |phi| / alpha: how near overturning (> 1: passed alpha)
-    undecided: bool = False           # ended moving, with the energy or tilt to overturn (`may_still_overturn`)
+    overturned: bool                  #: whether the block overturned (theta reached pi/2)
+    overturn_time: float | None       #: [s] when theta reached pi/2
+    direction: int | None             #: sign of the rotation phi at overturning, +1 about the left edge
+    fall_start_time: float | None     #: [s] when theta last passed alpha before overturning
+    max_rotation: float               #: [rad] max ``|phi|``
+    max_rotation_time: float          #: [s] when max ``|phi|`` was reached
+    max_slip: float                   #: [m] max ``|x|``
+    residual_slip: float              #: [m] x at the end
+    impacts: int                      #: impacts of the rocking block on its base (eq. 8)
+    states_seen: list[str]            #: the states it was in (REST, SLIP, ROCK, ROCKSLIP, OVERTURNED)
+    time_in_state: dict[str, float]   #: [s] time spent in each state, by name
+    status: str                       #: ok, flight, painleve or chatter
+    end_time: float                   #: [s] when the computation ended
+    energy: dict[str, float] = field(default_factory=dict)   #: [J] the energy ledger (energy_* in files)
+    alpha: float = math.nan           #: [rad] atan(b/h), the rotation past which gravity tips the block over
+    max_rotation_ratio: float = math.nan   #: max ``|phi|`` / alpha, how near overturning (> 1 passed alpha)
+    undecided: bool = False           #: ended moving, with the energy or tilt to overturn (`may_still_overturn`)
 
     @property
     def verdict(self) -> str:
+        """The verdict as printed (standing, overturned, undecided or outside the model, and why)."""
         if self.status == "chatter":
             return f"stopped: the state machine chattered at t = {self.end_time:.4f} s (a bug; please report it)"
         if self.status != "ok":
