@@ -60,3 +60,9 @@ records:
 
 clean:
 	rm -rf out .pytest_cache .hypothesis build *.egg-info
+
+# the documentation site, warnings as errors (needs the docs extra, which the test extra includes)
+.PHONY: docs
+docs:
+	$(PYTHON) -m sphinx -W --keep-going -b html docs docs/_build/html
+	@echo "open docs/_build/html/index.html"
