@@ -34,7 +34,7 @@ exclude_patterns = ["_build"]
 
 # Markdown: heading anchors so that [Units](#units) and [case file](case-file.md#scaling) resolve;
 # $...$ and $$...$$ as mathematics (docs/model.md)
-myst_heading_anchors = 3
+myst_heading_anchors = 4
 myst_enable_extensions = ["dollarmath", "colon_fence", "deflist"]
 # code blocks written ``` without a language are shown as plain text, not highlighted as Python
 highlight_language = "text"
