@@ -1,7 +1,8 @@
 """The documentation builds without a warning (Sphinx, myst-parser, sphinx-click; the `docs` extra,
 part of `test`): a broken cross-reference, a page left out of the table of contents, a docstring
 whose markup does not parse or a command's help that reads as bad reStructuredText fails here.
-Where the packages are missing this fails too, by design: CI installs them with `.[test]`."""
+Where the packages are missing this fails too, by design: CI installs them with `.[test]`. The build
+takes 2-9 s on 2 shared cores (autodoc imports the API), so it is not marked slow."""
 
 from __future__ import annotations
 
@@ -41,7 +42,6 @@ def squeeze(text: str) -> str:
     return re.sub(r"[^a-z0-9]", "", text.lower())
 
 
-@pytest.mark.slow
 def test_the_site_builds_without_warnings_and_holds_every_page(site):
     pages = {p.relative_to(REPO / "docs").with_suffix(".html")
              for p in (REPO / "docs").rglob("*.md") if "_build" not in p.parts}
@@ -53,7 +53,6 @@ def test_the_site_builds_without_warnings_and_holds_every_page(site):
     assert unlisted == []
 
 
-@pytest.mark.slow
 def test_the_api_reference_is_made_of_the_docstrings(site):
     import rockslide.api as api
 
@@ -65,7 +64,6 @@ def test_the_api_reference_is_made_of_the_docstrings(site):
         assert squeeze(summary) in letters, (name, summary)
 
 
-@pytest.mark.slow
 def test_the_command_reference_is_made_of_the_help(site):
     from rockslide.cli import main
 
