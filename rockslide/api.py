@@ -45,7 +45,9 @@ class RunResult:
         and the ground motion as applied [m/s^2].
     ground : dict
         The ground motion as applied: ``pga_horizontal``, ``pga_vertical`` [m/s^2], the scale
-        factors ``scale_horizontal``, ``scale_vertical`` (None where there is no record).
+        factors ``scale_horizontal``, ``scale_vertical`` (None where there is no record); with two
+        horizontal components also ``components`` (`engine.prepare.Components`: azimuths,
+        orientation, peaks along and across the block, the share the planar model ignores).
     records : list of dict
         The record files (name, SHA-256, format, scale factor).
     case : Case or None
@@ -85,7 +87,9 @@ class RunResult:
         ground motion on ``ground_time``, the event log on ``event``, the summary as attributes."""
         from .io.datasets import run_dataset
 
-        ground = {f"ground_{k}": v for k, v in self.ground.items() if v is not None}
+        flat = {**{k: v for k, v in self.ground.items() if k != "components"},
+                **(self.ground.get("components") or {})}
+        ground = {f"ground_{k}": v for k, v in flat.items() if v is not None}
         return run_dataset(self.result, name=self.name, attrs=ground)
 
 
@@ -120,7 +124,7 @@ def run(case: Case | Mapping | str | Path, *, records_dir: str | Path | None = N
     case = _case(case)
     prepared = engine.prepare(case, records.records_dir(records_dir), history=history)
     result = engine.simulate_prepared(prepared, progress=progress)
-    return RunResult(name=case.name, result=result, ground=prepared.ground.as_applied(),
+    return RunResult(name=case.name, result=result, ground=engine.applied_ground(prepared),
                      records=engine.record_entries(prepared), case=case, case_text=case.text)
 
 

@@ -78,11 +78,16 @@ class Block:
         Full base width 2b [m].
     mass : float
         Mass [kg].
+    orientation : float, optional
+        Azimuth of the base width [rad], clockwise from north: the direction across the rocking
+        axis, along which the ground motion of two horizontal components drives the block
+        (`Ground.horizontal_2`). None: along the first component.
     """
 
     height: float
     width: float
     mass: float
+    orientation: float | None = None
 
     @property
     def half_width(self) -> float:
@@ -142,6 +147,9 @@ class RecordSpec:
         Sample interval [s] for files without time column or header.
     skip_lines : int
         Lines to skip before the data, >= 0.
+    azimuth : float, optional
+        Of one of two horizontal components: the direction it is measured along [rad], clockwise
+        from north; None = from the file's header (PEER AT2).
     """
 
     file: str
@@ -151,6 +159,7 @@ class RecordSpec:
     column: int | str | None = None
     dt: float | None = None
     skip_lines: int = 0
+    azimuth: float | None = None
 
 
 @dataclass(frozen=True)
@@ -192,6 +201,10 @@ class Ground:
         Free-vibration time appended after the record ends [s], >= 0.
     time_shift : float
         Time shift applied to the records [s] (see :mod:`rockslide.records`).
+    horizontal_2 : RecordSpec, optional
+        The second horizontal component, orthogonal to ``horizontal`` (then the first; the case file
+        names them ``horizontal_1`` and ``horizontal_2``): the block feels the motion along
+        ``block.orientation`` (docs/two-components.md).
     """
 
     horizontal: RecordSpec | Pulse | None
@@ -199,6 +212,12 @@ class Ground:
     scale: Scale
     tail: float = 0.0
     time_shift: float = 0.0
+    horizontal_2: RecordSpec | None = None
+
+    @property
+    def two_components(self) -> bool:
+        """Whether the ground has two horizontal components (``horizontal_1`` and ``horizontal_2``)."""
+        return self.horizontal_2 is not None
 
 
 @dataclass(frozen=True)
@@ -445,6 +464,13 @@ _PULSE_KEYS = {
 #: A record's keys: a file's, then a pulse's (one or the other is given).
 _RECORD_KEYS = {**_FILE_KEYS, **_PULSE_KEYS}
 
+#: One of two horizontal components: a file's keys and its azimuth.
+_COMPONENT_KEYS = {**_FILE_KEYS, "azimuth": _key(
+    "angle", "direction the component is measured along, clockwise from north, e.g. '90 deg' "
+    "(default: from the file's header, PEER AT2)")}
+#: Keys whose bare number is refused (an azimuth of 30 would be 30 rad): they need their unit.
+_UNIT_NEEDED = ("block.orientation", "ground.horizontal_1.azimuth", "ground.horizontal_2.azimuth")
+
 CASE_KEYS: dict[str, dict] = {
     "name": _key("name", "case name, used in output file names: letters, digits, '.', '_', '-'",
                  required=True),
@@ -454,6 +480,9 @@ CASE_KEYS: dict[str, dict] = {
         "height": _key("length", "full height 2h", required=True, bounds=[(">", 0.0)]),
         "width": _key("length", "full base width 2b", required=True, bounds=[(">", 0.0)]),
         "mass": _key("mass", "mass", required=True, bounds=[(">", 0.0)]),
+        "orientation": _key("angle", "azimuth of the base width (across the rocking axis), clockwise "
+                            "from north, with two horizontal components, e.g. '30 deg' (default: "
+                            "along ground.horizontal_1)"),
     }),
     "contact": _key("mapping", "block-foundation contact", required=True, keys={
         "mu_static": _key("dimensionless", "static friction coefficient", required=True,
@@ -470,9 +499,15 @@ CASE_KEYS: dict[str, dict] = {
                            keys=_RECORD_KEYS),
         "vertical": _key("record", "vertical record: a file name, or a mapping with file or pulse",
                          keys=_RECORD_KEYS),
+        "horizontal_1": _key("component", "first of two orthogonal horizontal components (instead of "
+                             "horizontal): a file name, or a mapping with file and azimuth",
+                             keys=_COMPONENT_KEYS),
+        "horizontal_2": _key("component", "second horizontal component, 90 deg from horizontal_1",
+                             keys=_COMPONENT_KEYS),
         "scale": _key("mapping", "scaling of the record files", keys={
             "pga_horizontal": _key("acceleration", "scale the horizontal record to this peak "
-                                   "acceleration (exclusive with factor)", bounds=[(">", 0.0)]),
+                                   "acceleration (exclusive with factor; with two components, the "
+                                   "larger of their peaks)", bounds=[(">", 0.0)]),
             "factor": _key("dimensionless", "multiply the records by this factor (exclusive with "
                            "pga_horizontal)", bounds=[(">", 0.0)]),
             "pga_vertical": _key("acceleration", "scale the vertical record to this peak "
@@ -944,6 +979,13 @@ def _read_value(value, spec: dict, path: str, ctx: _Ctx):
         return _read_mapping(value, spec["keys"], path, ctx, "a mapping")
     if kind == "record":
         return _read_record(value, path, ctx)
+    if kind == "component":
+        if isinstance(value, str):
+            value = {"file": value}
+        if isinstance(value, Mapping) and value.get("pulse") is not None:
+            ctx.fail(path, "a horizontal component is a record file; an analytic pulse has one direction "
+                     "(give it as ground.horizontal)")
+        return _read_mapping(value, spec["keys"], path, ctx, "a file name or a mapping with file and azimuth")
     if kind in UNITS:
         return _read_quantity(value, spec, path, ctx)
     if kind == "name":
@@ -1120,6 +1162,8 @@ def _read_quantity(value, spec: dict, path: str, ctx: _Ctx) -> float:
         ctx.fail(path, f"{_show(value)} is too large (expected a finite {kind})")
     if written_unit(value):
         ctx.units[path] = written_unit(value)
+    elif path in _UNIT_NEEDED and number != 0.0 and not ctx.si_numbers:
+        ctx.fail(path, f"{_show(value)} has no unit; write the angle with its unit, e.g. '30 deg'")
     unit = spec.get("unit", "")
     for op, limit in spec.get("bounds", ()):
         if not _OPS[op][0](number, limit):
@@ -1156,6 +1200,7 @@ def _cross_checks(raw: dict, ctx: _Ctx) -> None:
 
     ground = raw["ground"]
     scale = ground["scale"]
+    _component_checks(raw, ctx)
     if ground["horizontal"] is None and ground["vertical"] is None and not ground["tail"] > 0.0:
         ctx.fail("ground", "needs a record (ground.horizontal or ground.vertical: a file name or a "
                  "mapping with 'file'), or, for a free vibration without record, a ground.tail "
@@ -1192,6 +1237,26 @@ def _cross_checks(raw: dict, ctx: _Ctx) -> None:
         if abs(ratio - round(ratio)) > 1e-9 * ratio:
             ctx.fail("output.interval", f"must be a whole multiple of solver.dt ({_with_unit(dt, 's')}),"
                      f" got {_with_unit(interval, 's')} ({_num(ratio)} steps)")
+
+
+def _component_checks(raw: dict, ctx: _Ctx) -> None:
+    """Two horizontal components come together, instead of ``horizontal``; ``horizontal_1`` then
+    becomes ``horizontal`` (the first component), and ``block.orientation`` needs them."""
+    ground = raw["ground"]
+    one, two = ground.pop("horizontal_1"), ground["horizontal_2"]
+    if one is None and two is None:
+        if raw["block"]["orientation"] is not None:
+            ctx.fail("block.orientation", "given, but the ground has one horizontal component: give two, "
+                     "ground.horizontal_1 and ground.horizontal_2 (each a file and its azimuth)")
+        return
+    if ground["horizontal"] is not None:
+        ctx.fail("ground.horizontal", "and ground.horizontal_1 are exclusive: give ground.horizontal "
+                 "(one component) or ground.horizontal_1 and ground.horizontal_2")
+    if one is None or two is None:
+        given, missing = ("horizontal_1", "horizontal_2") if two is None else ("horizontal_2", "horizontal_1")
+        ctx.fail(f"ground.{missing}", f"missing: ground.{given} is one of two horizontal components; give "
+                 f"the other (or one component as ground.horizontal)")
+    ground["horizontal"] = one
 
 
 def _pulse_checks(ground: dict, ctx: _Ctx) -> None:
@@ -1231,7 +1296,7 @@ def _build(data, *, source: str, base_dir: Path | None, text: str, si_numbers: b
     _cross_checks(raw, ctx)
     ground = raw["ground"]
     records = {k: None if ground[k] is None else (Pulse if "pulse" in ground[k] else RecordSpec)(**ground[k])
-               for k in ("horizontal", "vertical")}
+               for k in ("horizontal", "vertical", "horizontal_2")}
     sections = {path: cls(**_at(raw, path)) for path, cls in _SECTIONS.items()}
     return Case(
         name=raw["name"], gravity=raw["gravity"], block=sections["block"],
@@ -1277,7 +1342,9 @@ def case_to_dict(case: Case, *, case_file: bool = True) -> dict:
         return {f.name: getattr(obj, f.name) for f in dataclasses.fields(obj)
                 if getattr(obj, f.name) is not None}
 
-    ground = {"horizontal": case.ground.horizontal, "vertical": case.ground.vertical}
+    first = "horizontal_1" if case.ground.two_components else "horizontal"
+    ground = {first: case.ground.horizontal, "horizontal_2": case.ground.horizontal_2,
+              "vertical": case.ground.vertical}
     ground = {k: plain(v) for k, v in ground.items() if v is not None}
     ground.update(scale=plain(case.ground.scale), tail=case.ground.tail,
                   time_shift=case.ground.time_shift)
@@ -1300,7 +1367,8 @@ def case_to_dict(case: Case, *, case_file: bool = True) -> dict:
             node = out
             for part in parents:
                 node = node.get(part) if isinstance(node, dict) else None
-            if spec["type"] in UNIT_REQUIRED and isinstance(node, dict) and node.get(leaf) is not None:
+            needs_unit = spec["type"] in UNIT_REQUIRED or path in _UNIT_NEEDED
+            if needs_unit and isinstance(node, dict) and node.get(leaf) is not None:
                 node[leaf] = f"{node[leaf]!r} {SI_UNIT[spec['type']]}"
     return out
 
