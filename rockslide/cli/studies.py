@@ -94,6 +94,8 @@ def where_options(what: str, unit: str):
               "--amplitude, an overturning spectrum", "0.1:1:0.05")
 @_axis_option("duration", "time", "Duration of a rectangular or half-sine horizontal pulse "
               "(ground.horizontal.duration)", "0.05:0.5:0.01")
+@_axis_option("azimuth", "angle", "Azimuth of the block's width, clockwise from north, for a case with two "
+              "horizontal components (block.orientation; degrees unless a unit is given)", "0:180:5")
 @click.option("--mu-kinetic-ratio", type=float, default=None, metavar="R",
               help="mu_kinetic = R * mu_static for --mu (default: the case's ratio).")
 @records_dir_option
@@ -167,6 +169,9 @@ def sweep(case_file, mu_kinetic_ratio, records_dir, out_dir, overwrite, no_plot,
     undecided = int(variables["undecided"][0].sum())
     click.echo(f"  {over} of {plan.n_cases} overturned, {outside} outside the model; computed "
                f"{_rate(done, 'cases')}")
+    worst = sw.worst_azimuth(plan, variables)
+    if worst is not None:
+        click.echo(f"  {worst['text']}")
     if undecided:
         click.echo(f"  {undecided} undecided: still moving at the end with the energy to overturn "
                    "(give the case a ground.tail for their free motion)")
