@@ -140,9 +140,11 @@ def sweep(case: Case | Mapping | str | Path, *, mu_kinetic_ratio: float | None =
     **axes : str or sequence
         The axes, in dimension order: ``mu``, ``pga``, ``vertical_factor``, ``restitution``,
         ``slenderness`` (width / height, the height kept), ``gravity``, and for a pulse case
-        ``amplitude``, ``period``, ``duration``. Each is ``"start:stop:step"`` or a comma list as
-        on the command line (``pga="100gal:1000gal:25gal"``), or a sequence of values: SI numbers
-        or strings with units (``pga=[1.0, 2.0]`` in m/s^2, ``pga=["0.1g", "0.2g"]``).
+        ``amplitude``, ``period``, ``duration``, and for a case with two horizontal components
+        ``azimuth`` (``block.orientation``). Each is ``"start:stop:step"`` or a comma list as
+        on the command line (``pga="100gal:1000gal:25gal"``, ``azimuth="0:180:5"`` in degrees), or a
+        sequence of values: SI numbers or strings with units (``pga=[1.0, 2.0]`` in m/s^2,
+        ``pga=["0.1g", "0.2g"]``, ``azimuth=[0.0, 0.5]`` in rad).
     mu_kinetic_ratio : float, optional
         ``mu_kinetic / mu_static`` with ``mu`` (default: the case's ratio).
     records_dir : str or Path, optional
