@@ -13,8 +13,8 @@ import math
 import h5py
 import numpy as np
 import pytest
-
 from conftest import invoke, one_line_error, real_record
+
 from rockslide.api import run, sweep
 from rockslide.case import case_to_dict, parse_case, parse_mapping
 from rockslide.core import intensity
