@@ -188,7 +188,7 @@ def sweep(case: Case | Mapping | str | Path, *, mu_kinetic_ratio: float | None =
 def fragility(case: Case | Mapping | str | Path, suite: str | Path, *, im: str = "pga",
               levels: str | Sequence, damage: Sequence[str] = (), units: str | None = None,
               resamples: int = 1000, case_vertical: bool = False, samples: int = 0, seed: int = 1,
-              records_dir: str | Path | None = None,
+              azimuth: str | None = None, records_dir: str | Path | None = None,
               device: str = "cpu", workers: int | None = None, scheduler: str | None = None,
               chunk_size: int | None = None, store=None, progress: Callable[[int], None] | None = None):
     """Fragility curves of the case's block over a record suite, as ``rockslide fragility``.
@@ -200,7 +200,9 @@ def fragility(case: Case | Mapping | str | Path, suite: str | Path, *, im: str =
     suite : str or Path
         A suite file (YAML), a folder of horizontal records, or a glob of them.
     im : str
-        The intensity measure: ``pga``, ``pgv``, ``pga_rocking`` or ``sa(T)`` (e.g. ``"sa(0.5s)"``).
+        The intensity measure: ``pga``, ``pgv``, ``pga_rocking`` or ``sa(T)`` (e.g. ``"sa(0.5s)"``);
+        for a suite of two horizontal components also ``rotd50_`` or ``rotd100_`` of ``pga``, ``pgv``
+        or ``sa(T)`` (``"rotd50_sa(1s)"``; the others are then of the motion along the block).
     levels : str or sequence
         ``"0.1g:1.5g:0.1g"`` or a comma list as on the command line, or a sequence of values (SI
         numbers of the measure, or strings with units).
@@ -219,6 +221,10 @@ def fragility(case: Case | Mapping | str | Path, suite: str | Path, *, im: str =
         uncertainty; ``median_without_samples`` and ``beta_without_samples`` are the case's own.
     seed : int
         Seed of their Latin hypercube.
+    azimuth : str, optional
+        The block's orientations for a suite of two horizontal components (``"0:180:5"``, degrees
+        unless a unit is given): every record at every orientation, the fits over all of them (the
+        orientation unknown, uniform); one value states it. Default: the case's ``block.orientation``.
     records_dir, device, workers, scheduler, chunk_size, store, progress
         As in `sweep`.
 
@@ -238,7 +244,8 @@ def fragility(case: Case | Mapping | str | Path, suite: str | Path, *, im: str =
     parsed = fr.parse_levels(_axis_text(levels, measure.kind), measure)
     states = fr.damage_states(damage)
     scheduler = check_where(workers=workers, scheduler=scheduler, device=device)
-    fplan = fr.plan_fragility(case, fr.suite_from(str(suite), units=units), measure, parsed,
+    fplan = fr.plan_fragility(case, fr.suite_at_azimuths(fr.suite_from(str(suite), units=units), azimuth),
+                              measure, parsed,
                               records_dir=records.records_dir(records_dir), chunk_size=chunk_size,
                               case_vertical=case_vertical, samples=samples, seed=seed)
     done = execute(fplan.plan, store, workers=workers, scheduler=scheduler, device=device, progress=progress)

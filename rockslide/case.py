@@ -37,6 +37,7 @@ from .units import SI_UNITS, STANDARD_GRAVITY, UNIT_REQUIRED, UNITS, parse_quant
 
 __all__ = [
     "CASE_KEYS",
+    "with_orientations",
     "Block",
     "Case",
     "Contact",
@@ -1239,10 +1240,11 @@ def _cross_checks(raw: dict, ctx: _Ctx) -> None:
                      f" got {_with_unit(interval, 's')} ({_num(ratio)} steps)")
 
 
-def _component_checks(raw: dict, ctx: _Ctx) -> None:
+def _component_checks(raw: dict, ctx: _Ctx, path: str = "ground") -> None:
     """Two horizontal components come together, instead of ``horizontal``; ``horizontal_1`` then
-    becomes ``horizontal`` (the first component), and ``block.orientation`` needs them."""
-    ground = raw["ground"]
+    becomes ``horizontal`` (the first component), and ``block.orientation`` needs them. ``raw`` is
+    a case (``path`` ``ground``) or a suite's entry (its path)."""
+    ground = raw["ground"] if path == "ground" else raw
     one, two = ground.pop("horizontal_1"), ground["horizontal_2"]
     if one is None and two is None:
         if raw["block"]["orientation"] is not None:
@@ -1250,12 +1252,12 @@ def _component_checks(raw: dict, ctx: _Ctx) -> None:
                      "ground.horizontal_1 and ground.horizontal_2 (each a file and its azimuth)")
         return
     if ground["horizontal"] is not None:
-        ctx.fail("ground.horizontal", "and ground.horizontal_1 are exclusive: give ground.horizontal "
-                 "(one component) or ground.horizontal_1 and ground.horizontal_2")
+        ctx.fail(f"{path}.horizontal", f"and {path}.horizontal_1 are exclusive: give {path}.horizontal "
+                 f"(one component) or {path}.horizontal_1 and {path}.horizontal_2")
     if one is None or two is None:
         given, missing = ("horizontal_1", "horizontal_2") if two is None else ("horizontal_2", "horizontal_1")
-        ctx.fail(f"ground.{missing}", f"missing: ground.{given} is one of two horizontal components; give "
-                 f"the other (or one component as ground.horizontal)")
+        ctx.fail(f"{path}.{missing}", f"missing: {path}.{given} is one of two horizontal components; give "
+                 f"the other (or one component as {path}.horizontal)")
     ground["horizontal"] = one
 
 
@@ -1475,11 +1477,18 @@ class SuiteEntry:
         The horizontal record, read like a case's ``ground.horizontal``.
     vertical : RecordSpec or None
         Its vertical record, read like ``ground.vertical``.
+    horizontal_2 : RecordSpec or None
+        The second of two horizontal components (``horizontal`` is then the first: the suite file
+        names them ``horizontal_1`` and ``horizontal_2``, read like a case's).
+    orientation : float or None
+        [rad] The block's orientation for this entry's runs (an entry of `with_orientations`).
     """
 
     name: str
     horizontal: RecordSpec
     vertical: RecordSpec | None = None
+    horizontal_2: RecordSpec | None = None
+    orientation: float | None = None
 
 
 @dataclass(frozen=True)
@@ -1509,10 +1518,28 @@ SUITE_ENTRY_KEYS: dict[str, dict] = {
     "name": _key("string", "the record's name in results (default: the horizontal file's name "
                  "without its extension)"),
     "horizontal": _key("record", "horizontal record: a file name or a mapping, keys as "
-                       "ground.horizontal", required=True, keys=_RECORD_KEYS),
+                       "ground.horizontal (or two components, horizontal_1 and horizontal_2)",
+                       keys=_RECORD_KEYS),
+    "horizontal_1": _key("component", "first of two horizontal components: a file name or a mapping "
+                         "with file and azimuth, keys as ground.horizontal_1", keys=_COMPONENT_KEYS),
+    "horizontal_2": _key("component", "second horizontal component, 90 deg from horizontal_1",
+                         keys=_COMPONENT_KEYS),
     "vertical": _key("record", "vertical record, scaled by the same factor: a file name or a "
                      "mapping, keys as ground.vertical", keys=_RECORD_KEYS),
 }
+
+
+def with_orientations(suite: Suite, orientations) -> Suite:
+    """The suite with each entry of two horizontal components repeated at each block orientation
+    [rad] (``NAME@30deg``): the runs of a fragility over orientations (``--azimuth``)."""
+    entries = []
+    for entry in suite.entries:
+        if entry.horizontal_2 is None:
+            raise CaseError(f"the record {entry.name} has one horizontal component; turning the block needs "
+                            "two (horizontal_1 and horizontal_2 in the suite file)", source="--azimuth")
+        entries.extend(dataclasses.replace(entry, name=f"{entry.name}@{math.degrees(o):g}deg", orientation=o)
+                       for o in orientations)
+    return dataclasses.replace(suite, entries=tuple(entries))
 
 
 def load_suite(path) -> Suite:
@@ -1561,7 +1588,13 @@ def parse_suite(text: str, *, source: str = "<suite>", base_dir: Path | None = N
         if isinstance(item, str):
             item = {"horizontal": item}
         raw = _read_mapping(item, SUITE_ENTRY_KEYS, path, ctx, "a file name or a mapping")
+        if raw["horizontal"] is None and raw["horizontal_1"] is None and raw["horizontal_2"] is None:
+            ctx.fail(f"{path}.horizontal", "missing required key (horizontal record, or two components "
+                     "horizontal_1 and horizontal_2)")
+        raw["block"] = {"orientation": None}
+        _component_checks(raw, ctx, path)
         horizontal = RecordSpec(**raw["horizontal"])
+        second = None if raw["horizontal_2"] is None else RecordSpec(**raw["horizontal_2"])
         vertical = None if raw["vertical"] is None else RecordSpec(**raw["vertical"])
         name = raw["name"] if raw["name"] is not None else _file_stem(horizontal.file)
         if name in seen:
@@ -1569,7 +1602,7 @@ def parse_suite(text: str, *, source: str = "<suite>", base_dir: Path | None = N
                      f"the name {name!r} is also records[{seen[name]}]'s; give each record its own "
                      "'name'")
         seen[name] = i
-        entries.append(SuiteEntry(name=name, horizontal=horizontal, vertical=vertical))
+        entries.append(SuiteEntry(name=name, horizontal=horizontal, vertical=vertical, horizontal_2=second))
     return Suite(entries=tuple(entries), source=source, base_dir=base_dir, text=text)
 
 
