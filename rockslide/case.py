@@ -329,6 +329,9 @@ class Uncertain:
         A factor on the block's height and width together (its slenderness kept).
     slenderness : Distribution or None
         A factor on the block's width, its height kept.
+    orientation : Distribution or None
+        The block's orientation itself [rad] (``block.orientation``), for a case with two horizontal
+        components, e.g. uniform over 0 to 180 degrees: the orientation unknown.
     """
 
     intensity: Distribution | None = None
@@ -336,6 +339,7 @@ class Uncertain:
     friction: Distribution | None = None
     size: Distribution | None = None
     slenderness: Distribution | None = None
+    orientation: Distribution | None = None
 
     def given(self) -> dict[str, Distribution]:
         """The quantities given, by name."""
@@ -552,6 +556,9 @@ CASE_KEYS: dict[str, dict] = {
         "size": _key("distribution", "factor on height and width together, e.g. {lognormal: {median: 1, "
                      "beta: 0.3}}", bounds=[(">", 0.0)]),
         "slenderness": _key("distribution", "factor on the width, the height kept", bounds=[(">", 0.0)]),
+        "orientation": {**_key("distribution", "the block's orientation (block.orientation) with two horizontal "
+                               "components, angles with their unit, e.g. {uniform: [0 deg, 180 deg]}"),
+                        "quantity": "angle"},
     }),
 }
 
@@ -1058,6 +1065,10 @@ def _read_distribution(value, spec: dict, path: str, ctx: _Ctx) -> Distribution:
                "{lognormal: {median: 1, beta: 0.3}}")
 
     def number(v, where):
+        if spec.get("quantity") and (isinstance(v, str) or not ctx.si_numbers and v != 0):
+            if not isinstance(v, str):
+                ctx.fail(path, f"{_show(v)} has no unit; write the angle with its unit, e.g. '30 deg'")
+            return parse_quantity(v, spec["quantity"], source=ctx.source, field=path)
         try:
             x = float(v) if isinstance(v, (int, float)) and not isinstance(v, bool) else math.nan
         except OverflowError:                       # an integer beyond float64
@@ -1202,6 +1213,9 @@ def _cross_checks(raw: dict, ctx: _Ctx) -> None:
     ground = raw["ground"]
     scale = ground["scale"]
     _component_checks(raw, ctx)
+    if raw["uncertain"]["orientation"] is not None and ground["horizontal_2"] is None:
+        ctx.fail("uncertain.orientation", "given, but the ground has one horizontal component: turning the "
+                 "block needs two, ground.horizontal_1 and ground.horizontal_2")
     if ground["horizontal"] is None and ground["vertical"] is None and not ground["tail"] > 0.0:
         ctx.fail("ground", "needs a record (ground.horizontal or ground.vertical: a file name or a "
                  "mapping with 'file'), or, for a free vibration without record, a ground.tail "
@@ -1370,9 +1384,21 @@ def case_to_dict(case: Case, *, case_file: bool = True) -> dict:
             for part in parents:
                 node = node.get(part) if isinstance(node, dict) else None
             needs_unit = spec["type"] in UNIT_REQUIRED or path in _UNIT_NEEDED
-            if needs_unit and isinstance(node, dict) and node.get(leaf) is not None:
+            if spec.get("quantity") and isinstance(node, dict) and node.get(leaf) is not None:
+                node[leaf] = _with_si_units(node[leaf], SI_UNIT[spec["quantity"]])
+            elif needs_unit and isinstance(node, dict) and node.get(leaf) is not None:
                 node[leaf] = f"{node[leaf]!r} {SI_UNIT[spec['type']]}"
     return out
+
+
+def _with_si_units(value, unit: str):
+    """A distribution as the case file writes it (`Distribution.spec`) with each number as a string
+    with its SI unit (``{"uniform": ["0.0 rad", "3.14 rad"]}``)."""
+    if isinstance(value, dict):
+        return {k: _with_si_units(v, unit) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_with_si_units(v, unit) for v in value]
+    return f"{float(value)!r} {unit}"
 
 
 def case_with(case: Case, changes: Mapping[str, object]) -> Case:

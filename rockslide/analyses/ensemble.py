@@ -144,12 +144,16 @@ def plan_ensemble(case: Case, n: int = DEFAULT_MEMBERS, *, seed: int = SEED, rec
     dists, defaults = distributions(case)
     values = sample(dists, int(n), seed)
     e = case.contact.restitution
+    if "orientation" in values:         # a record per orientation: the members as an --azimuth sweep
+        axis = sw.Axis("azimuth", tuple(float(v) for v in values["orientation"]),
+                       tuple(f"{math.degrees(v):.6g}deg" for v in values["orientation"]), "uncertain.orientation")
+        axes, rows = [axis], np.arange(int(n), dtype=np.int64)
+    else:
+        axes, rows = [sw.parse_axis("restitution", repr(e))], np.zeros(int(n), dtype=np.int64)
     with warnings.catch_warnings():         # the nominal case's warnings are its run's (`prepare`)
         warnings.simplefilter("ignore", RunWarning)
-        nominal = sw.plan_sweep(case, [sw.parse_axis("restitution", repr(e))], records_dir=records_dir,
-                                chunk_size=1)
+        nominal = sw.plan_sweep(case, axes, records_dir=records_dir, chunk_size=1)
     n = int(n)
-    rows = np.zeros(n, dtype=np.int64)
     params, restitution = member_parameters(case, nominal.params[rows], values)
     intensity = values.get("intensity", np.ones(n))
     if coarse_step_warning(case.source, nominal.params) is None:
@@ -319,9 +323,11 @@ def member_variables(eplan: EnsemblePlan, variables: dict) -> dict:
     """Per member (``member`` dimension): the sampled quantities and the outcome variables, as
     `results.write_dataset` and `io.datasets.study_dataset` take them."""
     out = {}
-    units = {"restitution": "1"}
+    units = {"restitution": "1", "orientation": "rad"}
+    words = {"restitution": "coefficient of restitution",
+             "orientation": "the block's orientation (azimuth of its width, clockwise from north)"}
     for name, values in eplan.samples.items():
-        what = "coefficient of restitution" if name == "restitution" else f"factor: {name}"
+        what = words.get(name, f"factor: {name}")
         out[f"sample_{name}"] = (("member",), values, {"units": units.get(name, "1"), "long_name": what})
     for name in ("overturned", "max_rotation", "max_rotation_ratio", "status", "undecided", "impacts",
                  "max_slip", "end_time"):

@@ -707,6 +707,9 @@ def with_parameter_samples(fplan: FragilityPlan, samples: int, seed: int, chunk_
         raise CaseError("does not apply to a fragility analysis, whose levels set the intensity (remove it, or "
                         "run the case's neighbourhood with rockslide run --ensemble)", source=case.source,
                         field="uncertain.intensity")
+    if "orientation" in dists:
+        raise CaseError("is not drawn in a fragility analysis: give the orientations with --azimuth (e.g. "
+                        "0:175:5, each as likely)", source=case.source, field="uncertain.orientation")
     n_records, n_levels = plan.shape
     width = samples + 1
     n = plan.n_cases * width
