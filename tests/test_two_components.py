@@ -308,3 +308,85 @@ def test_azimuth_needs_two_components(pair, monkeypatch):
         "name: one\nblock: {height: 1 m, width: 0.25 m, mass: 50 kg}\ncontact: {mu_static: 0.7, "
         "restitution: 0.9}\nground: {horizontal: h1.at2}\nsolver: {dt: 1 ms}\n")
     one_line_error(invoke("sweep", "one.yaml", "--azimuth", "0:180:45"), "--azimuth", "horizontal_1")
+
+
+# --------------------------------------------------------------------------------------------------
+# Suites of pairs, fragility by RotD and over azimuths, ensembles over the orientation
+# --------------------------------------------------------------------------------------------------
+
+def _suite(folder, text):
+    path = folder / "suite.yaml"
+    path.write_text(text)
+    return path
+
+
+def test_suite_pairs(pair):
+    from rockslide.case import load_suite
+
+    suite = load_suite(_suite(pair, "records:\n  - {name: s, horizontal_1: h1.at2, horizontal_2: "
+                                    "{file: h2.at2, azimuth: 90 deg}}\n  - h1.at2\n"))
+    assert suite.entries[0].horizontal.file == "h1.at2"
+    assert suite.entries[0].horizontal_2.azimuth == math.radians(90.0)
+    assert suite.entries[1].horizontal_2 is None
+    with pytest.raises(CaseError, match=r"records\[0\].horizontal_2: missing"):
+        load_suite(_suite(pair, "records:\n  - {horizontal_1: h1.at2}\n"))
+    with pytest.raises(CaseError, match="exclusive"):
+        load_suite(_suite(pair, "records:\n  - {horizontal: h1.at2, horizontal_1: h1.at2, horizontal_2: h2.at2}\n"))
+
+
+def test_fragility_by_rotd50_and_along_the_block(pair):
+    from rockslide.api import fragility
+
+    suite = _suite(pair, "records:\n  - {name: s, horizontal_1: h1.at2, horizontal_2: h2.at2}\n")
+    case = _case(pair, orientation="30 deg")
+    a1, a2 = (rec.load_record(pair / f"h{k}.at2").data for k in (1, 2))
+    by_rotd = fragility(case, suite, im="rotd50_pga", levels="0.1g,0.3g", resamples=0)
+    brute = _brute_force(a1, a2, "pga")[0]
+    assert float(by_rotd["record_im"][0]) == pytest.approx(brute, rel=1e-12)
+    # pga with a pair: the peak of the motion along the block (30 deg from component 1, at 0 deg)
+    along = math.cos(math.radians(30.0)) * a1 + math.sin(math.radians(30.0)) * a2
+    by_pga = fragility(case, suite, im="pga", levels="0.1g,0.3g", resamples=0)
+    assert float(by_pga["record_im"][0]) == pytest.approx(np.max(np.abs(along)), rel=1e-14)
+    with pytest.raises(CaseError, match="needs two horizontal components"):
+        fragility(case, _suite(pair, "records: [h1.at2]\n"), im="rotd100_sa(0.5s)", levels="0.1g", resamples=0)
+
+
+def test_fragility_over_azimuths_is_each_stated_orientation(pair):
+    from rockslide.api import fragility
+
+    suite = _suite(pair, "records:\n  - {name: s, horizontal_1: h1.at2, horizontal_2: h2.at2}\n")
+    case = _case(pair)
+    levels = "0.2g,0.4g,0.6g"
+    pooled = fragility(case, suite, im="rotd50_pga", levels=levels, azimuth="0,60,120", resamples=0)
+    assert list(pooled["record"].values) == ["s@0deg", "s@60deg", "s@120deg"]
+    for k, degrees in enumerate((0, 60, 120)):
+        stated = fragility(case, suite, im="rotd50_pga", levels=levels, azimuth=str(degrees), resamples=0)
+        for name in ("overturned", "max_rotation"):
+            assert np.array_equal(pooled[name].isel(record=k).values, stated[name].isel(record=0).values), name
+        # the RotD50 does not depend on the orientation: one scale factor per level for all
+        assert float(stated["record_im"][0]) == float(pooled["record_im"][k])
+
+
+def test_ensemble_over_the_orientation(pair):
+    from rockslide.api import ensemble
+
+    case = _case(pair, orientation="30 deg", scale={"pga_horizontal": "400 gal"})
+    case = case.with_({"uncertain.orientation": {"uniform": ["0 deg", "180 deg"]}})
+    members = ensemble(case, 6, seed=3, records_dir=pair)
+    drawn = members["sample_orientation"].values
+    assert np.all((drawn >= 0.0) & (drawn <= math.pi)) and len(set(drawn)) == 6
+    for k in (0, 5):
+        alone = run(case.with_({"block.orientation": float(drawn[k])}), history=False).result.summary
+        assert float(members["max_rotation"][k]) == alone.max_rotation
+
+
+def test_uncertain_orientation_checks(pair):
+    base = _case(pair).with_({"uncertain.orientation": {"uniform": ["0 deg", "90 deg"]}})
+    assert base.uncertain.orientation.b == math.radians(90.0)
+    assert parse_mapping(case_to_dict(base), base_dir=pair).uncertain == base.uncertain
+    with pytest.raises(CaseError, match="one horizontal component"):
+        _case(pair, one="h1.at2").with_({"uncertain.orientation": {"uniform": ["0 deg", "90 deg"]}})
+    data = case_to_dict(_case(pair))
+    data["uncertain"] = {"orientation": {"uniform": [0, 90]}}
+    with pytest.raises(CaseError, match="no unit"):
+        parse_mapping(data, base_dir=pair)
