@@ -970,7 +970,8 @@ def _suggest(name: str, keys: Mapping[str, dict]) -> str:
     close = difflib.get_close_matches(name, list(keys), n=1)
     if close:
         return f"did you mean {close[0]!r}?"
-    elsewhere = [p for p, _ in iter_case_keys() if p.rsplit(".", 1)[-1] == name]
+    elsewhere = [p for p, _ in iter_case_keys() if p.rsplit(".", 1)[-1] == name
+                 and not (p.startswith(("ground.horizontal_1.", "ground.horizontal_2.")) and name in _FILE_KEYS)]
     if len(elsewhere) == 1:
         parent = elsewhere[0].rsplit(".", 1)[0]
         return f"did you mean {elsewhere[0]!r}? it belongs under {parent!r}"

@@ -2,9 +2,10 @@
 
 A sweep replaces a few values of a case file by every combination of its axes (:data:`AXES`:
 ``--mu``, ``--pga``, ``--vertical-factor``, ``--restitution``, ``--slenderness``, ``--gravity``,
-and for a case whose ground motion is analytic pulses ``--amplitude``, ``--period`` and
-``--duration`` of the horizontal pulse) and computes every point with the batch kernel (`batch`),
-without history or event log.
+for a case whose ground motion is analytic pulses ``--amplitude``, ``--period`` and
+``--duration`` of the horizontal pulse, and for a case of two horizontal components ``--azimuth``,
+the block's orientation: one record per orientation, the motion along it, `prepare.ground_along`)
+and computes every point with the batch kernel (`batch`), without history or event log.
 
 - **Axes.** ``start:stop:step`` (the stop is included when it falls on the grid, within 1e-9 of a
   step) or a comma list; values take units as in case files (``100gal:1000gal:25gal``; a unit on

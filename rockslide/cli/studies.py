@@ -103,7 +103,8 @@ def where_options(what: str, unit: str):
 def sweep(case_file, mu_kinetic_ratio, records_dir, out_dir, overwrite, no_plot, workers, scheduler, device,
           chunk_size, no_progress, dpi, as_csv, **_axes):
     """Grid of cases over friction, intensity, vertical factor, restitution, slenderness or gravity,
-    or over a pulse's amplitude and period or duration: CASE_FILE (YAML) -> OUT/NAME.sweep.h5 and
+    over a pulse's amplitude and period or duration, or over the block's orientation under two
+    horizontal components (--azimuth, docs/two-components.md): CASE_FILE (YAML) -> OUT/NAME.sweep.h5 and
     OUT/NAME.sweep.png.
 
     Every point is the case file with the axis values replaced (and validated as a case file), run
