@@ -472,7 +472,7 @@ _RECORD_KEYS = {**_FILE_KEYS, **_PULSE_KEYS}
 #: One of two horizontal components: a file's keys and its azimuth.
 _COMPONENT_KEYS = {**_FILE_KEYS, "azimuth": _key(
     "angle", "direction the component is measured along, clockwise from north, e.g. '90 deg' "
-    "(default: from the file's header, PEER AT2)")}
+    "(default: from the file's header, PEER AT2)", bounds=[(">=", -2.0 * math.pi), ("<=", 2.0 * math.pi)])}
 #: Keys whose bare number is refused (an azimuth of 30 would be 30 rad): they need their unit.
 _UNIT_NEEDED = ("block.orientation", "ground.horizontal_1.azimuth", "ground.horizontal_2.azimuth")
 
@@ -487,7 +487,7 @@ CASE_KEYS: dict[str, dict] = {
         "mass": _key("mass", "mass", required=True, bounds=[(">", 0.0)]),
         "orientation": _key("angle", "azimuth of the base width (across the rocking axis), clockwise "
                             "from north, with two horizontal components, e.g. '30 deg' (default: "
-                            "along ground.horizontal_1)"),
+                            "along ground.horizontal_1)", bounds=[(">=", -2.0 * math.pi), ("<=", 2.0 * math.pi)]),
     }),
     "contact": _key("mapping", "block-foundation contact", required=True, keys={
         "mu_static": _key("dimensionless", "static friction coefficient", required=True,
@@ -557,7 +557,8 @@ CASE_KEYS: dict[str, dict] = {
                      "beta: 0.3}}", bounds=[(">", 0.0)]),
         "slenderness": _key("distribution", "factor on the width, the height kept", bounds=[(">", 0.0)]),
         "orientation": {**_key("distribution", "the block's orientation (block.orientation) with two horizontal "
-                               "components, angles with their unit, e.g. {uniform: [0 deg, 180 deg]}"),
+                               "components, angles with their unit, e.g. {uniform: [0 deg, 180 deg]}",
+                               bounds=[(">=", -2.0 * math.pi), ("<=", 2.0 * math.pi)]),
                         "quantity": "angle"},
     }),
 }
@@ -1199,6 +1200,8 @@ def _unit_example(kind: str) -> str:
 def _limit_text(limit: float, spec: dict) -> str:
     if spec["type"] == "angle" and math.isclose(limit, math.pi / 2.0):
         return "pi/2 rad (90 deg)"
+    if spec["type"] == "angle" and math.isclose(abs(limit), 2.0 * math.pi):
+        return f"{'-' if limit < 0 else ''}360 deg"
     return _with_unit(limit, spec.get("unit", ""))
 
 

@@ -275,6 +275,8 @@ def test_bad_two_component_cases(pair):
         parse_case(text % ("", "horizontal: h1.at2, horizontal_1: h1.at2, horizontal_2: h2.at2"))
     with pytest.raises(CaseError, match="one horizontal component"):
         parse_case(text % (", orientation: 10 deg", "horizontal: h1.at2"))
+    with pytest.raises(CaseError, match="at most 360 deg"):     # 1e300 deg has no nanodegree
+        parse_case(text % (", orientation: 1e300 deg", "horizontal_1: h1.at2, horizontal_2: h2.at2"))
     with pytest.raises(CaseError, match="pulse"):
         parse_case(text % ("", "horizontal_1: {pulse: half-sine, amplitude: 1 g, duration: 0.2 s}, "
                                 "horizontal_2: h2.at2"))
