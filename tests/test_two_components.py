@@ -392,3 +392,35 @@ def test_uncertain_orientation_checks(pair):
     data["uncertain"] = {"orientation": {"uniform": [0, 90]}}
     with pytest.raises(CaseError, match="no unit"):
         parse_mapping(data, base_dir=pair)
+
+
+def test_worst_azimuth_rule():
+    """Most overturning first, then the largest rotation where it stands, then the earliest fall."""
+    from types import SimpleNamespace
+
+    from rockslide.analyses import sweep as sw
+
+    plan = SimpleNamespace(axes=[sw.parse_axis("azimuth", "0,45,90"), sw.parse_axis("mu", "0.5,0.6")])
+    over = np.array([[0, 0], [1, 0], [1, 0]])
+    ratio = np.array([[0.9, 0.8], [9.0, 0.5], [9.0, 0.7]])
+    when = np.where(over == 1, 5.0, np.nan)
+    variables = {"overturned": (over, {}), "max_rotation_ratio": (ratio, {}), "overturn_time": (when, {})}
+    worst = sw.worst_azimuth(plan, variables)
+    assert worst["azimuth"] == math.radians(90.0) and worst["overturned"] == 0.5    # 0.7 > 0.5 of alpha
+    assert worst["text"].startswith("worst azimuth 90 deg: overturned at 50 %")
+    when[1, 0] = 4.0                                       # all fall: the earliest is the worst
+    variables["overturned"] = (np.ones((3, 2), dtype=int), {})
+    variables["overturn_time"] = (np.array([[6.0, 6.0], [4.0, 6.0], [5.0, 6.0]]), {})
+    assert sw.worst_azimuth(plan, variables)["azimuth"] == math.radians(45.0)
+
+
+def test_sweep_command_prints_the_worst_azimuth(pair, monkeypatch):
+    monkeypatch.chdir(pair)
+    (pair / "two.yaml").write_text(
+        "name: two\nblock: {height: 1 m, width: 0.25 m, mass: 50 kg}\n"
+        "contact: {mu_static: 0.7, restitution: 0.9}\n"
+        "ground: {horizontal_1: h1.at2, horizontal_2: h2.at2, scale: {pga_horizontal: 300 gal}}\n"
+        "solver: {dt: 1 ms}\n")
+    result = invoke("sweep", "two.yaml", "--azimuth", "0:90:45", "--no-plot")
+    assert result.exit_code == 0, result.output
+    assert "worst azimuth" in result.output
