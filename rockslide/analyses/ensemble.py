@@ -281,7 +281,8 @@ def describe(summary: dict, nominal_verdict: str) -> list[str]:
     share = f"overturns in {pct(p)} % [{pct(low)}, {pct(high)}] of {summary['n_within_model']} neighbours"
     lines = [f"{nominal_verdict} (nominal); {share}" if not summary["robust"] else
              f"{nominal_verdict}: robust, every one of {n} neighbours agrees"]
-    quantities = ", ".join(f"{name} {_spec_text(spec)}" for name, spec in summary["quantities"].items())
+    quantities = ", ".join(f"{name} {_spec_text(spec, 180.0 / math.pi)} deg" if name == "orientation"
+                           else f"{name} {_spec_text(spec)}" for name, spec in summary["quantities"].items())
     origin = "default neighbourhood" if summary["defaults"] else "the case's uncertain section"
     lines.append(f"  ensemble of {n} ({origin}: {quantities}; Latin hypercube, seed {summary['seed']}); "
                  f"95 % Wilson interval")
@@ -298,15 +299,16 @@ def describe(summary: dict, nominal_verdict: str) -> list[str]:
     return lines
 
 
-def _spec_text(spec) -> str:
+def _spec_text(spec, scale: float = 1.0) -> str:
+    """A distribution in short (``U[0.95, 1.05]``), its values times ``scale`` (not a lognormal's beta)."""
     if not isinstance(spec, dict):
-        return f"{spec:g}"
+        return f"{spec * scale:g}"
     (kind, value), = spec.items()
     if kind == "uniform":
-        return f"U[{value[0]:g}, {value[1]:g}]"
+        return f"U[{value[0] * scale:g}, {value[1] * scale:g}]"
     if kind == "normal":
-        return f"N({value['mean']:g}, {value['std']:g})"
-    return f"LN({value['median']:g}, {value['beta']:g})"
+        return f"N({value['mean'] * scale:g}, {value['std'] * scale:g})"
+    return f"LN({value['median'] * scale:g}, {value['beta']:g})"
 
 
 def attributes(summary: dict) -> dict:
