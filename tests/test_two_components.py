@@ -234,13 +234,17 @@ def test_reported_across_peak_and_ignored_share(pair, tmp_path):
     assert at_first["pga_across"] == float(np.max(np.abs(a2)))
 
 
+def _case_file(case, folder, monkeypatch) -> str:
+    """The case written as a case file in ``folder``, made the current folder (for the commands)."""
+    import yaml
+
+    monkeypatch.chdir(folder)
+    (folder / f"{case.name}.yaml").write_text(yaml.safe_dump(case_to_dict(case)))
+    return f"{case.name}.yaml"
+
+
 def test_run_command_prints_and_stores_the_components(pair, monkeypatch):
-    monkeypatch.chdir(pair)
-    (pair / "two.yaml").write_text(
-        "name: two\nblock: {height: 1 m, width: 0.25 m, mass: 50 kg, orientation: 30 deg}\n"
-        "contact: {mu_static: 0.7, restitution: 0.9}\n"
-        "ground: {horizontal_1: h1.at2, horizontal_2: h2.at2}\nsolver: {dt: 1 ms}\n"
-        "output: {interval: 10 ms}\n")
+    _case_file(_case(pair, orientation="30 deg"), pair, monkeypatch)
     result = invoke("run", "two.yaml", "--no-plot")
     assert result.exit_code == 0, result.output
     assert "block at 30 deg" in result.output and "ignored by the planar model" in result.output
@@ -305,11 +309,8 @@ def test_azimuth_sweep_points_are_runs(pair):
 
 
 def test_azimuth_needs_two_components(pair, monkeypatch):
-    monkeypatch.chdir(pair)
-    (pair / "one.yaml").write_text(
-        "name: one\nblock: {height: 1 m, width: 0.25 m, mass: 50 kg}\ncontact: {mu_static: 0.7, "
-        "restitution: 0.9}\nground: {horizontal: h1.at2}\nsolver: {dt: 1 ms}\n")
-    one_line_error(invoke("sweep", "one.yaml", "--azimuth", "0:180:45"), "--azimuth", "horizontal_1")
+    name = _case_file(_case(pair, one="h1.at2"), pair, monkeypatch)
+    one_line_error(invoke("sweep", name, "--azimuth", "0:180:45"), "--azimuth", "horizontal_1")
 
 
 # --------------------------------------------------------------------------------------------------
@@ -415,12 +416,7 @@ def test_worst_azimuth_rule():
 
 
 def test_sweep_command_prints_the_worst_azimuth(pair, monkeypatch):
-    monkeypatch.chdir(pair)
-    (pair / "two.yaml").write_text(
-        "name: two\nblock: {height: 1 m, width: 0.25 m, mass: 50 kg}\n"
-        "contact: {mu_static: 0.7, restitution: 0.9}\n"
-        "ground: {horizontal_1: h1.at2, horizontal_2: h2.at2, scale: {pga_horizontal: 300 gal}}\n"
-        "solver: {dt: 1 ms}\n")
-    result = invoke("sweep", "two.yaml", "--azimuth", "0:90:45", "--no-plot")
+    name = _case_file(_case(pair, scale={"pga_horizontal": "300 gal"}), pair, monkeypatch)
+    result = invoke("sweep", name, "--azimuth", "0:90:45", "--no-plot")
     assert result.exit_code == 0, result.output
     assert "worst azimuth" in result.output
