@@ -45,7 +45,9 @@ class RunResult:
         and the ground motion as applied [m/s^2].
     ground : dict
         The ground motion as applied: ``pga_horizontal``, ``pga_vertical`` [m/s^2], the scale
-        factors ``scale_horizontal``, ``scale_vertical`` (None where there is no record).
+        factors ``scale_horizontal``, ``scale_vertical`` (None where there is no record); with two
+        horizontal components also ``components`` (`engine.prepare.Components`: azimuths,
+        orientation, peaks along and across the block, the share the planar model ignores).
     records : list of dict
         The record files (name, SHA-256, format, scale factor).
     case : Case or None
@@ -85,7 +87,9 @@ class RunResult:
         ground motion on ``ground_time``, the event log on ``event``, the summary as attributes."""
         from .io.datasets import run_dataset
 
-        ground = {f"ground_{k}": v for k, v in self.ground.items() if v is not None}
+        flat = {**{k: v for k, v in self.ground.items() if k != "components"},
+                **(self.ground.get("components") or {})}
+        ground = {f"ground_{k}": v for k, v in flat.items() if v is not None}
         return run_dataset(self.result, name=self.name, attrs=ground)
 
 
@@ -120,7 +124,7 @@ def run(case: Case | Mapping | str | Path, *, records_dir: str | Path | None = N
     case = _case(case)
     prepared = engine.prepare(case, records.records_dir(records_dir), history=history)
     result = engine.simulate_prepared(prepared, progress=progress)
-    return RunResult(name=case.name, result=result, ground=prepared.ground.as_applied(),
+    return RunResult(name=case.name, result=result, ground=engine.applied_ground(prepared),
                      records=engine.record_entries(prepared), case=case, case_text=case.text)
 
 
@@ -136,9 +140,11 @@ def sweep(case: Case | Mapping | str | Path, *, mu_kinetic_ratio: float | None =
     **axes : str or sequence
         The axes, in dimension order: ``mu``, ``pga``, ``vertical_factor``, ``restitution``,
         ``slenderness`` (width / height, the height kept), ``gravity``, and for a pulse case
-        ``amplitude``, ``period``, ``duration``. Each is ``"start:stop:step"`` or a comma list as
-        on the command line (``pga="100gal:1000gal:25gal"``), or a sequence of values: SI numbers
-        or strings with units (``pga=[1.0, 2.0]`` in m/s^2, ``pga=["0.1g", "0.2g"]``).
+        ``amplitude``, ``period``, ``duration``, and for a case with two horizontal components
+        ``azimuth`` (``block.orientation``). Each is ``"start:stop:step"`` or a comma list as
+        on the command line (``pga="100gal:1000gal:25gal"``, ``azimuth="0:180:5"`` in degrees), or a
+        sequence of values: SI numbers or strings with units (``pga=[1.0, 2.0]`` in m/s^2,
+        ``pga=["0.1g", "0.2g"]``, ``azimuth=[0.0, 0.5]`` in rad).
     mu_kinetic_ratio : float, optional
         ``mu_kinetic / mu_static`` with ``mu`` (default: the case's ratio).
     records_dir : str or Path, optional
@@ -182,7 +188,7 @@ def sweep(case: Case | Mapping | str | Path, *, mu_kinetic_ratio: float | None =
 def fragility(case: Case | Mapping | str | Path, suite: str | Path, *, im: str = "pga",
               levels: str | Sequence, damage: Sequence[str] = (), units: str | None = None,
               resamples: int = 1000, case_vertical: bool = False, samples: int = 0, seed: int = 1,
-              records_dir: str | Path | None = None,
+              azimuth: str | None = None, records_dir: str | Path | None = None,
               device: str = "cpu", workers: int | None = None, scheduler: str | None = None,
               chunk_size: int | None = None, store=None, progress: Callable[[int], None] | None = None):
     """Fragility curves of the case's block over a record suite, as ``rockslide fragility``.
@@ -194,7 +200,9 @@ def fragility(case: Case | Mapping | str | Path, suite: str | Path, *, im: str =
     suite : str or Path
         A suite file (YAML), a folder of horizontal records, or a glob of them.
     im : str
-        The intensity measure: ``pga``, ``pgv``, ``pga_rocking`` or ``sa(T)`` (e.g. ``"sa(0.5s)"``).
+        The intensity measure: ``pga``, ``pgv``, ``pga_rocking`` or ``sa(T)`` (e.g. ``"sa(0.5s)"``);
+        for a suite of two horizontal components also ``rotd50_`` or ``rotd100_`` of ``pga``, ``pgv``
+        or ``sa(T)`` (``"rotd50_sa(1s)"``; the others are then of the motion along the block).
     levels : str or sequence
         ``"0.1g:1.5g:0.1g"`` or a comma list as on the command line, or a sequence of values (SI
         numbers of the measure, or strings with units).
@@ -213,6 +221,10 @@ def fragility(case: Case | Mapping | str | Path, suite: str | Path, *, im: str =
         uncertainty; ``median_without_samples`` and ``beta_without_samples`` are the case's own.
     seed : int
         Seed of their Latin hypercube.
+    azimuth : str, optional
+        The block's orientations for a suite of two horizontal components (``"0:180:5"``, degrees
+        unless a unit is given): every record at every orientation, the fits over all of them (the
+        orientation unknown, uniform); one value states it. Default: the case's ``block.orientation``.
     records_dir, device, workers, scheduler, chunk_size, store, progress
         As in `sweep`.
 
@@ -232,7 +244,8 @@ def fragility(case: Case | Mapping | str | Path, suite: str | Path, *, im: str =
     parsed = fr.parse_levels(_axis_text(levels, measure.kind), measure)
     states = fr.damage_states(damage)
     scheduler = check_where(workers=workers, scheduler=scheduler, device=device)
-    fplan = fr.plan_fragility(case, fr.suite_from(str(suite), units=units), measure, parsed,
+    fplan = fr.plan_fragility(case, fr.suite_at_azimuths(fr.suite_from(str(suite), units=units), azimuth),
+                              measure, parsed,
                               records_dir=records.records_dir(records_dir), chunk_size=chunk_size,
                               case_vertical=case_vertical, samples=samples, seed=seed)
     done = execute(fplan.plan, store, workers=workers, scheduler=scheduler, device=device, progress=progress)

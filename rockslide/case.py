@@ -37,6 +37,7 @@ from .units import SI_UNITS, STANDARD_GRAVITY, UNIT_REQUIRED, UNITS, parse_quant
 
 __all__ = [
     "CASE_KEYS",
+    "with_orientations",
     "Block",
     "Case",
     "Contact",
@@ -78,11 +79,16 @@ class Block:
         Full base width 2b [m].
     mass : float
         Mass [kg].
+    orientation : float, optional
+        Azimuth of the base width [rad], clockwise from north: the direction across the rocking
+        axis, along which the ground motion of two horizontal components drives the block
+        (`Ground.horizontal_2`). None: along the first component.
     """
 
     height: float
     width: float
     mass: float
+    orientation: float | None = None
 
     @property
     def half_width(self) -> float:
@@ -142,6 +148,9 @@ class RecordSpec:
         Sample interval [s] for files without time column or header.
     skip_lines : int
         Lines to skip before the data, >= 0.
+    azimuth : float, optional
+        Of one of two horizontal components: the direction it is measured along [rad], clockwise
+        from north; None = from the file's header (PEER AT2).
     """
 
     file: str
@@ -151,6 +160,7 @@ class RecordSpec:
     column: int | str | None = None
     dt: float | None = None
     skip_lines: int = 0
+    azimuth: float | None = None
 
 
 @dataclass(frozen=True)
@@ -192,6 +202,10 @@ class Ground:
         Free-vibration time appended after the record ends [s], >= 0.
     time_shift : float
         Time shift applied to the records [s] (see :mod:`rockslide.records`).
+    horizontal_2 : RecordSpec, optional
+        The second horizontal component, orthogonal to ``horizontal`` (then the first; the case file
+        names them ``horizontal_1`` and ``horizontal_2``): the block feels the motion along
+        ``block.orientation`` (docs/two-components.md).
     """
 
     horizontal: RecordSpec | Pulse | None
@@ -199,6 +213,12 @@ class Ground:
     scale: Scale
     tail: float = 0.0
     time_shift: float = 0.0
+    horizontal_2: RecordSpec | None = None
+
+    @property
+    def two_components(self) -> bool:
+        """Whether the ground has two horizontal components (``horizontal_1`` and ``horizontal_2``)."""
+        return self.horizontal_2 is not None
 
 
 @dataclass(frozen=True)
@@ -309,6 +329,9 @@ class Uncertain:
         A factor on the block's height and width together (its slenderness kept).
     slenderness : Distribution or None
         A factor on the block's width, its height kept.
+    orientation : Distribution or None
+        The block's orientation itself [rad] (``block.orientation``), for a case with two horizontal
+        components, e.g. uniform over 0 to 180 degrees: the orientation unknown.
     """
 
     intensity: Distribution | None = None
@@ -316,6 +339,7 @@ class Uncertain:
     friction: Distribution | None = None
     size: Distribution | None = None
     slenderness: Distribution | None = None
+    orientation: Distribution | None = None
 
     def given(self) -> dict[str, Distribution]:
         """The quantities given, by name."""
@@ -445,6 +469,13 @@ _PULSE_KEYS = {
 #: A record's keys: a file's, then a pulse's (one or the other is given).
 _RECORD_KEYS = {**_FILE_KEYS, **_PULSE_KEYS}
 
+#: One of two horizontal components: a file's keys and its azimuth.
+_COMPONENT_KEYS = {**_FILE_KEYS, "azimuth": _key(
+    "angle", "direction the component is measured along, clockwise from north, e.g. '90 deg' "
+    "(default: from the file's header, PEER AT2)", bounds=[(">=", -2.0 * math.pi), ("<=", 2.0 * math.pi)])}
+#: Keys whose bare number is refused (an azimuth of 30 would be 30 rad): they need their unit.
+_UNIT_NEEDED = ("block.orientation", "ground.horizontal_1.azimuth", "ground.horizontal_2.azimuth")
+
 CASE_KEYS: dict[str, dict] = {
     "name": _key("name", "case name, used in output file names: letters, digits, '.', '_', '-'",
                  required=True),
@@ -454,6 +485,9 @@ CASE_KEYS: dict[str, dict] = {
         "height": _key("length", "full height 2h", required=True, bounds=[(">", 0.0)]),
         "width": _key("length", "full base width 2b", required=True, bounds=[(">", 0.0)]),
         "mass": _key("mass", "mass", required=True, bounds=[(">", 0.0)]),
+        "orientation": _key("angle", "azimuth of the base width (across the rocking axis), clockwise "
+                            "from north, with two horizontal components, e.g. '30 deg' (default: "
+                            "along ground.horizontal_1)", bounds=[(">=", -2.0 * math.pi), ("<=", 2.0 * math.pi)]),
     }),
     "contact": _key("mapping", "block-foundation contact", required=True, keys={
         "mu_static": _key("dimensionless", "static friction coefficient", required=True,
@@ -470,9 +504,15 @@ CASE_KEYS: dict[str, dict] = {
                            keys=_RECORD_KEYS),
         "vertical": _key("record", "vertical record: a file name, or a mapping with file or pulse",
                          keys=_RECORD_KEYS),
+        "horizontal_1": _key("component", "first of two orthogonal horizontal components (instead of "
+                             "horizontal): a file name, or a mapping with file and azimuth",
+                             keys=_COMPONENT_KEYS),
+        "horizontal_2": _key("component", "second horizontal component, 90 deg from horizontal_1",
+                             keys=_COMPONENT_KEYS),
         "scale": _key("mapping", "scaling of the record files", keys={
             "pga_horizontal": _key("acceleration", "scale the horizontal record to this peak "
-                                   "acceleration (exclusive with factor)", bounds=[(">", 0.0)]),
+                                   "acceleration (exclusive with factor; with two components, the "
+                                   "larger of their peaks)", bounds=[(">", 0.0)]),
             "factor": _key("dimensionless", "multiply the records by this factor (exclusive with "
                            "pga_horizontal)", bounds=[(">", 0.0)]),
             "pga_vertical": _key("acceleration", "scale the vertical record to this peak "
@@ -516,6 +556,10 @@ CASE_KEYS: dict[str, dict] = {
         "size": _key("distribution", "factor on height and width together, e.g. {lognormal: {median: 1, "
                      "beta: 0.3}}", bounds=[(">", 0.0)]),
         "slenderness": _key("distribution", "factor on the width, the height kept", bounds=[(">", 0.0)]),
+        "orientation": {**_key("distribution", "the block's orientation (block.orientation) with two horizontal "
+                               "components, angles with their unit, e.g. {uniform: [0 deg, 180 deg]}",
+                               bounds=[(">=", -2.0 * math.pi), ("<=", 2.0 * math.pi)]),
+                        "quantity": "angle"},
     }),
 }
 
@@ -927,7 +971,8 @@ def _suggest(name: str, keys: Mapping[str, dict]) -> str:
     close = difflib.get_close_matches(name, list(keys), n=1)
     if close:
         return f"did you mean {close[0]!r}?"
-    elsewhere = [p for p, _ in iter_case_keys() if p.rsplit(".", 1)[-1] == name]
+    elsewhere = [p for p, _ in iter_case_keys() if p.rsplit(".", 1)[-1] == name
+                 and not (p.startswith(("ground.horizontal_1.", "ground.horizontal_2.")) and name in _FILE_KEYS)]
     if len(elsewhere) == 1:
         parent = elsewhere[0].rsplit(".", 1)[0]
         return f"did you mean {elsewhere[0]!r}? it belongs under {parent!r}"
@@ -944,6 +989,13 @@ def _read_value(value, spec: dict, path: str, ctx: _Ctx):
         return _read_mapping(value, spec["keys"], path, ctx, "a mapping")
     if kind == "record":
         return _read_record(value, path, ctx)
+    if kind == "component":
+        if isinstance(value, str):
+            value = {"file": value}
+        if isinstance(value, Mapping) and value.get("pulse") is not None:
+            ctx.fail(path, "a horizontal component is a record file; an analytic pulse has one direction "
+                     "(give it as ground.horizontal)")
+        return _read_mapping(value, spec["keys"], path, ctx, "a file name or a mapping with file and azimuth")
     if kind in UNITS:
         return _read_quantity(value, spec, path, ctx)
     if kind == "name":
@@ -1015,6 +1067,10 @@ def _read_distribution(value, spec: dict, path: str, ctx: _Ctx) -> Distribution:
                "{lognormal: {median: 1, beta: 0.3}}")
 
     def number(v, where):
+        if spec.get("quantity") and (isinstance(v, str) or not ctx.si_numbers and v != 0):
+            if not isinstance(v, str):
+                ctx.fail(path, f"{_show(v)} has no unit; write the angle with its unit, e.g. '30 deg'")
+            return parse_quantity(v, spec["quantity"], source=ctx.source, field=path)
         try:
             x = float(v) if isinstance(v, (int, float)) and not isinstance(v, bool) else math.nan
         except OverflowError:                       # an integer beyond float64
@@ -1120,6 +1176,8 @@ def _read_quantity(value, spec: dict, path: str, ctx: _Ctx) -> float:
         ctx.fail(path, f"{_show(value)} is too large (expected a finite {kind})")
     if written_unit(value):
         ctx.units[path] = written_unit(value)
+    elif path in _UNIT_NEEDED and number != 0.0 and not ctx.si_numbers:
+        ctx.fail(path, f"{_show(value)} has no unit; write the angle with its unit, e.g. '30 deg'")
     unit = spec.get("unit", "")
     for op, limit in spec.get("bounds", ()):
         if not _OPS[op][0](number, limit):
@@ -1142,6 +1200,8 @@ def _unit_example(kind: str) -> str:
 def _limit_text(limit: float, spec: dict) -> str:
     if spec["type"] == "angle" and math.isclose(limit, math.pi / 2.0):
         return "pi/2 rad (90 deg)"
+    if spec["type"] == "angle" and math.isclose(abs(limit), 2.0 * math.pi):
+        return f"{'-' if limit < 0 else ''}360 deg"
     return _with_unit(limit, spec.get("unit", ""))
 
 
@@ -1156,6 +1216,10 @@ def _cross_checks(raw: dict, ctx: _Ctx) -> None:
 
     ground = raw["ground"]
     scale = ground["scale"]
+    _component_checks(raw, ctx)
+    if raw["uncertain"]["orientation"] is not None and ground["horizontal_2"] is None:
+        ctx.fail("uncertain.orientation", "given, but the ground has one horizontal component: turning the "
+                 "block needs two, ground.horizontal_1 and ground.horizontal_2")
     if ground["horizontal"] is None and ground["vertical"] is None and not ground["tail"] > 0.0:
         ctx.fail("ground", "needs a record (ground.horizontal or ground.vertical: a file name or a "
                  "mapping with 'file'), or, for a free vibration without record, a ground.tail "
@@ -1192,6 +1256,27 @@ def _cross_checks(raw: dict, ctx: _Ctx) -> None:
         if abs(ratio - round(ratio)) > 1e-9 * ratio:
             ctx.fail("output.interval", f"must be a whole multiple of solver.dt ({_with_unit(dt, 's')}),"
                      f" got {_with_unit(interval, 's')} ({_num(ratio)} steps)")
+
+
+def _component_checks(raw: dict, ctx: _Ctx, path: str = "ground") -> None:
+    """Two horizontal components come together, instead of ``horizontal``; ``horizontal_1`` then
+    becomes ``horizontal`` (the first component), and ``block.orientation`` needs them. ``raw`` is
+    a case (``path`` ``ground``) or a suite's entry (its path)."""
+    ground = raw["ground"] if path == "ground" else raw
+    one, two = ground.pop("horizontal_1"), ground["horizontal_2"]
+    if one is None and two is None:
+        if raw["block"]["orientation"] is not None:
+            ctx.fail("block.orientation", "given, but the ground has one horizontal component: give two, "
+                     "ground.horizontal_1 and ground.horizontal_2 (each a file and its azimuth)")
+        return
+    if ground["horizontal"] is not None:
+        ctx.fail(f"{path}.horizontal", f"and {path}.horizontal_1 are exclusive: give {path}.horizontal "
+                 f"(one component) or {path}.horizontal_1 and {path}.horizontal_2")
+    if one is None or two is None:
+        given, missing = ("horizontal_1", "horizontal_2") if two is None else ("horizontal_2", "horizontal_1")
+        ctx.fail(f"{path}.{missing}", f"missing: {path}.{given} is one of two horizontal components; give "
+                 f"the other (or one component as {path}.horizontal)")
+    ground["horizontal"] = one
 
 
 def _pulse_checks(ground: dict, ctx: _Ctx) -> None:
@@ -1231,7 +1316,7 @@ def _build(data, *, source: str, base_dir: Path | None, text: str, si_numbers: b
     _cross_checks(raw, ctx)
     ground = raw["ground"]
     records = {k: None if ground[k] is None else (Pulse if "pulse" in ground[k] else RecordSpec)(**ground[k])
-               for k in ("horizontal", "vertical")}
+               for k in ("horizontal", "vertical", "horizontal_2")}
     sections = {path: cls(**_at(raw, path)) for path, cls in _SECTIONS.items()}
     return Case(
         name=raw["name"], gravity=raw["gravity"], block=sections["block"],
@@ -1277,7 +1362,9 @@ def case_to_dict(case: Case, *, case_file: bool = True) -> dict:
         return {f.name: getattr(obj, f.name) for f in dataclasses.fields(obj)
                 if getattr(obj, f.name) is not None}
 
-    ground = {"horizontal": case.ground.horizontal, "vertical": case.ground.vertical}
+    first = "horizontal_1" if case.ground.two_components else "horizontal"
+    ground = {first: case.ground.horizontal, "horizontal_2": case.ground.horizontal_2,
+              "vertical": case.ground.vertical}
     ground = {k: plain(v) for k, v in ground.items() if v is not None}
     ground.update(scale=plain(case.ground.scale), tail=case.ground.tail,
                   time_shift=case.ground.time_shift)
@@ -1300,9 +1387,22 @@ def case_to_dict(case: Case, *, case_file: bool = True) -> dict:
             node = out
             for part in parents:
                 node = node.get(part) if isinstance(node, dict) else None
-            if spec["type"] in UNIT_REQUIRED and isinstance(node, dict) and node.get(leaf) is not None:
+            needs_unit = spec["type"] in UNIT_REQUIRED or path in _UNIT_NEEDED
+            if spec.get("quantity") and isinstance(node, dict) and node.get(leaf) is not None:
+                node[leaf] = _with_si_units(node[leaf], SI_UNIT[spec["quantity"]])
+            elif needs_unit and isinstance(node, dict) and node.get(leaf) is not None:
                 node[leaf] = f"{node[leaf]!r} {SI_UNIT[spec['type']]}"
     return out
+
+
+def _with_si_units(value, unit: str):
+    """A distribution as the case file writes it (`Distribution.spec`) with each number as a string
+    with its SI unit (``{"uniform": ["0.0 rad", "3.14 rad"]}``)."""
+    if isinstance(value, dict):
+        return {k: _with_si_units(v, unit) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_with_si_units(v, unit) for v in value]
+    return f"{float(value)!r} {unit}"
 
 
 def case_with(case: Case, changes: Mapping[str, object]) -> Case:
@@ -1407,11 +1507,18 @@ class SuiteEntry:
         The horizontal record, read like a case's ``ground.horizontal``.
     vertical : RecordSpec or None
         Its vertical record, read like ``ground.vertical``.
+    horizontal_2 : RecordSpec or None
+        The second of two horizontal components (``horizontal`` is then the first: the suite file
+        names them ``horizontal_1`` and ``horizontal_2``, read like a case's).
+    orientation : float or None
+        [rad] The block's orientation for this entry's runs (an entry of `with_orientations`).
     """
 
     name: str
     horizontal: RecordSpec
     vertical: RecordSpec | None = None
+    horizontal_2: RecordSpec | None = None
+    orientation: float | None = None
 
 
 @dataclass(frozen=True)
@@ -1441,10 +1548,28 @@ SUITE_ENTRY_KEYS: dict[str, dict] = {
     "name": _key("string", "the record's name in results (default: the horizontal file's name "
                  "without its extension)"),
     "horizontal": _key("record", "horizontal record: a file name or a mapping, keys as "
-                       "ground.horizontal", required=True, keys=_RECORD_KEYS),
+                       "ground.horizontal (or two components, horizontal_1 and horizontal_2)",
+                       keys=_RECORD_KEYS),
+    "horizontal_1": _key("component", "first of two horizontal components: a file name or a mapping "
+                         "with file and azimuth, keys as ground.horizontal_1", keys=_COMPONENT_KEYS),
+    "horizontal_2": _key("component", "second horizontal component, 90 deg from horizontal_1",
+                         keys=_COMPONENT_KEYS),
     "vertical": _key("record", "vertical record, scaled by the same factor: a file name or a "
                      "mapping, keys as ground.vertical", keys=_RECORD_KEYS),
 }
+
+
+def with_orientations(suite: Suite, orientations) -> Suite:
+    """The suite with each entry of two horizontal components repeated at each block orientation
+    [rad] (``NAME@30deg``): the runs of a fragility over orientations (``--azimuth``)."""
+    entries = []
+    for entry in suite.entries:
+        if entry.horizontal_2 is None:
+            raise CaseError(f"the record {entry.name} has one horizontal component; turning the block needs "
+                            "two (horizontal_1 and horizontal_2 in the suite file)", source="--azimuth")
+        entries.extend(dataclasses.replace(entry, name=f"{entry.name}@{math.degrees(o):g}deg", orientation=o)
+                       for o in orientations)
+    return dataclasses.replace(suite, entries=tuple(entries))
 
 
 def load_suite(path) -> Suite:
@@ -1493,7 +1618,13 @@ def parse_suite(text: str, *, source: str = "<suite>", base_dir: Path | None = N
         if isinstance(item, str):
             item = {"horizontal": item}
         raw = _read_mapping(item, SUITE_ENTRY_KEYS, path, ctx, "a file name or a mapping")
+        if raw["horizontal"] is None and raw["horizontal_1"] is None and raw["horizontal_2"] is None:
+            ctx.fail(f"{path}.horizontal", "missing required key (horizontal record, or two components "
+                     "horizontal_1 and horizontal_2)")
+        raw["block"] = {"orientation": None}
+        _component_checks(raw, ctx, path)
         horizontal = RecordSpec(**raw["horizontal"])
+        second = None if raw["horizontal_2"] is None else RecordSpec(**raw["horizontal_2"])
         vertical = None if raw["vertical"] is None else RecordSpec(**raw["vertical"])
         name = raw["name"] if raw["name"] is not None else _file_stem(horizontal.file)
         if name in seen:
@@ -1501,7 +1632,7 @@ def parse_suite(text: str, *, source: str = "<suite>", base_dir: Path | None = N
                      f"the name {name!r} is also records[{seen[name]}]'s; give each record its own "
                      "'name'")
         seen[name] = i
-        entries.append(SuiteEntry(name=name, horizontal=horizontal, vertical=vertical))
+        entries.append(SuiteEntry(name=name, horizontal=horizontal, vertical=vertical, horizontal_2=second))
     return Suite(entries=tuple(entries), source=source, base_dir=base_dir, text=text)
 
 

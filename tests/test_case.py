@@ -250,12 +250,15 @@ class TestSchema:
             for name, spec in keys.items():
                 assert spec["default"] == defaults[name], f"{section}.{name}"
         record_keys = list(CASE_KEYS["ground"]["keys"]["horizontal"]["keys"])    # a file's, then a pulse's
-        file_keys = [f.name for f in dataclasses.fields(RecordSpec)]
+        file_keys = [f.name for f in dataclasses.fields(RecordSpec) if f.name != "azimuth"]
         pulse_keys = [f.name for f in dataclasses.fields(Pulse)]
         assert file_keys + pulse_keys == record_keys
+        # one of two components: a file's keys and its azimuth
+        assert list(CASE_KEYS["ground"]["keys"]["horizontal_1"]["keys"]) == [*file_keys, "azimuth"]
         assert {f.name for f in dataclasses.fields(Block)} == set(CASE_KEYS["block"]["keys"])
         assert {f.name for f in dataclasses.fields(Contact)} == set(CASE_KEYS["contact"]["keys"])
-        assert {f.name for f in dataclasses.fields(Ground)} == set(CASE_KEYS["ground"]["keys"])
+        # the case file's horizontal_1 is Ground.horizontal (the first of two components)
+        assert {f.name for f in dataclasses.fields(Ground)} | {"horizontal_1"} == set(CASE_KEYS["ground"]["keys"])
         case_fields = {f.name for f in dataclasses.fields(Case)} - {"source", "base_dir", "text", "units"}
         assert case_fields == set(CASE_KEYS)
 
@@ -415,7 +418,7 @@ BAD = [
      ["ground.horizontal.file: missing required key"]),
     # types
     ("type-block-list", variant({"block": [0.2, 0.1, 10]}),
-     ["block: expected a mapping (keys: height, width, mass), got a list [0.2, 0.1, 10]"]),
+     ["block: expected a mapping (keys: height, width, mass, orientation), got a list [0.2, 0.1, 10]"]),
     ("type-contact-string", variant({"contact": "rough"}), ["contact: expected a mapping", "'rough'"]),
     ("type-scale-number", variant({"ground.scale": 2}),
      ["ground.scale: expected a mapping", "got an integer 2"]),

@@ -144,12 +144,16 @@ def plan_ensemble(case: Case, n: int = DEFAULT_MEMBERS, *, seed: int = SEED, rec
     dists, defaults = distributions(case)
     values = sample(dists, int(n), seed)
     e = case.contact.restitution
+    if "orientation" in values:         # a record per orientation: the members as an --azimuth sweep
+        axis = sw.Axis("azimuth", tuple(float(v) for v in values["orientation"]),
+                       tuple(f"{math.degrees(v):.6g}deg" for v in values["orientation"]), "uncertain.orientation")
+        axes, rows = [axis], np.arange(int(n), dtype=np.int64)
+    else:
+        axes, rows = [sw.parse_axis("restitution", repr(e))], np.zeros(int(n), dtype=np.int64)
     with warnings.catch_warnings():         # the nominal case's warnings are its run's (`prepare`)
         warnings.simplefilter("ignore", RunWarning)
-        nominal = sw.plan_sweep(case, [sw.parse_axis("restitution", repr(e))], records_dir=records_dir,
-                                chunk_size=1)
+        nominal = sw.plan_sweep(case, axes, records_dir=records_dir, chunk_size=1)
     n = int(n)
-    rows = np.zeros(n, dtype=np.int64)
     params, restitution = member_parameters(case, nominal.params[rows], values)
     intensity = values.get("intensity", np.ones(n))
     if coarse_step_warning(case.source, nominal.params) is None:
@@ -277,7 +281,8 @@ def describe(summary: dict, nominal_verdict: str) -> list[str]:
     share = f"overturns in {pct(p)} % [{pct(low)}, {pct(high)}] of {summary['n_within_model']} neighbours"
     lines = [f"{nominal_verdict} (nominal); {share}" if not summary["robust"] else
              f"{nominal_verdict}: robust, every one of {n} neighbours agrees"]
-    quantities = ", ".join(f"{name} {_spec_text(spec)}" for name, spec in summary["quantities"].items())
+    quantities = ", ".join(f"{name} {_spec_text(spec, 180.0 / math.pi)} deg" if name == "orientation"
+                           else f"{name} {_spec_text(spec)}" for name, spec in summary["quantities"].items())
     origin = "default neighbourhood" if summary["defaults"] else "the case's uncertain section"
     lines.append(f"  ensemble of {n} ({origin}: {quantities}; Latin hypercube, seed {summary['seed']}); "
                  f"95 % Wilson interval")
@@ -294,15 +299,16 @@ def describe(summary: dict, nominal_verdict: str) -> list[str]:
     return lines
 
 
-def _spec_text(spec) -> str:
+def _spec_text(spec, scale: float = 1.0) -> str:
+    """A distribution in short (``U[0.95, 1.05]``), its values times ``scale`` (not a lognormal's beta)."""
     if not isinstance(spec, dict):
-        return f"{spec:g}"
+        return f"{spec * scale:g}"
     (kind, value), = spec.items()
     if kind == "uniform":
-        return f"U[{value[0]:g}, {value[1]:g}]"
+        return f"U[{value[0] * scale:g}, {value[1] * scale:g}]"
     if kind == "normal":
-        return f"N({value['mean']:g}, {value['std']:g})"
-    return f"LN({value['median']:g}, {value['beta']:g})"
+        return f"N({value['mean'] * scale:g}, {value['std'] * scale:g})"
+    return f"LN({value['median'] * scale:g}, {value['beta']:g})"
 
 
 def attributes(summary: dict) -> dict:
@@ -319,9 +325,11 @@ def member_variables(eplan: EnsemblePlan, variables: dict) -> dict:
     """Per member (``member`` dimension): the sampled quantities and the outcome variables, as
     `results.write_dataset` and `io.datasets.study_dataset` take them."""
     out = {}
-    units = {"restitution": "1"}
+    units = {"restitution": "1", "orientation": "rad"}
+    words = {"restitution": "coefficient of restitution",
+             "orientation": "the block's orientation (azimuth of its width, clockwise from north)"}
     for name, values in eplan.samples.items():
-        what = "coefficient of restitution" if name == "restitution" else f"factor: {name}"
+        what = words.get(name, f"factor: {name}")
         out[f"sample_{name}"] = (("member",), values, {"units": units.get(name, "1"), "long_name": what})
     for name in ("overturned", "max_rotation", "max_rotation_ratio", "status", "undecided", "impacts",
                  "max_slip", "end_time"):

@@ -53,7 +53,7 @@ from pathlib import Path
 import numpy as np
 from scipy.special import log_ndtr, ndtr, ndtri
 
-from ..case import Case, RecordSpec, Suite, SuiteEntry, case_with, load_suite
+from ..case import Case, RecordSpec, Suite, SuiteEntry, case_with, load_suite, with_orientations
 from ..core import intensity
 from ..core import kernel as K
 from ..core.simulate import ground_array, initial_state, parameters
@@ -68,6 +68,7 @@ from ..engine.prepare import (
     check_step,
     coarse_step_warning,
     flight_warning,
+    ground_along,
     model_for,
     settings_for,
 )
@@ -77,7 +78,7 @@ from ..units import STANDARD_GRAVITY, parse_quantity, unit_factor
 from . import sweep as sw
 
 __all__ = ["IntensityMeasure", "INTENSITY_MEASURES", "parse_im", "parse_levels", "DamageState",
-           "parse_damage", "damage_states", "suite_from", "FragilityPlan", "plan_fragility",
+           "parse_damage", "damage_states", "suite_from", "suite_at_azimuths", "FragilityPlan", "plan_fragility",
            "point_case", "StateFit", "fit_state", "probit_mle", "stripe_counts", "exceedances",
            "analyse", "Analysis", "dataset", "json_summary", "figure", "stored_figure",
            "BOOTSTRAP_RESAMPLES", "BOOTSTRAP_SEED", "CONFIDENCE"]
@@ -123,6 +124,9 @@ class IntensityMeasure:
         ``display_scale`` is its size in SI.
     period : float or None
         [s] the oscillator's period, for ``sa(T)``.
+    rotd : int or None
+        50 or 100: the RotD50 or RotD100 of the measure over the two horizontal components (Boore
+        2010, `intensity.rotd_peaks`); None: of the motion along the block.
     """
 
     name: str
@@ -133,6 +137,13 @@ class IntensityMeasure:
     display_unit: str
     display_scale: float
     period: float | None = None
+    rotd: int | None = None
+
+    def of_pair(self, a1, a2, dt: float) -> float:
+        """RotD50 or RotD100 of two orthogonal horizontal components [m/s^2] sampled at ``dt`` [s]."""
+        measure = "sa" if self.period is not None else self.name.split("_", 1)[1]
+        peaks = intensity.rotd_peaks(a1, a2, dt, measure, self.period)
+        return float(np.median(peaks) if self.rotd == 50 else np.max(peaks))
 
     def of_record(self, acceleration, dt: float, gravity: float, tan_alpha: float) -> float:
         """The measure of a horizontal record [SI]; ``gravity`` [m/s^2] and ``tan_alpha`` (the
@@ -169,7 +180,9 @@ INTENSITY_MEASURES = {m.name: m for m in (
                      "PGA / (g tan α)", "", 1.0),
 )}
 _SA = re.compile(r"^\s*sa\s*\(\s*(?P<period>[^()]*?)\s*\)\s*$", re.IGNORECASE)
-_IM_CHOICES = "pga, pgv, pga_rocking or sa(T) with a period, e.g. 'sa(0.5s)'"
+_IM_CHOICES = ("pga, pgv, pga_rocking or sa(T) with a period, e.g. 'sa(0.5s)'; with two horizontal "
+               "components also rotd50_ or rotd100_ of pga, pgv, sa(T), e.g. 'rotd50_sa(1s)'")
+_ROTD = re.compile(r"^rotd(50|100)_(.*)$")
 
 
 #: [s] Periods of ``sa(T)``: the range of response spectra (NGA-West2 tabulates 0.01 s to 20 s).
@@ -188,6 +201,17 @@ def parse_im(text: str) -> IntensityMeasure:
         (scaling a record does not change it).
     """
     name = str(text).strip().lower()
+    rotd = _ROTD.match(name)
+    if rotd is not None:
+        inner = rotd.group(2).strip()
+        if inner not in ("pga", "pgv") and _SA.match(inner) is None:
+            raise CaseError(f"unknown intensity measure {text!r}: RotD{rotd.group(1)} applies to pga, pgv and "
+                            "sa(T), e.g. 'rotd50_sa(1s)'", source="--im")
+        base = parse_im(inner)
+        percent = int(rotd.group(1))
+        return replace(base, name=f"rotd{percent}_{base.name}", label=f"RotD{percent} {base.label}",
+                       long_name=f"RotD{percent} of the {base.long_name.replace('horizontal record', 'record')} "
+                       "over the horizontal directions (two components)", rotd=percent)
     if name in INTENSITY_MEASURES:
         return INTENSITY_MEASURES[name]
     if name.replace(" ", "") in ("pgv_pga", "pgv/pga"):
@@ -391,6 +415,17 @@ def suite_from(spec, *, units: str | None = None) -> Suite:
                  text="\n".join(str(p) for p in files))
 
 
+def suite_at_azimuths(suite: Suite, azimuth: str | None) -> Suite:
+    """The suite of ``--azimuth`` (the block's orientations, a sweep axis: ``0:180:5``, degrees by
+    default): each entry of two horizontal components run at each orientation, named
+    ``NAME@30deg`` (`case.with_orientations`). The fits then pool the orientations, each as likely
+    (the orientation unknown, uniform over the values); one value is a stated orientation. None:
+    the suite as it is (the case's ``block.orientation``)."""
+    if azimuth is None:
+        return suite
+    return with_orientations(suite, sw.parse_axis("azimuth", azimuth).values)
+
+
 # --------------------------------------------------------------------------------------------------
 # The plan: a sweep over records and levels
 # --------------------------------------------------------------------------------------------------
@@ -551,11 +586,23 @@ def plan_fragility(case: Case, suite: Suite, im: IntensityMeasure, levels: sw.Ax
             records["vertical"], specs["vertical"] = case_record
             found["vertical"], found["vertical_sha256"] = Path(case_record[0].path).name, case_record[0].sha256
         where = _entry_source(suite, r)
-        ground = rec.combine(records["horizontal"], records["vertical"], source=where)
-        changes = {"ground.horizontal": specs["horizontal"], "ground.vertical": specs["vertical"],
-                   "ground.scale": {"vertical_factor": vertical_factor} if specs["vertical"] else {}}
+        pair = entry.horizontal_2 is not None
+        if im.rotd is not None and not pair:
+            raise CaseError(f"{im.label} needs two horizontal components; the record {where} has one "
+                            "(give horizontal_1 and horizontal_2 in the suite file)", source="--im")
+        first_key = "ground.horizontal_1" if pair else "ground.horizontal"
+        changes = {"ground.horizontal": None, "ground.horizontal_1": None,
+                   first_key: specs["horizontal"], "ground.horizontal_2": specs["horizontal_2"],
+                   "ground.vertical": specs["vertical"],
+                   "ground.scale": {"vertical_factor": vertical_factor} if specs["vertical"] else {},
+                   "block.orientation": (entry.orientation if entry.orientation is not None
+                                         else case.block.orientation) if pair else None}
         try:
             record_case = case_with(case, changes)
+            if pair:
+                ground = ground_along(record_case, records, scaled=False)[0]
+            else:
+                ground = rec.combine(records["horizontal"], records["vertical"], source=where)
             check_step(record_case, ground)
             check_size(record_case, ground, history=False)
         except CaseError as exc:
@@ -572,7 +619,11 @@ def plan_fragility(case: Case, suite: Suite, im: IntensityMeasure, levels: sw.Ax
                 raise CaseError(f"{im.label} of the record {where} takes {points:.3g} points of the oscillator's "
                                 f"response; expected at most {MAX_OSCILLATOR_POINTS:.0e} (a longer period, or a "
                                 "shorter record)", source="--im")
-        measures["im"][r] = value = im.of_record(h, dt, case.gravity, tan_alpha)
+        if im.rotd is not None:
+            value = im.of_pair(records["horizontal"].data, records["horizontal_2"].data, dt)
+        else:
+            value = im.of_record(h, dt, case.gravity, tan_alpha)
+        measures["im"][r] = value
         measures["dt"][r], measures["duration"][r] = dt, (h.size - 1) * dt
         if not (math.isfinite(value) and value > 0):
             raise RecordError(f"its {im.label} is {value:g}: a record without motion cannot be scaled "
@@ -656,6 +707,9 @@ def with_parameter_samples(fplan: FragilityPlan, samples: int, seed: int, chunk_
         raise CaseError("does not apply to a fragility analysis, whose levels set the intensity (remove it, or "
                         "run the case's neighbourhood with rockslide run --ensemble)", source=case.source,
                         field="uncertain.intensity")
+    if "orientation" in dists:
+        raise CaseError("is not drawn in a fragility analysis: give the orientations with --azimuth (e.g. "
+                        "0:175:5, each as likely)", source=case.source, field="uncertain.orientation")
     n_records, n_levels = plan.shape
     width = samples + 1
     n = plan.n_cases * width
@@ -693,6 +747,8 @@ def _at_level(record_case: Case, records: dict, factor: float):
     """A record's run at the scale ``factor``: ``(its case, its ground motion)``, from the records
     already read (`records.combine`, as ``rockslide run`` of that case scales them)."""
     level_case = case_with(record_case, {"ground.scale.factor": float(factor)})
+    if level_case.ground.two_components:
+        return level_case, ground_along(level_case, records)[0]
     scale = level_case.ground.scale
     ground = rec.combine(records["horizontal"], records["vertical"], factor=scale.factor,
                          vertical_factor=scale.vertical_factor, source=record_case.source,
@@ -747,7 +803,7 @@ def _read_entry(suite: Suite, r: int, entry: SuiteEntry, folder: Path):
     """A suite entry's records: records by role, their specs for `case.case_with` (files as found)
     and their file names and checksums."""
     records, specs, found = {}, {}, {}
-    for role in ("horizontal", "vertical"):
+    for role in ("horizontal", "vertical", "horizontal_2"):
         spec = getattr(entry, role)
         found[role], found[f"{role}_sha256"] = "", ""
         if spec is None:

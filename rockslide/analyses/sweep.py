@@ -2,9 +2,10 @@
 
 A sweep replaces a few values of a case file by every combination of its axes (:data:`AXES`:
 ``--mu``, ``--pga``, ``--vertical-factor``, ``--restitution``, ``--slenderness``, ``--gravity``,
-and for a case whose ground motion is analytic pulses ``--amplitude``, ``--period`` and
-``--duration`` of the horizontal pulse) and computes every point with the batch kernel (`batch`),
-without history or event log.
+for a case whose ground motion is analytic pulses ``--amplitude``, ``--period`` and
+``--duration`` of the horizontal pulse, and for a case of two horizontal components ``--azimuth``,
+the block's orientation: one record per orientation, the motion along it, `prepare.ground_along`)
+and computes every point with the batch kernel (`batch`), without history or event log.
 
 - **Axes.** ``start:stop:step`` (the stop is included when it falls on the grid, within 1e-9 of a
   step) or a comma list; values take units as in case files (``100gal:1000gal:25gal``; a unit on
@@ -65,6 +66,7 @@ from ..engine.prepare import (
     check_size,
     coarse_step_warning,
     flight_warning,
+    ground_along,
     is_pulse_case,
     model_for,
     pulse_ground,
@@ -77,7 +79,7 @@ from ..io import records as rec
 from ..pulses import Pulse, linear_overturning_ratio
 from ..units import STANDARD_GRAVITY, UNIT_REQUIRED, parse_quantity
 
-__all__ = ["AXES", "AxisKind", "Axis", "parse_axis", "plan_sweep", "sweep_variables", "coordinates",
+__all__ = ["AXES", "AxisKind", "Axis", "parse_axis", "plan_sweep", "sweep_variables", "worst_azimuth", "coordinates",
            "root_attributes", "spectrum_scales", "figure", "stored_figure"]
 
 #: Points validated between two checks for Ctrl-C (and two calls of the planning's progress).
@@ -107,6 +109,8 @@ class AxisKind:
         The dimension's ``long_name`` and ``units`` attributes (SI; ``1`` for dimensionless).
     label : str
         Axis label in figures; ``display_scale`` divides the SI values for it.
+    bare_unit : str
+        The unit of a value written without one (default: SI); ``deg`` for ``--azimuth``.
     """
 
     name: str
@@ -117,6 +121,7 @@ class AxisKind:
     units: str
     label: str
     display_scale: float = 1.0
+    bare_unit: str = ""
 
 
 #: The axes a sweep can vary, in the order of ``rockslide sweep --help``.
@@ -140,6 +145,9 @@ AXES: dict[str, AxisKind] = {a.name: a for a in (
              "s", "pulse period T_p [s]"),
     AxisKind("duration", "--duration", "time", "ground.horizontal.duration",
              "duration of the horizontal pulse", "s", "pulse duration t_d [s]"),
+    AxisKind("azimuth", "--azimuth", "angle", "block.orientation",
+             "azimuth of the block's width, clockwise from north (two horizontal components)", "rad",
+             "block orientation [deg]", math.pi / 180.0, "deg"),
 )}
 #: The axes that change the horizontal pulse of a pulse case (and only there).
 PULSE_AXES = ("amplitude", "period", "duration")
@@ -229,6 +237,8 @@ def parse_axis(name: str, spec: str, kind: AxisKind | None = None) -> Axis:
             none = "" if kind.kind in UNIT_REQUIRED else " or on none (none means SI)"
             raise CaseError(f"give a unit on every value{none}, got {text!r}", source=option)
         texts = [f"{number}{unit}" for number, unit in parts]
+    if kind.bare_unit:
+        texts = [t if _PIECE.match(t).group(2) else f"{t}{kind.bare_unit}" for t in texts]
     values = [parse_quantity(t, kind.kind, source=option) for t in texts]
     seen = {}
     for t, v in zip(texts, values, strict=True):
@@ -381,18 +391,39 @@ def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = N
         if axis.name in RECORD_SCALE_AXES and pulses:
             raise CaseError("scales record files; a pulse is scaled by its amplitude (--amplitude)",
                             source=axis.kind.option)
+        if axis.name == "azimuth" and not case.ground.two_components:
+            raise CaseError("turns a block under two horizontal components; give the case ground.horizontal_1 "
+                            "and ground.horizontal_2 (files and azimuths) instead of ground.horizontal",
+                            source=axis.kind.option)
     if pulses:
         return _plan_pulses(case, axes, ratio, chunk_size, n, progress)
 
     records, entries = _read_records(case, records_dir)
-    unscaled = rec.combine(records["horizontal"], records["vertical"], source=case.source,
-                           still_dt=case.solver.dt)
-    check_size(case, unscaled, history=False)
-
     settings = settings_for(case, history=False, energy=False)
-    base = ground_array(unscaled.horizontal, unscaled.vertical, unscaled.dt, settings.tail)
+    # one record per orientation of the block (one in all with one horizontal component)
+    pieces: dict[float | None, tuple[int, rec.GroundMotion]] = {}
+    piece_arrays = []
+
+    def unscaled_for(point: Case) -> tuple[int, rec.GroundMotion]:
+        orientation = point.block.orientation if point.ground.two_components else None
+        if orientation not in pieces:
+            if point.ground.two_components:
+                ground = ground_along(point, records, scaled=False)[0]
+            else:
+                ground = rec.combine(records["horizontal"], records["vertical"], source=case.source,
+                                     still_dt=case.solver.dt)
+            if not pieces:
+                check_size(case, ground, history=False)
+            piece = ground_array(ground.horizontal, ground.vertical, ground.dt, settings.tail)
+            pieces[orientation] = (sum(p.shape[1] for p in piece_arrays), ground)
+            piece_arrays.append(piece)
+        return pieces[orientation]
+
+    unscaled = unscaled_for(case)[1]
+    length = piece_arrays[0].shape[1]
     start = unscaled.start + case.ground.time_shift
-    record_end = start + base.shape[1] * unscaled.dt
+    record_end = start + length * unscaled.dt
+    first = np.empty(n, dtype=np.int64)
 
     params = np.empty((n, K.N_PARAMS))
     states = np.empty((n, K.N_STATE))
@@ -405,15 +436,23 @@ def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = N
     grounds: dict[tuple, rec.GroundMotion] = {}         # a few scaled records, for the checks
     for i, combo, point in _points(case, axes, ratio, progress):
         s = point.ground.scale
-        scale = (s.pga_horizontal, s.factor, s.pga_vertical, s.vertical_factor)
+        try:
+            first[i] = unscaled_for(point)[0]
+        except CaseError as exc:
+            raise _point_error(exc, axes, combo) from None
+        orientation = point.block.orientation
+        scale = (s.pga_horizontal, s.factor, s.pga_vertical, s.vertical_factor, orientation)
         if (scale, point.gravity) not in checked:
             if scale not in grounds:
                 if len(grounds) >= 16:
                     grounds.clear()
-                grounds[scale] = rec.combine(records["horizontal"], records["vertical"],
-                                             pga_horizontal=scale[0], factor=scale[1],
-                                             pga_vertical=scale[2], vertical_factor=scale[3],
-                                             source=case.source, still_dt=case.solver.dt)
+                if point.ground.two_components:
+                    grounds[scale] = ground_along(point, records)[0]
+                else:
+                    grounds[scale] = rec.combine(records["horizontal"], records["vertical"],
+                                                 pga_horizontal=scale[0], factor=scale[1],
+                                                 pga_vertical=scale[2], vertical_factor=scale[3],
+                                                 source=case.source, still_dt=case.solver.dt)
             ground = grounds[scale]
             try:
                 peak = check_against_ground(point, ground, warn=False)
@@ -434,8 +473,8 @@ def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = N
         warnings.warn(f"{absurd_acceleration(case.source, highest[0])} [at {_point_text(axes, highest[1])}]",
                       RunWarning, stacklevel=2)
     plan = Plan(case=case, axes=axes, mu_kinetic_ratio=ratio, params=params, states=states,
-                factor_h=factor_h, factor_v=factor_v, base=base, first=np.zeros(n, dtype=np.int64),
-                count=np.full(n, base.shape[1], dtype=np.int64), record_end=np.full(n, record_end),
+                factor_h=factor_h, factor_v=factor_v, base=np.concatenate(piece_arrays, axis=1), first=first,
+                count=np.full(n, length, dtype=np.int64), record_end=np.full(n, record_end),
                 step=float(params[0, K.P_STEP]), records=entries, chunk_size=chunk_size)
     plan.key = definition_key(plan)
     return plan
@@ -771,6 +810,39 @@ def categories(variables: dict) -> np.ndarray:
     from ..plots import sweep_category
 
     return sweep_category(variables["overturned"][0], variables["status"][0], variables["modes"][0])
+
+
+def worst_azimuth(plan: Plan, variables: dict) -> dict | None:
+    """The block orientation of an ``--azimuth`` sweep under which it fares worst.
+
+    Per azimuth, the share of the other axes' points where the block overturns, then, to break
+    ties, the mean of ``max_rotation_ratio`` over the points that stand, then the earliest mean
+    overturning time (all overturned). Returns None without an azimuth axis, else ``{"azimuth":
+    rad, "overturned": share, "max_rotation_ratio": mean or NaN, "text": one line}``.
+    """
+    names = [a.name for a in plan.axes]
+    if "azimuth" not in names:
+        return None
+    d = names.index("azimuth")
+    axis = plan.axes[d]
+    over = np.moveaxis(np.asarray(variables["overturned"][0], dtype=bool), d, 0).reshape(len(axis), -1)
+    ratio = np.moveaxis(np.asarray(variables["max_rotation_ratio"][0], dtype=np.float64), d, 0)
+    ratio = np.where(over, np.nan, ratio.reshape(len(axis), -1))
+    when = np.moveaxis(np.asarray(variables["overturn_time"][0], dtype=np.float64), d, 0).reshape(len(axis), -1)
+    share = over.mean(axis=1)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)              # all overturned, or all standing
+        standing = np.nanmean(ratio, axis=1)
+        soonest = np.nanmean(when, axis=1)
+    order = sorted(range(len(axis)), key=lambda k: (share[k], np.nan_to_num(standing[k], nan=np.inf),
+                                                    -np.nan_to_num(soonest[k], nan=np.inf)))
+    k = order[-1]
+    rest = (f", at {soonest[k]:.2f} s on average" if math.isnan(standing[k])
+            else f", largest rotation {100 * standing[k]:.0f} % of alpha where it stands")
+    text = (f"worst azimuth {math.degrees(axis.values[k]):g} deg: overturned at {100 * share[k]:.0f} % of its "
+            f"points{rest} (best {math.degrees(axis.values[order[0]]):g} deg: {100 * share[order[0]]:.0f} %)")
+    return {"azimuth": float(axis.values[k]), "overturned": float(share[k]),
+            "max_rotation_ratio": float(standing[k]), "text": text}
 
 
 def figure(plan: Plan, variables: dict):

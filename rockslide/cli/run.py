@@ -67,7 +67,7 @@ def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, members, s
         from ..analyses import ensemble as ens
         members = ens.DEFAULT_MEMBERS if members is None else members
         eplan = ens.plan_ensemble(case, members, seed=seed, records_dir=records.records_dir(records_dir))
-    ground = prepared.ground.as_applied()
+    ground = runner.applied_ground(prepared)
     stored = None        # this case's complete result, of which only the figure is missing
     if _result_set(h5_path, png_path, overwrite=overwrite, no_plot=no_plot):
         stored = _same_result(case, prepared, h5_path, eplan=eplan)
@@ -345,6 +345,8 @@ def human_summary(name, summary, *, ground=None, units=None) -> str:
     lines = [f"{name}: {verdict}"]
     if ground is not None:
         lines.append("  " + _ground_line(ground, units))
+        if ground.get("components"):
+            lines.append("  " + _components_line(ground["components"], units))
     if summary.overturned:
         direction = "+" if summary.direction > 0 else "-"
         fall = ("" if summary.fall_start_time is None
@@ -361,6 +363,19 @@ def human_summary(name, summary, *, ground=None, units=None) -> str:
                      for s in summary.states_seen)
     lines.append(f"  states: {seen}")
     return "\n".join(lines)
+
+
+def _components_line(components: dict, units: dict) -> str:
+    """``two components (0 deg, 90 deg), block at 30 deg: along 674 gal, across 800 gal (59 % of the
+    motion ignored by the planar model)``."""
+    from ..units import acceleration_text
+
+    unit = units.get("ground.scale.pga_horizontal")
+    azimuths = ", ".join(f"{math.degrees(components[k]):g}" for k in ("azimuth_1", "azimuth_2"))
+    return (f"two components (azimuths {azimuths} deg), block at {math.degrees(components['orientation']):g} deg: "
+            f"peak along {acceleration_text(components['pga_along'], unit)}, across "
+            f"{acceleration_text(components['pga_across'], unit)} (ignored by the planar model: "
+            f"{100 * components['ignored_share']:.0f} % of the horizontal Arias intensity)")
 
 
 def _ground_line(ground: dict, units: dict) -> str:

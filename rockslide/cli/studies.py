@@ -94,6 +94,8 @@ def where_options(what: str, unit: str):
               "--amplitude, an overturning spectrum", "0.1:1:0.05")
 @_axis_option("duration", "time", "Duration of a rectangular or half-sine horizontal pulse "
               "(ground.horizontal.duration)", "0.05:0.5:0.01")
+@_axis_option("azimuth", "angle", "Azimuth of the block's width, clockwise from north, for a case with two "
+              "horizontal components (block.orientation; degrees unless a unit is given)", "0:180:5")
 @click.option("--mu-kinetic-ratio", type=float, default=None, metavar="R",
               help="mu_kinetic = R * mu_static for --mu (default: the case's ratio).")
 @records_dir_option
@@ -101,7 +103,8 @@ def where_options(what: str, unit: str):
 def sweep(case_file, mu_kinetic_ratio, records_dir, out_dir, overwrite, no_plot, workers, scheduler, device,
           chunk_size, no_progress, dpi, as_csv, **_axes):
     """Grid of cases over friction, intensity, vertical factor, restitution, slenderness or gravity,
-    or over a pulse's amplitude and period or duration: CASE_FILE (YAML) -> OUT/NAME.sweep.h5 and
+    over a pulse's amplitude and period or duration, or over the block's orientation under two
+    horizontal components (--azimuth, docs/two-components.md): CASE_FILE (YAML) -> OUT/NAME.sweep.h5 and
     OUT/NAME.sweep.png.
 
     Every point is the case file with the axis values replaced (and validated as a case file), run
@@ -167,6 +170,9 @@ def sweep(case_file, mu_kinetic_ratio, records_dir, out_dir, overwrite, no_plot,
     undecided = int(variables["undecided"][0].sum())
     click.echo(f"  {over} of {plan.n_cases} overturned, {outside} outside the model; computed "
                f"{_rate(done, 'cases')}")
+    worst = sw.worst_azimuth(plan, variables)
+    if worst is not None:
+        click.echo(f"  {worst['text']}")
     if undecided:
         click.echo(f"  {undecided} undecided: still moving at the end with the energy to overturn "
                    "(give the case a ground.tail for their free motion)")
@@ -180,7 +186,9 @@ def sweep(case_file, mu_kinetic_ratio, records_dir, out_dir, overwrite, no_plot,
                    "folder of horizontal records, or a quoted glob of them ('records/*.csv').")
 @click.option("--im", "im_text", default="pga", show_default=True, metavar="IM",
               help="Intensity measure each record is scaled to: pga, pgv, pga_rocking (PGA / (g tan "
-                   "alpha)) or sa(T) (5 %-damped spectral acceleration, e.g. 'sa(0.5s)').")
+                   "alpha)) or sa(T) (5 %-damped spectral acceleration, e.g. 'sa(0.5s)'); for a suite of two "
+                   "horizontal components also rotd50_ or rotd100_ of pga, pgv or sa(T) (the others: of the "
+                   "motion along the block).")
 @click.option("--levels", "levels_text", required=True, metavar="SPEC",
               help="Levels of the IM: START:STOP:STEP or a comma list, with units as in case files, "
                    "e.g. 0.1g:1.5g:0.1g (pgv: 10cm/s:100cm/s:10cm/s; pga_rocking: no unit).")
@@ -202,11 +210,16 @@ def sweep(case_file, mu_kinetic_ratio, records_dir, out_dir, overwrite, no_plot,
                    "then include the parameter uncertainty (drawn beside the case's own).")
 @click.option("--seed", type=click.IntRange(0, 2**62), default=1, show_default=True,
               help="Seed of the parameter samples' Latin hypercube (record r uses seed + r).")
+@click.option("--azimuth", "azimuth", default=None, metavar="SPEC",
+              help="Orientations of the block (degrees unless a unit is given: START:STOP:STEP or a comma "
+                   "list, e.g. 0:180:5) for a suite of two horizontal components: every record at every "
+                   "orientation, the fits over them all (the orientation unknown, uniform); one value states "
+                   "it (default: the case's block.orientation).")
 @click.option("--json", "as_json", is_flag=True, help="Print the fits as one JSON object on stdout.")
 @records_dir_option
 @where_options("fragility analysis", "run")
 def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, resamples, case_vertical, samples,
-              seed, as_json, records_dir, out_dir, overwrite, no_plot, workers, scheduler, device, chunk_size,
+              seed, azimuth, as_json, records_dir, out_dir, overwrite, no_plot, workers, scheduler, device, chunk_size,
               no_progress, dpi, as_csv):
     """Fragility curves of a block over a record suite scaled to levels of an intensity measure:
     CASE_FILE (YAML) -> OUT/NAME.fragility.h5 and OUT/NAME.fragility.png.
@@ -238,7 +251,7 @@ def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, 
     levels = fr.parse_levels(levels_text, im)
     states = fr.damage_states(damage_texts)
     scheduler = check_where(workers=workers, scheduler=scheduler, device=device)
-    suite = fr.suite_from(suite_spec, units=units)
+    suite = fr.suite_at_azimuths(fr.suite_from(suite_spec, units=units), azimuth)
     fplan = fr.plan_fragility(case, suite, im, levels, records_dir=records.records_dir(records_dir),
                               chunk_size=chunk_size, case_vertical=case_vertical, samples=samples, seed=seed)
     h5_path, png_path = _outputs(case, out_dir, ".fragility")

@@ -28,6 +28,9 @@ as given: for a processed record the two are the same, for the review's raw reco
   is seen at least `POINTS_PER_PERIOD` times per period (the input stays exactly linear on them):
   the peak between two such points is missed by at most ``1 - cos(pi / POINTS_PER_PERIOD)``
   (0.3 %). The response is followed over the record only (no free vibration after it).
+- **Two horizontal components**: the motion along a direction (`along`, what a planar block feels)
+  and the rotated peaks of PGA, PGV and Sa over 0-179 degrees (`rotd_peaks`), whose median and
+  maximum are RotD50 and RotD100 (Boore 2010, Bull. Seism. Soc. Am. 100(4); NGA-West2).
 """
 
 from __future__ import annotations
@@ -41,7 +44,8 @@ from scipy.linalg import expm
 from . import compiled  # noqa: F401  (before any cache=True: numba needs a cache folder)
 
 __all__ = ["DAMPING", "POINTS_PER_PERIOD", "peak_acceleration", "ground_velocity", "peak_velocity",
-           "sdof_coefficients", "sdof_response", "spectral_acceleration"]
+           "sdof_coefficients", "sdof_response", "spectral_acceleration", "PARTS_PER_DEGREE", "ROTD_ANGLES",
+           "direction_cosines", "along", "rotated_peaks", "rotd_peaks"]
 
 #: Damping ratio of the response spectrum [-] (the 5 % of building codes and ground-motion models).
 DAMPING = 0.05
@@ -204,3 +208,130 @@ def spectral_acceleration(acceleration, dt: float, period: float, damping: float
     u, _ = sdof_response(acceleration, dt, period, damping, substeps)
     omega = 2.0 * math.pi / period
     return float(omega * omega * np.max(np.abs(u)))
+
+
+# --------------------------------------------------------------------------------------------------
+# Two horizontal components: the motion along a direction, and rotated peaks (RotD50, RotD100)
+# --------------------------------------------------------------------------------------------------
+
+#: Angles are rounded to this many parts of a degree (a nanodegree) before their cosine is taken
+#: (`direction_cosines`): the motion then depends on the angles' differences only, bit for bit, and
+#: multiples of 90 degrees give cosines of exactly 0 and +-1.
+PARTS_PER_DEGREE = 10**9
+#: RotD angles: 0, 1, ..., 179 degrees from the first component (Boore 2010).
+ROTD_ANGLES = tuple(range(180))
+
+
+def direction_cosines(angle: float) -> tuple[float, float]:
+    """``(cos angle, sin angle)`` of an angle [rad] rounded to a nanodegree (`PARTS_PER_DEGREE`).
+
+    The rounded angle, a whole number of nanodegrees, is reduced exactly (integer arithmetic) to a
+    quarter turn and a rest within [0, 90) degrees; the quarter turns are applied by swapping and
+    negating. So an angle of a whole number of quarter turns gives exactly 0 and +-1, and angles
+    that differ by whole turns give the same pair bit for bit.
+    """
+    turn = 360 * PARTS_PER_DEGREE
+    parts = round(math.degrees(angle) * PARTS_PER_DEGREE) % turn
+    quarters, rest = divmod(parts, turn // 4)
+    if rest:
+        r = math.radians(rest / PARTS_PER_DEGREE)
+        c, s = math.cos(r), math.sin(r)
+    else:
+        c, s = 1.0, 0.0
+    for _ in range(quarters):
+        c, s = -s, c                 # cos(x + 90 deg) = -sin x, sin(x + 90 deg) = cos x
+    return c + 0.0, s + 0.0          # no negative zeros
+
+
+def along(a1, a2, azimuth_1: float, azimuth_2: float, direction: float) -> np.ndarray:
+    """The ground motion along ``direction`` from two orthogonal horizontal components.
+
+    Parameters
+    ----------
+    a1, a2 : array_like
+        The components' samples (any quantity: accelerations [m/s^2], displacements...), same length.
+    azimuth_1, azimuth_2 : float
+        [rad] the directions the components are measured along (clockwise from north), 90 degrees
+        apart (either way round).
+    direction : float
+        [rad] the direction wanted.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``a1 cos(direction - azimuth_1) + a2 cos(direction - azimuth_2)``, the cosines from
+        `direction_cosines` of the angle differences (so turning all three angles together changes
+        nothing). A term whose cosine is 0 is left out, so ``direction == azimuth_1`` gives ``a1``
+        itself, bit for bit.
+    """
+    terms = [(direction_cosines(direction - azimuth)[0], np.asarray(a, dtype=np.float64))
+             for a, azimuth in ((a1, azimuth_1), (a2, azimuth_2))]
+    terms = [(c, a) for c, a in terms if c != 0.0]
+    if not terms:
+        return np.zeros_like(np.asarray(a1, dtype=np.float64))
+    out = terms[0][1].copy() if terms[0][0] == 1.0 else terms[0][0] * terms[0][1]
+    for c, a in terms[1:]:
+        out = out + c * a
+    return out
+
+
+def rotated_peaks(x1, x2) -> np.ndarray:
+    """``max_t |x1 cos theta + x2 sin theta|`` for theta = 0, 1, ..., 179 degrees (`ROTD_ANGLES`).
+
+    ``x1``, ``x2`` are the two orthogonal components of any response (accelerations, the
+    oscillator's displacements) at the same times. Returns float64[180].
+    """
+    x1 = np.asarray(x1, dtype=np.float64)
+    x2 = np.asarray(x2, dtype=np.float64)
+    peaks = np.empty(len(ROTD_ANGLES))
+    for k, degrees in enumerate(ROTD_ANGLES):
+        c, s = direction_cosines(math.radians(degrees))
+        peaks[k] = np.max(np.abs(c * x1 + s * x2), initial=0.0)
+    return peaks
+
+
+def rotd_peaks(a1, a2, dt: float, measure: str, period: float | None = None,
+               damping: float = DAMPING) -> np.ndarray:
+    """A measure's peaks over the 180 rotation angles of two orthogonal components (Boore 2010).
+
+    Parameters
+    ----------
+    a1, a2 : array_like
+        [m/s^2] the two horizontal components at step ``dt``, linear in between.
+    dt : float
+        [s] sampling step.
+    measure : {"pga", "pgv", "sa"}
+        PGA [m/s^2], PGV [m/s] (`peak_velocity` of each rotated record, exact between samples) or
+        Sa(T, zeta) [m/s^2] (the oscillator's response is linear in its input, so the responses to
+        the two components are rotated, `spectral_acceleration`'s sampling).
+    period : float, optional
+        [s] the oscillator's period, for ``sa``.
+    damping : float
+        [-] its damping ratio.
+
+    Returns
+    -------
+    numpy.ndarray
+        float64[180], the peak at theta = 0 ... 179 degrees from component 1. RotD50 is their
+        median (``numpy.median``: the mean of the 90th and 91st), RotD100 their maximum.
+    """
+    a1, a2 = _samples(a1), _samples(a2)
+    if a1.shape != a2.shape:
+        raise ValueError(f"the two components differ in length: {a1.size} and {a2.size} samples")
+    if measure == "pga":
+        return rotated_peaks(a1, a2)
+    if measure == "pgv":
+        peaks = np.empty(len(ROTD_ANGLES))
+        for k, degrees in enumerate(ROTD_ANGLES):
+            c, s = direction_cosines(math.radians(degrees))
+            peaks[k] = peak_velocity(c * a1 + s * a2, dt)
+        return peaks
+    if measure == "sa":
+        if period is None:
+            raise ValueError("measure 'sa' needs a period")
+        substeps = max(1, math.ceil(POINTS_PER_PERIOD * dt / period - 1e-9))
+        u1, _ = sdof_response(a1, dt, period, damping, substeps)
+        u2, _ = sdof_response(a2, dt, period, damping, substeps)
+        omega = 2.0 * math.pi / period
+        return omega * omega * rotated_peaks(u1, u2)
+    raise ValueError(f"unknown measure {measure!r}; expected 'pga', 'pgv' or 'sa'")

@@ -8,6 +8,7 @@ pure core and calls `simulate` (or the reference solver).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import warnings
 from dataclasses import dataclass
@@ -16,7 +17,8 @@ from pathlib import Path
 import numpy as np
 
 from .. import pulses
-from ..case import Case
+from ..case import Case, Scale
+from ..core import intensity
 from ..core.layout import P_G, P_R, P_STEP
 from ..core.simulate import Model, Result, Settings, interval_count, parameters, simulate, substeps, tail_samples
 from ..errors import CaseError, RecordError
@@ -33,6 +35,41 @@ class Prepared:
     ground: rec.GroundMotion
     model: Model
     settings: Settings
+    components: Components | None = None
+
+
+@dataclass(frozen=True)
+class Components:
+    """Two horizontal components and the direction the block feels (`ground_along`).
+
+    Attributes
+    ----------
+    azimuth_1, azimuth_2 : float
+        [rad] the components' directions, clockwise from north (from the case or the AT2 headers).
+    orientation : float
+        [rad] the block's ``block.orientation`` (the first component's azimuth when not given).
+    pga_1, pga_2 : float
+        [m/s^2] the scaled components' peaks.
+    pga_along, pga_across : float
+        [m/s^2] the peaks of the scaled motion along the block's direction (what drives the model)
+        and across it, along the rocking axis (what the planar model ignores).
+    ignored_share : float
+        [-] the share of the horizontal motion's Arias intensity (the sum of the squared
+        accelerations) that lies across the block's direction: ``sum(a_across^2) / sum(a1^2 + a2^2)``.
+    """
+
+    azimuth_1: float
+    azimuth_2: float
+    orientation: float
+    pga_1: float
+    pga_2: float
+    pga_along: float
+    pga_across: float
+    ignored_share: float
+
+    def as_dict(self) -> dict:
+        """The fields by name, angles [rad], accelerations [m/s^2]."""
+        return dataclasses.asdict(self)
 
 
 def read_records(case: Case, records_dir: Path | None = None) -> dict[str, rec.Record | None]:
@@ -40,13 +77,14 @@ def read_records(case: Case, records_dir: Path | None = None) -> dict[str, rec.R
     where the case has none), found through `records.resolve_record_path`."""
     folder = records_dir if records_dir is not None else rec.records_dir()
     records = {}
-    for role in ("horizontal", "vertical"):
+    for role in ("horizontal", "vertical", "horizontal_2"):
         spec = getattr(case.ground, role)
         if spec is None:
             records[role] = None
             continue
+        key = "horizontal_1" if role == "horizontal" and case.ground.two_components else role
         path = rec.resolve_record_path(spec.file, case_dir=case.base_dir, records_dir=folder,
-                                       source=case.source, field=f"ground.{role}.file")
+                                       source=case.source, field=f"ground.{key}.file")
         records[role] = rec.load_record(path, format=spec.format, units=spec.units,
                                         time_column=spec.time_column, column=spec.column, dt=spec.dt,
                                         skip_lines=spec.skip_lines)
@@ -60,6 +98,8 @@ def load_ground(case: Case, records_dir: Path | None = None) -> rec.GroundMotion
     if is_pulse_case(case):
         return pulse_ground(case)
     records = read_records(case, records_dir)
+    if case.ground.two_components:
+        return ground_along(case, records)[0]
     scale = case.ground.scale
     try:
         return rec.combine(records["horizontal"], records["vertical"], pga_horizontal=scale.pga_horizontal,
@@ -71,6 +111,85 @@ def load_ground(case: Case, records_dir: Path | None = None) -> rec.GroundMotion
             raise
         # combine names its scale options; in the case file they are keys of ground.scale
         raise RecordError(exc.message, source=exc.source, field=f"ground.scale.{exc.field}") from None
+
+
+#: Largest difference from 90 degrees between two components' azimuths [rad] (a millidegree: the
+#: headers and case files give whole degrees).
+ORTHOGONALITY_TOLERANCE = math.radians(1e-3)
+
+
+def component_azimuths(case: Case, records: dict) -> tuple[float, float]:
+    """The azimuths [rad] of a case's two horizontal components: ``ground.horizontal_i.azimuth``,
+    else the PEER AT2 header's (`records.at2_azimuth`); they must be 90 degrees apart.
+
+    Raises
+    ------
+    CaseError
+        An azimuth neither given nor in the header, or components that are not orthogonal.
+    """
+    azimuths = []
+    for role, key in (("horizontal", "horizontal_1"), ("horizontal_2", "horizontal_2")):
+        azimuth = getattr(case.ground, role).azimuth
+        if azimuth is None and records[role].format == "at2":
+            azimuth = rec.at2_azimuth(records[role].path)
+        if azimuth is None:
+            raise CaseError(f"the azimuth of {Path(str(records[role].path)).name} is not given and its header "
+                            f"names none; give it, e.g. 'ground: {{{key}: {{file: ..., azimuth: 90 deg}}}}'",
+                            source=case.source, field=f"ground.{key}.azimuth")
+        azimuths.append(azimuth)
+    difference = abs(intensity.direction_cosines(azimuths[1] - azimuths[0])[0])
+    if difference > math.sin(ORTHOGONALITY_TOLERANCE):
+        raise CaseError(f"the components' azimuths {math.degrees(azimuths[0]):g} deg and "
+                        f"{math.degrees(azimuths[1]):g} deg are not 90 deg apart; expected two orthogonal "
+                        "horizontal components", source=case.source, field="ground.horizontal_2.azimuth")
+    return azimuths[0], azimuths[1]
+
+
+def ground_along(case: Case, records: dict, *, scaled: bool = True) -> tuple[rec.GroundMotion, Components]:
+    """The ground motion of a case with two horizontal components: the motion along
+    ``block.orientation`` (`intensity.along`) as its horizontal record, scaled.
+
+    ``ground.scale.factor`` multiplies both components; ``pga_horizontal`` scales both by one
+    factor, to make the larger of the two components' peaks that value (so the scale does not
+    depend on the block's orientation); the vertical is scaled as with one component
+    (`records.combine`). With ``block.orientation`` equal to the first component's azimuth the
+    result is that of the first component alone, bit for bit. ``scaled=False``: the records as
+    they are (factors 1).
+    """
+    first, second = records["horizontal"], records["horizontal_2"]
+    rec.check_same_grid(first, second, case.source, roles=("horizontal_1", "horizontal_2"))
+    azimuth_1, azimuth_2 = component_azimuths(case, records)
+    orientation = azimuth_1 if case.block.orientation is None else case.block.orientation
+    a1, a2 = np.asarray(first.data, dtype=np.float64), np.asarray(second.data, dtype=np.float64)
+    scale = case.ground.scale if scaled else Scale()
+    factor = scale.factor
+    if scale.pga_horizontal is not None:
+        peak = max(np.max(np.abs(a1), initial=0.0), np.max(np.abs(a2), initial=0.0))
+        if peak == 0.0:
+            raise CaseError(f"the records {first.name} and {second.name} are all zeros: they cannot be scaled "
+                            "to pga_horizontal", source=case.source, field="ground.scale.pga_horizontal")
+        factor = scale.pga_horizontal / float(peak)
+    along_record = dataclasses.replace(first, data=intensity.along(a1, a2, azimuth_1, azimuth_2, orientation))
+    try:
+        ground = rec.combine(along_record, records["vertical"], factor=factor, pga_vertical=scale.pga_vertical,
+                             vertical_factor=scale.vertical_factor, source=case.source)
+    except RecordError as exc:
+        if exc.field is None:
+            raise
+        raise RecordError(exc.message, source=exc.source, field=f"ground.scale.{exc.field}") from None
+    k = ground.horizontal_factor
+    across = intensity.along(a1, a2, azimuth_1, azimuth_2, orientation + 0.5 * math.pi)
+    with np.errstate(over="ignore", invalid="ignore"):
+        total = float(np.sum(a1 * a1) + np.sum(a2 * a2))
+        share = float(np.sum(across * across)) / total if total > 0.0 else 0.0
+    components = Components(
+        azimuth_1=azimuth_1, azimuth_2=azimuth_2, orientation=orientation,
+        pga_1=k * float(np.max(np.abs(a1), initial=0.0)), pga_2=k * float(np.max(np.abs(a2), initial=0.0)),
+        pga_along=float(np.max(np.abs(ground.horizontal), initial=0.0)),
+        pga_across=k * float(np.max(np.abs(across), initial=0.0)), ignored_share=share)
+    files = ground.files + ({"role": "horizontal_2", "path": second.path, "sha256": second.sha256,
+                             "format": second.format, "units": second.units},)
+    return dataclasses.replace(ground, files=files), components
 
 
 def is_pulse_case(case: Case) -> bool:
@@ -358,7 +477,11 @@ def prepare(case: Case, records_dir: Path | None = None, *, history: bool = True
     """Load the case's records and run every check that needs no computation (the parameters'
     ranges, the ground motion, the sizes), warning when the step is too coarse for the block."""
     check_parameters(case)
-    ground = load_ground(case, records_dir)
+    components = None
+    if case.ground.two_components:
+        ground, components = ground_along(case, read_records(case, records_dir))
+    else:
+        ground = load_ground(case, records_dir)
     check_against_ground(case, ground)
     check_size(case, ground, history=history)
     model = model_for(case)
@@ -366,7 +489,7 @@ def prepare(case: Case, records_dir: Path | None = None, *, history: bool = True
     warning = coarse_step_warning(case.source, parameters(model, ground.dt, settings))
     if warning:
         warnings.warn(warning, RunWarning, stacklevel=2)
-    return Prepared(case, ground, model, settings)
+    return Prepared(case, ground, model, settings, components)
 
 
 def start_time(prepared: Prepared) -> float:
@@ -392,20 +515,31 @@ def run_case(case: Case, records_dir: Path | None = None, *, history: bool = Tru
     return prepared, simulate_prepared(prepared)
 
 
+def applied_ground(prepared: Prepared) -> dict:
+    """The ground motion as applied (`records.GroundMotion.as_applied`), with two horizontal
+    components also ``components`` (`Components.as_dict`)."""
+    ground = prepared.ground.as_applied()
+    if prepared.components is not None:
+        ground["components"] = prepared.components.as_dict()
+    return ground
+
+
 def record_entries(prepared: Prepared) -> list[dict]:
     """The records' provenance for the result file (file name only, checksum, format, scale)."""
     out = []
     for entry in prepared.ground.files:
         role = entry["role"]
         ground = prepared.ground
-        factor = ground.horizontal_factor if role == "horizontal" else ground.vertical_factor
+        factor = ground.vertical_factor if role == "vertical" else ground.horizontal_factor
         out.append({**entry, "path": Path(str(entry["path"])).name, "scale_factor": float(factor)})
     return out
 
 
-__all__ = ["Prepared", "load_ground", "is_pulse_case", "unit_pulses", "pulse_ground", "model_for",
+__all__ = ["Prepared", "Components", "component_azimuths", "ground_along",
+           "load_ground", "is_pulse_case", "unit_pulses", "pulse_ground", "model_for",
            "settings_for", "check_parameters", "check_against_ground", "check_step", "check_size", "prepare",
-           "simulate_prepared", "run_case", "record_entries", "start_time", "verdict_robustness", "work", "Work",
+           "simulate_prepared", "run_case", "applied_ground",
+           "record_entries", "start_time", "verdict_robustness", "work", "Work",
            "step_warning", "RunWarning"]
 
 

@@ -649,6 +649,27 @@ def _at2_units(ctx: _Context, line: str) -> str | None:
     return unit
 
 
+_AT2_COMPONENT = re.compile(r"^[A-Za-z_-]*(\d{1,3}(?:\.\d*)?)$")
+
+
+def at2_azimuth(path) -> float | None:
+    """The azimuth [rad] of a PEER AT2 record's component, from the end of its title line (line 2:
+    ``Kobe Japan, 1/16/1995, KJMA, 90`` or ``..., KJM090``: degrees clockwise from north); None
+    when the line ends otherwise (``UP``, a vertical) or the file is not there."""
+    try:
+        with open(path, "rb") as handle:
+            head = handle.read(4096)
+    except OSError:
+        return None
+    lines = _decode(head).splitlines()
+    if len(lines) < 2:
+        return None
+    match = _AT2_COMPONENT.match(lines[1].rsplit(",", 1)[-1].strip())
+    if match is None or not float(match.group(1)) < 360.0:
+        return None
+    return math.radians(float(match.group(1)))
+
+
 def _at2_npts_dt(ctx: _Context, line: str) -> tuple[int, float]:
     """NPTS and DT [s] from AT2 line 4, in the PEER NGA (``NPTS=``, ``NPTS =``) or old style."""
     npts, dt = _AT2_NPTS.search(line), _AT2_DT.search(line)
@@ -1007,7 +1028,7 @@ def combine(horizontal: Record | obspy.Trace | None, vertical: Record | obspy.Tr
     horizontal, vertical = (r if r is None or isinstance(r, Record) else Record.from_trace(r)
                             for r in (horizontal, vertical))
     if horizontal is not None and vertical is not None:
-        _check_same_grid(horizontal, vertical, source)
+        check_same_grid(horizontal, vertical, source)
     h = None if horizontal is None else np.asarray(horizontal.data, dtype=np.float64)
     v = None if vertical is None else np.asarray(vertical.data, dtype=np.float64)
 
@@ -1054,9 +1075,12 @@ def _check_scale(name: str, value, positive: bool, source: str | None) -> None:
         raise RecordError(f"{name} = {value!r}; expected {expected}", source=source, field=name)
 
 
-def _check_same_grid(horizontal: Record, vertical: Record, source: str | None) -> None:
+def check_same_grid(horizontal: Record, vertical: Record, source: str | None,
+                    roles: tuple[str, str] = ("horizontal", "vertical")) -> None:
+    """Refuse two records that do not share one time grid (step, length, start): rockslide does not
+    resample. ``roles`` name them in the message."""
     dh, dv = float(horizontal.dt), float(vertical.dt)
-    names = f"horizontal {horizontal.name} and vertical {vertical.name}"
+    names = f"{roles[0]} {horizontal.name} and {roles[1]} {vertical.name}"
     if abs(dh - dv) > 1e-9 * max(dh, dv):
         raise RecordError(f"{names} have different dt ({dh} s and {dv} s); resample one of them "
                           "(rockslide does not resample)", source=source)

@@ -61,7 +61,10 @@ is the dimension scale of its group's columns and ``/event`` that of ``/events``
   None.
 - the ground motion as applied, if given: ``ground_pga_horizontal``, ``ground_pga_vertical``
   [m/s^2] (peaks of the scaled records) and ``ground_scale_horizontal``, ``ground_scale_vertical``
-  (the factors applied to the records; NaN for an absent record).
+  (the factors applied to the records; NaN for an absent record); with two horizontal components
+  also ``ground_azimuth_1``, ``ground_azimuth_2``, ``ground_orientation`` [rad], ``ground_pga_1``,
+  ``ground_pga_2``, ``ground_pga_along``, ``ground_pga_across`` [m/s^2] and ``ground_ignored_share``
+  (`COMPONENT_KEYS`).
 - ``verdict``, ``name``, ``integration_step`` [s], ``format`` = "rockslide-result",
   ``format_version`` = 1, ``created`` (ISO 8601, UTC);
 - versions: ``rockslide_version``, ``python_version``, ``numpy_version``, ``numba_version``,
@@ -115,6 +118,13 @@ HISTORY_UNITS = {"time": "s", "rotation": "rad", "rotation_rate": "rad/s", "slip
 STATE_CODES = ", ".join(f"{code} {name}" for code, name in enumerate(STATE_NAMES))
 GROUND_UNITS = {"time": "s", "horizontal": "m/s^2", "vertical": "m/s^2"}
 RECORD_KEYS = ("role", "path", "sha256", "format", "units", "scale_factor")
+#: The roles of ``/records`` groups: ``horizontal`` (with two components, the first), ``vertical``,
+#: ``horizontal_2`` (the second horizontal component).
+RECORD_ROLES = ("horizontal", "vertical", "horizontal_2")
+#: With two horizontal components (`prepare.Components`), root attributes ``ground_<key>``: the
+#: azimuths and orientation [rad], the scaled peaks [m/s^2] and the share the planar model ignores.
+COMPONENT_KEYS = ("azimuth_1", "azimuth_2", "orientation", "pga_1", "pga_2", "pga_along", "pga_across",
+                  "ignored_share")
 #: Packages whose versions are stored as ``<name>_version`` root attributes.
 VERSIONED_PACKAGES = ("rockslide", "python", "numpy", "numba", "h5py", "obspy", "scipy", "matplotlib")
 
@@ -437,8 +447,8 @@ def _write_body(f: h5py.File, result: Result, *, name, case_text, case, records,
         top = f.create_group("records", track_order=True)
         for record in records:
             role = str(record.get("role") or "")
-            if role not in ("horizontal", "vertical"):
-                raise ValueError(f"record role must be 'horizontal' or 'vertical', got {role!r}")
+            if role not in RECORD_ROLES:
+                raise ValueError(f"record role must be one of {', '.join(RECORD_ROLES)}, got {role!r}")
             group = top.create_group(role, track_order=True)
             for key in RECORD_KEYS:
                 value = record.get(key)
@@ -455,6 +465,9 @@ def _write_body(f: h5py.File, result: Result, *, name, case_text, case, records,
     for key in GROUND_KEYS if ground else ():
         value = ground.get(key)
         attrs[f"ground_{key}"] = math.nan if value is None else float(value)
+    components = (ground or {}).get("components") or {}
+    for key in COMPONENT_KEYS if components else ():
+        attrs[f"ground_{key}"] = float(components[key])
     attrs["verdict"] = result.summary.verdict
     attrs["name"] = name
     attrs["integration_step"] = float(result.step)
@@ -847,13 +860,15 @@ def _read_body(f: h5py.File) -> StoredResult:
         case = _unflatten(case_attrs)
     records = []
     if "records" in f:
-        for role in ("horizontal", "vertical"):
+        for role in RECORD_ROLES:
             if role in f["records"]:
                 group = f["records"][role]
                 records.append({key: _none_if_empty(_plain(group.attrs.get(key, "")))
                                 for key in RECORD_KEYS})
     ground = {key: None if math.isnan(attrs[f"ground_{key}"]) else float(attrs[f"ground_{key}"])
               for key in GROUND_KEYS if f"ground_{key}" in attrs}
+    if "ground_orientation" in attrs:
+        ground["components"] = {key: float(attrs[f"ground_{key}"]) for key in COMPONENT_KEYS}
     return StoredResult(name=str(attrs.get("name", "")), result=result, case_text=case_text,
                         case=case, records=records, attrs=attrs, ground=ground)
 
