@@ -58,6 +58,13 @@ def where_options(what: str, unit: str):
         click.option("--chunk-size", type=int, default=None, metavar="N",
                      help=f"{unit.capitalize()}s per chunk (default: about 1/100 of them, 4 to 256). Part of the "
                           f"{what}'s definition: a different size does not resume an interrupted run."),
+        click.option("--wait-workers", type=click.FloatRange(0, 86400), default=None, metavar="SECONDS",
+                     help="With --scheduler: how long to wait for a first worker to join the scheduler "
+                          "(default 120 s; on SLURM or Kubernetes the workers start after it)."),
+        click.option("--shard", default=None, metavar="I/N",
+                     help=f"Compute only share I of N of the {what}'s chunks into its chunk folder and stop (N "
+                          "processes, e.g. a SLURM job array, sharing the output folder); the same command "
+                          "without --shard then collects them into the result (docs/clusters.md)."),
         click.option("--no-progress", is_flag=True,
                      help="No progress bar on stderr (there is none anyway when stderr is not a terminal)."),
         dpi_option("PNG figure"),
@@ -101,7 +108,7 @@ def where_options(what: str, unit: str):
 @records_dir_option
 @where_options("sweep", "case")
 def sweep(case_file, mu_kinetic_ratio, records_dir, out_dir, overwrite, no_plot, workers, scheduler, device,
-          chunk_size, no_progress, dpi, as_csv, **_axes):
+          chunk_size, no_progress, dpi, as_csv, shard, wait_workers, **_axes):
     """Grid of cases over friction, intensity, vertical factor, restitution, slenderness or gravity,
     over a pulse's amplitude and period or duration, or over the block's orientation under two
     horizontal components (--azimuth, docs/two-components.md): CASE_FILE (YAML) -> OUT/NAME.sweep.h5 and
@@ -123,7 +130,7 @@ def sweep(case_file, mu_kinetic_ratio, records_dir, out_dir, overwrite, no_plot,
     from ..analyses import sweep as sw
     from ..case import load_case
     from ..engine.chunks import ChunkStore
-    from ..engine.execute import check_where
+    from ..engine.execute import check_where, parse_shard
     from ..engine.prepare import duration_text
     from ..io import files, records, results
     from ..plots import save_figure
@@ -133,7 +140,8 @@ def sweep(case_file, mu_kinetic_ratio, records_dir, out_dir, overwrite, no_plot,
     case = load_case(case_file)
     # the axes in the order given (dimension order): `_axis_option` keeps them; **_axes is unordered
     axes = [sw.parse_axis(name, text) for name, text in ctx.meta.get("rockslide.sweep.axes", [])]
-    scheduler = check_where(workers=workers, scheduler=scheduler, device=device)
+    scheduler = check_where(workers=workers, scheduler=scheduler, device=device, wait_workers=wait_workers)
+    shard = parse_shard(shard)
     h5_path, png_path = _outputs(case, out_dir, ".sweep")
     finishing = _result_set(h5_path, png_path, overwrite=overwrite, no_plot=no_plot, example="out/case.sweep",
                             leftovers=ChunkStore.beside(h5_path, "").root.exists())
@@ -152,7 +160,8 @@ def sweep(case_file, mu_kinetic_ratio, records_dir, out_dir, overwrite, no_plot,
         return
     files.remove_stale_temporaries([h5_path, png_path])
     done = _compute(ctx, plan, h5_path, what="sweep", description=plan.describe(), label=case.name, unit="case",
-                    workers=workers, scheduler=scheduler, device=device, no_progress=no_progress)
+                    workers=workers, scheduler=scheduler, device=device, no_progress=no_progress, shard=shard,
+                    wait_workers=wait_workers)
     variables = sw.sweep_variables(plan, done.states)
     with files.Staging(overwrite=overwrite) as staging:
         results.write_sweep(h5_path, sw.coordinates(plan), variables, overwrite=overwrite, staging=staging,
@@ -220,7 +229,7 @@ def sweep(case_file, mu_kinetic_ratio, records_dir, out_dir, overwrite, no_plot,
 @where_options("fragility analysis", "run")
 def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, resamples, case_vertical, samples,
               seed, azimuth, as_json, records_dir, out_dir, overwrite, no_plot, workers, scheduler, device, chunk_size,
-              no_progress, dpi, as_csv):
+              no_progress, dpi, as_csv, shard, wait_workers):
     """Fragility curves of a block over a record suite scaled to levels of an intensity measure:
     CASE_FILE (YAML) -> OUT/NAME.fragility.h5 and OUT/NAME.fragility.png.
 
@@ -240,7 +249,7 @@ def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, 
     """
     from ..analyses import fragility as fr
     from ..case import load_case
-    from ..engine.execute import check_where
+    from ..engine.execute import check_where, parse_shard
     from ..io import files, records, results
     from ..plots import save_figure
 
@@ -250,7 +259,8 @@ def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, 
     im = fr.parse_im(im_text)
     levels = fr.parse_levels(levels_text, im)
     states = fr.damage_states(damage_texts)
-    scheduler = check_where(workers=workers, scheduler=scheduler, device=device)
+    scheduler = check_where(workers=workers, scheduler=scheduler, device=device, wait_workers=wait_workers)
+    shard = parse_shard(shard)
     suite = fr.suite_at_azimuths(fr.suite_from(suite_spec, units=units), azimuth)
     fplan = fr.plan_fragility(case, suite, im, levels, records_dir=records.records_dir(records_dir),
                               chunk_size=chunk_size, case_vertical=case_vertical, samples=samples, seed=seed)
@@ -263,7 +273,7 @@ def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, 
         click.echo(f"  note: {fplan.vertical_note}", err=as_json)
     done = _compute(ctx, plan, h5_path, what="fragility", description=fplan.describe(), label=case.name,
                     unit="run", workers=workers, scheduler=scheduler, device=device, no_progress=no_progress,
-                    err=as_json)
+                    err=as_json, shard=shard, wait_workers=wait_workers)
     analysis = fr.analyse(fplan, done.states, states, resamples=resamples)
     coords, variables, attrs = fr.dataset(fplan, analysis, _command_line(ctx, case_file))
     with files.Staging(overwrite=overwrite) as staging:
@@ -330,10 +340,10 @@ def _rate(done, unit: str) -> str:
 
 
 def _compute(ctx, plan, h5_path, *, what, description, label, unit, workers, scheduler, no_progress,
-             device="cpu", err=False):
+             device="cpu", err=False, shard=None, wait_workers=None):
     """`engine.execute.execute` with the chunks kept beside ``h5_path``, its notes on the console
     (stderr with ``err``) and a progress bar on a terminal; after Ctrl-C or SIGTERM, says what is
-    kept and exits 130 or 143."""
+    kept and exits 130 or 143; with ``shard``, says what this share computed and exits 0."""
     from tqdm import tqdm
 
     from ..engine.chunks import ChunkStore
@@ -349,13 +359,19 @@ def _compute(ctx, plan, h5_path, *, what, description, label, unit, workers, sch
         # disable=None: tqdm draws only on a terminal, so that no frames land in log files
         with tqdm(total=plan.n_cases, unit=unit, file=sys.stderr, disable=True if no_progress else None,
                   dynamic_ncols=True, desc=label, smoothing=0.1) as bar:
-            return execute(plan, store, workers=workers, scheduler=scheduler, device=device, progress=bar.update,
+            done = execute(plan, store, workers=workers, scheduler=scheduler, device=device, progress=bar.update,
                            report=report, what=what, label=label, description=description, unit=unit,
-                           free_space_at=Path(h5_path).parent)
+                           free_space_at=Path(h5_path).parent, shard=shard, wait_workers=wait_workers)
     except interrupts.Interrupted as exc:
         click.echo(f"rockslide: {exc.word}: {store.count()} of {plan.n_chunks} chunks are kept in {store.folder}; "
                    "the same command resumes from them", err=True)
         ctx.exit(exc.exit_code)
+    if shard is not None:
+        click.echo(f"{what} {label}: shard {shard[0]}/{shard[1]} computed {done.computed} {unit}s in "
+                   f"{done.seconds:.1f} s; {store.count()} of {plan.n_chunks} chunks are in {store.folder} (the "
+                   "same command without --shard collects them)", err=err)
+        ctx.exit(0)
+    return done
 
 
 

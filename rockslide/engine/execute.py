@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import contextlib
 import time
+import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -33,7 +34,8 @@ from .prepare import STEPS_PER_SECOND
 
 def compute(plan: Plan, store: ChunkStore, chunks: Sequence[int], *, workers: int | None = None,
             scheduler: str | None = None, progress: Callable[[int], None] | None = None,
-            device: str = "cpu") -> None:
+            device: str = "cpu", wait_workers: float | None = None,
+            report: Callable[[str], None] | None = None) -> None:
     """Compute ``chunks`` of ``plan`` and store each as soon as it is done.
 
     Parameters
@@ -51,19 +53,27 @@ def compute(plan: Plan, store: ChunkStore, chunks: Sequence[int], *, workers: in
         Called with the number of cases of each finished chunk.
     device : {"cpu", "gpu"}
         Where a local run computes (`DEVICES`): the CPU's cores, or an NVIDIA GPU (`core.gpu`).
+    wait_workers : float, optional
+        [s] How long ``scheduler`` may have no worker before the first joins (default
+        `WAIT_FOR_WORKERS`).
+    report : callable, optional
+        Called with a note for the user (that it waits for a worker).
 
     Raises
     ------
     CaseError
-        ``workers`` out of range, the scheduler cannot be reached, is lost, or a task fails there
-        (the chunks finished before are stored), or no GPU can be used (`check_device`).
+        ``workers`` out of range, the scheduler cannot be reached, has no worker in time, its
+        workers run another rockslide (`check_workers_match`), it or all its workers are lost, or a
+        task fails there (the chunks finished before are stored), or no GPU can be used
+        (`check_device`).
     interrupts.Interrupted
         After Ctrl-C or SIGTERM, checked between chunk groups; the chunks finished before it are
         stored.
     """
     check_device(device)
     if scheduler:
-        _compute_dask(plan, store, chunks, scheduler, progress)
+        _compute_dask(plan, store, chunks, scheduler, progress, wait_workers,
+                      report if report is not None else (lambda text: None))
     elif device == "gpu":
         _compute_device(plan, store, chunks, progress)
     else:
@@ -209,17 +219,26 @@ def _chunk_inputs(plan: Plan, indices: np.ndarray):
 SCHEDULER_TIMEOUT = 10.0
 
 
-def _compute_dask(plan, store, chunks, address, progress):
+#: [s] How long ``--scheduler`` waits for a first worker by default (``--wait-workers``): on SLURM
+#: or Kubernetes the scheduler starts first and the workers join when their jobs start.
+WAIT_FOR_WORKERS = 120.0
+
+
+def _compute_dask(plan, store, chunks, address, progress, wait_workers, say):
     """One task per chunk on the cluster (`batch.compute`, serial in the task); each chunk is
-    stored as its result arrives. One bounded connection attempt (`identify_scheduler`), the
-    cluster's log messages kept off the terminal, Ctrl-C checked while waiting."""
+    stored as its result arrives. One bounded connection attempt (`identify_scheduler`), a bounded
+    wait for the first worker, every worker's rockslide checked against this one's
+    (`check_workers_match`), the cluster's log messages kept off the terminal, Ctrl-C checked
+    while waiting."""
     try:
         import distributed
     except ImportError:  # pragma: no cover - a declared dependency
         raise CaseError("needs dask.distributed (pip install 'dask[distributed]')",
                         source="--scheduler") from None
     address = scheduler_address(address)
-    with _quiet_logs("distributed", "tornado", "asyncio"):
+    with _quiet_logs("distributed", "tornado", "asyncio"), warnings.catch_warnings():
+        # dask's own table of mismatched package versions: `check_workers_match` says what matters
+        warnings.filterwarnings("ignore", message=".*[Mm]ismatched versions.*")
         identify_scheduler(address)
         try:
             client = distributed.Client(address, timeout=f"{SCHEDULER_TIMEOUT:g}s", set_as_default=False)
@@ -228,6 +247,8 @@ def _compute_dask(plan, store, chunks, address, progress):
                             source="--scheduler") from None
         futures = {}
         try:
+            _wait_for_workers(client, address, wait_workers, say)
+            check_workers_match(client.run(worker_identity), local_identity(), address)
             base = client.scatter(plan.base, broadcast=True)
             for chunk in chunks:
                 indices = plan.chunk_indices(chunk)
@@ -248,6 +269,8 @@ def _collect_futures(client, futures: dict, store: ChunkStore, address: str, pro
     fraction of a second and `SCHEDULER_TIMEOUT` respectively."""
 
     lost_since = None
+    no_workers_since = None
+    checked = time.monotonic()
     while futures:
         interrupts.check()
         finished = [f for f in futures if f.status in ("finished", "error", "cancelled", "lost")]
@@ -259,7 +282,7 @@ def _collect_futures(client, futures: dict, store: ChunkStore, address: str, pro
                     raise CaseError(f"a task failed on the cluster: {type(exc).__name__}: {exception_text(exc)} "
                                     "(are rockslide and its dependencies installed on the workers?)",
                                     source="--scheduler")
-                raise _lost(address, store)
+                raise _workers_lost(address, store) if _no_workers(client) else _lost(address, store)
             try:
                 states = np.asarray(future.result(timeout=SCHEDULER_TIMEOUT), dtype=np.float64)
             except Exception:  # noqa: BLE001 - the result could not be fetched: the scheduler is gone
@@ -273,6 +296,14 @@ def _collect_futures(client, futures: dict, store: ChunkStore, address: str, pro
             lost_since = time.monotonic()
         elif time.monotonic() - lost_since > SCHEDULER_TIMEOUT:
             raise _lost(address, store)
+        if lost_since is None and time.monotonic() - checked > 1.0:
+            checked = time.monotonic()
+            if not _no_workers(client):
+                no_workers_since = None
+            elif no_workers_since is None:
+                no_workers_since = checked
+            elif checked - no_workers_since > SCHEDULER_TIMEOUT:
+                raise _workers_lost(address, store)
         if not finished:
             time.sleep(0.1)
 
@@ -281,6 +312,91 @@ def _lost(address: str, store: ChunkStore) -> CaseError:
     return CaseError(f"lost the connection to the dask scheduler at {address}; {store.count()} finished "
                      f"chunks are kept in {store.folder} and the same command resumes from them",
                      source="--scheduler")
+
+
+def _workers_lost(address: str, store: ChunkStore) -> CaseError:
+    return CaseError(f"every worker of the dask scheduler at {address} is gone (the scheduler still answers); "
+                     f"{store.count()} finished chunks are kept in {store.folder}: start workers and the same "
+                     "command resumes from them", source="--scheduler")
+
+
+def _no_workers(client) -> bool:
+    """Whether the scheduler has no worker (a question to it; False when it cannot be asked)."""
+    try:
+        return not client.nthreads()
+    except Exception:  # noqa: BLE001 - the scheduler is gone: `_lost` says so
+        return False
+
+
+def _wait_for_workers(client, address: str, wait: float | None, say) -> None:
+    """Return once the scheduler has a worker; wait up to ``wait`` seconds for the first to join
+    (saying once that it waits), Ctrl-C checked, then one line naming ``--wait-workers``."""
+    wait = WAIT_FOR_WORKERS if wait is None else wait
+    deadline = time.monotonic() + wait
+    said = False
+    while not client.nthreads():
+        if time.monotonic() >= deadline:
+            raise CaseError(f"no dask worker joined the scheduler at {address} within {wait:g} s (start workers "
+                            f"with 'dask worker {address}', or wait longer with --wait-workers SECONDS)",
+                            source="--scheduler")
+        if not said:
+            say(f"  waiting for a first dask worker to join {address} (up to {wait:g} s, --wait-workers)")
+            said = True
+        interrupts.check()
+        time.sleep(0.2)
+
+
+def worker_identity() -> dict:
+    """What makes a worker's results this client's: rockslide's version, the compiled core's
+    source stamp and numba's version; or why rockslide cannot be imported there.
+
+    Sent to the workers by value (it names no module-level object of rockslide), so that a worker
+    without rockslide answers with the reason instead of failing to unpickle the task.
+    """
+    try:
+        import numba
+
+        import rockslide
+        from rockslide.core import compiled
+        return {"rockslide": rockslide.__version__, "core": compiled.source_stamp(), "numba": numba.__version__}
+    except Exception as exc:  # noqa: BLE001 - any reason a worker cannot import rockslide is the answer
+        return {"error": f"{type(exc).__name__}: {exc}"}
+
+
+worker_identity.__module__ = "__main__"     # cloudpickle sends functions of __main__ by value
+
+
+def local_identity() -> dict:
+    """`worker_identity` of this process."""
+    import numba
+
+    from .. import __version__
+    from ..core import compiled
+    return {"rockslide": __version__, "core": compiled.source_stamp(), "numba": numba.__version__}
+
+
+def check_workers_match(identities: dict, mine: dict, address: str) -> None:
+    """Refuse a cluster whose workers (``{worker address: worker_identity()}``) cannot import
+    rockslide or run another version of it, another core or another numba than ``mine``: one line
+    naming the workers and both versions (their results would differ from this client's)."""
+    broken = {w: i["error"] for w, i in identities.items() if "error" in i}
+    if broken:
+        names = ", ".join(sorted(broken)[:3]) + (f" and {len(broken) - 3} more" if len(broken) > 3 else "")
+        raise CaseError(f"the dask worker{'s' if len(broken) > 1 else ''} {names} cannot import rockslide "
+                        f"({next(iter(broken.values()))}); install rockslide=={mine['rockslide']} there",
+                        source="--scheduler")
+    for what, name in (("rockslide", "rockslide"), ("core", "rockslide's compiled core (source stamp)"),
+                       ("numba", "numba")):
+        other = {w: i[what] for w, i in identities.items() if i.get(what) != mine[what]}
+        if other:
+            workers = sorted(other)
+            names = ", ".join(workers[:3]) + (f" and {len(workers) - 3} more" if len(workers) > 3 else "")
+            theirs = other[workers[0]]
+            shown = (theirs[:12], mine[what][:12]) if what == "core" else (theirs, mine[what])
+            several = len(workers) > 1
+            raise CaseError(f"the dask worker{'s' if several else ''} {names} run{'' if several else 's'} "
+                            f"{name} {shown[0]}, this client {shown[1]}: their results would differ; install the "
+                            "same version on every worker", source="--scheduler")
 
 
 def scheduler_address(address: str) -> str:
@@ -403,7 +519,8 @@ class Execution:
     store: object
 
 
-def check_where(*, workers: int | None = None, scheduler: str | None = None, device: str = "cpu") -> str | None:
+def check_where(*, workers: int | None = None, scheduler: str | None = None, device: str = "cpu",
+                wait_workers: float | None = None) -> str | None:
     """Refuse ``workers``, ``scheduler`` and ``device`` that do not go together, ``workers`` out of
     range, and ``device="gpu"`` where no GPU can be used, before any planning (one line each,
     naming the command-line option). Returns the scheduler's address as ``tcp://HOST:PORT``."""
@@ -412,6 +529,9 @@ def check_where(*, workers: int | None = None, scheduler: str | None = None, dev
                         source="--workers")
     if device == "gpu" and scheduler:
         raise CaseError("with --scheduler the cluster's workers compute, on their CPUs", source="--device")
+    if wait_workers is not None and not scheduler:
+        raise CaseError("is the wait for a dask cluster's first worker: give it with --scheduler",
+                        source="--wait-workers")
     if device == "gpu" and workers is not None:
         raise CaseError("sets the CPU threads; with --device gpu the GPU computes", source="--workers")
     check_workers(workers)
@@ -422,7 +542,8 @@ def check_where(*, workers: int | None = None, scheduler: str | None = None, dev
 def execute(plan: Plan, store=None, *, workers: int | None = None, scheduler: str | None = None,
             device: str = "cpu", progress: Callable[[int], None] | None = None,
             report: Callable[[str], None] | None = None, what: str = "study", label: str = "",
-            description: str = "", unit: str = "case", free_space_at: Path | None = None) -> Execution:
+            description: str = "", unit: str = "case", free_space_at: Path | None = None,
+            shard: tuple[int, int] | None = None, wait_workers: float | None = None) -> Execution:
     """Compute what ``store`` does not hold yet of ``plan``, and return every case's final state.
 
     The one orchestration of every analysis: the chunks ``store`` holds are reused (a damaged one is
@@ -445,6 +566,17 @@ def execute(plan: Plan, store=None, *, workers: int | None = None, scheduler: st
         cases"``, ``"case"``).
     free_space_at : Path, optional
         The folder whose disk must hold the chunks and the result.
+    shard : (int, int), optional
+        ``(i, n)``: compute only the missing chunks whose number is ``i - 1`` modulo ``n`` (one of
+        ``n`` processes sharing ``store``'s folder, e.g. a SLURM job array; `parse_shard`) and
+        return no states: a run without ``shard`` collects them.
+    wait_workers : float, optional
+        [s] How long ``scheduler`` may wait for its first worker (`compute`).
+
+    Returns
+    -------
+    Execution
+        Its ``states`` are None with ``shard``.
 
     Raises
     ------
@@ -465,7 +597,11 @@ def execute(plan: Plan, store=None, *, workers: int | None = None, scheduler: st
         say(f"  note: {store.path(chunk)} cannot be used ({reason}); computing it again")
     reused = plan.n_chunks - len(missing)
     reused_cases = plan.n_cases - sum(plan.chunk_indices(c).size for c in missing)
-    device, why = ("cpu", "") if scheduler else choose_device(device, plan.n_cases - reused_cases)
+    all_missing = missing
+    if shard is not None:
+        missing = [c for c in missing if c % shard[1] == shard[0] - 1]
+    computed = sum(plan.chunk_indices(c).size for c in missing)
+    device, why = ("cpu", "") if scheduler else choose_device(device, computed)
     where = (f"on the dask scheduler {scheduler}" if scheduler else
              "on this machine's GPU" if device == "gpu" else "on this machine")
     where += f" (--device auto: {why})" if why else ""
@@ -473,7 +609,10 @@ def execute(plan: Plan, store=None, *, workers: int | None = None, scheduler: st
         say(f"{what} {label}: {description} in {plan.n_chunks} chunks, {where}")
     if reused:
         say(f"  reused {reused} of {plan.n_chunks} chunks ({reused_cases} {unit}s) from {store.folder}")
-    if work_estimate(plan, plan.n_cases - reused_cases, workers=workers) > 60:
+    if shard is not None:
+        say(f"  shard {shard[0]}/{shard[1]}: {len(missing)} of the {len(all_missing)} chunks still missing (those "
+            f"numbered {shard[0] - 1} modulo {shard[1]}); the same command without --shard collects them all")
+    if work_estimate(plan, computed, workers=workers) > 60:
         say(f"  up to {plan.steps_per_case:.3g} integration steps per {unit} (far fewer for {unit}s at rest "
             "or overturned): the progress bar shows the time left")
     if free_space_at is not None:
@@ -481,12 +620,28 @@ def execute(plan: Plan, store=None, *, workers: int | None = None, scheduler: st
         files.require_free_space(Path(free_space_at), bytes_needed(plan, len(missing)), f"the {what}")
     if not scheduler and missing:
         warm_up(device, say)
-    if progress is not None and reused_cases:
-        progress(reused_cases)
+    if progress is not None and plan.n_cases > computed:
+        progress(plan.n_cases - computed)
     started = time.perf_counter()
-    compute(plan, store, missing, workers=workers, scheduler=scheduler, progress=progress, device=device)
+    compute(plan, store, missing, workers=workers, scheduler=scheduler, progress=progress, device=device,
+            wait_workers=wait_workers, report=say)
     seconds = time.perf_counter() - started
-    return Execution(collect(plan, store), plan.n_cases - reused_cases, seconds, store)
+    return Execution(None if shard is not None else collect(plan, store), computed, seconds, store)
+
+
+def parse_shard(text: str | None) -> tuple[int, int] | None:
+    """``(i, n)`` from ``--shard I/N`` (1 <= i <= n), None for None; else one CaseError."""
+    if text is None:
+        return None
+    parts = str(text).strip().split("/")
+    try:
+        index, count = (int(p) for p in parts) if len(parts) == 2 else (None, None)
+    except ValueError:
+        index = count = None
+    if index is None or not 1 <= index <= count <= 1_000_000:
+        raise CaseError(f"expected I/N with 1 <= I <= N (this process's share of N, e.g. 3/16), got {text!r}",
+                        source="--shard")
+    return index, count
 
 
 def warm_up(device: str, say: Callable[[str], None]) -> None:
