@@ -356,9 +356,9 @@ def worker_identity() -> dict:
     try:
         import numba
 
-        import rockslide
+        from rockslide._version import __version__
         from rockslide.core import compiled
-        return {"rockslide": rockslide.__version__, "core": compiled.source_stamp(), "numba": numba.__version__}
+        return {"rockslide": __version__, "core": compiled.source_stamp(), "numba": numba.__version__}
     except Exception as exc:  # noqa: BLE001 - any reason a worker cannot import rockslide is the answer
         return {"error": f"{type(exc).__name__}: {exc}"}
 
@@ -370,7 +370,7 @@ def local_identity() -> dict:
     """`worker_identity` of this process."""
     import numba
 
-    from .. import __version__
+    from .._version import __version__
     from ..core import compiled
     return {"rockslide": __version__, "core": compiled.source_stamp(), "numba": numba.__version__}
 
