@@ -25,11 +25,13 @@ in what is stored. The format follows the file name in `save_figure` (PNG, PDF, 
 
 from __future__ import annotations
 
+import contextvars
 import logging
 import math
 import os
 import struct
 import sys
+import textwrap
 import zlib
 from contextlib import contextmanager
 from pathlib import Path
@@ -41,7 +43,7 @@ from matplotlib import rcParams
 from .core.layout import OVERTURNED, REST, ROCK, ROCKSLIP, SLIP, STATE_NAMES
 from .errors import OutputError
 from .io.files import atomic_write, check_destination
-from .units import percent_text
+from .units import FIGURE_SIZES, STANDARD_GRAVITY, parse_figure_size, percent_text, unit_factor
 
 
 @contextmanager
@@ -84,8 +86,14 @@ with _artists_without_set_docstrings():
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
-GAL = 0.01          # [m/s^2]
 FIGSIZE = (11.0, 8.0)   # [in]
+#: Smallest font of any figure at any size [pt]: what a printed journal column still reads.
+MIN_FONT = 6.0
+#: Fonts are the sizes written in this module times a factor that follows the figure's width
+#: (`font_scale`): 0.7 at a journal column (3.5 in), 0.8 at a page (7 in), 1 from 10 in up.
+FONT_SCALE_WIDTHS = (3.5, 7.0, 10.0)     # [in]
+FONT_SCALE_FACTORS = (0.7, 0.8, 1.0)
+_FONT_SCALE = contextvars.ContextVar("rockslide_font_scale", default=1.0)
 DPI = 150
 #: zlib level of PNG files (`_write_png`): 3 deflates a run's figure in about 17 ms (244 KB), 6 in
 #: about 45 ms (213 KB).
@@ -124,6 +132,185 @@ EDGE_PAD = 4.0
 #: Space [pt] between the blocks stacked in a response figure: the title, each panel with its
 #: decorations, the legend (`_fit_column`).
 BLOCK_GAP = 8.0
+
+
+# --------------------------------------------------------------------------------------------------
+# Sizes, fonts and captions
+# --------------------------------------------------------------------------------------------------
+
+
+def figure_size(size, default: tuple[float, float], *, column: float | None = None,
+                page: float | None = None) -> tuple[float, float]:
+    """The size [in] of a figure drawn at ``size`` (`units.parse_figure_size`): ``default`` for
+    None; a column's or a page's width (`units.FIGURE_SIZES`) with the height given for it
+    (``column``, ``page``; else the default's proportions); the slide's or the pair given."""
+    size = parse_figure_size(size)
+    if size is None:
+        return tuple(float(v) for v in default)
+    if isinstance(size, tuple):
+        return size
+    width, height = FIGURE_SIZES[size]
+    if height is None:
+        height = {"column": column, "page": page}[size] or width * default[1] / default[0]
+    return float(width), float(height)
+
+
+def font_scale(width: float) -> float:
+    """The factor on every font of a figure ``width`` [in] wide (`FONT_SCALE_WIDTHS`)."""
+    return float(np.interp(width, FONT_SCALE_WIDTHS, FONT_SCALE_FACTORS))
+
+
+def _pt(size: float) -> float:
+    """A font size written for a full-size figure [pt], at the figure being drawn (`_style`)."""
+    return max(MIN_FONT, size * _FONT_SCALE.get())
+
+
+@contextmanager
+def _style(width: float):
+    """Fonts, ticks and pads for a figure ``width`` [in] wide while it is made: `_pt` scales the
+    sizes written here, and matplotlib's own defaults (tick labels, axis labels, legends) follow.
+    Call `_freeze_ticks` before leaving: ticks made later, at drawing, would take the defaults."""
+    scale = font_scale(width)
+    token = _FONT_SCALE.set(scale)
+    try:
+        base = {"font.size": _pt(10), "axes.labelsize": _pt(10), "axes.titlesize": _pt(10),
+                "xtick.labelsize": _pt(10), "ytick.labelsize": _pt(10), "legend.fontsize": _pt(9),
+                "figure.titlesize": _pt(12),
+                "legend.title_fontsize": _pt(9), "axes.titlepad": 6.0 * scale, "axes.labelpad": 4.0 * scale}
+        for axis in ("x", "y"):
+            base[f"{axis}tick.major.size"] = 3.5 * scale
+            base[f"{axis}tick.major.pad"] = 3.5 * scale
+        with matplotlib.rc_context(base):
+            yield scale
+    finally:
+        _FONT_SCALE.reset(token)
+
+
+def _freeze_ticks(fig: Figure) -> None:
+    """Give every axis of ``fig`` the tick sizes of `_style` for good (ticks are made lazily)."""
+    for ax in fig.axes:
+        ax.tick_params(labelsize=rcParams["xtick.labelsize"], length=rcParams["xtick.major.size"],
+                       pad=rcParams["xtick.major.pad"])
+        for axis in (ax.xaxis, ax.yaxis):
+            axis.get_offset_text().set_fontsize(rcParams["xtick.labelsize"])
+
+
+def _wrap(text: str, width: float, size: float) -> str:
+    """``text`` broken into lines that fit ``width`` [in] at ``size`` [pt] (about half an em a
+    character: matplotlib's DejaVu Sans averages 0.55)."""
+    chars = max(20, int(width * 72.0 / (0.56 * size)))
+    return "\n".join(textwrap.fill(line, chars, break_on_hyphens=False) if len(line) > chars else line
+                     for line in text.split("\n"))
+
+
+def _headline(fig: Figure, title: str, caption: str, *, size: float = 12.0):
+    """The figure's title block: ``title`` (its first lines) and the ``caption`` (what was computed:
+    `case_caption`) below it, wrapped to the figure's width. Returns the suptitle (or None)."""
+    width = fig.get_size_inches()[0]
+    parts = [t for t in (title, caption) if t]
+    if not parts:
+        return None
+    font = _pt(size if not caption else 0.85 * size)
+    return fig.suptitle(_wrap("\n".join(parts), width * 0.97, font), fontsize=font)
+
+
+def case_caption(case_text: str = "", *, records=None, step: float | None = None, version: str | None = None,
+                 varied=(), ground: str | None = None) -> str:
+    """What a figure shows was computed from: the record(s) and their scaling, the block (width x
+    height, mass, alpha), friction, restitution, the integration step and rockslide's version.
+
+    Parameters
+    ----------
+    case_text : str
+        The case file's text, as stored in every result file (empty: only what is given here).
+    records : list of dict, optional
+        The records as applied (``role``, ``path``, ``scale_factor``), as stored with a run.
+    step : float, optional
+        The integration step [s] (default: the case's ``solver.dt``).
+    version : str, optional
+        rockslide's version that computed it.
+    varied : sequence of str
+        Quantities varied over the figure (a sweep's axes): their case values are marked as the
+        base case's.
+    ground : str, optional
+        The ground motion in words, in place of the case's (a fragility suite).
+
+    Returns
+    -------
+    str
+        One line, parts separated by ``"; "`` (`_headline` wraps it).
+    """
+    from .case import parse_case
+    from .errors import RockslideError
+
+    parts = []
+    case = None
+    if case_text:
+        try:
+            case = parse_case(case_text, source="<stored case>")
+        except RockslideError:
+            case = None
+    if ground:
+        parts.append(ground)
+    elif records:
+        shown = []
+        for entry in records:
+            role = {"horizontal": "H", "vertical": "V"}.get(str(entry.get("role")), str(entry.get("role", "")))
+            factor = entry.get("scale_factor")
+            scaled = f" ×{float(factor):.4g}" if factor is not None and float(factor) != 1.0 else ""
+            shown.append(f"{Path(str(entry.get('path', '?'))).name} ({role}){scaled}")
+        parts.append("records " + ", ".join(shown))
+    elif case is not None:
+        parts.append(_case_ground(case))
+    if case is not None:
+        scale = case.ground.scale
+        if scale.pga_horizontal is not None and not ground:
+            unit = case.units.get("ground.scale.pga_horizontal") or "g"
+            mark = " (base)" if "pga" in varied else ""
+            parts[-1] += f" scaled to PGA {scale.pga_horizontal / unit_factor(unit, 'acceleration'):.4g} {unit}{mark}"
+        b = case.block
+        alpha = math.atan2(b.width, b.height)
+        parts.append(f"block width × height {b.width:.4g} × {b.height:.4g} m, {b.mass:.4g} kg, "
+                     f"α = {alpha:.4g} rad")
+        mark = " (base)" if "mu" in varied else ""
+        parts.append(f"μ = {case.contact.mu_static:.4g}{mark} (kinetic {case.contact.mu_kinetic:.4g})")
+        mark = " (base)" if "restitution" in varied else ""
+        parts.append(f"e = {case.contact.restitution:.4g}{mark}")
+        step = case.solver.dt if step is None else step
+    if step is not None and math.isfinite(float(step)):
+        parts.append(f"dt = {_time_text(float(step))}")
+    if version:
+        parts.append(f"rockslide {version}")
+    return "; ".join(parts)
+
+
+def _case_ground(case) -> str:
+    """The case's ground motion in words (its record files, or its pulses)."""
+    shown = []
+    for role, spec in (("H", case.ground.horizontal), ("V", case.ground.vertical)):
+        if spec is None:
+            continue
+        name = getattr(spec, "file", None)
+        shown.append(f"{Path(name).name} ({role})" if name else f"{_pulse_text(spec)} ({role})")
+    return ("ground " + ", ".join(shown)) if shown else "still ground"
+
+
+def _pulse_text(pulse) -> str:
+    """``one-sine pulse 0.5 g, T = 0.4 s`` (amplitude in g: pulses are written so)."""
+    timing = [f"{name} {_time_text(value)}" for name, value in (("T =", pulse.period), ("length", pulse.duration))
+              if value is not None]
+    return ", ".join([f"{pulse.pulse} pulse {pulse.amplitude / STANDARD_GRAVITY:.4g} g", *timing])
+
+
+def _time_text(seconds: float) -> str:
+    return f"{seconds * 1e3:.4g} ms" if seconds < 0.1 else f"{seconds:.4g} s"
+
+
+def acceleration_unit(unit: str | None) -> tuple[str, float]:
+    """The unit figures show accelerations in (the one the case was written in: ``g``, ``gal``,
+    ``m/s^2``...; default gal) and its size [m/s^2]."""
+    unit = unit or "gal"
+    return unit, unit_factor(unit, "acceleration")
 
 
 # --------------------------------------------------------------------------------------------------
@@ -282,13 +469,15 @@ def _code(name) -> int:
 
 
 def response_figure(result, *, title: str = "", time_shift: float = 0.0,
-                    zoom: tuple | None | str = "auto", crop: tuple | None | str = "auto") -> Figure:
+                    zoom: tuple | None | str = "auto", crop: tuple | None | str = "auto", size=None,
+                    caption: str | None = None, unit: str | None = None) -> Figure:
     """The response of one simulation in the paper's style (module docstring).
 
     Parameters
     ----------
-    result : Result or StoredResult
-        A fresh or a stored result (a `StoredResult` gives its name as the default title).
+    result : Result, RunResult or StoredResult
+        A fresh or a stored result (a `RunResult` or a `StoredResult` gives its name as the default
+        title, its caption and its ground motion's unit).
     title : str
         Case name shown in the title, before the verdict.
     time_shift : float
@@ -300,53 +489,99 @@ def response_figure(result, *, title: str = "", time_shift: float = 0.0,
     crop : "auto", (t0, t1) or None
         The time range of the response and ground panels: ``"auto"`` = `motion_range`;
         ``(t0, t1)`` in the figure's time [s]; None = the whole record.
+    size : None, "column", "page", "slide", "WxH" or (width, height)
+        The figure's size [in] (`figure_size`; default 11 x 8 in); fonts follow its width.
+    caption : str, optional
+        What was computed (`case_caption`); default: from the result's case, records and version.
+    unit : str, optional
+        Unit of the ground acceleration shown (``g``, ``gal``, ``m/s^2``); default: the one the
+        case gives its PGA in, else gal.
 
     Returns
     -------
     matplotlib.figure.Figure
-        11 x 8 in; save it with `save_figure`. Its axes are labelled (``Axes.get_label``)
+        Save it with `save_figure`. Its axes are labelled (``Axes.get_label``)
         ``"record"`` and ``"record-slip"`` (the response: rotation, and the slip twin), ``"zoom"``
         and ``"zoom-slip"`` (if magnified) and ``"ground"``. It is laid out once, when made
         (`_fit_column`, no layout engine): resized, or given other texts, it is not laid out again.
     """
-    if hasattr(result, "result") and hasattr(result, "case_text"):   # a StoredResult
+    if hasattr(result, "result") and hasattr(result, "case_text"):   # a StoredResult or a RunResult
         title = title or result.name
+        if caption is None:
+            caption = run_caption(result)
+        if unit is None:
+            unit = pga_unit(result.case_text)
         result = result.result
     shift = float(time_shift)
     t0, t1 = _choose_range(result, crop, shift)
     window = _choose_zoom(result, zoom, shift, (t0, t1))
+    figsize = figure_size(size, FIGSIZE, column=6.0, page=7.5)
 
-    fig = Figure(figsize=FIGSIZE, dpi=DPI)
-    FigureCanvasAgg(fig)        # measured and drawn by one renderer (`_fit_column`)
-    ratios = [3.0, 3.0, 2.0] if window else [3.0, 2.0]
-    axes = fig.subplots(len(ratios), 1, gridspec_kw={"height_ratios": ratios})
-    top, ground = axes[0], axes[-1]
-    ground.sharex(top)
+    with _style(figsize[0]):
+        fig = Figure(figsize=figsize, dpi=DPI)
+        FigureCanvasAgg(fig)        # measured and drawn by one renderer (`_fit_column`)
+        ratios = [3.0, 3.0, 2.0] if window else [3.0, 2.0]
+        axes = fig.subplots(len(ratios), 1, gridspec_kw={"height_ratios": ratios})
+        top, ground = axes[0], axes[-1]
+        ground.sharex(top)
 
-    title_y = _response_panel(top, result, shift, (t0, t1), window=window, label="record")
-    record = _record_range(result)
-    if (t0, t1) == record:
-        top.set_title("whole record", loc="left", fontsize=10, y=title_y)
-    else:
-        top.set_title(f"{t0 + shift:.2f} to {t1 + shift:.2f} s of the {record[0] + shift:.4g} to "
-                      f"{record[1] + shift:.4g} s record", loc="left", fontsize=10, y=title_y)
-    if window:
-        zax = axes[1]
-        title_y = _response_panel(zax, result, shift, (window[0] - shift, window[1] - shift), label="zoom")
-        # round first: a pulse's ground starts a sample before 0 (-0.00 otherwise)
-        zax.set_title(f"magnified: {round(window[0], 2) + 0.0:.2f} to {window[1]:.2f} s", loc="left",
-                      fontsize=10, y=title_y)
-    _ground_panel(ground, result, shift, (t0, t1))
-    ground.set_label("ground")
-    ground.set_xlim(t0 + shift, t1 + shift)
-    for ax in axes:
-        ax.set_xlabel("time [s]")
+        alpha_drawn = []
+        title_y = _response_panel(top, result, shift, (t0, t1), window=window, label="record",
+                                  alpha_drawn=alpha_drawn)
+        record = _record_range(result)
+        if (t0, t1) == record:
+            top.set_title("whole record", loc="left", fontsize=_pt(10), y=title_y)
+        else:
+            top.set_title(f"{t0 + shift:.2f} to {t1 + shift:.2f} s of the {record[0] + shift:.4g} to "
+                          f"{record[1] + shift:.4g} s record", loc="left", fontsize=_pt(10), y=title_y)
+        if window:
+            zax = axes[1]
+            title_y = _response_panel(zax, result, shift, (window[0] - shift, window[1] - shift), label="zoom",
+                                      alpha_drawn=alpha_drawn)
+            # round first: a pulse's ground starts a sample before 0 (-0.00 otherwise)
+            zax.set_title(f"magnified: {round(window[0], 2) + 0.0:.2f} to {window[1]:.2f} s", loc="left",
+                          fontsize=_pt(10), y=title_y)
+        _ground_panel(ground, result, shift, (t0, t1), unit=unit)
+        ground.set_label("ground")
+        ground.set_xlim(t0 + shift, t1 + shift)
+        for ax in axes:
+            ax.set_xlabel("time [s]")
+        _freeze_ticks(fig)
 
-    suptitle = fig.suptitle(_title(result, title), fontsize=12)
-    legend = fig.legend(handles=_legend_handles(result), loc="lower center", ncols=6, frameon=False,
-                        fontsize=9)
-    _fit_column(fig, suptitle=suptitle, legend=legend, title_size=10)
+        suptitle = _headline(fig, _title(result, title), caption or "")
+        handles = _legend_handles(result, alpha=bool(alpha_drawn))
+        legend = fig.legend(handles=handles, loc="lower center", ncols=_legend_columns(handles, figsize[0]),
+                            frameon=False, fontsize=_pt(9))
+        _fit_column(fig, suptitle=suptitle, legend=legend, title_size=_pt(10))
     return fig
+
+
+def run_caption(run) -> str:
+    """`case_caption` of a run (a `RunResult` or a `StoredResult`): its records as applied, its
+    block and contact, its integration step and the version that computed it."""
+    from ._version import __version__
+
+    attrs = getattr(run, "attrs", None) or {}
+    step = attrs.get("integration_step")
+    return case_caption(run.case_text, records=run.records, step=None if step is None else float(step),
+                        version=str(attrs.get("rockslide_version", __version__)))
+
+
+def pga_unit(case_text: str) -> str | None:
+    """The unit a case gives its PGA in (None: not given, or the text is not a case)."""
+    from .case import parse_case
+    from .errors import RockslideError
+
+    try:
+        units = parse_case(case_text, source="<stored case>").units if case_text else {}
+    except RockslideError:
+        return None
+    return units.get("ground.scale.pga_horizontal")
+
+
+def _legend_columns(handles, width: float) -> int:
+    """Columns of a legend below a figure ``width`` [in] wide: about 1.7 in an entry, 6 at most."""
+    return max(1, min(len(handles), 6, int(width / 1.7)))
 
 
 def paper_figure(panels, *, title: str = "", time_shift: float = 0.0) -> Figure:
@@ -370,20 +605,20 @@ def paper_figure(panels, *, title: str = "", time_shift: float = 0.0) -> Figure:
         t0, t1 = motion_range(result)
         window = _choose_zoom(result, "auto", time_shift, (t0, t1))
         title_y = _response_panel(whole, result, time_shift, (t0, t1), window=window, label=f"record{row}")
-        whole.set_title(f"{label} {caption}", loc="left", fontsize=10, y=title_y)
+        whole.set_title(f"{label} {caption}", loc="left", fontsize=_pt(10), y=title_y)
         if window is None:
             window = (t0 + time_shift, t1 + time_shift)
         title_y = _response_panel(zoomed, result, time_shift, (window[0] - time_shift, window[1] - time_shift),
                                   label=f"zoom{row}", notes=False)
-        zoomed.set_title(f"magnified: {window[0]:.2f} to {window[1]:.2f} s", loc="left", fontsize=10, y=title_y)
+        zoomed.set_title(f"magnified: {window[0]:.2f} to {window[1]:.2f} s", loc="left", fontsize=_pt(10), y=title_y)
         for ax in (whole, zoomed):
             ax.set_xlabel("time [s]")
     if title:
-        fig.suptitle(title, fontsize=12)
+        fig.suptitle(title, fontsize=_pt(12))
     handles = [h for _, r, _ in panels for h in _legend_handles(r, ground=False)]
     unique = {h.get_label(): h for h in handles}
     fig.legend(handles=list(unique.values()), loc="outside lower center", ncols=7, frameon=False,
-               fontsize=9)
+               fontsize=_pt(9))
     return fig
 
 
@@ -391,37 +626,60 @@ CRITERIA_COLOURS = {REST: "#ffffff", SLIP: STATE_COLOURS[SLIP], ROCK: STATE_COLO
                     ROCKSLIP: STATE_COLOURS[ROCKSLIP]}
 
 
-def criteria_figure(ah_over_g, mu_values, maps, *, title: str = "") -> Figure:
+def criteria_figure(ah_over_g, mu_values, maps, *, title: str = "", size=None, caption: str = "") -> Figure:
     """Mode-initiation maps (the paper's Figure 5): one panel per vertical acceleration.
 
     Parameters
     ----------
     ah_over_g, mu_values : 1-D arrays
         The grid: horizontal acceleration [g] (x axis) and static friction (y axis).
-    maps : list of (caption, codes)
+    maps : list of (caption, codes) or (caption, codes, boundaries)
         ``codes`` from `criteria.mode_map` (rows mu, columns ah): REST, SLIP, ROCK (liftoff) or
-        ROCKSLIP (liftoff-slip).
+        ROCKSLIP (liftoff-slip); ``boundaries`` from `criteria.mode_boundaries`: the analytic
+        boundaries drawn as lines (without them, the regions' edges are outlined on the grid).
+    title, caption : str
+        The title, and what was computed (`case_caption`) under it.
+    size : None, "column", "page", "slide", "WxH" or (width, height)
+        The figure's size [in] (`figure_size`; default 4.2 in a panel across, 4.6 in high; at a
+        column's width, the panels are stacked).
     """
     from matplotlib.colors import BoundaryNorm, ListedColormap
 
-    fig = Figure(figsize=(4.2 * len(maps), 4.6), dpi=DPI, layout="constrained")
-    axes = fig.subplots(1, len(maps), squeeze=False, sharey=True)[0]
-    order = [REST, SLIP, ROCK, ROCKSLIP]
-    cmap = ListedColormap([CRITERIA_COLOURS[c] for c in order])
-    norm = BoundaryNorm(np.arange(len(order) + 1) - 0.5, cmap.N)
-    for ax, (caption, codes) in zip(axes, maps, strict=True):
-        index = np.vectorize(order.index)(codes)
-        ax.pcolormesh(ah_over_g, mu_values, index, cmap=cmap, norm=norm, shading="nearest")
-        ax.contour(ah_over_g, mu_values, index, levels=np.arange(len(order)) + 0.5, colors="0.3",
-                   linewidths=0.8)
-        ax.set_title(caption, fontsize=10)
-        ax.set_xlabel("horizontal acceleration |A_h| [g]")
-    axes[0].set_ylabel("static friction coefficient μ")
-    names = {REST: "rest", SLIP: "slip", ROCK: "liftoff", ROCKSLIP: "liftoff-slip"}
-    fig.legend(handles=[Patch(facecolor=CRITERIA_COLOURS[c], edgecolor="0.3", label=names[c]) for c in order],
-               loc="outside lower center", ncols=4, frameon=False)
-    if title:
-        fig.suptitle(title, fontsize=12)
+    n = len(maps)
+    figsize = figure_size(size, (4.2 * n, 4.6), column=1.2 + 2.6 * n, page=4.2)
+    stacked = figsize[0] < 1.6 * n + 1.0 or (figsize[0] < 5.0 and n > 1)
+    with _style(figsize[0]):
+        fig = Figure(figsize=figsize, dpi=DPI, layout="constrained")
+        axes = fig.subplots(n if stacked else 1, 1 if stacked else n, squeeze=False, sharey=True,
+                            sharex=stacked).ravel()
+        order = [REST, SLIP, ROCK, ROCKSLIP]
+        cmap = ListedColormap([CRITERIA_COLOURS[c] for c in order])
+        norm = BoundaryNorm(np.arange(len(order) + 1) - 0.5, cmap.N)
+        for ax, (name, codes, *rest) in zip(axes, maps, strict=True):
+            index = np.vectorize(order.index)(codes)
+            ax.pcolormesh(ah_over_g, mu_values, index, cmap=cmap, norm=norm, shading="nearest",
+                          rasterized=True)
+            if rest:
+                for x, y in rest[0]:
+                    ax.plot(x, np.minimum(y, mu_values[-1] + 1.0), color="0.2", lw=1.0)
+            else:
+                ax.contour(ah_over_g, mu_values, index, levels=np.arange(len(order)) + 0.5, colors="0.3",
+                           linewidths=0.8)
+            ax.set_xlim(ah_over_g[0], ah_over_g[-1])
+            ax.set_ylim(mu_values[0], mu_values[-1])
+            ax.set_title(name, fontsize=_pt(10))
+            if not stacked or ax is axes[-1]:
+                ax.set_xlabel("horizontal acceleration |A_h| [g]")
+            if stacked or ax is axes[0]:
+                ax.set_ylabel("static friction μ")
+        names = {REST: "rest", SLIP: "slip", ROCK: "liftoff", ROCKSLIP: "liftoff-slip"}
+        handles = [Patch(facecolor=CRITERIA_COLOURS[c], edgecolor="0.3", label=names[c]) for c in order]
+        if any(rest for _, _, *rest in maps):
+            handles.append(Line2D([], [], color="0.2", lw=1.0, label="boundaries (eqs. 6, 11, 26)"))
+        fig.legend(handles=handles, loc="outside lower center", ncols=min(len(handles), 3 if stacked else 5),
+                   frameon=False)
+        _headline(fig, title, caption)
+        _freeze_ticks(fig)
     return fig
 
 
@@ -472,13 +730,14 @@ def _title(result, name: str) -> str:
     return head + "\n" + ",  ".join(facts)
 
 
-def _response_panel(ax, result, shift, span, *, label, window=None, notes=True):
+def _response_panel(ax, result, shift, span, *, label, window=None, notes=True, alpha_drawn=None):
     """Rotation (left axis, with +-alpha) and slip in mm (right axis) over the shaded states, for
     ``span``. What the panel has to say goes in its title line, on the right, never over the data
     (unless not ``notes``: a narrow panel beside one that says it).
 
     The axes are labelled ``label`` (rotation) and ``label + "-slip"`` (the twin, slip). Returns
-    the height for the panel's titles (`_title_height`).
+    the height for the panel's titles (`_title_height`). Where the rotation comes near one of
+    +-alpha, both lines are drawn (and ``alpha_drawn``, a list, gets ``True``).
     """
     a, b = span
     _shade_states(ax, result, shift, span)
@@ -503,10 +762,13 @@ def _response_panel(ax, result, shift, span, *, label, window=None, notes=True):
     sides = []
     if math.isfinite(alpha) and phi.size:
         reach = {1.0: float(phi.max(initial=0.0)), -1.0: -float(phi.min(initial=0.0))}
-        sides = [side for side, r in reach.items() if r >= ALPHA_SHOWN_FRACTION * alpha]
+        if max(reach.values()) >= ALPHA_SHOWN_FRACTION * alpha:
+            sides = [1.0, -1.0]          # both: the legend says +-alpha
     rot_lim, slip_lim = _aligned_limits(np.append(phi, [side * alpha for side in sides]), x_mm)
     for side in sides:
-        ax.axhline(side * alpha, color=ALPHA_COLOUR, ls="--", lw=0.9, zorder=2)
+        ax.axhline(side * alpha, color=ALPHA_COLOUR, ls="--", lw=0.9, zorder=2, label=f"{side:+g}α")
+    if sides and alpha_drawn is not None:
+        alpha_drawn.append(True)
     if math.isfinite(alpha) and phi.size and not sides:
         said.append(f"±α = ±{alpha:.4g} rad off scale")
     ax.set_ylim(*rot_lim)
@@ -527,7 +789,7 @@ def _response_panel(ax, result, shift, span, *, label, window=None, notes=True):
         colour = end[1]
     title_y = _title_height(ax, slip_ax)
     if said and notes:
-        ax.set_title("; ".join(said), loc="right", fontsize=9, color=colour, y=title_y)
+        ax.set_title("; ".join(said), loc="right", fontsize=_pt(9), color=colour, y=title_y)
     if window is not None:
         slip_ax.axvspan(window[0], window[1], fill=False, ls=":", lw=1.0, ec="0.35", zorder=4)
     return title_y
@@ -668,30 +930,33 @@ def _mark_end(ax, result, shift, span, *, hatch):
     return text, colour
 
 
-def _ground_panel(ax, result, shift, span):
+def _ground_panel(ax, result, shift, span, *, unit=None):
+    """The ground acceleration as applied, in ``unit`` (`acceleration_unit`; default gal)."""
+    unit, factor = acceleration_unit(unit)
     t = np.asarray(result.ground_time)
     shown = _within(t, span)
     for key, values in (("horizontal", result.ground_horizontal), ("vertical", result.ground_vertical)):
-        ax.plot(*_envelope(t[shown] + shift, np.asarray(values)[shown] / GAL), color=GROUND_COLOURS[key],
+        ax.plot(*_envelope(t[shown] + shift, np.asarray(values)[shown] / factor), color=GROUND_COLOURS[key],
                 lw=0.8, label=key, alpha=0.9 if key == "horizontal" else 0.8)
     ax.axhline(0.0, color="0.6", lw=0.5)
-    ax.set_ylabel("ground acc. [gal]")
+    ax.set_ylabel(f"ground acc. [{unit}]")
     ax.grid(True, axis="x", color="0.88", lw=0.6)
     _mark_end(ax, result, shift, span, hatch=False)
     peak = max(float(np.max(np.abs(result.ground_horizontal), initial=0.0)),
-               float(np.max(np.abs(result.ground_vertical), initial=0.0))) / GAL
+               float(np.max(np.abs(result.ground_vertical), initial=0.0))) / factor
     if peak == 0.0:
         ax.set_ylim(-1.0, 1.0)
     title_y = _title_height(ax)
-    ax.set_title("ground acceleration as applied", loc="left", fontsize=10, y=title_y)
+    ax.set_title("ground acceleration as applied", loc="left", fontsize=_pt(10), y=title_y)
     if peak == 0.0:
-        ax.set_title("still ground (no record)", loc="right", fontsize=9, color="0.3", y=title_y)
+        ax.set_title("still ground (no record)", loc="right", fontsize=_pt(9), color="0.3", y=title_y)
 
 
-def _legend_handles(result, *, ground: bool = True) -> list:
+def _legend_handles(result, *, ground: bool = True, alpha: bool = True) -> list:
+    """The legend's entries; +-alpha only where ``alpha`` (drawn on some panel)."""
     handles = [Line2D([], [], color=ROTATION_COLOUR, lw=1.5, label="liftoff angle φ"),
                Line2D([], [], color=SLIP_COLOUR, lw=1.5, label="slip x")]
-    if math.isfinite(result.summary.alpha):
+    if alpha and math.isfinite(result.summary.alpha):
         handles.append(Line2D([], [], color=ALPHA_COLOUR, ls="--", lw=0.9, label="±α (tips over past it)"))
     if ground:
         handles += [Line2D([], [], color=GROUND_COLOURS[key], lw=1.0, label=f"ground {key}")
@@ -830,7 +1095,7 @@ def sweep_figure(axes, category, max_rotation, residual_slip, *, title: str = ""
         top.pcolormesh(x, [0.0, 1.0], np.vstack([category, category]), cmap=cmap_cat,
                        norm=norm_cat, shading="nearest")
         top.set_yticks([])
-        top.set_title("overturning and modes", loc="left", fontsize=10)
+        top.set_title("overturning and modes", loc="left", fontsize=_pt(10))
         shown = np.where(rotation > 0, rotation, np.nan)
         mid.semilogy(x, shown, "o-", color=ROTATION_COLOUR, ms=3)
         mid.axhline(0.5 * math.pi, color="0.5", lw=0.8, ls="--")
@@ -839,9 +1104,9 @@ def sweep_figure(axes, category, max_rotation, residual_slip, *, title: str = ""
         low.axhline(0.0, color="0.5", lw=0.8)
         low.set_ylabel("residual slip [mm] (standing)")
         low.set_xlabel(label)
-        fig.legend(handles=legend, loc="outside lower center", ncols=6, frameon=False, fontsize=9)
+        fig.legend(handles=legend, loc="outside lower center", ncols=6, frameon=False, fontsize=_pt(9))
         if title:
-            fig.suptitle(title, fontsize=12)
+            fig.suptitle(title, fontsize=_pt(12))
         return fig
 
     rows, note = _sweep_rows(axes)
@@ -872,12 +1137,12 @@ def sweep_figure(axes, category, max_rotation, residual_slip, *, title: str = ""
             _outline(ax, x_edges, y_edges, cat == 4)
             if bar:
                 fig.colorbar(mesh, ax=ax, label=bar)
-            ax.set_title(f"{name}{caption}", loc="left", fontsize=10)
+            ax.set_title(f"{name}{caption}", loc="left", fontsize=_pt(10))
             ax.set_xlabel(xlabel)
             ax.set_ylabel(ylabel)
-    fig.legend(handles=legend, loc="outside lower center", ncols=6, frameon=False, fontsize=9)
+    fig.legend(handles=legend, loc="outside lower center", ncols=6, frameon=False, fontsize=_pt(9))
     if title or note:
-        fig.suptitle("\n".join(t for t in (title, note) if t), fontsize=12)
+        fig.suptitle("\n".join(t for t in (title, note) if t), fontsize=_pt(12))
     return fig
 
 
@@ -986,14 +1251,14 @@ def fragility_figure(levels, grid, curves, *, xlabel: str, confidence: float, ti
         if any(curve.get(key) is not None for curve in curves):
             handles.append(handle)
             labels.append(label)
-    ax.legend(handles, labels, loc="upper left", fontsize=8, frameon=False)
+    ax.legend(handles, labels, loc="upper left", fontsize=_pt(8), frameon=False)
     ax.set_xlim(0.0, float(grid[-1]))
     ax.set_ylim(-0.02, 1.02)
     ax.set_xlabel(xlabel)
     ax.set_ylabel("probability of reaching the damage state")
     ax.grid(True, color="0.9")
     if title:
-        ax.set_title(title, fontsize=11)
+        ax.set_title(title, fontsize=_pt(11))
     return fig
 
 
@@ -1096,10 +1361,10 @@ def spectrum_figure(frequency, amplitude, category, rotation, curves=(), *, xlab
         ax.set_ylim(y_edges[0], y_edges[-1])
         ax.set_xlabel(xlabel)
         ax.set_ylabel(ylabel)
-        ax.set_title(name, loc="left", fontsize=10)
-    fig.legend(handles=handles, loc="outside lower center", ncols=4, frameon=False, fontsize=9)
+        ax.set_title(name, loc="left", fontsize=_pt(10))
+    fig.legend(handles=handles, loc="outside lower center", ncols=4, frameon=False, fontsize=_pt(9))
     if title:
-        fig.suptitle(title, fontsize=12)
+        fig.suptitle(title, fontsize=_pt(12))
     return fig
 
 

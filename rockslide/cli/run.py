@@ -12,7 +12,7 @@ import click
 
 from .. import interrupts
 from ..errors import CaseError, OutputError
-from .app import _json_default, _result_set, dpi_option, main, records_dir_option, show_warnings
+from .app import _json_default, _result_set, dpi_option, main, records_dir_option, show_warnings, size_option
 
 #: A single run expected to take longer than this [s] says so before it starts (and shows a
 #: progress bar on a terminal).
@@ -43,7 +43,8 @@ KEEP_HISTORY_ROWS = 2_000_000
               help="The verdict's robustness: an ensemble of 200 neighbours (--ensemble 200); robust when "
                    "none of them flips it.")
 @dpi_option("PNG figure")
-def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, members, seed, robustness, dpi):
+@size_option
+def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, members, seed, robustness, dpi, size):
     """Compute one case: CASE_FILE (YAML) -> OUT/NAME.h5 and OUT/NAME.png.
 
     \b
@@ -104,10 +105,12 @@ def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, members, s
             if not no_plot:
                 kept = writer.written_result()
                 _draw(kept if kept is not None else results.read_result(writer.tmp).result, case.name,
-                      png_path, overwrite=overwrite, dpi=dpi, staging=staging)
+                      png_path, overwrite=overwrite, dpi=dpi, staging=staging, size=size,
+                      about=(case.text, runner.record_entries(prepared), result.step, None))
                 if neighbourhood is not None:
                     _draw_ensemble(neighbourhood, group, result.summary, case.name, ensemble_png,
-                                   overwrite=overwrite, dpi=dpi, staging=staging)
+                                   overwrite=overwrite, dpi=dpi, staging=staging, size=size,
+                                   about=(case.text, runner.record_entries(prepared), result.step, None))
             stale = [png_path] if no_plot else []
             if overwrite and (no_plot or neighbourhood is None):
                 stale.append(ensemble_png)          # it showed the neighbourhood of the result replaced
@@ -117,7 +120,8 @@ def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, members, s
             written += f" and {ensemble_png}"
     else:
         with files.Staging(overwrite=False) as staging:
-            _draw(stored.result, stored.name, png_path, overwrite=False, dpi=dpi, staging=staging)
+            _draw(stored.result, stored.name, png_path, overwrite=False, dpi=dpi, staging=staging, size=size,
+                  about=_stored_about(stored))
             staging.publish()
         result = stored.result
         neighbourhood = None if eplan is None else json.loads(stored.attrs["ensemble"])
@@ -222,12 +226,29 @@ def _time_range(text: str, option: str, words: dict):
     return start, end
 
 
-def _draw(result, name, path, *, overwrite, dpi=None, time_shift=0.0, zoom="auto", crop="auto", staging=None):
-    """Draw the figure of one run (`plots.response_figure`) and save it (`plots.save_figure`)."""
-    from ..plots import response_figure, save_figure
+def _draw(result, name, path, *, overwrite, dpi=None, time_shift=0.0, zoom="auto", crop="auto", staging=None,
+          size=None, about=None):
+    """Draw the figure of one run (`plots.response_figure`) and save it (`plots.save_figure`).
+    ``about``: (case text, record entries, integration step [s], version or None: this one), for
+    its caption (`plots.case_caption`) and the unit of its ground motion."""
+    from .._version import __version__
+    from ..plots import pga_unit, case_caption, response_figure, save_figure
 
-    figure = response_figure(result, title=name, time_shift=time_shift, zoom=zoom, crop=crop)
+    caption, unit = "", None
+    if about is not None:
+        text, entries, step, version = about
+        caption = case_caption(text, records=entries, step=step, version=version or __version__)
+        unit = pga_unit(text)
+    figure = response_figure(result, title=name, time_shift=time_shift, zoom=zoom, crop=crop, size=size,
+                             caption=caption, unit=unit)
     save_figure(figure, path, overwrite=overwrite, dpi=dpi, staging=staging)
+
+
+def _stored_about(stored) -> tuple:
+    """`_draw`'s ``about`` of a result file read back."""
+    step = stored.attrs.get("integration_step")
+    return (stored.case_text, stored.records, None if step is None else float(step),
+            stored.attrs.get("rockslide_version"))
 
 
 def _same_result(case, prepared, h5_path: Path, *, eplan=None):
@@ -261,10 +282,12 @@ def run_text(name: str, summary, neighbourhood: dict | None = None, *, ground=No
 
 
 def _draw_ensemble(summary: dict, variables: dict, nominal, name: str, path: Path, *, overwrite: bool, dpi,
-                   staging) -> None:
-    """The neighbourhood's figure (`plots.ensemble_figure`): its members' largest rotations."""
+                   staging, size=None, about=None) -> None:
+    """The neighbourhood's figure (`plots.ensemble_figure`): its members' largest rotations
+    (``about`` as in `_draw`)."""
+    from .._version import __version__
     from ..analyses import ensemble as ens
-    from ..plots import ensemble_figure, save_figure
+    from ..plots import case_caption, ensemble_figure, save_figure
 
     ok = variables["status"][1] == 0
     ratio = variables["max_rotation_ratio"][1][ok]
@@ -272,7 +295,9 @@ def _draw_ensemble(summary: dict, variables: dict, nominal, name: str, path: Pat
     headline = ens.describe(summary, nominal.verdict)[0]
     figure = ensemble_figure(ratio, over, math.inf if nominal.overturned else nominal.max_rotation_ratio,
                              summary_text=headline.split("; ", 1)[-1],
-                             title=f"{name}: {summary['n']} neighbours (seed {summary['seed']})")
+                             title=f"{name}: {summary['n']} neighbours (seed {summary['seed']})", size=size,
+                             caption="" if about is None else case_caption(about[0], records=about[1], step=about[2],
+                                                                           version=about[3] or __version__))
     save_figure(figure, path, overwrite=overwrite, dpi=dpi, staging=staging)
 
 
