@@ -253,13 +253,16 @@ def case_caption(case_text: str = "", *, records=None, step: float | None = None
     if ground:
         parts.append(ground)
     elif records:
+        factors = {f"{float(e['scale_factor']):.4g}" for e in records if e.get("scale_factor") is not None}
+        one = len(factors) == 1 and len(records) > 1
         shown = []
         for entry in records:
             role = {"horizontal": "H", "vertical": "V"}.get(str(entry.get("role")), str(entry.get("role", "")))
             factor = entry.get("scale_factor")
-            scaled = f" ×{float(factor):.4g}" if factor is not None and float(factor) != 1.0 else ""
+            scaled = f" ×{float(factor):.4g}" if factor is not None and not one else ""
             shown.append(f"{Path(str(entry.get('path', '?'))).name} ({role}){scaled}")
-        parts.append("records " + ", ".join(shown))
+        parts.append(("records " if len(records) > 1 else "record ") + ", ".join(shown)
+                     + (f", both ×{factors.pop()}" if one else ""))
     elif case is not None:
         parts.append(_case_ground(case))
     if case is not None:
@@ -267,7 +270,7 @@ def case_caption(case_text: str = "", *, records=None, step: float | None = None
         if scale.pga_horizontal is not None and not ground:
             unit = case.units.get("ground.scale.pga_horizontal") or "g"
             mark = " (base)" if "pga" in varied else ""
-            parts[-1] += f" scaled to PGA {scale.pga_horizontal / unit_factor(unit, 'acceleration'):.4g} {unit}{mark}"
+            parts[-1] += f": PGA {scale.pga_horizontal / unit_factor(unit, 'acceleration'):.4g} {unit}{mark}"
         b = case.block
         alpha = math.atan2(b.width, b.height)
         parts.append(f"block width × height {b.width:.4g} × {b.height:.4g} m, {b.mass:.4g} kg, "
@@ -531,6 +534,9 @@ def response_figure(result, *, title: str = "", time_shift: float = 0.0,
         record = _record_range(result)
         if (t0, t1) == record:
             top.set_title("whole record", loc="left", fontsize=_pt(10), y=title_y)
+        elif _narrow(fig):
+            top.set_title(f"{t0 + shift:.2f}-{t1 + shift:.2f} s of {record[0] + shift:.4g}-"
+                          f"{record[1] + shift:.4g} s", loc="left", fontsize=_pt(10), y=title_y)
         else:
             top.set_title(f"{t0 + shift:.2f} to {t1 + shift:.2f} s of the {record[0] + shift:.4g} to "
                           f"{record[1] + shift:.4g} s record", loc="left", fontsize=_pt(10), y=title_y)
@@ -554,6 +560,17 @@ def response_figure(result, *, title: str = "", time_shift: float = 0.0,
                             frameon=False, fontsize=_pt(9))
         _fit_column(fig, suptitle=suptitle, legend=legend, title_size=_pt(10))
     return fig
+
+
+def _narrow(fig) -> bool:
+    """Whether ``fig`` is narrower than 5 in: its panels' titles say less."""
+    return fig.get_size_inches()[0] < 5.0
+
+
+def _brief_labels(fig) -> bool:
+    """Whether the response panels of ``fig`` are too low for their long y labels (the legend
+    says what φ and x are): narrow, or less than 6.5 in high."""
+    return _narrow(fig) or fig.get_size_inches()[1] < 6.5
 
 
 def run_caption(run) -> str:
@@ -619,6 +636,99 @@ def paper_figure(panels, *, title: str = "", time_shift: float = 0.0) -> Figure:
     unique = {h.get_label(): h for h in handles}
     fig.legend(handles=list(unique.values()), loc="outside lower center", ncols=7, frameon=False,
                fontsize=_pt(9))
+    return fig
+
+
+#: Colours of the runs overlaid on one figure (`runs_overlay_figure`), in order.
+OVERLAY_COLOURS = ("#1f4e9c", "#c0392b", "#2e8b57", "#8e44ad", "#d35400", "#16a085", "#3a3a3a")
+
+
+def runs_overlay_figure(runs, names, *, title: str = "", caption: str = "", size=None, time_shift: float = 0.0,
+                        crop: tuple | None | str = "auto", unit: str | None = None) -> Figure:
+    """Several runs on shared axes: the liftoff angle (with each run's +-alpha where its rotation
+    comes near it), the slip and the horizontal ground acceleration, one colour a run.
+
+    Parameters
+    ----------
+    runs : list of Result
+        The runs (`core.simulate.Result`).
+    names : list of str
+        Their names in the legend.
+    title, caption : str
+        The title, and what was computed (`case_caption` of each) under it.
+    size : None, "column", "page", "slide", "WxH" or (width, height)
+        The figure's size [in] (`figure_size`; default 11 x 8 in).
+    time_shift : float
+        Added to every time [s].
+    crop : "auto", (t0, t1) or None
+        The time range: ``"auto"`` = from the first to the last of the runs' `motion_range`;
+        ``(t0, t1)`` in the figure's time [s]; None = the whole of the longest record.
+    unit : str, optional
+        Unit of the ground acceleration (`acceleration_unit`; default gal).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Axes labelled ``"rotation"``, ``"slip"`` and ``"ground"``; the legend's first entries are
+        ``names``.
+    """
+    shift = float(time_shift)
+    ranges = [_choose_range(run, crop, shift) for run in runs]
+    t0, t1 = min(r[0] for r in ranges), max(r[1] for r in ranges)
+    unit, factor = acceleration_unit(unit)
+    figsize = figure_size(size, FIGSIZE, column=5.5, page=7.0)
+    with _style(figsize[0]):
+        fig = Figure(figsize=figsize, dpi=DPI, layout="constrained")
+        rot_ax, slip_ax, ground_ax = fig.subplots(3, 1, sharex=True, gridspec_kw={"height_ratios": [3, 2, 2]})
+        rot_ax.set_label("rotation")
+        slip_ax.set_label("slip")
+        ground_ax.set_label("ground")
+        handles = []
+        alpha_drawn = False
+        for k, (run, name) in enumerate(zip(runs, names, strict=True)):
+            colour = OVERLAY_COLOURS[k % len(OVERLAY_COLOURS)]
+            history = run.history or {}
+            t = np.asarray(history.get("time", np.zeros(0)))
+            shown = _within(t, (t0, t1))
+            phi = np.asarray(history.get("rotation", np.zeros(0)))[shown]
+            width = 2.6 if k == 0 and len(runs) > 1 else 1.2        # the first widest: one under another shows
+            if t.size:
+                rot_ax.plot(*_envelope(t[shown] + shift, phi), color=colour, lw=width, zorder=3 + k)
+                slip_ax.plot(*_envelope(t[shown] + shift, 1e3 * np.asarray(history["slip"])[shown]), color=colour,
+                             lw=width, zorder=3 + k)
+            g = np.asarray(run.ground_time)
+            at = _within(g, (t0, t1))
+            ground_ax.plot(*_envelope(g[at] + shift, np.asarray(run.ground_horizontal)[at] / factor), color=colour,
+                           lw=0.8 if k == 0 else 0.6, alpha=0.9, zorder=3 + k)
+            alpha = run.summary.alpha
+            if math.isfinite(alpha) and phi.size and np.abs(phi).max() >= ALPHA_SHOWN_FRACTION * alpha:
+                for side in (1.0, -1.0):
+                    rot_ax.axhline(side * alpha, color=colour, ls="--", lw=0.9, zorder=2)
+                alpha_drawn = True
+            s = run.summary
+            if s.overturned and s.overturn_time is not None and t0 <= s.overturn_time <= t1:
+                for ax in (rot_ax, slip_ax, ground_ax):
+                    ax.axvline(s.overturn_time + shift, color=colour, lw=1.2, ls="-.", zorder=2)
+            handles.append(Line2D([], [], color=colour, lw=2.0, label=f"{name}: {s.verdict}"))
+        for ax in (rot_ax, slip_ax, ground_ax):
+            ax.axhline(0.0, color="0.6", lw=0.5, zorder=1)
+            ax.grid(True, axis="x", color="0.88", lw=0.6)
+        rot_ax.set_ylabel("liftoff angle φ [rad]")
+        slip_ax.set_ylabel("slip x [mm]")
+        ground_ax.set_ylabel(f"ground acc. H [{unit}]")
+        ground_ax.set_xlabel("time [s]")
+        ground_ax.set_xlim(t0 + shift, t1 + shift)
+        keys = []
+        if alpha_drawn:
+            keys.append(Line2D([], [], color="0.4", ls="--", lw=0.9, label="±α of the run of that colour"))
+        if len(runs) > 1:
+            keys.append(Line2D([], [], color="0.4", lw=2.6, label=f"{names[0]} drawn wider (seen under the others)"))
+        if any(run.summary.overturned for run in runs):
+            keys.append(Line2D([], [], color="0.4", lw=1.2, ls="-.", label="overturned"))
+        fig.legend(handles=handles + keys, loc="outside lower center",
+                   ncols=max(1, min(2, int(figsize[0] / 3.0))), frameon=False, fontsize=_pt(9))
+        _headline(fig, title, caption)
+        _freeze_ticks(fig)
     return fig
 
 
@@ -770,12 +880,13 @@ def _response_panel(ax, result, shift, span, *, label, window=None, notes=True, 
     if sides and alpha_drawn is not None:
         alpha_drawn.append(True)
     if math.isfinite(alpha) and phi.size and not sides:
-        said.append(f"±α = ±{alpha:.4g} rad off scale")
+        said.append("±α off scale" if _narrow(ax.figure) else f"±α = ±{alpha:.4g} rad off scale")
     ax.set_ylim(*rot_lim)
     slip_ax.set_ylim(*slip_lim)
     ax.set_xlim(a + shift, b + shift)
-    ax.set_ylabel("liftoff angle φ [rad]", color=ROTATION_COLOUR)
-    slip_ax.set_ylabel("slip x [mm]", color=SLIP_COLOUR)
+    brief = _brief_labels(ax.figure)
+    ax.set_ylabel("φ [rad]" if brief else "liftoff angle φ [rad]", color=ROTATION_COLOUR)
+    slip_ax.set_ylabel("x [mm]" if brief else "slip x [mm]", color=SLIP_COLOUR)
     ax.tick_params(axis="y", colors=ROTATION_COLOUR)
     slip_ax.tick_params(axis="y", colors=SLIP_COLOUR)
     ax.grid(True, axis="x", color="0.88", lw=0.6)
@@ -939,7 +1050,7 @@ def _ground_panel(ax, result, shift, span, *, unit=None):
         ax.plot(*_envelope(t[shown] + shift, np.asarray(values)[shown] / factor), color=GROUND_COLOURS[key],
                 lw=0.8, label=key, alpha=0.9 if key == "horizontal" else 0.8)
     ax.axhline(0.0, color="0.6", lw=0.5)
-    ax.set_ylabel(f"ground acc. [{unit}]")
+    ax.set_ylabel(f"ground [{unit}]" if _brief_labels(ax.figure) else f"ground acc. [{unit}]")
     ax.grid(True, axis="x", color="0.88", lw=0.6)
     _mark_end(ax, result, shift, span, hatch=False)
     peak = max(float(np.max(np.abs(result.ground_horizontal), initial=0.0)),
@@ -1041,7 +1152,8 @@ def sweep_category(overturned, status, modes) -> np.ndarray:
     return out
 
 
-def sweep_figure(axes, category, max_rotation, residual_slip, *, title: str = "") -> Figure:
+def sweep_figure(axes, category, max_rotation, residual_slip, *, title: str = "", size=None,
+                 caption: str = "") -> Figure:
     """Maps of a sweep: overturning and the modes that occurred, max rotation, residual slip.
 
     Parameters
@@ -1052,7 +1164,11 @@ def sweep_figure(axes, category, max_rotation, residual_slip, *, title: str = ""
         `sweep_category` codes.
     max_rotation : float array [rad]
     residual_slip : float array [m]
-    title : str
+    title, caption : str
+        The title, and what was computed (`case_caption`) under it.
+    size : None, "column", "page", "slide", "WxH" or (width, height)
+        The figure's size [in] (`figure_size`; default 9 x 7.5 in for one axis, 15 in wide for
+        more); narrower than 8 in, the three maps of a row are stacked.
 
     Returns
     -------
@@ -1065,7 +1181,7 @@ def sweep_figure(axes, category, max_rotation, residual_slip, *, title: str = ""
         leaves points that never lifted off grey; the residual slip map leaves overturned points
         and points outside the model grey.
     """
-    from matplotlib.colors import BoundaryNorm, ListedColormap, LogNorm, TwoSlopeNorm
+    from matplotlib.colors import BoundaryNorm, ListedColormap, TwoSlopeNorm
 
     category = np.asarray(category)
     rotation = np.asarray(max_rotation, dtype=float)
@@ -1076,9 +1192,7 @@ def sweep_figure(axes, category, max_rotation, residual_slip, *, title: str = ""
     cmap_cat = ListedColormap(SWEEP_COLOURS)
     norm_cat = BoundaryNorm(np.arange(len(SWEEP_CATEGORIES) + 1) - 0.5, cmap_cat.N)
     standing = category < 4
-    positive = rotation[rotation > 0]
-    rot_norm = LogNorm(vmin=max(1e-6, min(float(positive.min()) if positive.size else 1e-3, 1.0)),
-                       vmax=0.5 * math.pi)
+    rot_norm = _rotation_norm(rotation)
     slip_shown = np.abs(slip_mm[standing]) if standing.any() else np.zeros(0)
     limit = max(float(slip_shown.max()) if slip_shown.size else 0.0, 1e-3)
     slip_norm = TwoSlopeNorm(vcenter=0.0, vmin=-limit, vmax=limit)
@@ -1090,59 +1204,128 @@ def sweep_figure(axes, category, max_rotation, residual_slip, *, title: str = ""
     if category.ndim == 1:
         label, x = axes[0]
         x = np.asarray(x, dtype=float)
-        fig = Figure(figsize=(9.0, 7.5), dpi=DPI, layout="constrained")
-        top, mid, low = fig.subplots(3, 1, sharex=True, gridspec_kw={"height_ratios": [0.6, 2, 2]})
-        top.pcolormesh(x, [0.0, 1.0], np.vstack([category, category]), cmap=cmap_cat,
-                       norm=norm_cat, shading="nearest")
-        top.set_yticks([])
-        top.set_title("overturning and modes", loc="left", fontsize=_pt(10))
-        shown = np.where(rotation > 0, rotation, np.nan)
-        mid.semilogy(x, shown, "o-", color=ROTATION_COLOUR, ms=3)
-        mid.axhline(0.5 * math.pi, color="0.5", lw=0.8, ls="--")
-        mid.set_ylabel("max rotation [rad]")
-        low.plot(x, np.where(standing, slip_mm, np.nan), "o-", color=SLIP_COLOUR, ms=3)
-        low.axhline(0.0, color="0.5", lw=0.8)
-        low.set_ylabel("residual slip [mm] (standing)")
-        low.set_xlabel(label)
-        fig.legend(handles=legend, loc="outside lower center", ncols=6, frameon=False, fontsize=_pt(9))
-        if title:
-            fig.suptitle(title, fontsize=_pt(12))
+        figsize = figure_size(size, (9.0, 7.5), column=5.0, page=6.0)
+        with _style(figsize[0]):
+            fig = Figure(figsize=figsize, dpi=DPI, layout="constrained")
+            top, mid, low = fig.subplots(3, 1, sharex=True, gridspec_kw={"height_ratios": [0.6, 2, 2]})
+            top.pcolormesh(x, [0.0, 1.0], np.vstack([category, category]), cmap=cmap_cat,
+                           norm=norm_cat, shading="nearest")
+            top.set_yticks([])
+            top.set_title("overturning and modes", loc="left", fontsize=_pt(10))
+            shown = np.where(rotation > 0, rotation, np.nan)
+            mid.semilogy(x, shown, "o-", color=ROTATION_COLOUR, ms=3)
+            mid.axhline(0.5 * math.pi, color="0.5", lw=0.8, ls="--")
+            mid.set_ylabel("max rotation [rad]")
+            low.plot(x, np.where(standing, slip_mm, np.nan), "o-", color=SLIP_COLOUR, ms=3)
+            low.axhline(0.0, color="0.5", lw=0.8)
+            low.set_ylabel("residual slip [mm]\n(standing)" if figsize[0] < 6 else "residual slip [mm] (standing)")
+            low.set_xlabel(label)
+            fig.legend(handles=legend, loc="outside lower center", ncols=_legend_columns(legend, figsize[0]),
+                       frameon=False, fontsize=_pt(9))
+            _headline(fig, title, caption)
+            _freeze_ticks(fig)
         return fig
 
     rows, note = _sweep_rows(axes)
-    fig = Figure(figsize=(15.0, 3.9 * len(rows) + 1.2), dpi=DPI, layout="constrained")
-    grid = fig.subplots(len(rows), 3, squeeze=False)
-    (ylabel, yv), (xlabel, xv) = axes[0], axes[1]
-    y_order, x_order = np.argsort(np.asarray(yv, dtype=float)), np.argsort(np.asarray(xv, dtype=float))
-    y_edges = _cell_edges(np.asarray(yv, dtype=float)[y_order])
-    x_edges = _cell_edges(np.asarray(xv, dtype=float)[x_order])
+    stacked_default = (15.0, 3.9 * len(rows) + 1.2)
+    figsize = figure_size(size, stacked_default, column=2.6 * 3 * len(rows) + 1.6, page=3.0 * len(rows) + 2.0)
+    stacked = figsize[0] < 8.0 and figsize[1] > figsize[0] * 1.3     # a narrow, tall figure: maps one above another
+    with _style(figsize[0]):
+        fig = Figure(figsize=figsize, dpi=DPI, layout="constrained")
+        grid = fig.subplots(3 * len(rows), 1, squeeze=False) if stacked else fig.subplots(len(rows), 3, squeeze=False)
+        (ylabel, yv), (xlabel, xv) = axes[0], axes[1]
+        y_order, x_order = np.argsort(np.asarray(yv, dtype=float)), np.argsort(np.asarray(xv, dtype=float))
+        y_edges = _cell_edges(np.asarray(yv, dtype=float)[y_order])
+        x_edges = _cell_edges(np.asarray(xv, dtype=float)[x_order])
 
-    def sorted_2d(values, index):
-        return values[index][np.ix_(y_order, x_order)]
+        def sorted_2d(values, index):
+            return values[index][np.ix_(y_order, x_order)]
 
-    for r, (index, caption) in enumerate(rows):
-        cat = sorted_2d(category, index)
-        rot = sorted_2d(rotation, index)
-        panels = (
-            (cat, dict(cmap=cmap_cat, norm=norm_cat), "overturning and modes", None),
-            (np.ma.masked_where(~(rot > 0), rot), dict(cmap=rot_cmap, norm=rot_norm), "max rotation",
-             "max rotation [rad]"),
-            (np.ma.masked_where(~sorted_2d(standing, index), sorted_2d(slip_mm, index)),
-             dict(cmap=slip_cmap, norm=slip_norm), "residual slip (standing blocks)",
-             "residual slip [mm]"),
-        )
-        for c, (values, style, name, bar) in enumerate(panels):
-            ax = grid[r, c]
-            mesh = ax.pcolormesh(x_edges, y_edges, values, shading="flat", **style)
+        for r, (index, row_caption) in enumerate(rows):
+            cat = sorted_2d(category, index)
+            rot = sorted_2d(rotation, index)
+            panels = (
+                (cat, dict(cmap=cmap_cat, norm=norm_cat), "overturning and modes", None),
+                (np.ma.masked_where(~(rot > 0), rot), dict(cmap=rot_cmap, norm=rot_norm), "max rotation",
+                 "max rotation [rad]"),
+                (np.ma.masked_where(~sorted_2d(standing, index), sorted_2d(slip_mm, index)),
+                 dict(cmap=slip_cmap, norm=slip_norm), "residual slip (standing blocks)",
+                 "residual slip [mm]"),
+            )
+            for c, (values, style, name, bar) in enumerate(panels):
+                ax = grid[3 * r + c, 0] if stacked else grid[r, c]
+                mesh = ax.pcolormesh(x_edges, y_edges, values, shading="flat", **style)
+                _outline(ax, x_edges, y_edges, cat == 4)
+                if bar:
+                    fig.colorbar(mesh, ax=ax, label=bar)
+                ax.set_title(f"{name}{row_caption}", loc="left", fontsize=_pt(10))
+                ax.set_xlabel(xlabel)
+                ax.set_ylabel(ylabel)
+        fig.legend(handles=legend, loc="outside lower center", ncols=_legend_columns(legend, figsize[0]),
+                   frameon=False, fontsize=_pt(9))
+        _headline(fig, "\n".join(t for t in (title, note) if t), caption)
+        _freeze_ticks(fig)
+    return fig
+
+
+def _rotation_norm(*rotations):
+    """The logarithmic colour scale of largest rotations [rad]: from the smallest that lifted off
+    (at least 1e-6 rad, at most 1 rad) to pi/2."""
+    from matplotlib.colors import LogNorm
+
+    positive = np.concatenate([np.ravel(r)[np.ravel(r) > 0] for r in rotations])
+    return LogNorm(vmin=max(1e-6, min(float(positive.min()) if positive.size else 1e-3, 1.0)), vmax=0.5 * math.pi)
+
+
+def sweep_overlay_figure(panels, *, title: str = "", caption: str = "", size=None) -> Figure:
+    """Several sweeps side by side on one colour scale: the largest rotation of each over its first
+    two axes (a third and further axes at their first value), overturned points outlined.
+
+    Parameters
+    ----------
+    panels : list of (name, axes, category, max_rotation)
+        For each sweep: its name (legend and panel title), its axes as `sweep_figure` takes them,
+        its `sweep_category` codes and its largest rotations [rad].
+    title, caption, size
+        As in `sweep_figure` (default 5.5 in a panel across, 5 in high).
+    """
+    n = len(panels)
+    figsize = figure_size(size, (5.5 * n + 1.0, 5.0), column=1.2 + 2.6 * n, page=4.0)
+    stacked = figsize[0] < 2.6 * n + 1.0
+    norm = _rotation_norm(*(np.asarray(p[3]) for p in panels))
+    with _style(figsize[0]):
+        fig = Figure(figsize=figsize, dpi=DPI, layout="constrained")
+        grid = fig.subplots(n if stacked else 1, 1 if stacked else n, squeeze=False, sharex=True, sharey=True).ravel()
+        mesh = None
+        for ax, (name, axes, category, rotation) in zip(grid, panels, strict=True):
+            category, rotation = np.asarray(category), np.asarray(rotation, dtype=float)
+            index = (slice(None),) * min(2, category.ndim) + (0,) * max(0, category.ndim - 2)
+            if category.ndim == 1:
+                x = np.asarray(axes[0][1], dtype=float)
+                order = np.argsort(x)
+                edges = _cell_edges(x[order])
+                values, cat = rotation[order][None, :], category[order][None, :]
+                y_edges, ylabel = np.array([0.0, 1.0]), ""
+                x_edges, xlabel = edges, axes[0][0]
+                ax.set_yticks([])
+            else:
+                (ylabel, yv), (xlabel, xv) = axes[0], axes[1]
+                yo, xo = np.argsort(np.asarray(yv, dtype=float)), np.argsort(np.asarray(xv, dtype=float))
+                y_edges, x_edges = _cell_edges(np.asarray(yv, dtype=float)[yo]), _cell_edges(np.asarray(xv, dtype=float)[xo])
+                values = rotation[index][np.ix_(yo, xo)]
+                cat = category[index][np.ix_(yo, xo)]
+            mesh = ax.pcolormesh(x_edges, y_edges, np.ma.masked_where(~(values > 0), values), cmap=_with_bad("viridis"),
+                                 norm=norm, shading="flat")
             _outline(ax, x_edges, y_edges, cat == 4)
-            if bar:
-                fig.colorbar(mesh, ax=ax, label=bar)
-            ax.set_title(f"{name}{caption}", loc="left", fontsize=_pt(10))
+            ax.set_title(name, loc="left", fontsize=_pt(10))
             ax.set_xlabel(xlabel)
             ax.set_ylabel(ylabel)
-    fig.legend(handles=legend, loc="outside lower center", ncols=6, frameon=False, fontsize=_pt(9))
-    if title or note:
-        fig.suptitle("\n".join(t for t in (title, note) if t), fontsize=_pt(12))
+        fig.colorbar(mesh, ax=list(grid), label="max rotation [rad] (one scale)")
+        handles = [Patch(facecolor="white", edgecolor="black", lw=1.2, label="overturned (outlined)"),
+                   Patch(facecolor=NO_DATA_COLOUR, label="no liftoff")]
+        fig.legend(handles=handles, loc="outside lower center", ncols=2, frameon=False, fontsize=_pt(9))
+        _headline(fig, title, caption)
+        _freeze_ticks(fig)
     return fig
 
 
@@ -1205,7 +1388,8 @@ def _short(value) -> str:
 FRAGILITY_COLOURS = ("#3a3a3a", "#1f4e9c", "#c0392b", "#2e8b57", "#8e44ad", "#d35400", "#16a085")
 
 
-def fragility_figure(levels, grid, curves, *, xlabel: str, confidence: float, title: str = "") -> Figure:
+def fragility_figure(levels, grid, curves, *, xlabel: str, confidence: float, title: str = "", size=None,
+                     caption: str = "") -> Figure:
     """Fragility curves: the observed fraction of each stripe, the fitted curve and its band.
 
     Parameters
@@ -1219,47 +1403,92 @@ def fragility_figure(levels, grid, curves, *, xlabel: str, confidence: float, ti
         NaN where no run counts), and optionally ``fitted`` (the maximum-likelihood curve on
         ``grid``), ``band`` (``[2, grid]``: lower and upper bound of the confidence band),
         ``moments`` (the method-of-moments curve on ``grid``), ``nominal`` (the fit without
-        parameter uncertainty, on ``grid``).
+        parameter uncertainty, on ``grid``), ``colour`` (default: the next of
+        `FRAGILITY_COLOURS`), ``style`` (line style of ``fitted``, default solid), ``levels`` (the
+        curve's own stripes, default ``levels``) and ``grid`` (its own, default ``grid``).
+        A curve that coincides with an earlier one (same fit and fractions, within 1e-9) is drawn
+        dashed over it, which is drawn wider, its markers offset, and its label says so.
     xlabel : str
         The intensity measure and its unit.
     confidence : float
         Level of the band, for the legend.
-    title : str
+    title, caption : str
+        The title, and what was computed (`case_caption`) under it.
+    size : None, "column", "page", "slide", "WxH" or (width, height)
+        The figure's size [in] (`figure_size`; default 9 x 6 in).
     """
-    fig = Figure(figsize=(9.0, 6.0), dpi=DPI, layout="constrained")
-    ax = fig.subplots()
-    levels, grid = np.asarray(levels, dtype=float), np.asarray(grid, dtype=float)
-    for i, curve in enumerate(curves):
-        colour = FRAGILITY_COLOURS[i % len(FRAGILITY_COLOURS)]
-        if curve.get("band") is not None:
-            ax.fill_between(grid, curve["band"][0], curve["band"][1], color=colour, alpha=0.15, lw=0)
-        if curve.get("fitted") is not None:
-            ax.plot(grid, curve["fitted"], color=colour, lw=2.0)
-        if curve.get("moments") is not None:
-            ax.plot(grid, curve["moments"], color=colour, lw=1.0, ls="--")
-        if curve.get("nominal") is not None:
-            ax.plot(grid, curve["nominal"], color=colour, lw=1.2, ls=":")
-        ax.plot(levels, curve["fraction"], "o", color=colour, ms=6, mfc="white" if curve.get("fitted") is None
-                else colour, label=curve["label"])
-    handles, labels = ax.get_legend_handles_labels()
-    for key, handle, label in (
-            ("fitted", Line2D([], [], color="0.3", lw=2.0), "maximum-likelihood lognormal fit"),
-            ("moments", Line2D([], [], color="0.3", lw=1.0, ls="--"), "method of moments (first exceedances)"),
-            ("nominal", Line2D([], [], color="0.3", lw=1.2, ls=":"),
-             "without parameter uncertainty (the case's values)"),
-            ("band", Patch(facecolor="0.3", alpha=0.15), f"{100 * confidence:g} % bootstrap band over records")):
-        if any(curve.get(key) is not None for curve in curves):
-            handles.append(handle)
-            labels.append(label)
-    ax.legend(handles, labels, loc="upper left", fontsize=_pt(8), frameon=False)
-    ax.set_xlim(0.0, float(grid[-1]))
-    ax.set_ylim(-0.02, 1.02)
-    ax.set_xlabel(xlabel)
-    ax.set_ylabel("probability of reaching the damage state")
-    ax.grid(True, color="0.9")
-    if title:
-        ax.set_title(title, fontsize=_pt(11))
+    figsize = figure_size(size, (9.0, 6.0), column=4.2, page=5.0)
+    with _style(figsize[0]):
+        fig = Figure(figsize=figsize, dpi=DPI, layout="constrained")
+        ax = fig.subplots()
+        levels, grid = np.asarray(levels, dtype=float), np.asarray(grid, dtype=float)
+        twins = _coinciding(curves)
+        for i, curve in enumerate(curves):
+            colour = curve.get("colour") or FRAGILITY_COLOURS[i % len(FRAGILITY_COLOURS)]
+            x = np.asarray(curve.get("grid", grid), dtype=float)
+            at = np.asarray(curve.get("levels", levels), dtype=float)
+            under = any(twins.get(j) == i for j in range(i + 1, len(curves)))   # another is drawn over it
+            over = twins.get(i)
+            if curve.get("band") is not None and over is None:
+                ax.fill_between(x, curve["band"][0], curve["band"][1], color=colour, alpha=0.15, lw=0)
+            if curve.get("fitted") is not None:
+                ax.plot(x, curve["fitted"], color=colour, lw=4.0 if under else 2.0,
+                        ls=(0, (3, 2)) if over is not None else curve.get("style", "-"), zorder=3 if over is None else 4)
+            if curve.get("moments") is not None:
+                ax.plot(x, curve["moments"], color=colour, lw=1.0, ls="--")
+            if curve.get("nominal") is not None:
+                ax.plot(x, curve["nominal"], color=colour, lw=1.2, ls=":")
+            label = curve["label"]
+            marker, size_pt = "o", 6
+            if over is not None:
+                label += f" (the same as {curves[over]['label'].split(':')[0]}: dashed over it)"
+                marker, size_pt = "x", 7
+            elif under:
+                marker, size_pt = "o", 9
+            ax.plot(at, curve["fraction"], marker, color=colour, ms=size_pt * _FONT_SCALE.get() ** 0.5, ls="none",
+                    mfc="white" if curve.get("fitted") is None or under else colour, label=label,
+                    zorder=5 if over is not None else 4)
+        handles, labels = ax.get_legend_handles_labels()
+        for key, handle, label in (
+                ("fitted", Line2D([], [], color="0.3", lw=2.0), "maximum-likelihood lognormal fit"),
+                ("moments", Line2D([], [], color="0.3", lw=1.0, ls="--"), "method of moments (first exceedances)"),
+                ("nominal", Line2D([], [], color="0.3", lw=1.2, ls=":"),
+                 "without parameter uncertainty (the case's values)"),
+                ("band", Patch(facecolor="0.3", alpha=0.15), f"{100 * confidence:g} % bootstrap band over records")):
+            if any(curve.get(key) is not None for curve in curves):
+                handles.append(handle)
+                labels.append(label)
+        ax.set_xlim(0.0, float(grid[-1]))
+        ax.set_ylim(-0.02, 1.02)
+        ax.set_xlabel(xlabel)
+        ax.set_ylabel("probability of reaching the state" if figsize[0] < 5.0
+                      else "probability of reaching the damage state")
+        ax.grid(True, color="0.9")
+        if figsize[0] < 6.0:       # narrow: the legend below the axes, not over the curves
+            labels = [_wrap(label, figsize[0] - 0.5, _pt(8)) for label in labels]
+            fig.legend(handles, labels, loc="outside lower center", ncols=1, frameon=False, fontsize=_pt(8))
+        else:
+            ax.legend(handles, labels, loc="upper left", fontsize=_pt(8), frameon=False)
+        _headline(fig, title, caption)
+        _freeze_ticks(fig)
     return fig
+
+
+def _coinciding(curves) -> dict[int, int]:
+    """For each curve that coincides with an earlier one (the same fitted curve and observed
+    fractions, to 1e-9: two damage states every run reaches together), the index of the first."""
+    same = {}
+    for i, curve in enumerate(curves):
+        for j in range(i):
+            a, b = curve, curves[j]
+            if (a.get("fitted") is not None and b.get("fitted") is not None
+                    and np.shape(a["fitted"]) == np.shape(b["fitted"])
+                    and np.allclose(a["fitted"], b["fitted"], rtol=1e-9, atol=1e-9)
+                    and np.shape(a["fraction"]) == np.shape(b["fraction"])
+                    and np.allclose(a["fraction"], b["fraction"], rtol=1e-9, atol=1e-9, equal_nan=True)):
+                same[i] = j
+                break
+    return same
 
 
 # --------------------------------------------------------------------------------------------------
@@ -1293,7 +1522,7 @@ def spectrum_category(overturned, status, modes, impacts) -> np.ndarray:
 
 
 def spectrum_figure(frequency, amplitude, category, rotation, curves=(), *, xlabel: str = "ω_p / p",
-                    ylabel: str = "a_p / (g tan α)", title: str = "") -> Figure:
+                    ylabel: str = "a_p / (g tan α)", title: str = "", size=None, caption: str = "") -> Figure:
     """An overturning spectrum: the regions of `spectrum_category` in the plane of pulse frequency
     over ``p`` (across) and amplitude over ``g tan(alpha)`` (up), and the largest rotation of the
     standing blocks over ``alpha``, with theoretical curves drawn over both.
@@ -1312,14 +1541,17 @@ def spectrum_figure(frequency, amplitude, category, rotation, curves=(), *, xlab
         Theory: ``x`` None draws the horizontal line ``y``; else the curve through ``(x, y)`` (NaN
         where the theory has no value).
     xlabel, ylabel, title : str
+    size : None, "column", "page", "slide", "WxH" or (width, height)
+        The figure's size [in] (`figure_size`; default 14 x 6.2 in); narrower than 8 in, the two
+        maps are stacked.
+    caption : str
+        What was computed (`case_caption`), under the title.
 
     Returns
     -------
     matplotlib.figure.Figure
         Axes labelled ``"regions"`` and ``"rotation"``.
     """
-    from matplotlib.colors import BoundaryNorm, ListedColormap, LogNorm
-
     x = np.asarray(frequency, dtype=float)
     y = np.asarray(amplitude, dtype=float)
     category = np.asarray(category)
@@ -1331,15 +1563,25 @@ def spectrum_figure(frequency, amplitude, category, rotation, curves=(), *, xlab
     x_edges, y_edges = _cell_edges(x[xo]), _cell_edges(y[yo])
     category = category[np.ix_(yo, xo)]
     rotation = rotation[np.ix_(yo, xo)]
+    figsize = figure_size(size, (14.0, 6.2), column=7.0, page=8.0)
+    with _style(figsize[0]):
+        return _spectrum_figure(x_edges, y_edges, category, rotation, curves, xlabel=xlabel, ylabel=ylabel,
+                                title=title, caption=caption, figsize=figsize)
+
+
+def _spectrum_figure(x_edges, y_edges, category, rotation, curves, *, xlabel, ylabel, title, caption,
+                     figsize) -> Figure:
+    from matplotlib.colors import BoundaryNorm, ListedColormap, LogNorm
+
     standing = category < 3
     cmap = ListedColormap(SPECTRUM_COLOURS)
     norm = BoundaryNorm(np.arange(len(SPECTRUM_CATEGORIES) + 1) - 0.5, cmap.N)
     shown = np.ma.masked_where(~(standing & (rotation > 0)), rotation)
     low = float(shown.min()) if shown.count() else 1e-3
     rot_norm = LogNorm(vmin=max(1e-4, min(low, 0.5)), vmax=1.0)
-
-    fig = Figure(figsize=(14.0, 6.2), dpi=DPI, layout="constrained")
-    regions, rotated = fig.subplots(1, 2)
+    stacked = figsize[0] < 8.0
+    fig = Figure(figsize=figsize, dpi=DPI, layout="constrained")
+    regions, rotated = fig.subplots(2, 1) if stacked else fig.subplots(1, 2)
     regions.pcolormesh(x_edges, y_edges, category, cmap=cmap, norm=norm, shading="flat")
     regions.set_label("regions")
     mesh = rotated.pcolormesh(x_edges, y_edges, shown, cmap=_with_bad("viridis"), norm=rot_norm,
@@ -1362,9 +1604,9 @@ def spectrum_figure(frequency, amplitude, category, rotation, curves=(), *, xlab
         ax.set_xlabel(xlabel)
         ax.set_ylabel(ylabel)
         ax.set_title(name, loc="left", fontsize=_pt(10))
-    fig.legend(handles=handles, loc="outside lower center", ncols=4, frameon=False, fontsize=_pt(9))
-    if title:
-        fig.suptitle(title, fontsize=_pt(12))
+    fig.legend(handles=handles, loc="outside lower center", ncols=2 if stacked else 4, frameon=False, fontsize=_pt(9))
+    _headline(fig, title, caption)
+    _freeze_ticks(fig)
     return fig
 
 
@@ -1457,7 +1699,8 @@ __all__ = ["response_figure", "save_figure", "zoom_window", "state_segments", "s
            "SPECTRUM_CATEGORIES"]
 
 
-def ensemble_figure(ratios, overturned, nominal_ratio: float, *, summary_text: str, title: str = "") -> Figure:
+def ensemble_figure(ratios, overturned, nominal_ratio: float, *, summary_text: str, title: str = "", size=None,
+                    caption: str = "") -> Figure:
     """A verdict's neighbourhood: the empirical CDF of the members' largest rotation over alpha (an
     overturned member counts as beyond the axis), the nominal run marked, the probability of
     overturning and its interval in the legend.
@@ -1472,9 +1715,19 @@ def ensemble_figure(ratios, overturned, nominal_ratio: float, *, summary_text: s
         The nominal run's max rotation / alpha (``inf`` when it overturned).
     summary_text : str
         The probability line (``overturns in 38 % [31, 45] of 200``).
-    title : str
+    title, caption : str
+        The title, and what was computed (`case_caption`: the nominal case) under it.
+    size : None, "column", "page", "slide", "WxH" or (width, height)
+        The figure's size [in] (`figure_size`; default 8 x 5 in).
     """
-    fig = Figure(figsize=(8.0, 5.0), dpi=DPI, layout="constrained")
+    figsize = figure_size(size, (8.0, 5.0), column=3.6, page=4.5)
+    with _style(figsize[0]):
+        return _ensemble_figure(ratios, overturned, nominal_ratio, summary_text=summary_text, title=title,
+                                caption=caption, figsize=figsize)
+
+
+def _ensemble_figure(ratios, overturned, nominal_ratio, *, summary_text, title, caption, figsize) -> Figure:
+    fig = Figure(figsize=figsize, dpi=DPI, layout="constrained")
     ax = fig.subplots()
     ratios = np.asarray(ratios, dtype=float)
     overturned = np.asarray(overturned, dtype=bool)
@@ -1498,7 +1751,7 @@ def ensemble_figure(ratios, overturned, nominal_ratio: float, *, summary_text: s
     ax.set_xlabel("largest rotation / α")
     ax.set_ylabel("fraction of the members")
     ax.grid(True, alpha=0.3)
-    ax.legend(loc="lower right", fontsize="small", title=summary_text, title_fontsize="small")
-    if title:
-        ax.set_title(title)
+    ax.legend(loc="lower right", fontsize=_pt(8), title=summary_text, title_fontsize=_pt(8))
+    _headline(fig, title, caption)
+    _freeze_ticks(fig)
     return fig

@@ -773,19 +773,41 @@ def categories(variables: dict) -> np.ndarray:
     return sweep_category(variables["overturned"][0], variables["status"][0], variables["modes"][0])
 
 
-def figure(plan: Plan, variables: dict):
+def figure(plan: Plan, variables: dict, *, size=None):
     """The PNG of a sweep: an overturning spectrum (`spectrum_scales`), else the maps of
     `plots.sweep_figure` with the axes in their display units (gal for accelerations given as
-    PGA) and categories from `categories`."""
+    PGA) and categories from `categories`; what was computed in its caption (`caption`)."""
+    from .._version import __version__
+
     axes = [(a.kind.name, a.values) for a in plan.axes]
     title = f"{plan.case.name}: {plan.describe()}"
+    text = caption(plan.case.text, [name for name, _ in axes], plan.records, plan.step, __version__)
     scales = spectrum_scales(plan)
     if scales is not None:
-        return _spectrum(axes, variables, scales, title)
-    return _maps(axes, variables, title)
+        return _spectrum(axes, variables, scales, title, size=size, caption=text)
+    return _maps(axes, variables, title, size=size, caption=text)
 
 
-def stored_figure(stored) -> object:
+def caption(case_text: str, axes, records, step, version) -> str:
+    """`plots.case_caption` of a sweep: the case's values of its ``axes`` are marked as the base
+    case's."""
+    from ..plots import case_caption
+
+    return case_caption(case_text, records=[r for r in records if r.get("path")] or None, step=step,
+                        version=version, varied=tuple(axes))
+
+
+def stored_caption(stored) -> str:
+    """`caption` of a sweep file read back."""
+    attrs = stored.attrs
+    records = [{"role": role, "path": attrs[f"record_{role}"]} for role in ("horizontal", "vertical")
+               if attrs.get(f"record_{role}")]
+    step = attrs.get("integration_step")
+    return caption(str(attrs.get("case_text", "")), [name for name, _, _ in stored.coords], records,
+                   None if step is None else float(step), str(attrs.get("rockslide_version", "?")))
+
+
+def stored_figure(stored, *, size=None) -> object:
     """The same figure from a sweep file read back (`results.read_sweep`), for ``rockslide plot``."""
     shape = " x ".join(f"{len(values)} {name}" for name, values, _ in stored.coords)
     axes = [(name, values) for name, values, _ in stored.coords]
@@ -793,16 +815,35 @@ def stored_figure(stored) -> object:
              f"{int(np.prod([len(v) for _, v, _ in stored.coords]))} cases")
     scales = {key[len("spectrum_"):]: value for key, value in stored.attrs.items()
               if key.startswith("spectrum_")}
+    text = stored_caption(stored)
     if scales:
-        return _spectrum(axes, variables=stored.variables, scales=scales, title=title)
-    return _maps(axes, stored.variables, title)
+        return _spectrum(axes, variables=stored.variables, scales=scales, title=title, size=size, caption=text)
+    return _maps(axes, stored.variables, title, size=size, caption=text)
+
+
+def overlay_figure(stored_files, names, *, size=None):
+    """Sweeps side by side (``rockslide plot A B``): the largest rotation of each over its first two
+    axes, on one colour scale (`plots.sweep_overlay_figure`); the sweeps must have the same axes."""
+    from ..plots import sweep_overlay_figure
+
+    first = [name for name, _, _ in stored_files[0].coords]
+    panels = []
+    for stored, name in zip(stored_files, names, strict=True):
+        axes = [n for n, _, _ in stored.coords]
+        if axes[:2] != first[:2]:
+            raise CaseError(f"{name} is over {' x '.join(axes)} and {names[0]} over {' x '.join(first)}; overlay "
+                            "sweeps over the same axes", source="rockslide plot")
+        shown = [(AXES[n].label, np.asarray(values) / AXES[n].display_scale) for n, values, _ in stored.coords]
+        panels.append((name, shown, categories(stored.variables), np.asarray(stored.variables["max_rotation"][0])))
+    text = "\n".join(f"{name}: {stored_caption(stored)}" for stored, name in zip(stored_files, names, strict=True))
+    return sweep_overlay_figure(panels, title="sweeps: " + " and ".join(names), caption=text, size=size)
 
 
 #: Points of the small-angle theory's curve drawn over a spectrum.
 THEORY_POINTS = 40
 
 
-def _spectrum(axes, variables: dict, scales: dict, title: str):
+def _spectrum(axes, variables: dict, scales: dict, title: str, *, size=None, caption: str = ""):
     """`plots.spectrum_figure` of a two-axis pulse sweep: amplitude over ``g tan(alpha)`` up the
     page, pulse frequency over ``p`` across, the categories of `plots.spectrum_category`, and
     the theory's curves where they exist: the thresholds of liftoff and slip at rest (exact), and
@@ -838,16 +879,17 @@ def _spectrum(axes, variables: dict, scales: dict, title: str):
     return spectrum_figure(frequency, amplitude, category, rotation, curves,
                            xlabel=f"ω_p / p   (p = {p:.3g} rad/s)",
                            ylabel=f"a_p / (g tan α)   (g tan α = {lift / STANDARD_GRAVITY:.3g} g)",
-                           title=f"{title}: {pulse.pulse} pulse")
+                           title=f"{title}: {pulse.pulse} pulse", size=size, caption=caption)
 
 
-def _maps(axes, variables: dict, title: str):
+def _maps(axes, variables: dict, title: str, *, size=None, caption: str = ""):
     from ..plots import sweep_figure
 
     over = int(np.asarray(variables["overturned"][0]).sum())
     shown = [(AXES[name].label, np.asarray(values) / AXES[name].display_scale) for name, values in axes]
     return sweep_figure(shown, categories(variables), variables["max_rotation"][0],
-                        variables["residual_slip"][0], title=f"{title}, {over} overturned")
+                        variables["residual_slip"][0], title=f"{title}, {over} overturned", size=size,
+                        caption=caption)
 
 
 def time_shares(states: np.ndarray) -> dict:

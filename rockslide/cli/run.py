@@ -140,32 +140,38 @@ def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, members, s
 
 
 @main.command()
-@click.argument("result_file", type=click.Path(path_type=Path))
+@click.argument("result_files", nargs=-1, required=True, type=click.Path(path_type=Path), metavar="RESULT_FILE...")
 @click.option("-o", "--output", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="Figure to write; the format follows its extension: .png, .pdf, .svg, .eps... "
-                   "(default: the result's name with .png, next to it).")
+                   "(default: the result's name with .png, next to it; for several files, their names joined "
+                   "by -vs- with .png, next to the first).")
 @click.option("--time-shift", default="0 s", show_default=True, metavar="TIME",
               help="Time added to the time axis, with a unit as in case files (e.g. '-25 s'; a bare "
                    "number is in s), to lay the figure beside another's.")
 @click.option("--window", default="auto", show_default=True, metavar="START:END|auto|none",
-              help="The magnified window, in the figure's time (e.g. 30:36 or '30 s:36 s'); none: no "
-                   "magnified panel.")
+              help="The magnified window of one result file, in the figure's time (e.g. 30:36 or '30 s:36 s'); "
+                   "none: no magnified panel.")
 @click.option("--crop", default="auto", show_default=True, metavar="START:END|auto|all",
               help="Time range of the response and ground panels (auto: where the ground or the block "
                    "moves; all: the whole record).")
 @click.option("--overwrite", is_flag=True,
-              help="Replace the file given with -o if it exists (the result's own figure is always "
-                   "redrawn).")
+              help="Replace the file given with -o if it exists (the result's own figure, and the default "
+                   "figure of several files, is always redrawn).")
 @dpi_option("figure (PNG)")
-def plot(result_file, output, time_shift, window, crop, dpi, overwrite):
-    """Redraw the figure of a result, sweep or fragility file (replaces it).
+@size_option
+def plot(result_files, output, time_shift, window, crop, dpi, overwrite, size):
+    """Redraw the figure of a result, sweep or fragility file (replaces it), or overlay several
+    files of one kind: runs (rotation, slip and ground motion on shared axes), sweeps (side by
+    side on one colour scale) or fragility analyses (their curves and bands), named after their
+    cases.
 
     \b
     Example:
         rockslide plot out/example.h5
         rockslide plot out/example.h5 --window 6.6:7.2 -o out/example-impact.pdf
-        rockslide plot out/example.sweep.h5
+        rockslide plot out/example.sweep.h5 --size column
         rockslide plot out/example.fragility.h5
+        rockslide plot out/statue.h5 out/statue-squat.h5 -o out/statue-vs-squat.pdf
     """
     from ..io import results
     from ..units import parse_quantity
@@ -173,28 +179,39 @@ def plot(result_file, output, time_shift, window, crop, dpi, overwrite):
     shift = parse_quantity(time_shift, "time", source="--time-shift")
     zoom = _time_range(window, "--window", {"auto": "auto", "none": None})
     span = _time_range(crop, "--crop", {"auto": "auto", "all": None})
+    if len(result_files) > 1:
+        from ..api import plot_results
+
+        if zoom != "auto":
+            raise CaseError("applies to one result file, not to several overlaid", source="--window")
+        stems = [Path(f).name.split(".")[0] for f in result_files]
+        own = Path(result_files[0]).parent / ("-vs-".join(stems[:3]) + ("-etc" if len(stems) > 3 else "") + ".png")
+        png = output if output is not None else own
+        plot_results(result_files, size=size, time_shift=shift, crop=span, path=png, dpi=dpi,
+                     overwrite=overwrite or png.resolve() == own.resolve())
+        click.echo(f"drew {png}")
+        return
+    result_file = result_files[0]
     own = Path(result_file).with_suffix(".png")
     png = output if output is not None else own
     # the result's own figure is the one redrawn; another file is replaced only when asked to
     replace = overwrite or png.resolve() == own.resolve()
     kind = results.file_format(result_file)
-    if kind == results.SWEEP_FORMAT:
-        from ..analyses.sweep import stored_figure
+    if kind in (results.SWEEP_FORMAT, results.FRAGILITY_FORMAT):
         from ..plots import save_figure
+        what = "sweep" if kind == results.SWEEP_FORMAT else "fragility"
         given = [option for option, value, default in (("--time-shift", shift, 0.0), ("--window", zoom, "auto"),
                                                        ("--crop", span, "auto")) if value != default]
         if given:
-            raise CaseError("applies to result files, not to sweep files", source=given[0])
-        save_figure(stored_figure(results.read_sweep(result_file)), png, overwrite=replace, dpi=dpi)
-    elif kind == results.FRAGILITY_FORMAT:
-        from ..analyses.fragility import stored_figure as stored_fragility_figure
-        from ..plots import save_figure
-        given = [option for option, value, default in (("--time-shift", shift, 0.0), ("--window", zoom, "auto"),
-                                                       ("--crop", span, "auto")) if value != default]
-        if given:
-            raise CaseError("applies to result files, not to fragility files", source=given[0])
-        stored = results.read_dataset(result_file, format=results.FRAGILITY_FORMAT)
-        save_figure(stored_fragility_figure(stored), png, overwrite=replace, dpi=dpi)
+            raise CaseError(f"applies to result files, not to {what} files", source=given[0])
+        if kind == results.SWEEP_FORMAT:
+            from ..analyses.sweep import stored_figure
+            figure = stored_figure(results.read_sweep(result_file), size=size)
+        else:
+            from ..analyses.fragility import stored_figure as stored_fragility_figure
+            figure = stored_fragility_figure(results.read_dataset(result_file, format=results.FRAGILITY_FORMAT),
+                                             size=size)
+        save_figure(figure, png, overwrite=replace, dpi=dpi)
     else:
         stored = results.read_result(result_file)
         times = stored.result.ground_time
@@ -204,7 +221,8 @@ def plot(result_file, output, time_shift, window, crop, dpi, overwrite):
                 if isinstance(pair, tuple) and (pair[1] <= first or pair[0] >= last):
                     raise CaseError(f"{pair[0]:g} to {pair[1]:g} s is outside the result, which runs from "
                                     f"{first:g} to {last:g} s (in the figure's time)", source=option)
-        _draw(stored.result, stored.name, png, overwrite=replace, time_shift=shift, zoom=zoom, crop=span, dpi=dpi)
+        _draw(stored.result, stored.name, png, overwrite=replace, time_shift=shift, zoom=zoom, crop=span, dpi=dpi,
+              size=size, about=_stored_about(stored))
     click.echo(f"redrew {png}")
 
 
