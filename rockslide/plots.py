@@ -691,7 +691,7 @@ def runs_overlay_figure(runs, names, *, title: str = "", caption: str = "", size
             t = np.asarray(history.get("time", np.zeros(0)))
             shown = _within(t, (t0, t1))
             phi = np.asarray(history.get("rotation", np.zeros(0)))[shown]
-            width = 2.6 if k == 0 and len(runs) > 1 else 1.2        # the first widest: one under another shows
+            width = 2.2 if k == 0 and len(runs) > 1 else 1.0        # the first widest: one under another shows
             if t.size:
                 rot_ax.plot(*_envelope(t[shown] + shift, phi), color=colour, lw=width, zorder=3 + k)
                 slip_ax.plot(*_envelope(t[shown] + shift, 1e3 * np.asarray(history["slip"])[shown]), color=colour,
@@ -722,7 +722,7 @@ def runs_overlay_figure(runs, names, *, title: str = "", caption: str = "", size
         if alpha_drawn:
             keys.append(Line2D([], [], color="0.4", ls="--", lw=0.9, label="±α of the run of that colour"))
         if len(runs) > 1:
-            keys.append(Line2D([], [], color="0.4", lw=2.6, label=f"{names[0]} drawn wider (seen under the others)"))
+            keys.append(Line2D([], [], color="0.4", lw=2.2, label=f"{names[0]} drawn wider (seen under the others)"))
         if any(run.summary.overturned for run in runs):
             keys.append(Line2D([], [], color="0.4", lw=1.2, ls="-.", label="overturned"))
         fig.legend(handles=handles + keys, loc="outside lower center",
@@ -1432,12 +1432,13 @@ def fragility_figure(levels, grid, curves, *, xlabel: str, confidence: float, ti
             if curve.get("band") is not None and over is None:
                 ax.fill_between(x, curve["band"][0], curve["band"][1], color=colour, alpha=0.15, lw=0)
             if curve.get("fitted") is not None:
+                if over is not None and (curves[over].get("colour") or colour) == colour:
+                    colour = "white"          # dashes of its own colour would not show on the wider one
                 ax.plot(x, curve["fitted"], color=colour, lw=4.0 if under else 2.0,
                         ls=(0, (3, 2)) if over is not None else curve.get("style", "-"), zorder=3 if over is None else 4)
-            if curve.get("moments") is not None:
-                ax.plot(x, curve["moments"], color=colour, lw=1.0, ls="--")
-            if curve.get("nominal") is not None:
-                ax.plot(x, curve["nominal"], color=colour, lw=1.2, ls=":")
+            for key, style in (("moments", dict(lw=1.0, ls="--")), ("nominal", dict(lw=1.2, ls=":"))):
+                if curve.get(key) is not None and not (over is not None and _same(curve[key], curves[over].get(key))):
+                    ax.plot(x, curve[key], color=colour, **style)
             label = curve["label"]
             marker, size_pt = "o", 6
             if over is not None:
@@ -1445,6 +1446,7 @@ def fragility_figure(levels, grid, curves, *, xlabel: str, confidence: float, ti
                 marker, size_pt = "x", 7
             elif under:
                 marker, size_pt = "o", 9
+            colour = curve.get("colour") or FRAGILITY_COLOURS[i % len(FRAGILITY_COLOURS)]
             ax.plot(at, curve["fraction"], marker, color=colour, ms=size_pt * _FONT_SCALE.get() ** 0.5, ls="none",
                     mfc="white" if curve.get("fitted") is None or under else colour, label=label,
                     zorder=5 if over is not None else 4)
@@ -1464,7 +1466,8 @@ def fragility_figure(levels, grid, curves, *, xlabel: str, confidence: float, ti
         ax.set_ylabel("probability of reaching the state" if figsize[0] < 5.0
                       else "probability of reaching the damage state")
         ax.grid(True, color="0.9")
-        if figsize[0] < 6.0:       # narrow: the legend below the axes, not over the curves
+        longest = max((len(label) for label in labels), default=0) * 0.55 * _pt(8) / 72.0     # [in]
+        if figsize[0] < 6.0 or longest > 0.45 * figsize[0]:     # the legend below the axes, not over the curves
             labels = [_wrap(label, figsize[0] - 0.5, _pt(8)) for label in labels]
             fig.legend(handles, labels, loc="outside lower center", ncols=1, frameon=False, fontsize=_pt(8))
         else:
@@ -1474,18 +1477,19 @@ def fragility_figure(levels, grid, curves, *, xlabel: str, confidence: float, ti
     return fig
 
 
+def _same(a, b) -> bool:
+    """Whether two curves are the same, to 1e-9."""
+    return (a is not None and b is not None and np.shape(a) == np.shape(b)
+            and bool(np.allclose(a, b, rtol=1e-9, atol=1e-9, equal_nan=True)))
+
+
 def _coinciding(curves) -> dict[int, int]:
     """For each curve that coincides with an earlier one (the same fitted curve and observed
     fractions, to 1e-9: two damage states every run reaches together), the index of the first."""
     same = {}
     for i, curve in enumerate(curves):
         for j in range(i):
-            a, b = curve, curves[j]
-            if (a.get("fitted") is not None and b.get("fitted") is not None
-                    and np.shape(a["fitted"]) == np.shape(b["fitted"])
-                    and np.allclose(a["fitted"], b["fitted"], rtol=1e-9, atol=1e-9)
-                    and np.shape(a["fraction"]) == np.shape(b["fraction"])
-                    and np.allclose(a["fraction"], b["fraction"], rtol=1e-9, atol=1e-9, equal_nan=True)):
+            if _same(curve.get("fitted"), curves[j].get("fitted")) and _same(curve["fraction"], curves[j]["fraction"]):
                 same[i] = j
                 break
     return same

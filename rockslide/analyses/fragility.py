@@ -1410,6 +1410,7 @@ def overlay_figure(stored_files, names, *, size=None):
     curves = []
     for k, (d, name) in enumerate(zip(drawn, names, strict=True)):
         for i, curve in enumerate(d["curves"]):
+            curve = {key: value for key, value in curve.items() if key not in ("moments", "nominal")}   # one fit each
             curves.append({**curve, "label": f"{name}, {curve['label']}",
                            "colour": FRAGILITY_COLOURS[(k + 1) % len(FRAGILITY_COLOURS)],
                            "style": styles[i % len(styles)], "levels": d["levels"] / first.display_scale,
