@@ -1310,8 +1310,9 @@ def sweep_overlay_figure(panels, *, title: str = "", caption: str = "", size=Non
                 ax.set_yticks([])
             else:
                 (ylabel, yv), (xlabel, xv) = axes[0], axes[1]
-                yo, xo = np.argsort(np.asarray(yv, dtype=float)), np.argsort(np.asarray(xv, dtype=float))
-                y_edges, x_edges = _cell_edges(np.asarray(yv, dtype=float)[yo]), _cell_edges(np.asarray(xv, dtype=float)[xo])
+                yv, xv = np.asarray(yv, dtype=float), np.asarray(xv, dtype=float)
+                yo, xo = np.argsort(yv), np.argsort(xv)
+                y_edges, x_edges = _cell_edges(yv[yo]), _cell_edges(xv[xo])
                 values = rotation[index][np.ix_(yo, xo)]
                 cat = category[index][np.ix_(yo, xo)]
             mesh = ax.pcolormesh(x_edges, y_edges, np.ma.masked_where(~(values > 0), values), cmap=_with_bad("viridis"),
@@ -1434,8 +1435,8 @@ def fragility_figure(levels, grid, curves, *, xlabel: str, confidence: float, ti
             if curve.get("fitted") is not None:
                 if over is not None and (curves[over].get("colour") or colour) == colour:
                     colour = "white"          # dashes of its own colour would not show on the wider one
-                ax.plot(x, curve["fitted"], color=colour, lw=4.0 if under else 2.0,
-                        ls=(0, (3, 2)) if over is not None else curve.get("style", "-"), zorder=3 if over is None else 4)
+                ax.plot(x, curve["fitted"], color=colour, lw=4.0 if under else 2.0, zorder=3 if over is None else 4,
+                        ls=(0, (3, 2)) if over is not None else curve.get("style", "-"))
             for key, style in (("moments", dict(lw=1.0, ls="--")), ("nominal", dict(lw=1.2, ls=":"))):
                 if curve.get(key) is not None and not (over is not None and _same(curve[key], curves[over].get(key))):
                     ax.plot(x, curve[key], color=colour, **style)

@@ -13,6 +13,7 @@ import math
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from conftest import one_line_error
 from matplotlib.text import Text
 
 import rockslide
@@ -22,7 +23,6 @@ from rockslide.core import criteria
 from rockslide.core.physics import REST, ROCK, ROCKSLIP, SLIP
 from rockslide.core.simulate import Model, Settings, simulate
 from rockslide.io.example import write_example
-from conftest import one_line_error
 
 #: A journal column [in] (the brief's "about 3.5 in"): `--size column` must give exactly this width.
 COLUMN_WIDTH = 3.5
@@ -94,8 +94,8 @@ def test_size_column_is_a_column_wide_with_fonts_of_6_pt_at_least(files, kind):
         fig = rockslide.plot_results([files / "example.h5", files / "statue.h5"], size="column")
     elif kind == "criteria":
         ah, mu = np.linspace(0, 1.5, 31), np.linspace(0, 1.2, 25)
-        maps = [(f"A_v = {av:+.1f} g", criteria.mode_map(ah, mu, av, 0.05, 0.1), criteria.mode_boundaries(ah, av, 0.05, 0.1))
-                for av in (-0.5, 0.0, 0.5)]
+        maps = [(f"A_v = {av:+.1f} g", criteria.mode_map(ah, mu, av, 0.05, 0.1),
+                 criteria.mode_boundaries(ah, av, 0.05, 0.1)) for av in (-0.5, 0.0, 0.5)]
         fig = plots.criteria_figure(ah, mu, maps, title="t", caption="block", size="column")
     elif kind == "sweep":
         shape = (4, 5)
@@ -103,8 +103,8 @@ def test_size_column_is_a_column_wide_with_fonts_of_6_pt_at_least(files, kind):
                                  rng.integers(0, 5, shape), rng.uniform(1e-3, 1, shape), rng.normal(size=shape) * 1e-3,
                                  title="t", caption="c", size="column")
     elif kind == "spectrum":
-        fig = plots.spectrum_figure([1.0, 2.0, 3.0], [1.0, 2.0], rng.integers(0, 5, (2, 3)), rng.uniform(0.01, 1, (2, 3)),
-                                    title="t", caption="c", size="column")
+        fig = plots.spectrum_figure([1.0, 2.0, 3.0], [1.0, 2.0], rng.integers(0, 5, (2, 3)),
+                                    rng.uniform(0.01, 1, (2, 3)), title="t", caption="c", size="column")
     else:
         fig = plots.ensemble_figure(rng.uniform(0, 1, 50), rng.uniform(size=50) < 0.2, 0.5, summary_text="s",
                                     title="t", caption="c", size="column")

@@ -250,7 +250,7 @@ def _draw(result, name, path, *, overwrite, dpi=None, time_shift=0.0, zoom="auto
     ``about``: (case text, record entries, integration step [s], version or None: this one), for
     its caption (`plots.case_caption`) and the unit of its ground motion."""
     from .._version import __version__
-    from ..plots import pga_unit, case_caption, response_figure, save_figure
+    from ..plots import case_caption, pga_unit, response_figure, save_figure
 
     caption, unit = "", None
     if about is not None:
