@@ -51,6 +51,7 @@ def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, members, s
     Example:
         rockslide run example/example.yaml --json
         rockslide run example/example.yaml --ensemble 200
+        rockslide run example/spectrum-one-sine.yaml --size column
     """
     from ..case import case_to_dict, load_case
     from ..engine import prepare as runner
@@ -171,7 +172,7 @@ def plot(result_files, output, time_shift, window, crop, dpi, overwrite, size):
         rockslide plot out/example.h5 --window 6.6:7.2 -o out/example-impact.pdf
         rockslide plot out/example.sweep.h5 --size column
         rockslide plot out/example.fragility.h5
-        rockslide plot out/statue.h5 out/statue-squat.h5 -o out/statue-vs-squat.pdf
+        rockslide plot out/example.h5 out/spectrum-one-sine.h5 --size page -o out/two-runs.pdf
     """
     from ..io import results
     from ..units import parse_quantity
