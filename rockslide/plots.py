@@ -264,7 +264,8 @@ def case_caption(case_text: str = "", *, records=None, step: float | None = None
         parts.append(("records " if len(records) > 1 else "record ") + ", ".join(shown)
                      + (f", both ×{factors.pop()}" if one else ""))
     elif case is not None:
-        parts.append(_case_ground(case))
+        pulse_axes = {"amplitude", "period", "duration"} & set(varied)
+        parts.append(_case_ground(case) + (f" ({', '.join(sorted(pulse_axes))} varied)" if pulse_axes else ""))
     if case is not None:
         scale = case.ground.scale
         if scale.pga_horizontal is not None and not ground:
@@ -1609,7 +1610,8 @@ def _spectrum_figure(x_edges, y_edges, category, rotation, curves, *, xlabel, yl
         ax.set_xlabel(xlabel)
         ax.set_ylabel(ylabel)
         ax.set_title(name, loc="left", fontsize=_pt(10))
-    fig.legend(handles=handles, loc="outside lower center", ncols=2 if stacked else 4, frameon=False, fontsize=_pt(9))
+    fig.legend(handles=handles, loc="outside lower center", ncols=1 if figsize[0] < 5.0 else 2 if stacked else 4,
+               frameon=False, fontsize=_pt(9))
     _headline(fig, title, caption)
     _freeze_ticks(fig)
     return fig
@@ -1756,7 +1758,11 @@ def _ensemble_figure(ratios, overturned, nominal_ratio, *, summary_text, title, 
     ax.set_xlabel("largest rotation / α")
     ax.set_ylabel("fraction of the members")
     ax.grid(True, alpha=0.3)
-    ax.legend(loc="lower right", fontsize=_pt(8), title=summary_text, title_fontsize=_pt(8))
+    if figsize[0] < 6.0:       # narrow: below the axes, not over the curve
+        fig.legend(*ax.get_legend_handles_labels(), loc="outside lower center", fontsize=_pt(8), title=summary_text,
+                   title_fontsize=_pt(8), frameon=False)
+    else:
+        ax.legend(loc="lower right", fontsize=_pt(8), title=summary_text, title_fontsize=_pt(8))
     _headline(fig, title, caption)
     _freeze_ticks(fig)
     return fig
