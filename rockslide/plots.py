@@ -198,7 +198,7 @@ def _freeze_ticks(fig: Figure) -> None:
 def _wrap(text: str, width: float, size: float) -> str:
     """``text`` broken into lines that fit ``width`` [in] at ``size`` [pt] (about half an em a
     character: matplotlib's DejaVu Sans averages 0.55)."""
-    chars = max(20, int(width * 72.0 / (0.56 * size)))
+    chars = max(12, int(width * 72.0 / (0.56 * size)))
     return "\n".join(textwrap.fill(line, chars, break_on_hyphens=False) if len(line) > chars else line
                      for line in text.split("\n"))
 
@@ -1242,6 +1242,10 @@ def sweep_figure(axes, category, max_rotation, residual_slip, *, title: str = ""
         def sorted_2d(values, index):
             return values[index][np.ix_(y_order, x_order)]
 
+        # [in] about what a map and its colour bar leave its labels
+        panel_width = figsize[0] - 1.0 if stacked else figsize[0] / 3.0 - 0.9
+        panel_height = (figsize[1] - 1.5) / (3 * len(rows) if stacked else len(rows))
+
         for r, (index, row_caption) in enumerate(rows):
             cat = sorted_2d(category, index)
             rot = sorted_2d(rotation, index)
@@ -1260,8 +1264,8 @@ def sweep_figure(axes, category, max_rotation, residual_slip, *, title: str = ""
                 if bar:
                     fig.colorbar(mesh, ax=ax, label=bar)
                 ax.set_title(f"{name}{row_caption}", loc="left", fontsize=_pt(10))
-                ax.set_xlabel(xlabel)
-                ax.set_ylabel(ylabel)
+                ax.set_xlabel(_wrap(xlabel, panel_width, _pt(10)))
+                ax.set_ylabel(_wrap(ylabel, 0.8 * panel_height, _pt(10)))
         fig.legend(handles=legend, loc="outside lower center", ncols=_legend_columns(legend, figsize[0]),
                    frameon=False, fontsize=_pt(9))
         _headline(fig, "\n".join(t for t in (title, note) if t), caption)

@@ -62,6 +62,9 @@ def files(tmp_path_factory):
         result = invoke("fragility", folder / "ex" / f"{name}.yaml", "--suite", folder / "ex" / "suite-synthetic.yaml",
                         "--levels", "0.4g:1.6g:0.4g", "--out-dir", out, "--no-plot")
         assert result.exit_code == 0, result.output
+        result = invoke("sweep", folder / "ex" / f"{name}.yaml", "--mu", "0.5,0.9", "--pga", "0.4g,0.8g",
+                        "--out-dir", out, "--no-plot")
+        assert result.exit_code == 0, result.output
     return out
 
 
@@ -233,3 +236,17 @@ def test_plots_without_a_caption_still_work_from_a_bare_result():
     run = simulate(Model.from_block(0.1, 0.2, 0.8, 0.76, 0.8), 0.01, np.zeros(100), np.zeros(100), Settings())
     fig = plots.response_figure(run, size="page")
     assert fig.get_size_inches()[0] == pytest.approx(7.0)
+
+
+def test_two_sweeps_side_by_side_on_one_colour_scale_in_the_cases_unit(files):
+    fig = rockslide.plot_results([files / "statue.sweep.h5", files / "example.sweep.h5"])
+    maps = [ax for ax in fig.axes if ax.get_title(loc="left")]          # not the colour bar
+    titles = [ax.get_title(loc="left") for ax in maps]
+    assert titles == ["statue", "example"]
+    meshes = [c for ax in maps for c in ax.collections if c.get_array() is not None]
+    assert len(meshes) == 2 and len({(m.norm.vmin, m.norm.vmax) for m in meshes}) == 1     # one colour scale
+    # statue's case gives its PGA in g: the shared axis is in g, the values the case's 0.4 and 0.8 g
+    assert all(ax.get_xlabel().replace("\n", " ").endswith("[g]") for ax in maps)
+    assert maps[1].get_xlim() == pytest.approx((0.2, 1.0))     # 0.4 g and 0.8 g, cells 0.4 g wide
+    single = rockslide.plot_results([files / "statue.sweep.h5"])
+    assert all(ax.get_xlabel().replace("\n", " ").endswith("[g]") for ax in single.axes if ax.get_xlabel())

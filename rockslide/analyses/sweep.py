@@ -75,7 +75,7 @@ from ..engine.prepare import (
 from ..errors import CaseError
 from ..io import records as rec
 from ..pulses import Pulse, linear_overturning_ratio
-from ..units import STANDARD_GRAVITY, UNIT_REQUIRED, parse_quantity
+from ..units import STANDARD_GRAVITY, UNIT_REQUIRED, parse_quantity, unit_factor
 
 __all__ = ["AXES", "AxisKind", "Axis", "parse_axis", "plan_sweep", "sweep_variables", "coordinates",
            "root_attributes", "spectrum_scales", "figure", "stored_figure"]
@@ -785,7 +785,7 @@ def figure(plan: Plan, variables: dict, *, size=None):
     scales = spectrum_scales(plan)
     if scales is not None:
         return _spectrum(axes, variables, scales, title, size=size, caption=text)
-    return _maps(axes, variables, title, size=size, caption=text)
+    return _maps(axes, variables, title, size=size, caption=text, case_text=plan.case.text)
 
 
 def caption(case_text: str, axes, records, step, version) -> str:
@@ -818,7 +818,8 @@ def stored_figure(stored, *, size=None) -> object:
     text = stored_caption(stored)
     if scales:
         return _spectrum(axes, variables=stored.variables, scales=scales, title=title, size=size, caption=text)
-    return _maps(axes, stored.variables, title, size=size, caption=text)
+    return _maps(axes, stored.variables, title, size=size, caption=text,
+                 case_text=str(stored.attrs.get("case_text", "")))
 
 
 def overlay_figure(stored_files, names, *, size=None):
@@ -833,7 +834,9 @@ def overlay_figure(stored_files, names, *, size=None):
         if axes[:2] != first[:2]:
             raise CaseError(f"{name} is over {' x '.join(axes)} and {names[0]} over {' x '.join(first)}; overlay "
                             "sweeps over the same axes", source="rockslide plot")
-        shown = [(AXES[n].label, np.asarray(values) / AXES[n].display_scale) for n, values, _ in stored.coords]
+        # one unit for all: the first case's (the panels share their axes)
+        shown = shown_axes([(n, values) for n, values, _ in stored.coords],
+                           str(stored_files[0].attrs.get("case_text", "")))
         panels.append((name, shown, categories(stored.variables), np.asarray(stored.variables["max_rotation"][0])))
     text = "\n".join(f"{name}: {stored_caption(stored)}" for stored, name in zip(stored_files, names, strict=True))
     return sweep_overlay_figure(panels, title="sweeps: " + " and ".join(names), caption=text, size=size)
@@ -882,11 +885,27 @@ def _spectrum(axes, variables: dict, scales: dict, title: str, *, size=None, cap
                            title=f"{title}: {pulse.pulse} pulse", size=size, caption=caption)
 
 
-def _maps(axes, variables: dict, title: str, *, size=None, caption: str = ""):
+def shown_axes(axes, case_text: str = "") -> list:
+    """``(label, values)`` of each ``(name, SI values)`` axis as figures show it: the PGA in the unit
+    the case gives its PGA in (`plots.pga_unit`; gal when it gives none), the others in `AXES`'s
+    display units."""
+    from ..plots import pga_unit
+
+    unit = pga_unit(case_text) if any(name == "pga" for name, _ in axes) else None
+    shown = []
+    for name, values in axes:
+        label, scale = AXES[name].label, AXES[name].display_scale
+        if name == "pga" and unit:
+            label, scale = f"peak horizontal acceleration [{unit}]", unit_factor(unit, "acceleration")
+        shown.append((label, np.asarray(values) / scale))
+    return shown
+
+
+def _maps(axes, variables: dict, title: str, *, size=None, caption: str = "", case_text: str = ""):
     from ..plots import sweep_figure
 
     over = int(np.asarray(variables["overturned"][0]).sum())
-    shown = [(AXES[name].label, np.asarray(values) / AXES[name].display_scale) for name, values in axes]
+    shown = shown_axes(axes, case_text)
     return sweep_figure(shown, categories(variables), variables["max_rotation"][0],
                         variables["residual_slip"][0], title=f"{title}, {over} overturned", size=size,
                         caption=caption)
