@@ -580,7 +580,7 @@ def run_caption(run) -> str:
     from ._version import __version__
 
     attrs = getattr(run, "attrs", None) or {}
-    step = attrs.get("integration_step")
+    step = attrs.get("integration_step", getattr(run.result, "step", None))
     return case_caption(run.case_text, records=run.records, step=None if step is None else float(step),
                         version=str(attrs.get("rockslide_version", __version__)))
 
@@ -1438,7 +1438,9 @@ def fragility_figure(levels, grid, curves, *, xlabel: str, confidence: float, ti
             if curve.get("band") is not None and over is None:
                 ax.fill_between(x, curve["band"][0], curve["band"][1], color=colour, alpha=0.15, lw=0)
             if curve.get("fitted") is not None:
-                if over is not None and (curves[over].get("colour") or colour) == colour:
+                below = None if over is None else (curves[over].get("colour")
+                                                   or FRAGILITY_COLOURS[over % len(FRAGILITY_COLOURS)])
+                if below == colour:
                     colour = "white"          # dashes of its own colour would not show on the wider one
                 ax.plot(x, curve["fitted"], color=colour, lw=4.0 if under else 2.0, zorder=3 if over is None else 4,
                         ls=(0, (3, 2)) if over is not None else curve.get("style", "-"))

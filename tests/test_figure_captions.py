@@ -200,8 +200,15 @@ def test_coinciding_fragility_curves_both_show_and_the_legend_says_so():
     assert len(fits) == 2
     under, over = fits
     assert under.get_linewidth() > over.get_linewidth() and over.get_linestyle() != "-"
+    assert under.get_color() != over.get_color()            # the dashes show on the wider line
     labels = [t.get_text() for t in ax.get_legend().get_texts()]
     assert any("the same as overturn" in label for label in labels)
+    # two curves of one colour (an overlay's file): the dashes over it are white, not its own colour
+    fig = plots.fragility_figure([0.5, 1.0, 1.5], grid, [{**same, "label": "a: x", "colour": "#123456"},
+                                                         {**same, "label": "b: x", "colour": "#123456"}],
+                                 xlabel="PGA [g]", confidence=0.95)
+    under, over = [line for line in fig.axes[0].get_lines() if len(line.get_xdata()) == grid.size]
+    assert under.get_color() == "#123456" and over.get_color() == "white"
 
 
 def test_the_criteria_boundaries_are_the_closed_forms_and_part_the_map():
