@@ -1429,6 +1429,7 @@ def fragility_figure(levels, grid, curves, *, xlabel: str, confidence: float, ti
         ax = fig.subplots()
         levels, grid = np.asarray(levels, dtype=float), np.asarray(grid, dtype=float)
         twins = _coinciding(curves)
+        handles, labels = [], []
         for i, curve in enumerate(curves):
             colour = curve.get("colour") or FRAGILITY_COLOURS[i % len(FRAGILITY_COLOURS)]
             x = np.asarray(curve.get("grid", grid), dtype=float)
@@ -1455,10 +1456,15 @@ def fragility_figure(levels, grid, curves, *, xlabel: str, confidence: float, ti
             elif under:
                 marker, size_pt = "o", 9
             colour = curve.get("colour") or FRAGILITY_COLOURS[i % len(FRAGILITY_COLOURS)]
-            ax.plot(at, curve["fraction"], marker, color=colour, ms=size_pt * _FONT_SCALE.get() ** 0.5, ls="none",
-                    mfc="white" if curve.get("fitted") is None or under else colour, label=label,
+            face = "white" if curve.get("fitted") is None or under else colour
+            ms = size_pt * _FONT_SCALE.get() ** 0.5
+            ax.plot(at, curve["fraction"], marker, color=colour, ms=ms, ls="none", mfc=face,
                     zorder=5 if over is not None else 4)
-        handles, labels = ax.get_legend_handles_labels()
+            # the entry shows the curve's line style too (overlays tell damage states by it)
+            shown_style = "none" if curve.get("fitted") is None else (0, (3, 2)) if over is not None \
+                else curve.get("style", "-")
+            handles.append(Line2D([], [], color=colour, ls=shown_style, lw=1.5, marker=marker, ms=ms, mfc=face))
+            labels.append(label)
         for key, handle, label in (
                 ("fitted", Line2D([], [], color="0.3", lw=2.0), "maximum-likelihood lognormal fit"),
                 ("moments", Line2D([], [], color="0.3", lw=1.0, ls="--"), "method of moments (first exceedances)"),
