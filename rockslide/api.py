@@ -27,8 +27,8 @@ from .case import Case, case_with, load_case
 from .core.simulate import Result, Summary
 from .errors import CaseError
 
-__all__ = ["load_case", "case_with", "run", "sweep", "fragility", "ensemble", "read_result", "RunResult",
-           "Case", "Summary"]
+__all__ = ["load_case", "case_with", "run", "sweep", "fragility", "ensemble", "read_result", "plot_results",
+           "RunResult", "Case", "Summary"]
 
 
 @dataclass
@@ -324,6 +324,115 @@ def read_result(path: str | Path):
     stored = results.read_result(path)
     return RunResult(name=stored.name, result=stored.result, ground=stored.ground, records=stored.records,
                      case_text=stored.case_text, attrs=stored.attrs)
+
+
+def plot_results(results: Sequence, *, size=None, names: Sequence[str] | None = None, time_shift: float = 0.0,
+                 zoom: tuple | None | str = "auto", crop: tuple | None | str = "auto", path: str | Path | None = None,
+                 overwrite: bool = False, dpi: float | None = None):
+    """The figure of one result, or several of one kind overlaid, as ``rockslide plot A.h5 B.h5``.
+
+    Parameters
+    ----------
+    results : sequence of str, Path or RunResult
+        Result files (of runs, sweeps or fragility analyses: all of one kind) or runs (`run`). One:
+        its own figure (`plots.response_figure`, or the sweep's or fragility analysis's).
+        Several runs: liftoff angle, slip and ground motion on shared axes
+        (`plots.runs_overlay_figure`); sweeps: their largest rotation side by side on one colour
+        scale; fragility analyses: their curves with their confidence bands on one plot.
+    size : None, "column", "page", "slide", "WxH" or (width, height)
+        The figure's size [in]: a journal column (3.5 in wide), a page (7 in), a 16:9 slide
+        (10 x 5.6 in) or the pair given; fonts follow it. Default: the figure's own size.
+    names : sequence of str, optional
+        The legend's names (default: the cases' names, or the files' names where two cases share
+        one).
+    time_shift : float
+        Added to the time axis of runs [s].
+    zoom : "auto", (t0, t1) or None
+        The magnified window of a single run (`plots.response_figure`).
+    crop : "auto", (t0, t1) or None
+        The time range of runs.
+    path : str or Path, optional
+        Also save the figure there (the format follows the extension), atomically.
+    overwrite : bool
+        Replace ``path`` if it exists.
+    dpi : float, optional
+        Resolution of a raster ``path`` (default 150).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+
+    Raises
+    ------
+    CaseError
+        Files of different kinds, sweeps over different axes, fragility analyses over different
+        intensity measures, a bad size.
+    OutputError
+        A file that is not a rockslide file, or ``path`` exists (without ``overwrite``).
+    """
+    from . import plots
+    from .io import results as stored_files
+    from .units import parse_figure_size
+
+    size = parse_figure_size(size, source="size")
+    items = list(results) if not isinstance(results, (str, Path, RunResult)) else [results]
+    if not items:
+        raise CaseError("no result to draw; give one file or more", source="plot_results")
+    kinds, loaded, stems = [], [], []
+    for item in items:
+        if isinstance(item, RunResult):
+            kinds.append("result")
+            loaded.append(item)
+            stems.append(item.name)
+            continue
+        kind = stored_files.file_format(item)
+        kind = {stored_files.SWEEP_FORMAT: "sweep", stored_files.FRAGILITY_FORMAT: "fragility"}.get(kind, "result")
+        if kinds and kind != kinds[0]:
+            raise CaseError(f"a {kind} file among {kinds[0]} files ({items[0]}); overlay files of one kind",
+                            source=str(item))
+        kinds.append(kind)
+        stems.append(Path(item).name.split(".")[0])
+        if kind == "sweep":
+            loaded.append(stored_files.read_sweep(item))
+        elif kind == "fragility":
+            loaded.append(stored_files.read_dataset(item, format=stored_files.FRAGILITY_FORMAT))
+        else:
+            stored = stored_files.read_result(item)
+            loaded.append(RunResult(name=stored.name, result=stored.result, ground=stored.ground,
+                                    records=stored.records, case_text=stored.case_text, attrs=stored.attrs))
+    kind = kinds[0]
+    if names is None:
+        names = [item.name if kind == "result" else str(item.attrs.get("name") or stem)
+                 for item, stem in zip(loaded, stems, strict=True)]
+        if len(set(names)) < len(names):
+            names = stems if len(set(stems)) == len(stems) else [f"{n} ({i + 1})" for i, n in enumerate(names)]
+    names = [str(n) for n in names]
+    if len(names) != len(loaded):
+        raise CaseError(f"{len(names)} names for {len(loaded)} results", source="names")
+    if len(loaded) == 1:
+        if kind == "sweep":
+            from .analyses.sweep import stored_figure
+            figure = stored_figure(loaded[0], size=size)
+        elif kind == "fragility":
+            from .analyses.fragility import stored_figure
+            figure = stored_figure(loaded[0], size=size)
+        else:
+            figure = plots.response_figure(loaded[0], title=names[0], time_shift=time_shift, zoom=zoom, crop=crop,
+                                           size=size)
+    elif kind == "sweep":
+        from .analyses.sweep import overlay_figure
+        figure = overlay_figure(loaded, names, size=size)
+    elif kind == "fragility":
+        from .analyses.fragility import overlay_figure
+        figure = overlay_figure(loaded, names, size=size)
+    else:
+        caption = "\n".join(f"{name}: {plots.run_caption(run)}" for run, name in zip(loaded, names, strict=True))
+        figure = plots.runs_overlay_figure([run.result for run in loaded], names, title=" and ".join(names),
+                                           caption=caption, size=size, time_shift=time_shift, crop=crop,
+                                           unit=plots.pga_unit(loaded[0].case_text))
+    if path is not None:
+        plots.save_figure(figure, path, overwrite=overwrite, dpi=dpi)
+    return figure
 
 
 def _case(case) -> Case:

@@ -25,11 +25,13 @@ in what is stored. The format follows the file name in `save_figure` (PNG, PDF, 
 
 from __future__ import annotations
 
+import contextvars
 import logging
 import math
 import os
 import struct
 import sys
+import textwrap
 import zlib
 from contextlib import contextmanager
 from pathlib import Path
@@ -41,7 +43,7 @@ from matplotlib import rcParams
 from .core.layout import OVERTURNED, REST, ROCK, ROCKSLIP, SLIP, STATE_NAMES
 from .errors import OutputError
 from .io.files import atomic_write, check_destination
-from .units import percent_text
+from .units import FIGURE_SIZES, STANDARD_GRAVITY, parse_figure_size, percent_text, unit_factor
 
 
 @contextmanager
@@ -84,8 +86,14 @@ with _artists_without_set_docstrings():
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
-GAL = 0.01          # [m/s^2]
 FIGSIZE = (11.0, 8.0)   # [in]
+#: Smallest font of any figure at any size [pt]: what a printed journal column still reads.
+MIN_FONT = 6.0
+#: Fonts are the sizes written in this module times a factor that follows the figure's width
+#: (`font_scale`): 0.7 at a journal column (3.5 in), 0.8 at a page (7 in), 1 from 10 in up.
+FONT_SCALE_WIDTHS = (3.5, 7.0, 10.0)     # [in]
+FONT_SCALE_FACTORS = (0.7, 0.8, 1.0)
+_FONT_SCALE = contextvars.ContextVar("rockslide_font_scale", default=1.0)
 DPI = 150
 #: zlib level of PNG files (`_write_png`): 3 deflates a run's figure in about 17 ms (244 KB), 6 in
 #: about 45 ms (213 KB).
@@ -124,6 +132,189 @@ EDGE_PAD = 4.0
 #: Space [pt] between the blocks stacked in a response figure: the title, each panel with its
 #: decorations, the legend (`_fit_column`).
 BLOCK_GAP = 8.0
+
+
+# --------------------------------------------------------------------------------------------------
+# Sizes, fonts and captions
+# --------------------------------------------------------------------------------------------------
+
+
+def figure_size(size, default: tuple[float, float], *, column: float | None = None,
+                page: float | None = None) -> tuple[float, float]:
+    """The size [in] of a figure drawn at ``size`` (`units.parse_figure_size`): ``default`` for
+    None; a column's or a page's width (`units.FIGURE_SIZES`) with the height given for it
+    (``column``, ``page``; else the default's proportions); the slide's or the pair given."""
+    size = parse_figure_size(size)
+    if size is None:
+        return tuple(float(v) for v in default)
+    if isinstance(size, tuple):
+        return size
+    width, height = FIGURE_SIZES[size]
+    if height is None:
+        height = {"column": column, "page": page}[size] or width * default[1] / default[0]
+    return float(width), float(height)
+
+
+def font_scale(width: float) -> float:
+    """The factor on every font of a figure ``width`` [in] wide (`FONT_SCALE_WIDTHS`)."""
+    return float(np.interp(width, FONT_SCALE_WIDTHS, FONT_SCALE_FACTORS))
+
+
+def _pt(size: float) -> float:
+    """A font size written for a full-size figure [pt], at the figure being drawn (`_style`)."""
+    return max(MIN_FONT, size * _FONT_SCALE.get())
+
+
+@contextmanager
+def _style(width: float):
+    """Fonts, ticks and pads for a figure ``width`` [in] wide while it is made: `_pt` scales the
+    sizes written here, and matplotlib's own defaults (tick labels, axis labels, legends) follow.
+    Call `_freeze_ticks` before leaving: ticks made later, at drawing, would take the defaults."""
+    scale = font_scale(width)
+    token = _FONT_SCALE.set(scale)
+    try:
+        base = {"font.size": _pt(10), "axes.labelsize": _pt(10), "axes.titlesize": _pt(10),
+                "xtick.labelsize": _pt(10), "ytick.labelsize": _pt(10), "legend.fontsize": _pt(9),
+                "figure.titlesize": _pt(12),
+                "legend.title_fontsize": _pt(9), "axes.titlepad": 6.0 * scale, "axes.labelpad": 4.0 * scale}
+        for axis in ("x", "y"):
+            base[f"{axis}tick.major.size"] = 3.5 * scale
+            base[f"{axis}tick.major.pad"] = 3.5 * scale
+        with matplotlib.rc_context(base):
+            yield scale
+    finally:
+        _FONT_SCALE.reset(token)
+
+
+def _freeze_ticks(fig: Figure) -> None:
+    """Give every axis of ``fig`` the tick sizes of `_style` for good (ticks are made lazily)."""
+    for ax in fig.axes:
+        ax.tick_params(labelsize=rcParams["xtick.labelsize"], length=rcParams["xtick.major.size"],
+                       pad=rcParams["xtick.major.pad"])
+        for axis in (ax.xaxis, ax.yaxis):
+            axis.get_offset_text().set_fontsize(rcParams["xtick.labelsize"])
+
+
+def _wrap(text: str, width: float, size: float) -> str:
+    """``text`` broken into lines that fit ``width`` [in] at ``size`` [pt] (about half an em a
+    character: matplotlib's DejaVu Sans averages 0.55)."""
+    chars = max(12, int(width * 72.0 / (0.56 * size)))
+    return "\n".join(textwrap.fill(line, chars, break_on_hyphens=False) if len(line) > chars else line
+                     for line in text.split("\n"))
+
+
+def _headline(fig: Figure, title: str, caption: str, *, size: float = 12.0):
+    """The figure's title block: ``title`` (its first lines) and the ``caption`` (what was computed:
+    `case_caption`) below it, wrapped to the figure's width. Returns the suptitle (or None)."""
+    width = fig.get_size_inches()[0]
+    parts = [t for t in (title, caption) if t]
+    if not parts:
+        return None
+    font = _pt(size if not caption else 0.85 * size)
+    return fig.suptitle(_wrap("\n".join(parts), width * 0.97, font), fontsize=font)
+
+
+def case_caption(case_text: str = "", *, records=None, step: float | None = None, version: str | None = None,
+                 varied=(), ground: str | None = None) -> str:
+    """What a figure shows was computed from: the record(s) and their scaling, the block (width x
+    height, mass, alpha), friction, restitution, the integration step and rockslide's version.
+
+    Parameters
+    ----------
+    case_text : str
+        The case file's text, as stored in every result file (empty: only what is given here).
+    records : list of dict, optional
+        The records as applied (``role``, ``path``, ``scale_factor``), as stored with a run.
+    step : float, optional
+        The integration step [s] (default: the case's ``solver.dt``).
+    version : str, optional
+        rockslide's version that computed it.
+    varied : sequence of str
+        Quantities varied over the figure (a sweep's axes): their case values are marked as the
+        base case's.
+    ground : str, optional
+        The ground motion in words, in place of the case's (a fragility suite).
+
+    Returns
+    -------
+    str
+        One line, parts separated by ``"; "`` (`_headline` wraps it).
+    """
+    from .case import parse_case
+    from .errors import RockslideError
+
+    parts = []
+    case = None
+    if case_text:
+        try:
+            case = parse_case(case_text, source="<stored case>")
+        except RockslideError:
+            case = None
+    if ground:
+        parts.append(ground)
+    elif records:
+        factors = {f"{float(e['scale_factor']):.4g}" for e in records if e.get("scale_factor") is not None}
+        one = len(factors) == 1 and len(records) > 1
+        shown = []
+        for entry in records:
+            role = {"horizontal": "H", "vertical": "V"}.get(str(entry.get("role")), str(entry.get("role", "")))
+            factor = entry.get("scale_factor")
+            scaled = f" ×{float(factor):.4g}" if factor is not None and not one else ""
+            shown.append(f"{Path(str(entry.get('path', '?'))).name} ({role}){scaled}")
+        parts.append(("records " if len(records) > 1 else "record ") + ", ".join(shown)
+                     + (f", both ×{factors.pop()}" if one else ""))
+    elif case is not None:
+        pulse_axes = {"amplitude", "period", "duration"} & set(varied)
+        parts.append(_case_ground(case) + (f" ({', '.join(sorted(pulse_axes))} varied)" if pulse_axes else ""))
+    if case is not None:
+        scale = case.ground.scale
+        if scale.pga_horizontal is not None and not ground:
+            unit = case.units.get("ground.scale.pga_horizontal") or "g"
+            mark = " (base)" if "pga" in varied else ""
+            parts[-1] += f": PGA {scale.pga_horizontal / unit_factor(unit, 'acceleration'):.4g} {unit}{mark}"
+        b = case.block
+        alpha = math.atan2(b.width, b.height)
+        parts.append(f"block width × height {b.width:.4g} × {b.height:.4g} m, {b.mass:.4g} kg, "
+                     f"α = {alpha:.4g} rad")
+        mark = " (base)" if "mu" in varied else ""
+        parts.append(f"μ = {case.contact.mu_static:.4g}{mark} (kinetic {case.contact.mu_kinetic:.4g})")
+        mark = " (base)" if "restitution" in varied else ""
+        parts.append(f"e = {case.contact.restitution:.4g}{mark}")
+        step = case.solver.dt if step is None else step
+    if step is not None and math.isfinite(float(step)):
+        parts.append(f"dt = {_time_text(float(step))}")
+    if version:
+        parts.append(f"rockslide {version}")
+    return "; ".join(parts)
+
+
+def _case_ground(case) -> str:
+    """The case's ground motion in words (its record files, or its pulses)."""
+    shown = []
+    for role, spec in (("H", case.ground.horizontal), ("V", case.ground.vertical)):
+        if spec is None:
+            continue
+        name = getattr(spec, "file", None)
+        shown.append(f"{Path(name).name} ({role})" if name else f"{_pulse_text(spec)} ({role})")
+    return ("ground " + ", ".join(shown)) if shown else "still ground"
+
+
+def _pulse_text(pulse) -> str:
+    """``one-sine pulse 0.5 g, T = 0.4 s`` (amplitude in g: pulses are written so)."""
+    timing = [f"{name} {_time_text(value)}" for name, value in (("T =", pulse.period), ("length", pulse.duration))
+              if value is not None]
+    return ", ".join([f"{pulse.pulse} pulse {pulse.amplitude / STANDARD_GRAVITY:.4g} g", *timing])
+
+
+def _time_text(seconds: float) -> str:
+    return f"{seconds * 1e3:.4g} ms" if seconds < 0.1 else f"{seconds:.4g} s"
+
+
+def acceleration_unit(unit: str | None) -> tuple[str, float]:
+    """The unit figures show accelerations in (the one the case was written in: ``g``, ``gal``,
+    ``m/s^2``...; default gal) and its size [m/s^2]."""
+    unit = unit or "gal"
+    return unit, unit_factor(unit, "acceleration")
 
 
 # --------------------------------------------------------------------------------------------------
@@ -282,13 +473,15 @@ def _code(name) -> int:
 
 
 def response_figure(result, *, title: str = "", time_shift: float = 0.0,
-                    zoom: tuple | None | str = "auto", crop: tuple | None | str = "auto") -> Figure:
+                    zoom: tuple | None | str = "auto", crop: tuple | None | str = "auto", size=None,
+                    caption: str | None = None, unit: str | None = None) -> Figure:
     """The response of one simulation in the paper's style (module docstring).
 
     Parameters
     ----------
-    result : Result or StoredResult
-        A fresh or a stored result (a `StoredResult` gives its name as the default title).
+    result : Result, RunResult or StoredResult
+        A fresh or a stored result (a `RunResult` or a `StoredResult` gives its name as the default
+        title, its caption and its ground motion's unit).
     title : str
         Case name shown in the title, before the verdict.
     time_shift : float
@@ -300,53 +493,113 @@ def response_figure(result, *, title: str = "", time_shift: float = 0.0,
     crop : "auto", (t0, t1) or None
         The time range of the response and ground panels: ``"auto"`` = `motion_range`;
         ``(t0, t1)`` in the figure's time [s]; None = the whole record.
+    size : None, "column", "page", "slide", "WxH" or (width, height)
+        The figure's size [in] (`figure_size`; default 11 x 8 in); fonts follow its width.
+    caption : str, optional
+        What was computed (`case_caption`); default: from the result's case, records and version.
+    unit : str, optional
+        Unit of the ground acceleration shown (``g``, ``gal``, ``m/s^2``); default: the one the
+        case gives its PGA in, else gal.
 
     Returns
     -------
     matplotlib.figure.Figure
-        11 x 8 in; save it with `save_figure`. Its axes are labelled (``Axes.get_label``)
+        Save it with `save_figure`. Its axes are labelled (``Axes.get_label``)
         ``"record"`` and ``"record-slip"`` (the response: rotation, and the slip twin), ``"zoom"``
         and ``"zoom-slip"`` (if magnified) and ``"ground"``. It is laid out once, when made
         (`_fit_column`, no layout engine): resized, or given other texts, it is not laid out again.
     """
-    if hasattr(result, "result") and hasattr(result, "case_text"):   # a StoredResult
+    if hasattr(result, "result") and hasattr(result, "case_text"):   # a StoredResult or a RunResult
         title = title or result.name
+        if caption is None:
+            caption = run_caption(result)
+        if unit is None:
+            unit = pga_unit(result.case_text)
         result = result.result
     shift = float(time_shift)
     t0, t1 = _choose_range(result, crop, shift)
     window = _choose_zoom(result, zoom, shift, (t0, t1))
+    figsize = figure_size(size, FIGSIZE, column=6.0, page=7.5)
 
-    fig = Figure(figsize=FIGSIZE, dpi=DPI)
-    FigureCanvasAgg(fig)        # measured and drawn by one renderer (`_fit_column`)
-    ratios = [3.0, 3.0, 2.0] if window else [3.0, 2.0]
-    axes = fig.subplots(len(ratios), 1, gridspec_kw={"height_ratios": ratios})
-    top, ground = axes[0], axes[-1]
-    ground.sharex(top)
+    with _style(figsize[0]):
+        fig = Figure(figsize=figsize, dpi=DPI)
+        FigureCanvasAgg(fig)        # measured and drawn by one renderer (`_fit_column`)
+        ratios = [3.0, 3.0, 2.0] if window else [3.0, 2.0]
+        axes = fig.subplots(len(ratios), 1, gridspec_kw={"height_ratios": ratios})
+        top, ground = axes[0], axes[-1]
+        ground.sharex(top)
 
-    title_y = _response_panel(top, result, shift, (t0, t1), window=window, label="record")
-    record = _record_range(result)
-    if (t0, t1) == record:
-        top.set_title("whole record", loc="left", fontsize=10, y=title_y)
-    else:
-        top.set_title(f"{t0 + shift:.2f} to {t1 + shift:.2f} s of the {record[0] + shift:.4g} to "
-                      f"{record[1] + shift:.4g} s record", loc="left", fontsize=10, y=title_y)
-    if window:
-        zax = axes[1]
-        title_y = _response_panel(zax, result, shift, (window[0] - shift, window[1] - shift), label="zoom")
-        # round first: a pulse's ground starts a sample before 0 (-0.00 otherwise)
-        zax.set_title(f"magnified: {round(window[0], 2) + 0.0:.2f} to {window[1]:.2f} s", loc="left",
-                      fontsize=10, y=title_y)
-    _ground_panel(ground, result, shift, (t0, t1))
-    ground.set_label("ground")
-    ground.set_xlim(t0 + shift, t1 + shift)
-    for ax in axes:
-        ax.set_xlabel("time [s]")
+        alpha_drawn = []
+        title_y = _response_panel(top, result, shift, (t0, t1), window=window, label="record",
+                                  alpha_drawn=alpha_drawn)
+        record = _record_range(result)
+        if (t0, t1) == record:
+            top.set_title("whole record", loc="left", fontsize=_pt(10), y=title_y)
+        elif _narrow(fig):
+            top.set_title(f"{t0 + shift:.2f}-{t1 + shift:.2f} s of {record[0] + shift:.4g}-"
+                          f"{record[1] + shift:.4g} s", loc="left", fontsize=_pt(10), y=title_y)
+        else:
+            top.set_title(f"{t0 + shift:.2f} to {t1 + shift:.2f} s of the {record[0] + shift:.4g} to "
+                          f"{record[1] + shift:.4g} s record", loc="left", fontsize=_pt(10), y=title_y)
+        if window:
+            zax = axes[1]
+            title_y = _response_panel(zax, result, shift, (window[0] - shift, window[1] - shift), label="zoom",
+                                      alpha_drawn=alpha_drawn)
+            # round first: a pulse's ground starts a sample before 0 (-0.00 otherwise)
+            zax.set_title(f"magnified: {round(window[0], 2) + 0.0:.2f} to {window[1]:.2f} s", loc="left",
+                          fontsize=_pt(10), y=title_y)
+        _ground_panel(ground, result, shift, (t0, t1), unit=unit)
+        ground.set_label("ground")
+        ground.set_xlim(t0 + shift, t1 + shift)
+        for ax in axes:
+            ax.set_xlabel("time [s]")
+        _freeze_ticks(fig)
 
-    suptitle = fig.suptitle(_title(result, title), fontsize=12)
-    legend = fig.legend(handles=_legend_handles(result), loc="lower center", ncols=6, frameon=False,
-                        fontsize=9)
-    _fit_column(fig, suptitle=suptitle, legend=legend, title_size=10)
+        suptitle = _headline(fig, _title(result, title), caption or "")
+        handles = _legend_handles(result, alpha=bool(alpha_drawn))
+        legend = fig.legend(handles=handles, loc="lower center", ncols=_legend_columns(handles, figsize[0]),
+                            frameon=False, fontsize=_pt(9))
+        _fit_column(fig, suptitle=suptitle, legend=legend, title_size=_pt(10))
     return fig
+
+
+def _narrow(fig) -> bool:
+    """Whether ``fig`` is narrower than 5 in: its panels' titles say less."""
+    return fig.get_size_inches()[0] < 5.0
+
+
+def _brief_labels(fig) -> bool:
+    """Whether the response panels of ``fig`` are too low for their long y labels (the legend
+    says what φ and x are): narrow, or less than 6.5 in high."""
+    return _narrow(fig) or fig.get_size_inches()[1] < 6.5
+
+
+def run_caption(run) -> str:
+    """`case_caption` of a run (a `RunResult` or a `StoredResult`): its records as applied, its
+    block and contact, its integration step and the version that computed it."""
+    from ._version import __version__
+
+    attrs = getattr(run, "attrs", None) or {}
+    step = attrs.get("integration_step", getattr(run.result, "step", None))
+    return case_caption(run.case_text, records=run.records, step=None if step is None else float(step),
+                        version=str(attrs.get("rockslide_version", __version__)))
+
+
+def pga_unit(case_text: str) -> str | None:
+    """The unit a case gives its PGA in (None: not given, or the text is not a case)."""
+    from .case import parse_case
+    from .errors import RockslideError
+
+    try:
+        units = parse_case(case_text, source="<stored case>").units if case_text else {}
+    except RockslideError:
+        return None
+    return units.get("ground.scale.pga_horizontal")
+
+
+def _legend_columns(handles, width: float) -> int:
+    """Columns of a legend below a figure ``width`` [in] wide: about 1.7 in an entry, 6 at most."""
+    return max(1, min(len(handles), 6, int(width / 1.7)))
 
 
 def paper_figure(panels, *, title: str = "", time_shift: float = 0.0) -> Figure:
@@ -370,20 +623,113 @@ def paper_figure(panels, *, title: str = "", time_shift: float = 0.0) -> Figure:
         t0, t1 = motion_range(result)
         window = _choose_zoom(result, "auto", time_shift, (t0, t1))
         title_y = _response_panel(whole, result, time_shift, (t0, t1), window=window, label=f"record{row}")
-        whole.set_title(f"{label} {caption}", loc="left", fontsize=10, y=title_y)
+        whole.set_title(f"{label} {caption}", loc="left", fontsize=_pt(10), y=title_y)
         if window is None:
             window = (t0 + time_shift, t1 + time_shift)
         title_y = _response_panel(zoomed, result, time_shift, (window[0] - time_shift, window[1] - time_shift),
                                   label=f"zoom{row}", notes=False)
-        zoomed.set_title(f"magnified: {window[0]:.2f} to {window[1]:.2f} s", loc="left", fontsize=10, y=title_y)
+        zoomed.set_title(f"magnified: {window[0]:.2f} to {window[1]:.2f} s", loc="left", fontsize=_pt(10), y=title_y)
         for ax in (whole, zoomed):
             ax.set_xlabel("time [s]")
     if title:
-        fig.suptitle(title, fontsize=12)
+        fig.suptitle(title, fontsize=_pt(12))
     handles = [h for _, r, _ in panels for h in _legend_handles(r, ground=False)]
     unique = {h.get_label(): h for h in handles}
     fig.legend(handles=list(unique.values()), loc="outside lower center", ncols=7, frameon=False,
-               fontsize=9)
+               fontsize=_pt(9))
+    return fig
+
+
+#: Colours of the runs overlaid on one figure (`runs_overlay_figure`), in order.
+OVERLAY_COLOURS = ("#1f4e9c", "#c0392b", "#2e8b57", "#8e44ad", "#d35400", "#16a085", "#3a3a3a")
+
+
+def runs_overlay_figure(runs, names, *, title: str = "", caption: str = "", size=None, time_shift: float = 0.0,
+                        crop: tuple | None | str = "auto", unit: str | None = None) -> Figure:
+    """Several runs on shared axes: the liftoff angle (with each run's +-alpha where its rotation
+    comes near it), the slip and the horizontal ground acceleration, one colour a run.
+
+    Parameters
+    ----------
+    runs : list of Result
+        The runs (`core.simulate.Result`).
+    names : list of str
+        Their names in the legend.
+    title, caption : str
+        The title, and what was computed (`case_caption` of each) under it.
+    size : None, "column", "page", "slide", "WxH" or (width, height)
+        The figure's size [in] (`figure_size`; default 11 x 8 in).
+    time_shift : float
+        Added to every time [s].
+    crop : "auto", (t0, t1) or None
+        The time range: ``"auto"`` = from the first to the last of the runs' `motion_range`;
+        ``(t0, t1)`` in the figure's time [s]; None = the whole of the longest record.
+    unit : str, optional
+        Unit of the ground acceleration (`acceleration_unit`; default gal).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Axes labelled ``"rotation"``, ``"slip"`` and ``"ground"``; the legend's first entries are
+        ``names``.
+    """
+    shift = float(time_shift)
+    ranges = [_choose_range(run, crop, shift) for run in runs]
+    t0, t1 = min(r[0] for r in ranges), max(r[1] for r in ranges)
+    unit, factor = acceleration_unit(unit)
+    figsize = figure_size(size, FIGSIZE, column=5.5, page=7.0)
+    with _style(figsize[0]):
+        fig = Figure(figsize=figsize, dpi=DPI, layout="constrained")
+        rot_ax, slip_ax, ground_ax = fig.subplots(3, 1, sharex=True, gridspec_kw={"height_ratios": [3, 2, 2]})
+        rot_ax.set_label("rotation")
+        slip_ax.set_label("slip")
+        ground_ax.set_label("ground")
+        handles = []
+        alpha_drawn = False
+        for k, (run, name) in enumerate(zip(runs, names, strict=True)):
+            colour = OVERLAY_COLOURS[k % len(OVERLAY_COLOURS)]
+            history = run.history or {}
+            t = np.asarray(history.get("time", np.zeros(0)))
+            shown = _within(t, (t0, t1))
+            phi = np.asarray(history.get("rotation", np.zeros(0)))[shown]
+            width = 2.2 if k == 0 and len(runs) > 1 else 1.0        # the first widest: one under another shows
+            if t.size:
+                rot_ax.plot(*_envelope(t[shown] + shift, phi), color=colour, lw=width, zorder=3 + k)
+                slip_ax.plot(*_envelope(t[shown] + shift, 1e3 * np.asarray(history["slip"])[shown]), color=colour,
+                             lw=width, zorder=3 + k)
+            g = np.asarray(run.ground_time)
+            at = _within(g, (t0, t1))
+            ground_ax.plot(*_envelope(g[at] + shift, np.asarray(run.ground_horizontal)[at] / factor), color=colour,
+                           lw=0.8 if k == 0 else 0.6, alpha=0.9, zorder=3 + k)
+            alpha = run.summary.alpha
+            if math.isfinite(alpha) and phi.size and np.abs(phi).max() >= ALPHA_SHOWN_FRACTION * alpha:
+                for side in (1.0, -1.0):
+                    rot_ax.axhline(side * alpha, color=colour, ls="--", lw=0.9, zorder=2)
+                alpha_drawn = True
+            s = run.summary
+            if s.overturned and s.overturn_time is not None and t0 <= s.overturn_time <= t1:
+                for ax in (rot_ax, slip_ax, ground_ax):
+                    ax.axvline(s.overturn_time + shift, color=colour, lw=1.2, ls="-.", zorder=2)
+            handles.append(Line2D([], [], color=colour, lw=2.0, label=f"{name}: {s.verdict}"))
+        for ax in (rot_ax, slip_ax, ground_ax):
+            ax.axhline(0.0, color="0.6", lw=0.5, zorder=1)
+            ax.grid(True, axis="x", color="0.88", lw=0.6)
+        rot_ax.set_ylabel("liftoff angle φ [rad]")
+        slip_ax.set_ylabel("slip x [mm]")
+        ground_ax.set_ylabel(f"ground acc. H [{unit}]")
+        ground_ax.set_xlabel("time [s]")
+        ground_ax.set_xlim(t0 + shift, t1 + shift)
+        keys = []
+        if alpha_drawn:
+            keys.append(Line2D([], [], color="0.4", ls="--", lw=0.9, label="±α of the run of that colour"))
+        if len(runs) > 1:
+            keys.append(Line2D([], [], color="0.4", lw=2.2, label=f"{names[0]} drawn wider (seen under the others)"))
+        if any(run.summary.overturned for run in runs):
+            keys.append(Line2D([], [], color="0.4", lw=1.2, ls="-.", label="overturned"))
+        fig.legend(handles=handles + keys, loc="outside lower center",
+                   ncols=max(1, min(2, int(figsize[0] / 3.0))), frameon=False, fontsize=_pt(9))
+        _headline(fig, title, caption)
+        _freeze_ticks(fig)
     return fig
 
 
@@ -391,37 +737,60 @@ CRITERIA_COLOURS = {REST: "#ffffff", SLIP: STATE_COLOURS[SLIP], ROCK: STATE_COLO
                     ROCKSLIP: STATE_COLOURS[ROCKSLIP]}
 
 
-def criteria_figure(ah_over_g, mu_values, maps, *, title: str = "") -> Figure:
+def criteria_figure(ah_over_g, mu_values, maps, *, title: str = "", size=None, caption: str = "") -> Figure:
     """Mode-initiation maps (the paper's Figure 5): one panel per vertical acceleration.
 
     Parameters
     ----------
     ah_over_g, mu_values : 1-D arrays
         The grid: horizontal acceleration [g] (x axis) and static friction (y axis).
-    maps : list of (caption, codes)
+    maps : list of (caption, codes) or (caption, codes, boundaries)
         ``codes`` from `criteria.mode_map` (rows mu, columns ah): REST, SLIP, ROCK (liftoff) or
-        ROCKSLIP (liftoff-slip).
+        ROCKSLIP (liftoff-slip); ``boundaries`` from `criteria.mode_boundaries`: the analytic
+        boundaries drawn as lines (without them, the regions' edges are outlined on the grid).
+    title, caption : str
+        The title, and what was computed (`case_caption`) under it.
+    size : None, "column", "page", "slide", "WxH" or (width, height)
+        The figure's size [in] (`figure_size`; default 4.2 in a panel across, 4.6 in high; at a
+        column's width, the panels are stacked).
     """
     from matplotlib.colors import BoundaryNorm, ListedColormap
 
-    fig = Figure(figsize=(4.2 * len(maps), 4.6), dpi=DPI, layout="constrained")
-    axes = fig.subplots(1, len(maps), squeeze=False, sharey=True)[0]
-    order = [REST, SLIP, ROCK, ROCKSLIP]
-    cmap = ListedColormap([CRITERIA_COLOURS[c] for c in order])
-    norm = BoundaryNorm(np.arange(len(order) + 1) - 0.5, cmap.N)
-    for ax, (caption, codes) in zip(axes, maps, strict=True):
-        index = np.vectorize(order.index)(codes)
-        ax.pcolormesh(ah_over_g, mu_values, index, cmap=cmap, norm=norm, shading="nearest")
-        ax.contour(ah_over_g, mu_values, index, levels=np.arange(len(order)) + 0.5, colors="0.3",
-                   linewidths=0.8)
-        ax.set_title(caption, fontsize=10)
-        ax.set_xlabel("horizontal acceleration |A_h| [g]")
-    axes[0].set_ylabel("static friction coefficient μ")
-    names = {REST: "rest", SLIP: "slip", ROCK: "liftoff", ROCKSLIP: "liftoff-slip"}
-    fig.legend(handles=[Patch(facecolor=CRITERIA_COLOURS[c], edgecolor="0.3", label=names[c]) for c in order],
-               loc="outside lower center", ncols=4, frameon=False)
-    if title:
-        fig.suptitle(title, fontsize=12)
+    n = len(maps)
+    figsize = figure_size(size, (4.2 * n, 4.6), column=1.2 + 2.6 * n, page=4.2)
+    stacked = figsize[0] < 1.6 * n + 1.0 or (figsize[0] < 5.0 and n > 1)
+    with _style(figsize[0]):
+        fig = Figure(figsize=figsize, dpi=DPI, layout="constrained")
+        axes = fig.subplots(n if stacked else 1, 1 if stacked else n, squeeze=False, sharey=True,
+                            sharex=stacked).ravel()
+        order = [REST, SLIP, ROCK, ROCKSLIP]
+        cmap = ListedColormap([CRITERIA_COLOURS[c] for c in order])
+        norm = BoundaryNorm(np.arange(len(order) + 1) - 0.5, cmap.N)
+        for ax, (name, codes, *rest) in zip(axes, maps, strict=True):
+            index = np.vectorize(order.index)(codes)
+            ax.pcolormesh(ah_over_g, mu_values, index, cmap=cmap, norm=norm, shading="nearest",
+                          rasterized=True)
+            if rest:
+                for x, y in rest[0]:
+                    ax.plot(x, np.minimum(y, mu_values[-1] + 1.0), color="0.2", lw=1.0)
+            else:
+                ax.contour(ah_over_g, mu_values, index, levels=np.arange(len(order)) + 0.5, colors="0.3",
+                           linewidths=0.8)
+            ax.set_xlim(ah_over_g[0], ah_over_g[-1])
+            ax.set_ylim(mu_values[0], mu_values[-1])
+            ax.set_title(name, fontsize=_pt(10))
+            if not stacked or ax is axes[-1]:
+                ax.set_xlabel("horizontal acceleration |A_h| [g]")
+            if stacked or ax is axes[0]:
+                ax.set_ylabel("static friction μ")
+        names = {REST: "rest", SLIP: "slip", ROCK: "liftoff", ROCKSLIP: "liftoff-slip"}
+        handles = [Patch(facecolor=CRITERIA_COLOURS[c], edgecolor="0.3", label=names[c]) for c in order]
+        if any(rest for _, _, *rest in maps):
+            handles.append(Line2D([], [], color="0.2", lw=1.0, label="boundaries (eqs. 6, 11, 26)"))
+        fig.legend(handles=handles, loc="outside lower center", ncols=min(len(handles), 3 if stacked else 5),
+                   frameon=False)
+        _headline(fig, title, caption)
+        _freeze_ticks(fig)
     return fig
 
 
@@ -472,13 +841,14 @@ def _title(result, name: str) -> str:
     return head + "\n" + ",  ".join(facts)
 
 
-def _response_panel(ax, result, shift, span, *, label, window=None, notes=True):
+def _response_panel(ax, result, shift, span, *, label, window=None, notes=True, alpha_drawn=None):
     """Rotation (left axis, with +-alpha) and slip in mm (right axis) over the shaded states, for
     ``span``. What the panel has to say goes in its title line, on the right, never over the data
     (unless not ``notes``: a narrow panel beside one that says it).
 
     The axes are labelled ``label`` (rotation) and ``label + "-slip"`` (the twin, slip). Returns
-    the height for the panel's titles (`_title_height`).
+    the height for the panel's titles (`_title_height`). Where the rotation comes near one of
+    +-alpha, both lines are drawn (and ``alpha_drawn``, a list, gets ``True``).
     """
     a, b = span
     _shade_states(ax, result, shift, span)
@@ -503,17 +873,21 @@ def _response_panel(ax, result, shift, span, *, label, window=None, notes=True):
     sides = []
     if math.isfinite(alpha) and phi.size:
         reach = {1.0: float(phi.max(initial=0.0)), -1.0: -float(phi.min(initial=0.0))}
-        sides = [side for side, r in reach.items() if r >= ALPHA_SHOWN_FRACTION * alpha]
+        if max(reach.values()) >= ALPHA_SHOWN_FRACTION * alpha:
+            sides = [1.0, -1.0]          # both: the legend says +-alpha
     rot_lim, slip_lim = _aligned_limits(np.append(phi, [side * alpha for side in sides]), x_mm)
     for side in sides:
-        ax.axhline(side * alpha, color=ALPHA_COLOUR, ls="--", lw=0.9, zorder=2)
+        ax.axhline(side * alpha, color=ALPHA_COLOUR, ls="--", lw=0.9, zorder=2, label=f"{side:+g}α")
+    if sides and alpha_drawn is not None:
+        alpha_drawn.append(True)
     if math.isfinite(alpha) and phi.size and not sides:
-        said.append(f"±α = ±{alpha:.4g} rad off scale")
+        said.append("±α off scale" if _narrow(ax.figure) else f"±α = ±{alpha:.4g} rad off scale")
     ax.set_ylim(*rot_lim)
     slip_ax.set_ylim(*slip_lim)
     ax.set_xlim(a + shift, b + shift)
-    ax.set_ylabel("liftoff angle φ [rad]", color=ROTATION_COLOUR)
-    slip_ax.set_ylabel("slip x [mm]", color=SLIP_COLOUR)
+    brief = _brief_labels(ax.figure)
+    ax.set_ylabel("φ [rad]" if brief else "liftoff angle φ [rad]", color=ROTATION_COLOUR)
+    slip_ax.set_ylabel("x [mm]" if brief else "slip x [mm]", color=SLIP_COLOUR)
     ax.tick_params(axis="y", colors=ROTATION_COLOUR)
     slip_ax.tick_params(axis="y", colors=SLIP_COLOUR)
     ax.grid(True, axis="x", color="0.88", lw=0.6)
@@ -527,7 +901,7 @@ def _response_panel(ax, result, shift, span, *, label, window=None, notes=True):
         colour = end[1]
     title_y = _title_height(ax, slip_ax)
     if said and notes:
-        ax.set_title("; ".join(said), loc="right", fontsize=9, color=colour, y=title_y)
+        ax.set_title("; ".join(said), loc="right", fontsize=_pt(9), color=colour, y=title_y)
     if window is not None:
         slip_ax.axvspan(window[0], window[1], fill=False, ls=":", lw=1.0, ec="0.35", zorder=4)
     return title_y
@@ -668,30 +1042,33 @@ def _mark_end(ax, result, shift, span, *, hatch):
     return text, colour
 
 
-def _ground_panel(ax, result, shift, span):
+def _ground_panel(ax, result, shift, span, *, unit=None):
+    """The ground acceleration as applied, in ``unit`` (`acceleration_unit`; default gal)."""
+    unit, factor = acceleration_unit(unit)
     t = np.asarray(result.ground_time)
     shown = _within(t, span)
     for key, values in (("horizontal", result.ground_horizontal), ("vertical", result.ground_vertical)):
-        ax.plot(*_envelope(t[shown] + shift, np.asarray(values)[shown] / GAL), color=GROUND_COLOURS[key],
+        ax.plot(*_envelope(t[shown] + shift, np.asarray(values)[shown] / factor), color=GROUND_COLOURS[key],
                 lw=0.8, label=key, alpha=0.9 if key == "horizontal" else 0.8)
     ax.axhline(0.0, color="0.6", lw=0.5)
-    ax.set_ylabel("ground acc. [gal]")
+    ax.set_ylabel(f"ground [{unit}]" if _brief_labels(ax.figure) else f"ground acc. [{unit}]")
     ax.grid(True, axis="x", color="0.88", lw=0.6)
     _mark_end(ax, result, shift, span, hatch=False)
     peak = max(float(np.max(np.abs(result.ground_horizontal), initial=0.0)),
-               float(np.max(np.abs(result.ground_vertical), initial=0.0))) / GAL
+               float(np.max(np.abs(result.ground_vertical), initial=0.0))) / factor
     if peak == 0.0:
         ax.set_ylim(-1.0, 1.0)
     title_y = _title_height(ax)
-    ax.set_title("ground acceleration as applied", loc="left", fontsize=10, y=title_y)
+    ax.set_title("ground acceleration as applied", loc="left", fontsize=_pt(10), y=title_y)
     if peak == 0.0:
-        ax.set_title("still ground (no record)", loc="right", fontsize=9, color="0.3", y=title_y)
+        ax.set_title("still ground (no record)", loc="right", fontsize=_pt(9), color="0.3", y=title_y)
 
 
-def _legend_handles(result, *, ground: bool = True) -> list:
+def _legend_handles(result, *, ground: bool = True, alpha: bool = True) -> list:
+    """The legend's entries; +-alpha only where ``alpha`` (drawn on some panel)."""
     handles = [Line2D([], [], color=ROTATION_COLOUR, lw=1.5, label="liftoff angle φ"),
                Line2D([], [], color=SLIP_COLOUR, lw=1.5, label="slip x")]
-    if math.isfinite(result.summary.alpha):
+    if alpha and math.isfinite(result.summary.alpha):
         handles.append(Line2D([], [], color=ALPHA_COLOUR, ls="--", lw=0.9, label="±α (tips over past it)"))
     if ground:
         handles += [Line2D([], [], color=GROUND_COLOURS[key], lw=1.0, label=f"ground {key}")
@@ -776,7 +1153,8 @@ def sweep_category(overturned, status, modes) -> np.ndarray:
     return out
 
 
-def sweep_figure(axes, category, max_rotation, residual_slip, *, title: str = "") -> Figure:
+def sweep_figure(axes, category, max_rotation, residual_slip, *, title: str = "", size=None,
+                 caption: str = "") -> Figure:
     """Maps of a sweep: overturning and the modes that occurred, max rotation, residual slip.
 
     Parameters
@@ -787,7 +1165,11 @@ def sweep_figure(axes, category, max_rotation, residual_slip, *, title: str = ""
         `sweep_category` codes.
     max_rotation : float array [rad]
     residual_slip : float array [m]
-    title : str
+    title, caption : str
+        The title, and what was computed (`case_caption`) under it.
+    size : None, "column", "page", "slide", "WxH" or (width, height)
+        The figure's size [in] (`figure_size`; default 9 x 7.5 in for one axis, 15 in wide for
+        more); narrower than 8 in, the three maps of a row are stacked.
 
     Returns
     -------
@@ -800,7 +1182,7 @@ def sweep_figure(axes, category, max_rotation, residual_slip, *, title: str = ""
         leaves points that never lifted off grey; the residual slip map leaves overturned points
         and points outside the model grey.
     """
-    from matplotlib.colors import BoundaryNorm, ListedColormap, LogNorm, TwoSlopeNorm
+    from matplotlib.colors import BoundaryNorm, ListedColormap, TwoSlopeNorm
 
     category = np.asarray(category)
     rotation = np.asarray(max_rotation, dtype=float)
@@ -811,9 +1193,7 @@ def sweep_figure(axes, category, max_rotation, residual_slip, *, title: str = ""
     cmap_cat = ListedColormap(SWEEP_COLOURS)
     norm_cat = BoundaryNorm(np.arange(len(SWEEP_CATEGORIES) + 1) - 0.5, cmap_cat.N)
     standing = category < 4
-    positive = rotation[rotation > 0]
-    rot_norm = LogNorm(vmin=max(1e-6, min(float(positive.min()) if positive.size else 1e-3, 1.0)),
-                       vmax=0.5 * math.pi)
+    rot_norm = _rotation_norm(rotation)
     slip_shown = np.abs(slip_mm[standing]) if standing.any() else np.zeros(0)
     limit = max(float(slip_shown.max()) if slip_shown.size else 0.0, 1e-3)
     slip_norm = TwoSlopeNorm(vcenter=0.0, vmin=-limit, vmax=limit)
@@ -825,59 +1205,133 @@ def sweep_figure(axes, category, max_rotation, residual_slip, *, title: str = ""
     if category.ndim == 1:
         label, x = axes[0]
         x = np.asarray(x, dtype=float)
-        fig = Figure(figsize=(9.0, 7.5), dpi=DPI, layout="constrained")
-        top, mid, low = fig.subplots(3, 1, sharex=True, gridspec_kw={"height_ratios": [0.6, 2, 2]})
-        top.pcolormesh(x, [0.0, 1.0], np.vstack([category, category]), cmap=cmap_cat,
-                       norm=norm_cat, shading="nearest")
-        top.set_yticks([])
-        top.set_title("overturning and modes", loc="left", fontsize=10)
-        shown = np.where(rotation > 0, rotation, np.nan)
-        mid.semilogy(x, shown, "o-", color=ROTATION_COLOUR, ms=3)
-        mid.axhline(0.5 * math.pi, color="0.5", lw=0.8, ls="--")
-        mid.set_ylabel("max rotation [rad]")
-        low.plot(x, np.where(standing, slip_mm, np.nan), "o-", color=SLIP_COLOUR, ms=3)
-        low.axhline(0.0, color="0.5", lw=0.8)
-        low.set_ylabel("residual slip [mm] (standing)")
-        low.set_xlabel(label)
-        fig.legend(handles=legend, loc="outside lower center", ncols=6, frameon=False, fontsize=9)
-        if title:
-            fig.suptitle(title, fontsize=12)
+        figsize = figure_size(size, (9.0, 7.5), column=5.0, page=6.0)
+        with _style(figsize[0]):
+            fig = Figure(figsize=figsize, dpi=DPI, layout="constrained")
+            top, mid, low = fig.subplots(3, 1, sharex=True, gridspec_kw={"height_ratios": [0.6, 2, 2]})
+            top.pcolormesh(x, [0.0, 1.0], np.vstack([category, category]), cmap=cmap_cat,
+                           norm=norm_cat, shading="nearest")
+            top.set_yticks([])
+            top.set_title("overturning and modes", loc="left", fontsize=_pt(10))
+            shown = np.where(rotation > 0, rotation, np.nan)
+            mid.semilogy(x, shown, "o-", color=ROTATION_COLOUR, ms=3)
+            mid.axhline(0.5 * math.pi, color="0.5", lw=0.8, ls="--")
+            mid.set_ylabel("max rotation [rad]")
+            low.plot(x, np.where(standing, slip_mm, np.nan), "o-", color=SLIP_COLOUR, ms=3)
+            low.axhline(0.0, color="0.5", lw=0.8)
+            low.set_ylabel("residual slip [mm]\n(standing)" if figsize[0] < 6 else "residual slip [mm] (standing)")
+            low.set_xlabel(label)
+            fig.legend(handles=legend, loc="outside lower center", ncols=_legend_columns(legend, figsize[0]),
+                       frameon=False, fontsize=_pt(9))
+            _headline(fig, title, caption)
+            _freeze_ticks(fig)
         return fig
 
     rows, note = _sweep_rows(axes)
-    fig = Figure(figsize=(15.0, 3.9 * len(rows) + 1.2), dpi=DPI, layout="constrained")
-    grid = fig.subplots(len(rows), 3, squeeze=False)
-    (ylabel, yv), (xlabel, xv) = axes[0], axes[1]
-    y_order, x_order = np.argsort(np.asarray(yv, dtype=float)), np.argsort(np.asarray(xv, dtype=float))
-    y_edges = _cell_edges(np.asarray(yv, dtype=float)[y_order])
-    x_edges = _cell_edges(np.asarray(xv, dtype=float)[x_order])
+    stacked_default = (15.0, 3.9 * len(rows) + 1.2)
+    figsize = figure_size(size, stacked_default, column=2.6 * 3 * len(rows) + 1.6, page=3.0 * len(rows) + 2.0)
+    stacked = figsize[0] < 8.0 and figsize[1] > figsize[0] * 1.3     # a narrow, tall figure: maps one above another
+    with _style(figsize[0]):
+        fig = Figure(figsize=figsize, dpi=DPI, layout="constrained")
+        grid = fig.subplots(3 * len(rows), 1, squeeze=False) if stacked else fig.subplots(len(rows), 3, squeeze=False)
+        (ylabel, yv), (xlabel, xv) = axes[0], axes[1]
+        y_order, x_order = np.argsort(np.asarray(yv, dtype=float)), np.argsort(np.asarray(xv, dtype=float))
+        y_edges = _cell_edges(np.asarray(yv, dtype=float)[y_order])
+        x_edges = _cell_edges(np.asarray(xv, dtype=float)[x_order])
 
-    def sorted_2d(values, index):
-        return values[index][np.ix_(y_order, x_order)]
+        def sorted_2d(values, index):
+            return values[index][np.ix_(y_order, x_order)]
 
-    for r, (index, caption) in enumerate(rows):
-        cat = sorted_2d(category, index)
-        rot = sorted_2d(rotation, index)
-        panels = (
-            (cat, dict(cmap=cmap_cat, norm=norm_cat), "overturning and modes", None),
-            (np.ma.masked_where(~(rot > 0), rot), dict(cmap=rot_cmap, norm=rot_norm), "max rotation",
-             "max rotation [rad]"),
-            (np.ma.masked_where(~sorted_2d(standing, index), sorted_2d(slip_mm, index)),
-             dict(cmap=slip_cmap, norm=slip_norm), "residual slip (standing blocks)",
-             "residual slip [mm]"),
-        )
-        for c, (values, style, name, bar) in enumerate(panels):
-            ax = grid[r, c]
-            mesh = ax.pcolormesh(x_edges, y_edges, values, shading="flat", **style)
+        # [in] about what a map and its colour bar leave its labels
+        panel_width = figsize[0] - 1.0 if stacked else figsize[0] / 3.0 - 0.9
+        panel_height = (figsize[1] - 1.5) / (3 * len(rows) if stacked else len(rows))
+
+        for r, (index, row_caption) in enumerate(rows):
+            cat = sorted_2d(category, index)
+            rot = sorted_2d(rotation, index)
+            panels = (
+                (cat, dict(cmap=cmap_cat, norm=norm_cat), "overturning and modes", None),
+                (np.ma.masked_where(~(rot > 0), rot), dict(cmap=rot_cmap, norm=rot_norm), "max rotation",
+                 "max rotation [rad]"),
+                (np.ma.masked_where(~sorted_2d(standing, index), sorted_2d(slip_mm, index)),
+                 dict(cmap=slip_cmap, norm=slip_norm), "residual slip (standing blocks)",
+                 "residual slip [mm]"),
+            )
+            for c, (values, style, name, bar) in enumerate(panels):
+                ax = grid[3 * r + c, 0] if stacked else grid[r, c]
+                mesh = ax.pcolormesh(x_edges, y_edges, values, shading="flat", **style)
+                _outline(ax, x_edges, y_edges, cat == 4)
+                if bar:
+                    fig.colorbar(mesh, ax=ax, label=bar)
+                ax.set_title(f"{name}{row_caption}", loc="left", fontsize=_pt(10))
+                ax.set_xlabel(_wrap(xlabel, panel_width, _pt(10)))
+                ax.set_ylabel(_wrap(ylabel, 0.8 * panel_height, _pt(10)))
+        fig.legend(handles=legend, loc="outside lower center", ncols=_legend_columns(legend, figsize[0]),
+                   frameon=False, fontsize=_pt(9))
+        _headline(fig, "\n".join(t for t in (title, note) if t), caption)
+        _freeze_ticks(fig)
+    return fig
+
+
+def _rotation_norm(*rotations):
+    """The logarithmic colour scale of largest rotations [rad]: from the smallest that lifted off
+    (at least 1e-6 rad, at most 1 rad) to pi/2."""
+    from matplotlib.colors import LogNorm
+
+    positive = np.concatenate([np.ravel(r)[np.ravel(r) > 0] for r in rotations])
+    return LogNorm(vmin=max(1e-6, min(float(positive.min()) if positive.size else 1e-3, 1.0)), vmax=0.5 * math.pi)
+
+
+def sweep_overlay_figure(panels, *, title: str = "", caption: str = "", size=None) -> Figure:
+    """Several sweeps side by side on one colour scale: the largest rotation of each over its first
+    two axes (a third and further axes at their first value), overturned points outlined.
+
+    Parameters
+    ----------
+    panels : list of (name, axes, category, max_rotation)
+        For each sweep: its name (legend and panel title), its axes as `sweep_figure` takes them,
+        its `sweep_category` codes and its largest rotations [rad].
+    title, caption, size
+        As in `sweep_figure` (default 5.5 in a panel across, 5 in high).
+    """
+    n = len(panels)
+    figsize = figure_size(size, (5.5 * n + 1.0, 5.0), column=1.2 + 2.6 * n, page=4.0)
+    stacked = figsize[0] < 2.6 * n + 1.0
+    norm = _rotation_norm(*(np.asarray(p[3]) for p in panels))
+    with _style(figsize[0]):
+        fig = Figure(figsize=figsize, dpi=DPI, layout="constrained")
+        grid = fig.subplots(n if stacked else 1, 1 if stacked else n, squeeze=False, sharex=True, sharey=True).ravel()
+        mesh = None
+        for ax, (name, axes, category, rotation) in zip(grid, panels, strict=True):
+            category, rotation = np.asarray(category), np.asarray(rotation, dtype=float)
+            index = (slice(None),) * min(2, category.ndim) + (0,) * max(0, category.ndim - 2)
+            if category.ndim == 1:
+                x = np.asarray(axes[0][1], dtype=float)
+                order = np.argsort(x)
+                edges = _cell_edges(x[order])
+                values, cat = rotation[order][None, :], category[order][None, :]
+                y_edges, ylabel = np.array([0.0, 1.0]), ""
+                x_edges, xlabel = edges, axes[0][0]
+                ax.set_yticks([])
+            else:
+                (ylabel, yv), (xlabel, xv) = axes[0], axes[1]
+                yv, xv = np.asarray(yv, dtype=float), np.asarray(xv, dtype=float)
+                yo, xo = np.argsort(yv), np.argsort(xv)
+                y_edges, x_edges = _cell_edges(yv[yo]), _cell_edges(xv[xo])
+                values = rotation[index][np.ix_(yo, xo)]
+                cat = category[index][np.ix_(yo, xo)]
+            mesh = ax.pcolormesh(x_edges, y_edges, np.ma.masked_where(~(values > 0), values), cmap=_with_bad("viridis"),
+                                 norm=norm, shading="flat")
             _outline(ax, x_edges, y_edges, cat == 4)
-            if bar:
-                fig.colorbar(mesh, ax=ax, label=bar)
-            ax.set_title(f"{name}{caption}", loc="left", fontsize=10)
+            ax.set_title(name, loc="left", fontsize=_pt(10))
             ax.set_xlabel(xlabel)
             ax.set_ylabel(ylabel)
-    fig.legend(handles=legend, loc="outside lower center", ncols=6, frameon=False, fontsize=9)
-    if title or note:
-        fig.suptitle("\n".join(t for t in (title, note) if t), fontsize=12)
+        fig.colorbar(mesh, ax=list(grid), label="max rotation [rad] (one scale)")
+        handles = [Patch(facecolor="white", edgecolor="black", lw=1.2, label="overturned (outlined)"),
+                   Patch(facecolor=NO_DATA_COLOUR, label="no liftoff")]
+        fig.legend(handles=handles, loc="outside lower center", ncols=2, frameon=False, fontsize=_pt(9))
+        _headline(fig, title, caption)
+        _freeze_ticks(fig)
     return fig
 
 
@@ -940,7 +1394,8 @@ def _short(value) -> str:
 FRAGILITY_COLOURS = ("#3a3a3a", "#1f4e9c", "#c0392b", "#2e8b57", "#8e44ad", "#d35400", "#16a085")
 
 
-def fragility_figure(levels, grid, curves, *, xlabel: str, confidence: float, title: str = "") -> Figure:
+def fragility_figure(levels, grid, curves, *, xlabel: str, confidence: float, title: str = "", size=None,
+                     caption: str = "") -> Figure:
     """Fragility curves: the observed fraction of each stripe, the fitted curve and its band.
 
     Parameters
@@ -954,47 +1409,104 @@ def fragility_figure(levels, grid, curves, *, xlabel: str, confidence: float, ti
         NaN where no run counts), and optionally ``fitted`` (the maximum-likelihood curve on
         ``grid``), ``band`` (``[2, grid]``: lower and upper bound of the confidence band),
         ``moments`` (the method-of-moments curve on ``grid``), ``nominal`` (the fit without
-        parameter uncertainty, on ``grid``).
+        parameter uncertainty, on ``grid``), ``colour`` (default: the next of
+        `FRAGILITY_COLOURS`), ``style`` (line style of ``fitted``, default solid), ``levels`` (the
+        curve's own stripes, default ``levels``) and ``grid`` (its own, default ``grid``).
+        A curve that coincides with an earlier one (same fit and fractions, within 1e-9) is drawn
+        dashed over it, which is drawn wider, its markers offset, and its label says so.
     xlabel : str
         The intensity measure and its unit.
     confidence : float
         Level of the band, for the legend.
-    title : str
+    title, caption : str
+        The title, and what was computed (`case_caption`) under it.
+    size : None, "column", "page", "slide", "WxH" or (width, height)
+        The figure's size [in] (`figure_size`; default 9 x 6 in).
     """
-    fig = Figure(figsize=(9.0, 6.0), dpi=DPI, layout="constrained")
-    ax = fig.subplots()
-    levels, grid = np.asarray(levels, dtype=float), np.asarray(grid, dtype=float)
-    for i, curve in enumerate(curves):
-        colour = FRAGILITY_COLOURS[i % len(FRAGILITY_COLOURS)]
-        if curve.get("band") is not None:
-            ax.fill_between(grid, curve["band"][0], curve["band"][1], color=colour, alpha=0.15, lw=0)
-        if curve.get("fitted") is not None:
-            ax.plot(grid, curve["fitted"], color=colour, lw=2.0)
-        if curve.get("moments") is not None:
-            ax.plot(grid, curve["moments"], color=colour, lw=1.0, ls="--")
-        if curve.get("nominal") is not None:
-            ax.plot(grid, curve["nominal"], color=colour, lw=1.2, ls=":")
-        ax.plot(levels, curve["fraction"], "o", color=colour, ms=6, mfc="white" if curve.get("fitted") is None
-                else colour, label=curve["label"])
-    handles, labels = ax.get_legend_handles_labels()
-    for key, handle, label in (
-            ("fitted", Line2D([], [], color="0.3", lw=2.0), "maximum-likelihood lognormal fit"),
-            ("moments", Line2D([], [], color="0.3", lw=1.0, ls="--"), "method of moments (first exceedances)"),
-            ("nominal", Line2D([], [], color="0.3", lw=1.2, ls=":"),
-             "without parameter uncertainty (the case's values)"),
-            ("band", Patch(facecolor="0.3", alpha=0.15), f"{100 * confidence:g} % bootstrap band over records")):
-        if any(curve.get(key) is not None for curve in curves):
-            handles.append(handle)
+    figsize = figure_size(size, (9.0, 6.0), column=4.2, page=5.0)
+    with _style(figsize[0]):
+        fig = Figure(figsize=figsize, dpi=DPI, layout="constrained")
+        ax = fig.subplots()
+        levels, grid = np.asarray(levels, dtype=float), np.asarray(grid, dtype=float)
+        twins = _coinciding(curves)
+        handles, labels = [], []
+        for i, curve in enumerate(curves):
+            colour = curve.get("colour") or FRAGILITY_COLOURS[i % len(FRAGILITY_COLOURS)]
+            x = np.asarray(curve.get("grid", grid), dtype=float)
+            at = np.asarray(curve.get("levels", levels), dtype=float)
+            under = any(twins.get(j) == i for j in range(i + 1, len(curves)))   # another is drawn over it
+            over = twins.get(i)
+            if curve.get("band") is not None and over is None:
+                ax.fill_between(x, curve["band"][0], curve["band"][1], color=colour, alpha=0.15, lw=0)
+            if curve.get("fitted") is not None:
+                below = None if over is None else (curves[over].get("colour")
+                                                   or FRAGILITY_COLOURS[over % len(FRAGILITY_COLOURS)])
+                if below == colour:
+                    colour = "white"          # dashes of its own colour would not show on the wider one
+                ax.plot(x, curve["fitted"], color=colour, lw=4.0 if under else 2.0, zorder=3 if over is None else 4,
+                        ls=(0, (3, 2)) if over is not None else curve.get("style", "-"))
+            for key, style in (("moments", dict(lw=1.0, ls="--")), ("nominal", dict(lw=1.2, ls=":"))):
+                if curve.get(key) is not None and not (over is not None and _same(curve[key], curves[over].get(key))):
+                    ax.plot(x, curve[key], color=colour, **style)
+            label = curve["label"]
+            marker, size_pt = "o", 6
+            if over is not None:
+                label += f" (the same as {curves[over]['label'].split(':')[0]}: dashed over it)"
+                marker, size_pt = "x", 7
+            elif under:
+                marker, size_pt = "o", 9
+            colour = curve.get("colour") or FRAGILITY_COLOURS[i % len(FRAGILITY_COLOURS)]
+            face = "white" if curve.get("fitted") is None or under else colour
+            ms = size_pt * _FONT_SCALE.get() ** 0.5
+            ax.plot(at, curve["fraction"], marker, color=colour, ms=ms, ls="none", mfc=face,
+                    zorder=5 if over is not None else 4)
+            # the entry shows the curve's line style too (overlays tell damage states by it)
+            shown_style = "none" if curve.get("fitted") is None else (0, (3, 2)) if over is not None \
+                else curve.get("style", "-")
+            handles.append(Line2D([], [], color=colour, ls=shown_style, lw=1.5, marker=marker, ms=ms, mfc=face))
             labels.append(label)
-    ax.legend(handles, labels, loc="upper left", fontsize=8, frameon=False)
-    ax.set_xlim(0.0, float(grid[-1]))
-    ax.set_ylim(-0.02, 1.02)
-    ax.set_xlabel(xlabel)
-    ax.set_ylabel("probability of reaching the damage state")
-    ax.grid(True, color="0.9")
-    if title:
-        ax.set_title(title, fontsize=11)
+        for key, handle, label in (
+                ("fitted", Line2D([], [], color="0.3", lw=2.0), "maximum-likelihood lognormal fit"),
+                ("moments", Line2D([], [], color="0.3", lw=1.0, ls="--"), "method of moments (first exceedances)"),
+                ("nominal", Line2D([], [], color="0.3", lw=1.2, ls=":"),
+                 "without parameter uncertainty (the case's values)"),
+                ("band", Patch(facecolor="0.3", alpha=0.15), f"{100 * confidence:g} % bootstrap band over records")):
+            if any(curve.get(key) is not None for curve in curves):
+                handles.append(handle)
+                labels.append(label)
+        ax.set_xlim(0.0, float(grid[-1]))
+        ax.set_ylim(-0.02, 1.02)
+        ax.set_xlabel(xlabel)
+        ax.set_ylabel("probability of reaching the state" if figsize[0] < 5.0
+                      else "probability of reaching the damage state")
+        ax.grid(True, color="0.9")
+        longest = max((len(label) for label in labels), default=0) * 0.55 * _pt(8) / 72.0     # [in]
+        if figsize[0] < 6.0 or longest > 0.45 * figsize[0]:     # the legend below the axes, not over the curves
+            labels = [_wrap(label, figsize[0] - 0.5, _pt(8)) for label in labels]
+            fig.legend(handles, labels, loc="outside lower center", ncols=1, frameon=False, fontsize=_pt(8))
+        else:
+            ax.legend(handles, labels, loc="upper left", fontsize=_pt(8), frameon=False)
+        _headline(fig, title, caption)
+        _freeze_ticks(fig)
     return fig
+
+
+def _same(a, b) -> bool:
+    """Whether two curves are the same, to 1e-9."""
+    return (a is not None and b is not None and np.shape(a) == np.shape(b)
+            and bool(np.allclose(a, b, rtol=1e-9, atol=1e-9, equal_nan=True)))
+
+
+def _coinciding(curves) -> dict[int, int]:
+    """For each curve that coincides with an earlier one (the same fitted curve and observed
+    fractions, to 1e-9: two damage states every run reaches together), the index of the first."""
+    same = {}
+    for i, curve in enumerate(curves):
+        for j in range(i):
+            if _same(curve.get("fitted"), curves[j].get("fitted")) and _same(curve["fraction"], curves[j]["fraction"]):
+                same[i] = j
+                break
+    return same
 
 
 # --------------------------------------------------------------------------------------------------
@@ -1028,7 +1540,7 @@ def spectrum_category(overturned, status, modes, impacts) -> np.ndarray:
 
 
 def spectrum_figure(frequency, amplitude, category, rotation, curves=(), *, xlabel: str = "ω_p / p",
-                    ylabel: str = "a_p / (g tan α)", title: str = "") -> Figure:
+                    ylabel: str = "a_p / (g tan α)", title: str = "", size=None, caption: str = "") -> Figure:
     """An overturning spectrum: the regions of `spectrum_category` in the plane of pulse frequency
     over ``p`` (across) and amplitude over ``g tan(alpha)`` (up), and the largest rotation of the
     standing blocks over ``alpha``, with theoretical curves drawn over both.
@@ -1047,14 +1559,17 @@ def spectrum_figure(frequency, amplitude, category, rotation, curves=(), *, xlab
         Theory: ``x`` None draws the horizontal line ``y``; else the curve through ``(x, y)`` (NaN
         where the theory has no value).
     xlabel, ylabel, title : str
+    size : None, "column", "page", "slide", "WxH" or (width, height)
+        The figure's size [in] (`figure_size`; default 14 x 6.2 in); narrower than 8 in, the two
+        maps are stacked.
+    caption : str
+        What was computed (`case_caption`), under the title.
 
     Returns
     -------
     matplotlib.figure.Figure
         Axes labelled ``"regions"`` and ``"rotation"``.
     """
-    from matplotlib.colors import BoundaryNorm, ListedColormap, LogNorm
-
     x = np.asarray(frequency, dtype=float)
     y = np.asarray(amplitude, dtype=float)
     category = np.asarray(category)
@@ -1066,15 +1581,25 @@ def spectrum_figure(frequency, amplitude, category, rotation, curves=(), *, xlab
     x_edges, y_edges = _cell_edges(x[xo]), _cell_edges(y[yo])
     category = category[np.ix_(yo, xo)]
     rotation = rotation[np.ix_(yo, xo)]
+    figsize = figure_size(size, (14.0, 6.2), column=7.0, page=8.0)
+    with _style(figsize[0]):
+        return _spectrum_figure(x_edges, y_edges, category, rotation, curves, xlabel=xlabel, ylabel=ylabel,
+                                title=title, caption=caption, figsize=figsize)
+
+
+def _spectrum_figure(x_edges, y_edges, category, rotation, curves, *, xlabel, ylabel, title, caption,
+                     figsize) -> Figure:
+    from matplotlib.colors import BoundaryNorm, ListedColormap, LogNorm
+
     standing = category < 3
     cmap = ListedColormap(SPECTRUM_COLOURS)
     norm = BoundaryNorm(np.arange(len(SPECTRUM_CATEGORIES) + 1) - 0.5, cmap.N)
     shown = np.ma.masked_where(~(standing & (rotation > 0)), rotation)
     low = float(shown.min()) if shown.count() else 1e-3
     rot_norm = LogNorm(vmin=max(1e-4, min(low, 0.5)), vmax=1.0)
-
-    fig = Figure(figsize=(14.0, 6.2), dpi=DPI, layout="constrained")
-    regions, rotated = fig.subplots(1, 2)
+    stacked = figsize[0] < 8.0
+    fig = Figure(figsize=figsize, dpi=DPI, layout="constrained")
+    regions, rotated = fig.subplots(2, 1) if stacked else fig.subplots(1, 2)
     regions.pcolormesh(x_edges, y_edges, category, cmap=cmap, norm=norm, shading="flat")
     regions.set_label("regions")
     mesh = rotated.pcolormesh(x_edges, y_edges, shown, cmap=_with_bad("viridis"), norm=rot_norm,
@@ -1096,10 +1621,11 @@ def spectrum_figure(frequency, amplitude, category, rotation, curves=(), *, xlab
         ax.set_ylim(y_edges[0], y_edges[-1])
         ax.set_xlabel(xlabel)
         ax.set_ylabel(ylabel)
-        ax.set_title(name, loc="left", fontsize=10)
-    fig.legend(handles=handles, loc="outside lower center", ncols=4, frameon=False, fontsize=9)
-    if title:
-        fig.suptitle(title, fontsize=12)
+        ax.set_title(name, loc="left", fontsize=_pt(10))
+    fig.legend(handles=handles, loc="outside lower center", ncols=1 if figsize[0] < 5.0 else 2 if stacked else 4,
+               frameon=False, fontsize=_pt(9))
+    _headline(fig, title, caption)
+    _freeze_ticks(fig)
     return fig
 
 
@@ -1192,7 +1718,8 @@ __all__ = ["response_figure", "save_figure", "zoom_window", "state_segments", "s
            "SPECTRUM_CATEGORIES"]
 
 
-def ensemble_figure(ratios, overturned, nominal_ratio: float, *, summary_text: str, title: str = "") -> Figure:
+def ensemble_figure(ratios, overturned, nominal_ratio: float, *, summary_text: str, title: str = "", size=None,
+                    caption: str = "") -> Figure:
     """A verdict's neighbourhood: the empirical CDF of the members' largest rotation over alpha (an
     overturned member counts as beyond the axis), the nominal run marked, the probability of
     overturning and its interval in the legend.
@@ -1207,9 +1734,19 @@ def ensemble_figure(ratios, overturned, nominal_ratio: float, *, summary_text: s
         The nominal run's max rotation / alpha (``inf`` when it overturned).
     summary_text : str
         The probability line (``overturns in 38 % [31, 45] of 200``).
-    title : str
+    title, caption : str
+        The title, and what was computed (`case_caption`: the nominal case) under it.
+    size : None, "column", "page", "slide", "WxH" or (width, height)
+        The figure's size [in] (`figure_size`; default 8 x 5 in).
     """
-    fig = Figure(figsize=(8.0, 5.0), dpi=DPI, layout="constrained")
+    figsize = figure_size(size, (8.0, 5.0), column=3.6, page=4.5)
+    with _style(figsize[0]):
+        return _ensemble_figure(ratios, overturned, nominal_ratio, summary_text=summary_text, title=title,
+                                caption=caption, figsize=figsize)
+
+
+def _ensemble_figure(ratios, overturned, nominal_ratio, *, summary_text, title, caption, figsize) -> Figure:
+    fig = Figure(figsize=figsize, dpi=DPI, layout="constrained")
     ax = fig.subplots()
     ratios = np.asarray(ratios, dtype=float)
     overturned = np.asarray(overturned, dtype=bool)
@@ -1233,7 +1770,11 @@ def ensemble_figure(ratios, overturned, nominal_ratio: float, *, summary_text: s
     ax.set_xlabel("largest rotation / α")
     ax.set_ylabel("fraction of the members")
     ax.grid(True, alpha=0.3)
-    ax.legend(loc="lower right", fontsize="small", title=summary_text, title_fontsize="small")
-    if title:
-        ax.set_title(title)
+    if figsize[0] < 6.0:       # narrow: below the axes, not over the curve
+        fig.legend(*ax.get_legend_handles_labels(), loc="outside lower center", fontsize=_pt(8), title=summary_text,
+                   title_fontsize=_pt(8), frameon=False)
+    else:
+        ax.legend(loc="lower right", fontsize=_pt(8), title=summary_text, title_fontsize=_pt(8))
+    _headline(fig, title, caption)
+    _freeze_ticks(fig)
     return fig

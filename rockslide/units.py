@@ -147,6 +147,49 @@ def percent_text(ratio: float) -> str:
     return f"{percent:.0f} %" if abs(percent) >= 9.95 else f"{percent:.2g} %"
 
 
+#: Named figure sizes [in] (`parse_figure_size`): the width of a journal column and of a page (the
+#: height follows the figure), and a 16:9 slide.
+FIGURE_SIZES = {"column": (3.5, None), "page": (7.0, None), "slide": (10.0, 5.625)}
+#: Figures are 1 to 50 in on each side.
+FIGURE_SIDE_RANGE = (1.0, 50.0)
+
+
+def parse_figure_size(value, *, source: str = "--size"):
+    """A figure size as given (``--size``, ``size=``): None (each figure's default), one of
+    `FIGURE_SIZES` (``"column"``, ``"page"``, ``"slide"``), ``"WxH"`` in inches (``"6x4"``) or a
+    ``(width, height)`` pair [in]. Returns None, the name, or ``(width, height)`` [in]; CaseError
+    otherwise."""
+    if value is None:
+        return None
+    if isinstance(value, str):
+        key = value.strip().lower()
+        if key in FIGURE_SIZES:
+            return key
+        parts = key.replace("in", "").split("x")
+        pair = None
+        if len(parts) == 2:
+            try:
+                pair = tuple(float(p) for p in parts)
+            except ValueError:
+                pair = None
+        if pair is None:
+            raise CaseError(f"unknown figure size {value!r}; expected column (3.5 in wide), page (7 in), "
+                            "slide (10 x 5.6 in) or WIDTHxHEIGHT in inches (e.g. 6x4)", source=source)
+    else:
+        try:
+            pair = tuple(float(v) for v in value)
+        except (TypeError, ValueError):
+            pair = ()
+        if len(pair) != 2:
+            raise CaseError(f"expected a (width, height) pair in inches or a size name, got {value!r}",
+                            source=source)
+    low, high = FIGURE_SIDE_RANGE
+    if not all(math.isfinite(v) and low <= v <= high for v in pair):
+        raise CaseError(f"figure size {pair[0]:g} x {pair[1]:g} in is out of range; each side must be "
+                        f"{low:g} to {high:g} in (e.g. 6x4)", source=source)
+    return pair
+
+
 def written_unit(value) -> str | None:
     """The unit of a ``"number unit"`` string as written (``"800 gal"`` -> ``"gal"``), None if
     there is none (a bare number, or text that is not a quantity)."""

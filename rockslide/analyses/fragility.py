@@ -1358,14 +1358,36 @@ def _pair(pair):
     return None if pair is None else [float(pair[0]), float(pair[1])]
 
 
-def figure(fplan: FragilityPlan, analysis: Analysis):
-    """The PNG: fitted curves, the stripes' observed fractions and the confidence bands."""
+def figure(fplan: FragilityPlan, analysis: Analysis, *, size=None):
+    """The PNG: fitted curves, the stripes' observed fractions and the confidence bands, and what
+    was computed (`caption`)."""
+    from ..plots import fragility_figure
+
     title = f"{fplan.plan.case.name}: {fplan.describe()}"
-    return _figure(np.asarray(fplan.levels.values), analysis.fitted, analysis.states, analysis.fits,
-                   fplan.im, title, analysis.nominal_fits)
+    levels = np.asarray(fplan.levels.values)
+    grid, curves = _curves(levels, analysis.fitted, analysis.states, analysis.fits, fplan.im, analysis.nominal_fits)
+    text = caption(fplan.plan.case.text, suite=str(fplan.suite.source), records=len(fplan.suite.entries), im=fplan.im,
+                   levels=levels, step=fplan.plan.step)
+    return fragility_figure(levels / fplan.im.display_scale, grid / fplan.im.display_scale, curves,
+                            xlabel=fplan.im.axis_label(), confidence=CONFIDENCE, title=title, size=size, caption=text)
 
 
-def _figure(levels, exceeded, states, fits, im: IntensityMeasure, title: str, nominal_fits=()):
+def caption(case_text: str, *, suite: str, records: int, im: IntensityMeasure, levels, step, version=None) -> str:
+    """`plots.case_caption` of a fragility analysis: the suite, its records and the levels they
+    were scaled to, in place of the case's records."""
+    from .._version import __version__
+    from ..plots import case_caption
+
+    levels = np.asarray(levels, dtype=float) / im.display_scale
+    unit = f" {im.display_unit}" if im.display_unit else ""
+    ground = (f"suite {Path(suite).name} ({records} records) scaled to {im.label} "
+              f"{levels.min():.4g} to {levels.max():.4g}{unit} ({levels.size} levels)")
+    return case_caption(case_text, ground=ground, step=step, version=version or __version__)
+
+
+def _curves(levels, exceeded, states, fits, im: IntensityMeasure, nominal_fits=()):
+    """The grid [SI of the measure] and the curves of `plots.fragility_figure` (in SI: divide by
+    ``im.display_scale``) of fitted damage states."""
     grid = np.linspace(levels[-1] * 1e-3, levels[-1] * 1.1, 300)
     lower_tail, upper_tail = 50.0 * (1.0 - CONFIDENCE), 100.0 - 50.0 * (1.0 - CONFIDENCE)
     curves = []
@@ -1385,10 +1407,7 @@ def _figure(levels, exceeded, states, fits, im: IntensityMeasure, title: str, no
         if own is not None and own.median is not None:
             curve["nominal"] = fragility(grid, own.median, own.beta)
         curves.append(curve)
-    from ..plots import fragility_figure
-
-    return fragility_figure(levels / im.display_scale, grid / im.display_scale, curves, xlabel=im.axis_label(),
-                            confidence=CONFIDENCE, title=title)
+    return grid, curves
 
 
 def describe_fit(state: DamageState, fit: StateFit, im: IntensityMeasure) -> str:
@@ -1419,9 +1438,49 @@ def _legend(state: DamageState, fit: StateFit, im: IntensityMeasure) -> str:
             f"β {fit.beta:.2f}{interval(fit.beta_ci, lambda b: f'{b:.2f}')}")
 
 
-def stored_figure(stored) -> object:
+def stored_figure(stored, *, size=None) -> object:
     """The same figure from a fragility file read back (`results.read_dataset`), for ``rockslide
     plot``: the fits are recomputed from the stored exceedances (same resamples, same seed)."""
+    from ..plots import fragility_figure
+
+    drawn = stored_curves(stored)
+    im = drawn["im"]
+    return fragility_figure(drawn["levels"] / im.display_scale, drawn["grid"] / im.display_scale, drawn["curves"],
+                            xlabel=im.axis_label(), confidence=CONFIDENCE, title=drawn["title"], size=size,
+                            caption=drawn["caption"])
+
+
+def overlay_figure(stored_files, names, *, size=None):
+    """Fragility curves of several files on one plot (``rockslide plot A B``): a colour for each
+    file, a line style for each damage state, each curve with its band; the legend names the
+    files (``names``: their cases). The files must use one intensity measure."""
+    from ..plots import FRAGILITY_COLOURS, fragility_figure
+
+    drawn = [stored_curves(stored) for stored in stored_files]
+    first = drawn[0]["im"]
+    for d, name in zip(drawn[1:], names[1:], strict=True):
+        if (d["im"].label, d["im"].display_unit) != (first.label, first.display_unit):
+            raise CaseError(f"{name} is over {d['im'].label} and {names[0]} over {first.label}; overlay fragility "
+                            "files of one intensity measure", source="rockslide plot")
+    styles = ("-", (0, (6, 2)), (0, (1, 1.5)), (0, (6, 2, 1, 2)))
+    curves = []
+    for k, (d, name) in enumerate(zip(drawn, names, strict=True)):
+        for i, curve in enumerate(d["curves"]):
+            curve = {key: value for key, value in curve.items() if key not in ("moments", "nominal")}   # one fit each
+            curves.append({**curve, "label": f"{name}, {curve['label']}",
+                           "colour": FRAGILITY_COLOURS[(k + 1) % len(FRAGILITY_COLOURS)],
+                           "style": styles[i % len(styles)], "levels": d["levels"] / first.display_scale,
+                           "grid": d["grid"] / first.display_scale})
+    top = max(float(d["grid"][-1]) for d in drawn) / first.display_scale
+    return fragility_figure(drawn[0]["levels"] / first.display_scale, np.array([0.0, top]), curves,
+                            xlabel=first.axis_label(), confidence=CONFIDENCE,
+                            title="fragility: " + " and ".join(names), size=size,
+                            caption="\n".join(f"{name}: {d['caption']}" for d, name in zip(drawn, names, strict=True)))
+
+
+def stored_curves(stored) -> dict:
+    """What the figure of a fragility file read back draws: ``levels`` and ``grid`` [SI of the
+    measure], ``curves`` (`plots.fragility_figure`), ``im``, ``title`` and ``caption``."""
     attrs = stored.attrs
     coords = {name: values for name, values, _ in stored.coords}
     variables = stored.variables
@@ -1438,14 +1497,21 @@ def stored_figure(stored) -> object:
     resamples = int(attrs.get("bootstrap_resamples", BOOTSTRAP_RESAMPLES))
     seed = int(attrs.get("bootstrap_seed", BOOTSTRAP_SEED))
     title = f"{attrs.get('name', 'fragility')}: {_describe(*exceeded.shape[:2], im.label)}"
+    step = attrs.get("integration_step")
+    text = caption(str(attrs.get("case_text", "")), suite=str(attrs.get("suite", "?")), records=exceeded.shape[0],
+                   im=im, levels=levels, step=None if step is None else float(step),
+                   version=str(attrs.get("rockslide_version", "?")))
+    nominal = ()
     if "sample" not in coords:
         fits = [fit_state(levels, exceeded[..., i], resamples=resamples, seed=seed, show=im.show)
                 for i in range(len(states))]
-        return _figure(levels, exceeded, states, fits, im, title)
-    records, n_levels, width = exceeded.shape[:3]
-    rows = np.moveaxis(exceeded[:, :, 1:, :], 2, 1).reshape(records * (width - 1), n_levels, len(states))
-    fits = [fit_state(levels, rows[..., i], resamples=resamples, seed=seed, show=im.show, per_record=width - 1)
-            for i in range(len(states))]
-    nominal = [fit_state(levels, exceeded[:, :, 0, i], resamples=resamples, seed=seed, show=im.show)
-               for i in range(len(states))]
-    return _figure(levels, rows, states, fits, im, f"{title} x {width} parameter sets", nominal)
+    else:
+        records, n_levels, width = exceeded.shape[:3]
+        title += f" x {width} parameter sets"
+        nominal = [fit_state(levels, exceeded[:, :, 0, i], resamples=resamples, seed=seed, show=im.show)
+                   for i in range(len(states))]
+        exceeded = np.moveaxis(exceeded[:, :, 1:, :], 2, 1).reshape(records * (width - 1), n_levels, len(states))
+        fits = [fit_state(levels, exceeded[..., i], resamples=resamples, seed=seed, show=im.show,
+                          per_record=width - 1) for i in range(len(states))]
+    grid, curves = _curves(levels, exceeded, states, fits, im, nominal)
+    return {"levels": levels, "grid": grid, "curves": curves, "im": im, "title": title, "caption": text}

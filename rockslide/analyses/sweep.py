@@ -77,7 +77,7 @@ from ..engine.prepare import (
 from ..errors import CaseError
 from ..io import records as rec
 from ..pulses import Pulse, linear_overturning_ratio
-from ..units import STANDARD_GRAVITY, UNIT_REQUIRED, parse_quantity
+from ..units import STANDARD_GRAVITY, UNIT_REQUIRED, parse_quantity, unit_factor
 
 __all__ = ["AXES", "AxisKind", "Axis", "parse_axis", "plan_sweep", "sweep_variables", "worst_azimuth", "coordinates",
            "root_attributes", "spectrum_scales", "figure", "stored_figure"]
@@ -845,19 +845,41 @@ def worst_azimuth(plan: Plan, variables: dict) -> dict | None:
             "max_rotation_ratio": float(standing[k]), "text": text}
 
 
-def figure(plan: Plan, variables: dict):
+def figure(plan: Plan, variables: dict, *, size=None):
     """The PNG of a sweep: an overturning spectrum (`spectrum_scales`), else the maps of
     `plots.sweep_figure` with the axes in their display units (gal for accelerations given as
-    PGA) and categories from `categories`."""
+    PGA) and categories from `categories`; what was computed in its caption (`caption`)."""
+    from .._version import __version__
+
     axes = [(a.kind.name, a.values) for a in plan.axes]
     title = f"{plan.case.name}: {plan.describe()}"
+    text = caption(plan.case.text, [name for name, _ in axes], plan.records, plan.step, __version__)
     scales = spectrum_scales(plan)
     if scales is not None:
-        return _spectrum(axes, variables, scales, title)
-    return _maps(axes, variables, title)
+        return _spectrum(axes, variables, scales, title, size=size, caption=text)
+    return _maps(axes, variables, title, size=size, caption=text, case_text=plan.case.text)
 
 
-def stored_figure(stored) -> object:
+def caption(case_text: str, axes, records, step, version) -> str:
+    """`plots.case_caption` of a sweep: the case's values of its ``axes`` are marked as the base
+    case's."""
+    from ..plots import case_caption
+
+    return case_caption(case_text, records=[r for r in records if r.get("path")] or None, step=step,
+                        version=version, varied=tuple(axes))
+
+
+def stored_caption(stored) -> str:
+    """`caption` of a sweep file read back."""
+    attrs = stored.attrs
+    records = [{"role": role, "path": attrs[f"record_{role}"]} for role in ("horizontal", "vertical")
+               if attrs.get(f"record_{role}")]
+    step = attrs.get("integration_step")
+    return caption(str(attrs.get("case_text", "")), [name for name, _, _ in stored.coords], records,
+                   None if step is None else float(step), str(attrs.get("rockslide_version", "?")))
+
+
+def stored_figure(stored, *, size=None) -> object:
     """The same figure from a sweep file read back (`results.read_sweep`), for ``rockslide plot``."""
     shape = " x ".join(f"{len(values)} {name}" for name, values, _ in stored.coords)
     axes = [(name, values) for name, values, _ in stored.coords]
@@ -865,16 +887,38 @@ def stored_figure(stored) -> object:
              f"{int(np.prod([len(v) for _, v, _ in stored.coords]))} cases")
     scales = {key[len("spectrum_"):]: value for key, value in stored.attrs.items()
               if key.startswith("spectrum_")}
+    text = stored_caption(stored)
     if scales:
-        return _spectrum(axes, variables=stored.variables, scales=scales, title=title)
-    return _maps(axes, stored.variables, title)
+        return _spectrum(axes, variables=stored.variables, scales=scales, title=title, size=size, caption=text)
+    return _maps(axes, stored.variables, title, size=size, caption=text,
+                 case_text=str(stored.attrs.get("case_text", "")))
+
+
+def overlay_figure(stored_files, names, *, size=None):
+    """Sweeps side by side (``rockslide plot A B``): the largest rotation of each over its first two
+    axes, on one colour scale (`plots.sweep_overlay_figure`); the sweeps must have the same axes."""
+    from ..plots import sweep_overlay_figure
+
+    first = [name for name, _, _ in stored_files[0].coords]
+    panels = []
+    for stored, name in zip(stored_files, names, strict=True):
+        axes = [n for n, _, _ in stored.coords]
+        if axes[:2] != first[:2]:
+            raise CaseError(f"{name} is over {' x '.join(axes)} and {names[0]} over {' x '.join(first)}; overlay "
+                            "sweeps over the same axes", source="rockslide plot")
+        # one unit for all: the first case's (the panels share their axes)
+        shown = shown_axes([(n, values) for n, values, _ in stored.coords],
+                           str(stored_files[0].attrs.get("case_text", "")))
+        panels.append((name, shown, categories(stored.variables), np.asarray(stored.variables["max_rotation"][0])))
+    text = "\n".join(f"{name}: {stored_caption(stored)}" for stored, name in zip(stored_files, names, strict=True))
+    return sweep_overlay_figure(panels, title="sweeps: " + " and ".join(names), caption=text, size=size)
 
 
 #: Points of the small-angle theory's curve drawn over a spectrum.
 THEORY_POINTS = 40
 
 
-def _spectrum(axes, variables: dict, scales: dict, title: str):
+def _spectrum(axes, variables: dict, scales: dict, title: str, *, size=None, caption: str = ""):
     """`plots.spectrum_figure` of a two-axis pulse sweep: amplitude over ``g tan(alpha)`` up the
     page, pulse frequency over ``p`` across, the categories of `plots.spectrum_category`, and
     the theory's curves where they exist: the thresholds of liftoff and slip at rest (exact), and
@@ -910,16 +954,33 @@ def _spectrum(axes, variables: dict, scales: dict, title: str):
     return spectrum_figure(frequency, amplitude, category, rotation, curves,
                            xlabel=f"ω_p / p   (p = {p:.3g} rad/s)",
                            ylabel=f"a_p / (g tan α)   (g tan α = {lift / STANDARD_GRAVITY:.3g} g)",
-                           title=f"{title}: {pulse.pulse} pulse")
+                           title=f"{title}: {pulse.pulse} pulse", size=size, caption=caption)
 
 
-def _maps(axes, variables: dict, title: str):
+def shown_axes(axes, case_text: str = "") -> list:
+    """``(label, values)`` of each ``(name, SI values)`` axis as figures show it: the PGA in the unit
+    the case gives its PGA in (`plots.pga_unit`; gal when it gives none), the others in `AXES`'s
+    display units."""
+    from ..plots import pga_unit
+
+    unit = pga_unit(case_text) if any(name == "pga" for name, _ in axes) else None
+    shown = []
+    for name, values in axes:
+        label, scale = AXES[name].label, AXES[name].display_scale
+        if name == "pga" and unit:
+            label, scale = f"peak horizontal acceleration [{unit}]", unit_factor(unit, "acceleration")
+        shown.append((label, np.asarray(values) / scale))
+    return shown
+
+
+def _maps(axes, variables: dict, title: str, *, size=None, caption: str = "", case_text: str = ""):
     from ..plots import sweep_figure
 
     over = int(np.asarray(variables["overturned"][0]).sum())
-    shown = [(AXES[name].label, np.asarray(values) / AXES[name].display_scale) for name, values in axes]
+    shown = shown_axes(axes, case_text)
     return sweep_figure(shown, categories(variables), variables["max_rotation"][0],
-                        variables["residual_slip"][0], title=f"{title}, {over} overturned")
+                        variables["residual_slip"][0], title=f"{title}, {over} overturned", size=size,
+                        caption=caption)
 
 
 def time_shares(states: np.ndarray) -> dict:

@@ -462,8 +462,8 @@ def criteria_map_figure(height: float = 0.2, width: float = 0.1, gravity: float 
     """The paper's Figure 5: modes initiated from rest over |A_h| and mu for A_v = -0.5, 0, +0.5 g."""
     ah = np.linspace(0.0, 1.5, 301)
     mu = np.linspace(0.0, 1.2, 241)
-    maps = [(f"A_v = {av:+.1f} g", criteria.mode_map(ah, mu, av, width / 2, height / 2, gravity))
-            for av in (-0.5, 0.0, 0.5)]
+    maps = [(f"A_v = {av:+.1f} g", criteria.mode_map(ah, mu, av, width / 2, height / 2, gravity),
+             criteria.mode_boundaries(ah, av, width / 2, height / 2, gravity)) for av in (-0.5, 0.0, 0.5)]
     return plots.criteria_figure(ah, mu, maps, title=f"Figure 5: modes initiated from rest, B/H = "
                                                      f"{width / height:g} (eqs. 6, 11, 26)")
 

@@ -193,6 +193,17 @@ records_dir_option = click.option(
          "resolve against the case file's folder first.")
 
 
+def size_option(function):
+    """``--size``: the figure's size (`units.parse_figure_size`), checked before anything is computed."""
+    from ..units import parse_figure_size
+
+    return click.option("--size", default=None, metavar="column|page|slide|WxH",
+                        callback=lambda ctx, param, value: parse_figure_size(value),
+                        help="Figure size: column (3.5 in wide), page (7 in wide), slide (10 x 5.6 in) or "
+                             "WIDTHxHEIGHT in inches (e.g. 6x4); fonts follow it (default: the figure's own "
+                             "size).")(function)
+
+
 def dpi_option(what: str):
     """``--dpi``: the resolution of raster figures (PNG); vector formats (PDF, SVG) ignore it. The
     default is `plots.DPI` (not imported here: matplotlib takes most of a second to load)."""

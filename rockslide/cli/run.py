@@ -12,7 +12,7 @@ import click
 
 from .. import interrupts
 from ..errors import CaseError, OutputError
-from .app import _json_default, _result_set, dpi_option, main, records_dir_option, show_warnings
+from .app import _json_default, _result_set, dpi_option, main, records_dir_option, show_warnings, size_option
 
 #: A single run expected to take longer than this [s] says so before it starts (and shows a
 #: progress bar on a terminal).
@@ -43,13 +43,15 @@ KEEP_HISTORY_ROWS = 2_000_000
               help="The verdict's robustness: an ensemble of 200 neighbours (--ensemble 200); robust when "
                    "none of them flips it.")
 @dpi_option("PNG figure")
-def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, members, seed, robustness, dpi):
+@size_option
+def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, members, seed, robustness, dpi, size):
     """Compute one case: CASE_FILE (YAML) -> OUT/NAME.h5 and OUT/NAME.png.
 
     \b
     Example:
         rockslide run example/example.yaml --json
         rockslide run example/example.yaml --ensemble 200
+        rockslide run example/spectrum-one-sine.yaml --size column
     """
     from ..case import case_to_dict, load_case
     from ..engine import prepare as runner
@@ -104,10 +106,12 @@ def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, members, s
             if not no_plot:
                 kept = writer.written_result()
                 _draw(kept if kept is not None else results.read_result(writer.tmp).result, case.name,
-                      png_path, overwrite=overwrite, dpi=dpi, staging=staging)
+                      png_path, overwrite=overwrite, dpi=dpi, staging=staging, size=size,
+                      about=(case.text, runner.record_entries(prepared), result.step, None))
                 if neighbourhood is not None:
                     _draw_ensemble(neighbourhood, group, result.summary, case.name, ensemble_png,
-                                   overwrite=overwrite, dpi=dpi, staging=staging)
+                                   overwrite=overwrite, dpi=dpi, staging=staging, size=size,
+                                   about=(case.text, runner.record_entries(prepared), result.step, None))
             stale = [png_path] if no_plot else []
             if overwrite and (no_plot or neighbourhood is None):
                 stale.append(ensemble_png)          # it showed the neighbourhood of the result replaced
@@ -117,7 +121,8 @@ def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, members, s
             written += f" and {ensemble_png}"
     else:
         with files.Staging(overwrite=False) as staging:
-            _draw(stored.result, stored.name, png_path, overwrite=False, dpi=dpi, staging=staging)
+            _draw(stored.result, stored.name, png_path, overwrite=False, dpi=dpi, staging=staging, size=size,
+                  about=_stored_about(stored))
             staging.publish()
         result = stored.result
         neighbourhood = None if eplan is None else json.loads(stored.attrs["ensemble"])
@@ -136,32 +141,38 @@ def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, members, s
 
 
 @main.command()
-@click.argument("result_file", type=click.Path(path_type=Path))
+@click.argument("result_files", nargs=-1, required=True, type=click.Path(path_type=Path), metavar="RESULT_FILE...")
 @click.option("-o", "--output", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="Figure to write; the format follows its extension: .png, .pdf, .svg, .eps... "
-                   "(default: the result's name with .png, next to it).")
+                   "(default: the result's name with .png, next to it; for several files, their names joined "
+                   "by -vs- with .png, next to the first).")
 @click.option("--time-shift", default="0 s", show_default=True, metavar="TIME",
               help="Time added to the time axis, with a unit as in case files (e.g. '-25 s'; a bare "
                    "number is in s), to lay the figure beside another's.")
 @click.option("--window", default="auto", show_default=True, metavar="START:END|auto|none",
-              help="The magnified window, in the figure's time (e.g. 30:36 or '30 s:36 s'); none: no "
-                   "magnified panel.")
+              help="The magnified window of one result file, in the figure's time (e.g. 30:36 or '30 s:36 s'); "
+                   "none: no magnified panel.")
 @click.option("--crop", default="auto", show_default=True, metavar="START:END|auto|all",
               help="Time range of the response and ground panels (auto: where the ground or the block "
                    "moves; all: the whole record).")
 @click.option("--overwrite", is_flag=True,
-              help="Replace the file given with -o if it exists (the result's own figure is always "
-                   "redrawn).")
+              help="Replace the file given with -o if it exists (the result's own figure, and the default "
+                   "figure of several files, is always redrawn).")
 @dpi_option("figure (PNG)")
-def plot(result_file, output, time_shift, window, crop, dpi, overwrite):
-    """Redraw the figure of a result, sweep or fragility file (replaces it).
+@size_option
+def plot(result_files, output, time_shift, window, crop, dpi, overwrite, size):
+    """Redraw the figure of a result, sweep or fragility file (replaces it), or overlay several
+    files of one kind: runs (rotation, slip and ground motion on shared axes), sweeps (side by
+    side on one colour scale) or fragility analyses (their curves and bands), named after their
+    cases.
 
     \b
     Example:
         rockslide plot out/example.h5
         rockslide plot out/example.h5 --window 6.6:7.2 -o out/example-impact.pdf
-        rockslide plot out/example.sweep.h5
+        rockslide plot out/example.sweep.h5 --size column
         rockslide plot out/example.fragility.h5
+        rockslide plot out/example.h5 out/spectrum-one-sine.h5 --size page -o out/two-runs.pdf
     """
     from ..io import results
     from ..units import parse_quantity
@@ -169,28 +180,39 @@ def plot(result_file, output, time_shift, window, crop, dpi, overwrite):
     shift = parse_quantity(time_shift, "time", source="--time-shift")
     zoom = _time_range(window, "--window", {"auto": "auto", "none": None})
     span = _time_range(crop, "--crop", {"auto": "auto", "all": None})
+    if len(result_files) > 1:
+        from ..api import plot_results
+
+        if zoom != "auto":
+            raise CaseError("applies to one result file, not to several overlaid", source="--window")
+        stems = [Path(f).name.split(".")[0] for f in result_files]
+        own = Path(result_files[0]).parent / ("-vs-".join(stems[:3]) + ("-etc" if len(stems) > 3 else "") + ".png")
+        png = output if output is not None else own
+        plot_results(result_files, size=size, time_shift=shift, crop=span, path=png, dpi=dpi,
+                     overwrite=overwrite or png.resolve() == own.resolve())
+        click.echo(f"drew {png}")
+        return
+    result_file = result_files[0]
     own = Path(result_file).with_suffix(".png")
     png = output if output is not None else own
     # the result's own figure is the one redrawn; another file is replaced only when asked to
     replace = overwrite or png.resolve() == own.resolve()
     kind = results.file_format(result_file)
-    if kind == results.SWEEP_FORMAT:
-        from ..analyses.sweep import stored_figure
+    if kind in (results.SWEEP_FORMAT, results.FRAGILITY_FORMAT):
         from ..plots import save_figure
+        what = "sweep" if kind == results.SWEEP_FORMAT else "fragility"
         given = [option for option, value, default in (("--time-shift", shift, 0.0), ("--window", zoom, "auto"),
                                                        ("--crop", span, "auto")) if value != default]
         if given:
-            raise CaseError("applies to result files, not to sweep files", source=given[0])
-        save_figure(stored_figure(results.read_sweep(result_file)), png, overwrite=replace, dpi=dpi)
-    elif kind == results.FRAGILITY_FORMAT:
-        from ..analyses.fragility import stored_figure as stored_fragility_figure
-        from ..plots import save_figure
-        given = [option for option, value, default in (("--time-shift", shift, 0.0), ("--window", zoom, "auto"),
-                                                       ("--crop", span, "auto")) if value != default]
-        if given:
-            raise CaseError("applies to result files, not to fragility files", source=given[0])
-        stored = results.read_dataset(result_file, format=results.FRAGILITY_FORMAT)
-        save_figure(stored_fragility_figure(stored), png, overwrite=replace, dpi=dpi)
+            raise CaseError(f"applies to result files, not to {what} files", source=given[0])
+        if kind == results.SWEEP_FORMAT:
+            from ..analyses.sweep import stored_figure
+            figure = stored_figure(results.read_sweep(result_file), size=size)
+        else:
+            from ..analyses.fragility import stored_figure as stored_fragility_figure
+            figure = stored_fragility_figure(results.read_dataset(result_file, format=results.FRAGILITY_FORMAT),
+                                             size=size)
+        save_figure(figure, png, overwrite=replace, dpi=dpi)
     else:
         stored = results.read_result(result_file)
         times = stored.result.ground_time
@@ -200,7 +222,8 @@ def plot(result_file, output, time_shift, window, crop, dpi, overwrite):
                 if isinstance(pair, tuple) and (pair[1] <= first or pair[0] >= last):
                     raise CaseError(f"{pair[0]:g} to {pair[1]:g} s is outside the result, which runs from "
                                     f"{first:g} to {last:g} s (in the figure's time)", source=option)
-        _draw(stored.result, stored.name, png, overwrite=replace, time_shift=shift, zoom=zoom, crop=span, dpi=dpi)
+        _draw(stored.result, stored.name, png, overwrite=replace, time_shift=shift, zoom=zoom, crop=span, dpi=dpi,
+              size=size, about=_stored_about(stored))
     click.echo(f"redrew {png}")
 
 
@@ -222,12 +245,29 @@ def _time_range(text: str, option: str, words: dict):
     return start, end
 
 
-def _draw(result, name, path, *, overwrite, dpi=None, time_shift=0.0, zoom="auto", crop="auto", staging=None):
-    """Draw the figure of one run (`plots.response_figure`) and save it (`plots.save_figure`)."""
-    from ..plots import response_figure, save_figure
+def _draw(result, name, path, *, overwrite, dpi=None, time_shift=0.0, zoom="auto", crop="auto", staging=None,
+          size=None, about=None):
+    """Draw the figure of one run (`plots.response_figure`) and save it (`plots.save_figure`).
+    ``about``: (case text, record entries, integration step [s], version or None: this one), for
+    its caption (`plots.case_caption`) and the unit of its ground motion."""
+    from .._version import __version__
+    from ..plots import case_caption, pga_unit, response_figure, save_figure
 
-    figure = response_figure(result, title=name, time_shift=time_shift, zoom=zoom, crop=crop)
+    caption, unit = "", None
+    if about is not None:
+        text, entries, step, version = about
+        caption = case_caption(text, records=entries, step=step, version=version or __version__)
+        unit = pga_unit(text)
+    figure = response_figure(result, title=name, time_shift=time_shift, zoom=zoom, crop=crop, size=size,
+                             caption=caption, unit=unit)
     save_figure(figure, path, overwrite=overwrite, dpi=dpi, staging=staging)
+
+
+def _stored_about(stored) -> tuple:
+    """`_draw`'s ``about`` of a result file read back."""
+    step = stored.attrs.get("integration_step")
+    return (stored.case_text, stored.records, None if step is None else float(step),
+            stored.attrs.get("rockslide_version"))
 
 
 def _same_result(case, prepared, h5_path: Path, *, eplan=None):
@@ -261,10 +301,12 @@ def run_text(name: str, summary, neighbourhood: dict | None = None, *, ground=No
 
 
 def _draw_ensemble(summary: dict, variables: dict, nominal, name: str, path: Path, *, overwrite: bool, dpi,
-                   staging) -> None:
-    """The neighbourhood's figure (`plots.ensemble_figure`): its members' largest rotations."""
+                   staging, size=None, about=None) -> None:
+    """The neighbourhood's figure (`plots.ensemble_figure`): its members' largest rotations
+    (``about`` as in `_draw`)."""
+    from .._version import __version__
     from ..analyses import ensemble as ens
-    from ..plots import ensemble_figure, save_figure
+    from ..plots import case_caption, ensemble_figure, save_figure
 
     ok = variables["status"][1] == 0
     ratio = variables["max_rotation_ratio"][1][ok]
@@ -272,7 +314,9 @@ def _draw_ensemble(summary: dict, variables: dict, nominal, name: str, path: Pat
     headline = ens.describe(summary, nominal.verdict)[0]
     figure = ensemble_figure(ratio, over, math.inf if nominal.overturned else nominal.max_rotation_ratio,
                              summary_text=headline.split("; ", 1)[-1],
-                             title=f"{name}: {summary['n']} neighbours (seed {summary['seed']})")
+                             title=f"{name}: {summary['n']} neighbours (seed {summary['seed']})", size=size,
+                             caption="" if about is None else case_caption(about[0], records=about[1], step=about[2],
+                                                                           version=about[3] or __version__))
     save_figure(figure, path, overwrite=overwrite, dpi=dpi, staging=staging)
 
 

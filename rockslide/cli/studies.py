@@ -14,7 +14,7 @@ import click
 
 from .. import interrupts
 from ..errors import OutputError
-from .app import _json_default, _result_set, dpi_option, main, records_dir_option, show_warnings
+from .app import _json_default, _result_set, dpi_option, main, records_dir_option, show_warnings, size_option
 
 
 def _axis_option(name: str, kind: str, what: str, example: str):
@@ -68,6 +68,7 @@ def where_options(what: str, unit: str):
         click.option("--no-progress", is_flag=True,
                      help="No progress bar on stderr (there is none anyway when stderr is not a terminal)."),
         dpi_option("PNG figure"),
+        size_option,
         click.option("--csv", "as_csv", is_flag=True,
                      help=f"Also write OUT/NAME.{'sweep' if what == 'sweep' else 'fragility'}.csv: one row per "
                           f"{unit} with its coordinates and results (units in the header), for a spreadsheet or "
@@ -108,7 +109,7 @@ def where_options(what: str, unit: str):
 @records_dir_option
 @where_options("sweep", "case")
 def sweep(case_file, mu_kinetic_ratio, records_dir, out_dir, overwrite, no_plot, workers, scheduler, device,
-          chunk_size, no_progress, dpi, as_csv, shard, wait_workers, **_axes):
+          chunk_size, no_progress, dpi, size, as_csv, shard, wait_workers, **_axes):
     """Grid of cases over friction, intensity, vertical factor, restitution, slenderness or gravity,
     over a pulse's amplitude and period or duration, or over the block's orientation under two
     horizontal components (--azimuth, docs/two-components.md): CASE_FILE (YAML) -> OUT/NAME.sweep.h5 and
@@ -156,7 +157,7 @@ def sweep(case_file, mu_kinetic_ratio, records_dir, out_dir, overwrite, no_plot,
                              mu_kinetic_ratio=mu_kinetic_ratio, chunk_size=chunk_size, progress=bar.update)
     if finishing:
         _finish_sweep(plan, ChunkStore.beside(h5_path, plan.key), h5_path, png_path, no_plot=no_plot,
-                      started=started, dpi=dpi)
+                      started=started, dpi=dpi, size=size)
         return
     files.remove_stale_temporaries([h5_path, png_path])
     done = _compute(ctx, plan, h5_path, what="sweep", description=plan.describe(), label=case.name, unit="case",
@@ -167,7 +168,7 @@ def sweep(case_file, mu_kinetic_ratio, records_dir, out_dir, overwrite, no_plot,
         results.write_sweep(h5_path, sw.coordinates(plan), variables, overwrite=overwrite, staging=staging,
                             attrs=sw.root_attributes(plan, _command_line(ctx, case_file)))
         if not no_plot:
-            save_figure(sw.figure(plan, variables), png_path, overwrite=overwrite, dpi=dpi, staging=staging)
+            save_figure(sw.figure(plan, variables, size=size), png_path, overwrite=overwrite, dpi=dpi, staging=staging)
         if as_csv:
             from ..io.datasets import sweep_dataset
             _write_csv(sweep_dataset(sw.coordinates(plan), variables), [a.name for a in plan.axes],
@@ -229,7 +230,7 @@ def sweep(case_file, mu_kinetic_ratio, records_dir, out_dir, overwrite, no_plot,
 @where_options("fragility analysis", "run")
 def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, resamples, case_vertical, samples,
               seed, azimuth, as_json, records_dir, out_dir, overwrite, no_plot, workers, scheduler, device, chunk_size,
-              no_progress, dpi, as_csv, shard, wait_workers):
+              no_progress, dpi, size, as_csv, shard, wait_workers):
     """Fragility curves of a block over a record suite scaled to levels of an intensity measure:
     CASE_FILE (YAML) -> OUT/NAME.fragility.h5 and OUT/NAME.fragility.png.
 
@@ -280,7 +281,7 @@ def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, 
         results.write_dataset(h5_path, coords, variables, format=results.FRAGILITY_FORMAT, attrs=attrs,
                               overwrite=overwrite, staging=staging)
         if not no_plot:
-            save_figure(fr.figure(fplan, analysis), png_path, overwrite=overwrite, dpi=dpi, staging=staging)
+            save_figure(fr.figure(fplan, analysis, size=size), png_path, overwrite=overwrite, dpi=dpi, staging=staging)
         if as_csv:
             from ..io.datasets import study_dataset
             _write_csv(study_dataset(coords, variables), [name for name, _, _ in coords if name != "damage_state"],
@@ -375,7 +376,8 @@ def _compute(ctx, plan, h5_path, *, what, description, label, unit, workers, sch
 
 
 
-def _finish_sweep(plan, store, h5_path: Path, png_path: Path, *, no_plot: bool, started: float, dpi=None) -> None:
+def _finish_sweep(plan, store, h5_path: Path, png_path: Path, *, no_plot: bool, started: float, dpi=None,
+                  size=None) -> None:
     """``NAME.sweep.h5`` exists: if it is this sweep's result (same definition key), draw its
     missing figure and remove its chunks (a run stopped in its final phase); else refuse."""
     from ..analyses.sweep import stored_figure
@@ -390,7 +392,7 @@ def _finish_sweep(plan, store, h5_path: Path, png_path: Path, *, no_plot: bool, 
         files.refuse_existing(h5_path, overwrite=False)
     drawn = ""
     if not no_plot and not (png_path.exists() or png_path.is_symlink()):
-        save_figure(stored_figure(stored), png_path, overwrite=False, dpi=dpi)
+        save_figure(stored_figure(stored, size=size), png_path, overwrite=False, dpi=dpi)
         drawn = f"; drew its missing figure {png_path}"
     store.remove()
     click.echo(f"sweep {plan.case.name}: {h5_path} is this sweep's complete result{drawn}; removed its "

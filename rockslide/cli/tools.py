@@ -10,7 +10,7 @@ from pathlib import Path
 import click
 
 from ..errors import CaseError, OutputError
-from .app import _json_default, dpi_option, main, records_dir_option
+from .app import _json_default, dpi_option, main, records_dir_option, size_option
 
 
 @main.command()
@@ -143,7 +143,8 @@ MAX_CRITERIA_PANELS = 12
               show_default=True, help="PNG to write.")
 @click.option("--overwrite", is_flag=True, help="Replace an existing PNG.")
 @dpi_option("PNG")
-def criteria(case_file, height, width, vertical, ah_max, mu_max, output, overwrite, dpi):
+@size_option
+def criteria(case_file, height, width, vertical, ah_max, mu_max, output, overwrite, dpi, size):
     """Draw the mode-initiation map (rest / slip / liftoff / liftoff-slip) of a block, from eqs. 6, 11, 26:
     of CASE_FILE's block if given, else of --height and --width.
 
@@ -154,6 +155,7 @@ def criteria(case_file, height, width, vertical, ah_max, mu_max, output, overwri
     """
     import numpy as np
 
+    from .._version import __version__
     from ..core import criteria as crit
     from ..plots import criteria_figure, save_figure
     from ..units import STANDARD_GRAVITY, parse_quantity
@@ -183,8 +185,13 @@ def criteria(case_file, height, width, vertical, ah_max, mu_max, output, overwri
         raise OutputError(f"{output} exists (use --overwrite to replace it)")
     ah = np.linspace(0.0, ah_max, 301)
     mu = np.linspace(0.0, mu_max, 241)
-    maps = [(f"A_v = {a:+.2f} g", crit.mode_map(ah, mu, a, w / 2, h / 2)) for a in avs]
-    figure = criteria_figure(ah, mu, maps, title=f"modes initiated from rest: {w:g} m wide, {h:g} m high")
+    maps = [(f"A_v = {a:+.2f} g", crit.mode_map(ah, mu, a, w / 2, h / 2), crit.mode_boundaries(ah, a, w / 2, h / 2))
+            for a in avs]
+    caption = (f"block width × height {w:.4g} × {h:.4g} m, α = {math.atan2(w, h):.4g} rad; from rest under "
+               f"constant accelerations (eqs. 6, 11, 26: no record, no time step; μ across the map, e plays no "
+               f"part); rockslide {__version__}")
+    figure = criteria_figure(ah, mu, maps, title=f"modes initiated from rest: {w:g} m wide, {h:g} m high",
+                             size=size, caption=caption)
     save_figure(figure, output, overwrite=overwrite, dpi=dpi)
     click.echo(f"wrote {output}")
 

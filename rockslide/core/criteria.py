@@ -69,3 +69,46 @@ def mode_map(ah_over_g, mu_values, av_over_g: float, half_width: float, half_hei
         for j, a in enumerate(ah_over_g):
             out[i, j] = initial_mode(a * gravity, av_over_g * gravity, mu, half_width, half_height, gravity)
     return out
+
+
+def mode_boundaries(ah_over_g, av_over_g: float, half_width: float, half_height: float,
+                    gravity: float = 9.80665, points: int = 2001) -> list:
+    """The boundaries between the regions of `mode_map`, as lines in its plane (``|A_h|/g`` across,
+    ``mu`` up), from the same criteria (the closed forms, not the grid's cells).
+
+    With ``G = g (1 + A_v/g)`` and ``tan(alpha) = b/h``: slip starts where ``mu G = |A_h|`` (eq.
+    11), below ``mu = b/h`` (above it liftoff comes first); liftoff where ``|A_h| = (b/h) G`` (eq.
+    6), above ``mu = b/h``; beyond it, the line ``mu = b/h`` parts slip from liftoff, and the
+    friction liftoff needs (`sufficient_friction`, eq. 26) parts liftoff from liftoff-slip, drawn
+    where it is above ``b/h``.
+
+    Parameters
+    ----------
+    ah_over_g : 1-D array
+        The map's horizontal accelerations [g]: the lines span its range.
+    av_over_g : float
+        Vertical acceleration [g], above -1.
+    half_width, half_height : float
+        ``b``, ``h`` [m].
+    points : int
+        Points of the curved boundary (eq. 26) over the range.
+
+    Returns
+    -------
+    list of (x, y)
+        Polylines, ``x`` in g, ``y`` friction coefficients (NaN where a line is absent).
+    """
+    ah_over_g = np.asarray(ah_over_g, float)
+    a_max = float(ah_over_g.max())
+    scale = 1.0 + av_over_g
+    tan_alpha = half_width / half_height
+    lift = tan_alpha * scale                        # |A_h| / g where liftoff starts
+    lines = [(np.array([0.0, min(lift, a_max)]), np.array([0.0, min(lift, a_max) / scale]))]
+    if lift < a_max:
+        lines.append((np.array([lift, a_max]), np.array([tan_alpha, tan_alpha])))
+        lines.append((np.array([lift, lift]), np.array([tan_alpha, np.inf])))
+        a = np.linspace(lift, a_max, points)[1:]
+        needed = np.array([sufficient_friction(x * gravity, av_over_g * gravity, half_width, half_height,
+                                               gravity) for x in a])
+        lines.append((a, np.where(needed > tan_alpha, needed, np.nan)))
+    return lines
