@@ -474,7 +474,7 @@ def _code(name) -> int:
 
 def response_figure(result, *, title: str = "", time_shift: float = 0.0,
                     zoom: tuple | None | str = "auto", crop: tuple | None | str = "auto", size=None,
-                    caption: str | None = None, unit: str | None = None) -> Figure:
+                    caption: str | None = None, unit: str | None = None, horizontal: str | None = None) -> Figure:
     """The response of one simulation in the paper's style (module docstring).
 
     Parameters
@@ -500,6 +500,9 @@ def response_figure(result, *, title: str = "", time_shift: float = 0.0,
     unit : str, optional
         Unit of the ground acceleration shown (``g``, ``gal``, ``m/s^2``); default: the one the
         case gives its PGA in, else gal.
+    horizontal : str, optional
+        What the legend calls the horizontal ground motion (default ``"horizontal"``, or
+        `along_the_block` for a case with two horizontal components).
 
     Returns
     -------
@@ -515,6 +518,8 @@ def response_figure(result, *, title: str = "", time_shift: float = 0.0,
             caption = run_caption(result)
         if unit is None:
             unit = pga_unit(result.case_text)
+        if horizontal is None:
+            horizontal = along_the_block(result.case_text)
         result = result.result
     shift = float(time_shift)
     t0, t1 = _choose_range(result, crop, shift)
@@ -556,7 +561,7 @@ def response_figure(result, *, title: str = "", time_shift: float = 0.0,
         _freeze_ticks(fig)
 
         suptitle = _headline(fig, _title(result, title), caption or "")
-        handles = _legend_handles(result, alpha=bool(alpha_drawn))
+        handles = _legend_handles(result, alpha=bool(alpha_drawn), horizontal=horizontal or "horizontal")
         legend = fig.legend(handles=handles, loc="lower center", ncols=_legend_columns(handles, figsize[0]),
                             frameon=False, fontsize=_pt(9))
         _fit_column(fig, suptitle=suptitle, legend=legend, title_size=_pt(10))
@@ -583,6 +588,23 @@ def run_caption(run) -> str:
     step = attrs.get("integration_step", getattr(run.result, "step", None))
     return case_caption(run.case_text, records=run.records, step=None if step is None else float(step),
                         version=str(attrs.get("rockslide_version", __version__)))
+
+
+def along_the_block(case_text: str) -> str | None:
+    """``"along the block (30 deg)"`` for a case with two horizontal components (the motion that
+    drives the model is their projection on the block's direction); None otherwise."""
+    from .case import parse_case
+    from .errors import RockslideError
+
+    try:
+        case = parse_case(case_text, source="<stored case>") if case_text else None
+    except RockslideError:
+        return None
+    if case is None or getattr(case.ground, "horizontal_2", None) is None:
+        return None
+    if case.block.orientation is None:
+        return "along the block (component 1)"
+    return f"along the block ({math.degrees(case.block.orientation):g} deg)"
 
 
 def pga_unit(case_text: str) -> str | None:
@@ -1064,14 +1086,16 @@ def _ground_panel(ax, result, shift, span, *, unit=None):
         ax.set_title("still ground (no record)", loc="right", fontsize=_pt(9), color="0.3", y=title_y)
 
 
-def _legend_handles(result, *, ground: bool = True, alpha: bool = True) -> list:
-    """The legend's entries; +-alpha only where ``alpha`` (drawn on some panel)."""
+def _legend_handles(result, *, ground: bool = True, alpha: bool = True, horizontal: str = "horizontal") -> list:
+    """The legend's entries; +-alpha only where ``alpha`` (drawn on some panel); ``horizontal``
+    names the horizontal ground motion (`along_the_block`)."""
     handles = [Line2D([], [], color=ROTATION_COLOUR, lw=1.5, label="liftoff angle φ"),
                Line2D([], [], color=SLIP_COLOUR, lw=1.5, label="slip x")]
     if alpha and math.isfinite(result.summary.alpha):
         handles.append(Line2D([], [], color=ALPHA_COLOUR, ls="--", lw=0.9, label="±α (tips over past it)"))
     if ground:
-        handles += [Line2D([], [], color=GROUND_COLOURS[key], lw=1.0, label=f"ground {key}")
+        handles += [Line2D([], [], color=GROUND_COLOURS[key], lw=1.0,
+                           label=f"ground {horizontal if key == 'horizontal' else key}")
                     for key in ("horizontal", "vertical")]
     handles += [Patch(facecolor="white", edgecolor="0.6", lw=0.5, label="REST"),
                 Patch(facecolor=STATE_COLOURS[SLIP], label="SLIP"),

@@ -251,15 +251,15 @@ def _draw(result, name, path, *, overwrite, dpi=None, time_shift=0.0, zoom="auto
     ``about``: (case text, record entries, integration step [s], version or None: this one), for
     its caption (`plots.case_caption`) and the unit of its ground motion."""
     from .._version import __version__
-    from ..plots import case_caption, pga_unit, response_figure, save_figure
+    from ..plots import along_the_block, case_caption, pga_unit, response_figure, save_figure
 
-    caption, unit = "", None
+    caption, unit, horizontal = "", None, None
     if about is not None:
         text, entries, step, version = about
         caption = case_caption(text, records=entries, step=step, version=version or __version__)
-        unit = pga_unit(text)
+        unit, horizontal = pga_unit(text), along_the_block(text)
     figure = response_figure(result, title=name, time_shift=time_shift, zoom=zoom, crop=crop, size=size,
-                             caption=caption, unit=unit)
+                             caption=caption, unit=unit, horizontal=horizontal)
     save_figure(figure, path, overwrite=overwrite, dpi=dpi, staging=staging)
 
 
