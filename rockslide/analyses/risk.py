@@ -61,8 +61,8 @@ from scipy.special import log_ndtr, ndtr
 
 #: Fraction of the rate below which the hazard curve's ends are of no consequence (no note).
 NEGLIGIBLE = 1e-3
-#: Points of the disaggregation's density per hazard interval (for the curve drawn).
-DENSITY_POINTS = 8
+#: Levels the disaggregation's density is given at (geometric over the hazard curves' levels).
+DENSITY_POINTS = 400
 
 
 # --------------------------------------------------------------------------------------------------
@@ -263,15 +263,19 @@ def lognormal_box(median_interval, beta_interval, points: int = 9) -> list[Logno
     return [Lognormal(float(m), float(b)) for m in medians for b in betas]
 
 
-def density(fragility, curve: HazardCurve, points: int = DENSITY_POINTS) -> tuple[np.ndarray, np.ndarray]:
-    """The integrand of eq. (1) per unit of ``ln x``, ``P(F | x) k_i lambda(x)`` [1/yr], at
-    ``points`` levels per interval of the hazard curve (geometric): ``(levels, density)``."""
-    u = np.log(curve.levels)
-    steps = np.linspace(0.0, 1.0, points + 1)[:-1]
-    grid = np.r_[(u[:-1, None] + np.diff(u)[:, None] * steps).ravel(), u[-1]]
-    x = np.exp(grid)
-    k = np.r_[np.repeat(curve.slopes, points), curve.slopes[-1]]
-    return x, fragility(x) * k * curve.rate(x)
+def density(fragility, curve: HazardCurve, x) -> np.ndarray:
+    """The integrand of eq. (1) per unit of ``ln x``, ``P(F | x) k_i lambda(x)`` [1/yr], at the
+    levels ``x`` [SI of the IM] (NaN outside the hazard curve's levels)."""
+    x = np.asarray(x, dtype=np.float64)
+    interval = np.clip(np.searchsorted(curve.levels, x, side="right") - 1, 0, curve.levels.size - 2)
+    return fragility(x) * curve.slopes[interval] * curve.rate(x)
+
+
+def density_grid(curves, points: int = DENSITY_POINTS) -> np.ndarray:
+    """Levels [SI] to draw the densities of ``curves`` at: geometric over all their levels."""
+    low = min(float(c.levels[0]) for c in curves)
+    high = max(float(c.levels[-1]) for c in curves)
+    return np.geomspace(low, high, points)
 
 
 def probability_in(rate_per_year, years: float):
@@ -313,3 +317,260 @@ def truncated(result: Rate) -> bool:
     """Whether the motions above the hazard curve's last level could change the rate by more than
     `NEGLIGIBLE` of it."""
     return result.missing > NEGLIGIBLE * result.rate
+
+
+# --------------------------------------------------------------------------------------------------
+# The analysis, its dataset, its JSON and its printout
+# --------------------------------------------------------------------------------------------------
+
+
+@dataclass
+class FragilityUsed:
+    """The fragility of an analysis and where it comes from.
+
+    Attributes
+    ----------
+    curve : Lognormal or Tabulated
+    damage_state : str
+        ``overturn``, ``rotation>0.5alpha``...
+    source : str
+        The fragility file, or ``--median/--beta``.
+    form : str
+        ``lognormal fit``, ``empirical stripes`` or ``lognormal given``.
+    median, beta : float
+        [SI of the IM], [-]: the lognormal's (NaN for the stripes).
+    variants : list
+        Fragilities spanning its uncertainty (`rate_range` over them); empty: none known.
+    uncertainty : str
+        How ``variants`` were made ("" without).
+    """
+
+    curve: object
+    damage_state: str
+    source: str
+    form: str
+    median: float = math.nan
+    beta: float = math.nan
+    variants: list = None
+    uncertainty: str = ""
+
+
+@dataclass
+class Analysis:
+    """A fragility over hazard curves (`analyse`).
+
+    Attributes
+    ----------
+    fragility : FragilityUsed
+    measure : dict
+        The IM: ``name``, ``units`` (SI), ``long_name``, ``label``, ``display_unit``, ``display_scale``.
+    curves : list of HazardCurve
+    about : list of dict
+        Per curve: ``source``, ``kind``, ``lon``, ``lat``, ``investigation_time`` [yr].
+    results : list of Rate
+    intervals : list of tuple
+        Per curve, the rate's range over the fragility's uncertainty [1/yr] (NaNs: none).
+    life : float
+        [yr] the service life of ``probability_in``.
+    age : float or None
+        [yr] a precariously balanced rock's age.
+    confidence : float
+        Of the rejection of a hazard curve by the rock's survival.
+    """
+
+    fragility: FragilityUsed
+    measure: dict
+    curves: list
+    about: list
+    results: list
+    intervals: list
+    life: float
+    age: float | None
+    confidence: float
+
+    @property
+    def rates(self) -> np.ndarray:
+        return np.array([r.rate for r in self.results])
+
+    @property
+    def survivals(self) -> np.ndarray | None:
+        return None if self.age is None else survival(self.rates, self.age)
+
+
+def analyse(fragility: FragilityUsed, measure: dict, curves, about, *, life: float, age: float | None = None,
+            confidence: float = 0.95) -> Analysis:
+    """The rate of ``fragility``'s damage state under each hazard curve, with its interval over the
+    fragility's uncertainty (arguments as the attributes of `Analysis`)."""
+    results = [rate(fragility.curve, c) for c in curves]
+    intervals = [rate_range(fragility.variants, c) if fragility.variants else (math.nan, math.nan)
+                 for c in curves]
+    return Analysis(fragility=fragility, measure=dict(measure), curves=list(curves), about=list(about),
+                    results=results, intervals=intervals, life=life, age=age, confidence=confidence)
+
+
+INTEGRATION = ("lambda_F = integral of P(F|x) |d lambda(x)|, the hazard curve log-log interpolated between its "
+               "levels (a power law on each interval) and integrated exactly in closed form; capacities below "
+               "the first level counted at its rate, motions above the last at P(F|x_max) (a lower bound, short "
+               "by at most rate_missing_max)")
+
+
+def dataset(analysis: Analysis, command_line: str = "") -> tuple[list, dict, dict]:
+    """``(coords, variables, attrs)`` of ``NAME.risk.h5`` (`io.results.write_dataset`) and of the
+    API's dataset (`io.datasets.study_dataset`)."""
+    im, f = analysis.measure, analysis.fragility
+    n = max(c.levels.size for c in analysis.curves)
+    grid = density_grid(analysis.curves)
+    coords = [
+        ("curve", np.array([c.name for c in analysis.curves], dtype=object),
+         {"long_name": "hazard curve (site, branch or quantile)"}),
+        ("point", np.arange(n, dtype=np.float64), {"long_name": "level of a hazard curve, in its order"}),
+        ("im", grid, {"units": im["units"], "long_name": f"intensity level: {im['long_name']} (geometric grid "
+                      "over the hazard curves' levels)"}),
+    ]
+    per_curve = ("curve",)
+    padded = {name: np.full((len(analysis.curves), n), np.nan) for name in ("levels", "rates", "parts")}
+    for i, (c, r) in enumerate(zip(analysis.curves, analysis.results, strict=True)):
+        m = c.levels.size
+        padded["levels"][i, :m], padded["rates"][i, :m], padded["parts"][i, :m] = c.levels, c.rates, r.contributions
+    rates = analysis.rates
+    missing = np.array([r.missing for r in analysis.results])
+    intervals = np.array(analysis.intervals, dtype=np.float64).reshape(-1, 2)
+    rate_unit = "1/yr"
+    variables = {
+        "rate": (per_curve, rates, {"units": rate_unit, "long_name": f"annual rate of the damage state {f.damage_state}"
+                                    " (a lower bound where the hazard curve is truncated)"}),
+        "rate_missing_max": (per_curve, missing, {"units": rate_unit, "long_name": "the most that the motions above "
+                                                  "the hazard curve's last level could add: lambda(x_max) (1 - "
+                                                  "P(F|x_max))"}),
+        "rate_lower": (per_curve, intervals[:, 0], {"units": rate_unit, "long_name": "smallest rate over the "
+                                                    "fragility's uncertainty (NaN: none known)"}),
+        "rate_upper": (per_curve, intervals[:, 1], {"units": rate_unit, "long_name": "largest rate over the "
+                                                    "fragility's uncertainty (NaN: none known)"}),
+        "probability_in_life": (per_curve, probability_in(rates, analysis.life),
+                                {"units": "1", "long_name": f"probability of the damage state in {analysis.life:g} "
+                                 "years: 1 - exp(-rate T)"}),
+        "return_period": (per_curve, return_period(rates), {"units": "yr", "long_name": "1 / rate"}),
+        "below_rate": (per_curve, np.array([r.below for r in analysis.results]),
+                       {"units": rate_unit, "long_name": "part of the rate from capacities below the first level "
+                        "(counted at its rate: a lower bound)"}),
+        "hazard_level": (("curve", "point"), padded["levels"], {"units": im["units"], "long_name": "the hazard "
+                         "curve's intensity levels (NaN: past its last)"}),
+        "hazard_rate": (("curve", "point"), padded["rates"], {"units": rate_unit, "long_name": "annual rate of "
+                        "exceeding the level"}),
+        "contribution": (("curve", "point"), padded["parts"], {"units": rate_unit, "long_name": "disaggregation: the "
+                         "part of the rate from motions between this level and the next (at the last level: above "
+                         "it, at P(F|x_max)); they sum to rate"}),
+        "density": (("curve", "im"), np.array([density(f.curve, c, grid) for c in analysis.curves]),
+                    {"units": rate_unit, "long_name": "disaggregation density d rate / d ln(x) = P(F|x) |d lambda / "
+                     "d ln x| (NaN outside the curve's levels)"}),
+        "fragility": (("im",), f.curve(grid), {"units": "1", "long_name": f"P({f.damage_state} | x): {f.form}"}),
+        "curve_source": (per_curve, np.array([a["source"] for a in analysis.about], dtype=object),
+                         {"long_name": "hazard file"}),
+        "curve_kind": (per_curve, np.array([a["kind"] for a in analysis.about], dtype=object),
+                       {"long_name": "OpenQuake's kind: mean, quantile-q, rlz-n (empty: a plain table)"}),
+        "site_lon": (per_curve, np.array([a["lon"] for a in analysis.about], dtype=np.float64),
+                     {"units": "degree", "long_name": "site longitude (NaN: not given)"}),
+        "site_lat": (per_curve, np.array([a["lat"] for a in analysis.about], dtype=np.float64),
+                     {"units": "degree", "long_name": "site latitude (NaN: not given)"}),
+        "investigation_time": (per_curve, np.array([a["investigation_time"] for a in analysis.about],
+                                                   dtype=np.float64),
+                               {"units": "yr", "long_name": "OpenQuake's investigation time of the PoE (NaN: rates "
+                                "given)"}),
+    }
+    if analysis.age is not None:
+        alive = analysis.survivals
+        variables["survival"] = (per_curve, alive, {"units": "1", "long_name": f"probability of standing "
+                                                    f"{analysis.age:g} years: exp(-rate T_age)"})
+        variables["rejected"] = (per_curve, rejected(alive, analysis.confidence).astype(np.int8),
+                                 {"units": "1", "long_name": f"the rock standing rejects the curve at "
+                                  f"{analysis.confidence:.0%} confidence (survival < {1 - analysis.confidence:g})"})
+    attrs = {
+        "title": f"rockslide risk: {f.damage_state} of {f.source} under {len(analysis.curves)} hazard curve(s)",
+        "command_line": command_line,
+        "damage_state": f.damage_state,
+        "fragility_source": f.source,
+        "fragility_form": f.form,
+        "fragility_median": f.median,
+        "fragility_beta": f.beta,
+        "fragility_uncertainty": f.uncertainty,
+        "intensity_measure": im["name"],
+        "intensity_measure_units": im["units"],
+        "intensity_measure_label": im["label"],
+        "intensity_measure_display_unit": im["display_unit"],
+        "intensity_measure_display_scale": im["display_scale"],
+        "service_life": analysis.life,
+        "integration": INTEGRATION,
+    }
+    if analysis.age is not None:
+        attrs.update({"age": analysis.age, "confidence_level": analysis.confidence})
+    return coords, variables, attrs
+
+
+def json_summary(analysis: Analysis) -> dict:
+    """The ``--json`` object: per curve its rate [1/yr] and what follows from it (null for NaN)."""
+    def number(value):
+        value = float(value)
+        return value if math.isfinite(value) else None
+
+    f = analysis.fragility
+    survivals = analysis.survivals
+    curves = []
+    for i, (c, r) in enumerate(zip(analysis.curves, analysis.results, strict=True)):
+        entry = {"curve": c.name, "rate": r.rate, "rate_missing_max": r.missing,
+                 "rate_interval": [number(v) for v in analysis.intervals[i]],
+                 "probability_in_life": float(probability_in(r.rate, analysis.life)),
+                 "return_period": number(return_period(r.rate)), "truncated": truncated(r),
+                 "contributions": {"levels": [float(v) for v in c.levels], "rate": [float(v) for v in r.contributions]}}
+        if survivals is not None:
+            entry.update({"survival": float(survivals[i]),
+                          "rejected": bool(rejected(survivals[i], analysis.confidence))})
+        curves.append(entry)
+    return {"damage_state": f.damage_state, "fragility": {"source": f.source, "form": f.form,
+                                                          "median": number(f.median), "beta": number(f.beta),
+                                                          "uncertainty": f.uncertainty},
+            "intensity_measure": analysis.measure["name"],
+            "units": {"rate": "1/yr", "levels": analysis.measure["units"], "return_period": "yr"},
+            "service_life": analysis.life, "age": analysis.age,
+            "confidence": analysis.confidence if analysis.age is not None else None,
+            "integration": INTEGRATION, "curves": curves}
+
+
+def summary_lines(analysis: Analysis, show) -> list[str]:
+    """The printout: one line per curve, then the warnings of truncation; ``show(x)`` writes a
+    level [SI] in its display unit."""
+    f = analysis.fragility
+    lines = [f"{f.damage_state}: {f.form} from {f.source}"]
+    survivals = analysis.survivals
+    for i, (c, r) in enumerate(zip(analysis.curves, analysis.results, strict=True)):
+        low, high = analysis.intervals[i]
+        interval = f" ({low:.3g} ... {high:.3g})" if math.isfinite(low) else ""
+        text = (f"  {c.name}: {r.rate:.4g} /yr{interval}, return period {float(return_period(r.rate)):.4g} yr, "
+                f"{100 * float(probability_in(r.rate, analysis.life)):.3g} % in {analysis.life:g} yr")
+        if survivals is not None:
+            verdict = "rejected" if rejected(survivals[i], analysis.confidence) else "not rejected"
+            text += (f"; survives {analysis.age:g} yr with probability {survivals[i]:.3g}: {verdict} at "
+                     f"{analysis.confidence:.0%}")
+        lines.append(text)
+        top = int(np.argmax(r.contributions))
+        where = (f"above {show(c.levels[-1])}" if top == c.levels.size - 1 else
+                 f"{show(c.levels[top])} ... {show(c.levels[top + 1])}")
+        lines.append(f"    most from {where} ({100 * r.contributions[top] / r.rate:.3g} %)" if r.rate > 0 else
+                     "    no contribution")
+    return lines
+
+
+def warnings_of(analysis: Analysis, show) -> list[str]:
+    """Truncation and lower-end notes, one per curve that has one."""
+    out = []
+    for c, r in zip(analysis.curves, analysis.results, strict=True):
+        if truncated(r):
+            out.append(f"{c.name}: the hazard curve ends at {show(c.levels[-1])} where P(F) is "
+                       f"{float(analysis.fragility.curve(c.levels[-1])):.3g}: the rate {r.rate:.4g} /yr is a lower "
+                       f"bound; the motions above could add at most {r.missing:.3g} /yr "
+                       f"({100 * r.missing / r.rate:.3g} %); extend the hazard curve to higher levels"
+                       if r.rate > 0 else f"{c.name}: the hazard curve ends at {show(c.levels[-1])} before the "
+                       f"fragility rises; the rate could be up to {r.missing:.3g} /yr")
+        note = below_note(r)
+        if note:
+            out.append(f"{c.name}: {note}")
+    return out

@@ -3,7 +3,7 @@
 **OpenQuake engine** (``oq export hcurves``: ``hazard_curve-<kind>-<IMT>_<calc>.csv``; the
 engine's manual, "Outputs from Classical PSHA")::
 
-    #,,,,,"generated_by='OpenQuake engine 3.18.0', start_date='2023-10-03T06:09:08', checksum=2107362341, kind='mean', investigation_time=1.0, imt='PGA'"
+    #,,,,,"generated_by='OpenQuake engine 3.18.0', start_date=..., kind='mean', investigation_time=1.0, imt='PGA'"
     lon,lat,depth,poe-0.1000000,poe-0.4000000,poe-0.6000000
     0.00000,0.00000,-0.10000,4.553860E-01,5.754042E-02,6.354511E-03
 
