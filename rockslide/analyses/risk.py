@@ -59,6 +59,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.special import log_ndtr, ndtr
 
+from ..errors import CaseError
+
 #: Fraction of the rate below which the hazard curve's ends are of no consequence (no note).
 NEGLIGIBLE = 1e-3
 #: Levels the disaggregation's density is given at (geometric over the hazard curves' levels).
@@ -574,3 +576,28 @@ def warnings_of(analysis: Analysis, show) -> list[str]:
         if note:
             out.append(f"{c.name}: {note}")
     return out
+
+
+_YEARS = {"": 1.0, "yr": 1.0, "y": 1.0, "a": 1.0, "year": 1.0, "years": 1.0, "ka": 1e3, "kyr": 1e3, "ma": 1e6,
+          "myr": 1e6}
+
+
+def parse_years(value, *, source: str) -> float:
+    """A time span in years [yr]: a number, or ``50yr``, ``50 years``, ``24ka``, ``24 kyr``, ``1.2Ma``.
+
+    Raises
+    ------
+    CaseError
+        Naming ``source``: not a positive number of years.
+    """
+    text = str(value).strip()
+    number = text.rstrip("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ ")
+    unit = text[len(number):].strip().lower()
+    try:
+        years = float(number) * _YEARS[unit]
+    except (ValueError, KeyError):
+        raise CaseError(f"cannot read {text!r} as a time in years (e.g. 50, 50yr, 24ka, 1.2Ma)",
+                        source=source) from None
+    if not (math.isfinite(years) and years > 0):
+        raise CaseError(f"must be a positive time, got {text!r}", source=source)
+    return years
