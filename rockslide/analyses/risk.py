@@ -601,3 +601,20 @@ def parse_years(value, *, source: str) -> float:
     if not (math.isfinite(years) and years > 0):
         raise CaseError(f"must be a positive time, got {text!r}", source=source)
     return years
+
+
+def figure(analysis: Analysis):
+    """`plots.risk_figure` of an analysis (levels in the measure's display unit)."""
+    from ..plots import risk_figure
+
+    im, f = analysis.measure, analysis.fragility
+    scale = im["display_scale"]
+    grid = density_grid(analysis.curves)
+    curves = []
+    for c, r in zip(analysis.curves, analysis.results, strict=True):
+        share = density(f.curve, c, grid) * math.log(10.0) / r.rate if r.rate > 0 else np.full(grid.size, np.nan)
+        curves.append({"label": f"{c.name}: λ_F = {r.rate:.3g} /yr", "levels": c.levels / scale, "rates": c.rates,
+                       "share": share})
+    unit = f" [{im['display_unit']}]" if im["display_unit"] else ""
+    return risk_figure(curves, grid / scale, f.curve(grid), xlabel=f"{im['label']}{unit}", state=f.damage_state,
+                       title=f"{f.damage_state}: {f.form} ({f.source})")
