@@ -18,6 +18,7 @@ import h5py
 import numpy as np
 import pytest
 from conftest import invoke, one_line_error
+from scipy import optimize, stats
 
 import rockslide
 from rockslide.analyses import risk as rk
@@ -90,11 +91,16 @@ def test_disaggregation_sums_to_the_rate_and_peaks_near_the_median():
     curve = power_law(60, low=0.01, high=10.0)
     result = rk.rate(rk.Lognormal(THETA * G, BETA), curve)
     assert result.contributions.sum() == pytest.approx(result.rate, rel=1e-12)
-    # the integrand of a power law times a lognormal density peaks at theta exp(-k beta^2) (the
-    # contribution d lambda_F / d ln x is proportional to a lognormal at that median)
-    peak = THETA * math.exp(-K * BETA ** 2)
+    # the integrand P(F|x) k lambda(x) = k k0 Phi(z) exp(-k (mu + beta z)) peaks where
+    # phi(z) = k beta Phi(z) (its derivative in z vanishes)
+    z = optimize.brentq(lambda z: stats.norm.pdf(z) - K * BETA * stats.norm.cdf(z), -5.0, 5.0)
+    peak = THETA * math.exp(BETA * z)
     top = int(np.argmax(result.contributions[:-1]))
-    assert curve.levels[top] / G <= peak * 1.13 and curve.levels[top + 1] / G >= peak / 1.13
+    ratio = curve.levels[1] / curve.levels[0]
+    assert curve.levels[top] / G / ratio <= peak <= curve.levels[top + 1] / G * ratio
+    fine = np.geomspace(0.2, 1.0, 4001) * G
+    assert fine[np.argmax(rk.density(rk.Lognormal(THETA * G, BETA), curve, fine))] / G == pytest.approx(peak,
+                                                                                                        rel=1e-3)
     grid = np.geomspace(0.011, 9.9, 2000) * G
     dens = rk.density(rk.Lognormal(THETA * G, BETA), curve, grid)
     integral = np.sum(0.5 * (dens[1:] + dens[:-1]) * np.diff(np.log(grid)))
@@ -239,7 +245,7 @@ def test_fragility_file_fit_stripes_and_interval(tmp_path):
 
 
 def test_command_writes_file_figure_and_json(tmp_path):
-    levels = np.geomspace(0.01, 3.0, 40)
+    levels = np.geomspace(0.1, 3.0, 40)
     csv = openquake_csv(tmp_path / "hazard_curve-mean-PGA_1.csv", levels,
                         [-np.expm1(-K0 * levels ** -K * 50.0), -np.expm1(-2 * K0 * levels ** -K * 50.0)],
                         sites=[(10.0, 45.0), (10.5, 45.0)])

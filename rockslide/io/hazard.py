@@ -188,8 +188,9 @@ def read_hazard(path, *, units: str | None = None) -> list[HazardTable]:
     except OSError as exc:
         raise CaseError(f"cannot read the file: {exc.strerror or exc}", source=source) from None
     lines = text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
-    first = next((line for line in lines if line.strip()), "")
-    if first.lstrip().startswith("#") and "investigation_time" in first:
+    filled = [line.strip() for line in lines if line.strip()][:2]
+    if filled and filled[0].startswith("#") and ("investigation_time" in filled[0] or "imt=" in filled[0]
+                                                 or filled[-1].replace(" ", "").startswith("lon,lat,")):
         return _read_openquake(lines, source)
     return _read_plain(lines, source, units)
 
