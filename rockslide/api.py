@@ -298,9 +298,10 @@ def risk(fragility: str | Path | None = None, hazard=None, *, damage: str = "ove
 
     Parameters
     ----------
-    fragility : str or Path, optional
-        A ``NAME.fragility.h5`` of `fragility` (its lognormal fit, or with ``stripes`` its empirical
-        fractions). Without it, ``median`` and ``beta`` give a lognormal.
+    fragility : str, Path or xarray.Dataset, optional
+        A ``NAME.fragility.h5`` of `fragility`, or the dataset `fragility` returned (its lognormal
+        fit, or with ``stripes`` its empirical fractions). Without it, ``median`` and ``beta`` give
+        a lognormal.
     hazard : str, Path, sequence of them, or mapping
         Hazard files (OpenQuake's hazard-curve CSV export: one curve per site; or a plain table of
         level and annual rate), or ``{name: (levels, rates)}`` with levels in SI [m/s^2, m/s] and
@@ -381,9 +382,11 @@ def _risk_fragility(path, *, damage, stripes, median, beta, im):
                                 [], ""), measure
     if median is not None or beta is not None:
         raise CaseError("give either a fragility file or --median/--beta, not both", source="--median/--beta")
-    ds = read_result(path)
+    given = hasattr(path, "data_vars")
+    ds = path if given else read_result(path)
+    path = "the fragility dataset given" if given else str(path)
     if isinstance(ds, RunResult) or "damage_state" not in ds.coords:
-        raise CaseError("not a fragility file (NAME.fragility.h5 of 'rockslide fragility')", source=str(path))
+        raise CaseError("not a fragility file (NAME.fragility.h5 of 'rockslide fragility')", source=path)
     measure = fr.parse_im(ds.attrs["intensity_measure"])
     states = [str(s) for s in ds["damage_state"].values]
     if damage not in states:
