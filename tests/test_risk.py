@@ -268,6 +268,8 @@ def test_command_writes_file_figure_and_json(tmp_path):
     text = invoke("risk", frag, "--hazard", csv, "--overwrite", "--no-plot")
     assert text.exit_code == 0 and "return period" in text.stdout
     assert not (tmp_path / "block.risk.png").exists()
+    redrawn = invoke("plot", tmp_path / "block.risk.h5", "-o", tmp_path / "again.png")
+    assert redrawn.exit_code == 0 and (tmp_path / "again.png").stat().st_size > 10_000
 
 
 def test_truncation_warning_on_the_command_line(tmp_path):

@@ -604,17 +604,27 @@ def parse_years(value, *, source: str) -> float:
 
 
 def figure(analysis: Analysis):
-    """`plots.risk_figure` of an analysis (levels in the measure's display unit)."""
+    """`plots.risk_figure` of an analysis: `stored_figure` of its dataset."""
+    return stored_figure(*dataset(analysis))
+
+
+def stored_figure(coords, variables, attrs):
+    """`plots.risk_figure` of a risk file's ``(coords, variables, attrs)`` (`dataset`, or a file read
+    back by `io.results.read_dataset`), levels in the measure's display unit."""
     from ..plots import risk_figure
 
-    im, f = analysis.measure, analysis.fragility
-    scale = im["display_scale"]
-    grid = density_grid(analysis.curves)
+    names = [str(n) for n in dict((name, values) for name, values, _ in coords)["curve"]]
+    grid = np.asarray(dict((name, values) for name, values, _ in coords)["im"], dtype=np.float64)
+    value = {name: np.asarray(v[1]) for name, v in variables.items()}
+    scale, unit = float(attrs["intensity_measure_display_scale"]), str(attrs["intensity_measure_display_unit"])
     curves = []
-    for c, r in zip(analysis.curves, analysis.results, strict=True):
-        share = density(f.curve, c, grid) * math.log(10.0) / r.rate if r.rate > 0 else np.full(grid.size, np.nan)
-        curves.append({"label": f"{c.name}: λ_F = {r.rate:.3g} /yr", "levels": c.levels / scale, "rates": c.rates,
-                       "share": share})
-    unit = f" [{im['display_unit']}]" if im["display_unit"] else ""
-    return risk_figure(curves, grid / scale, f.curve(grid), xlabel=f"{im['label']}{unit}", state=f.damage_state,
-                       title=f"{f.damage_state}: {f.form} ({f.source})")
+    for i, name in enumerate(names):
+        kept = np.isfinite(value["hazard_level"][i])
+        lam = float(value["rate"][i])
+        share = value["density"][i] * math.log(10.0) / lam if lam > 0 else np.full(grid.size, np.nan)
+        curves.append({"label": f"{name}: λ_F = {lam:.3g} /yr", "levels": value["hazard_level"][i][kept] / scale,
+                       "rates": value["hazard_rate"][i][kept], "share": share})
+    state = str(attrs["damage_state"])
+    return risk_figure(curves, grid / scale, value["fragility"], xlabel=f"{attrs['intensity_measure_label']}"
+                       + (f" [{unit}]" if unit else ""), state=state,
+                       title=f"{state}: {attrs['fragility_form']} ({attrs['fragility_source']})")

@@ -162,6 +162,7 @@ def plot(result_file, output, time_shift, window, crop, dpi, overwrite):
         rockslide plot out/example.h5 --window 6.6:7.2 -o out/example-impact.pdf
         rockslide plot out/example.sweep.h5
         rockslide plot out/example.fragility.h5
+        rockslide plot out/example.risk.h5
     """
     from ..io import results
     from ..units import parse_quantity
@@ -191,6 +192,16 @@ def plot(result_file, output, time_shift, window, crop, dpi, overwrite):
             raise CaseError("applies to result files, not to fragility files", source=given[0])
         stored = results.read_dataset(result_file, format=results.FRAGILITY_FORMAT)
         save_figure(stored_fragility_figure(stored), png, overwrite=replace, dpi=dpi)
+    elif kind == results.RISK_FORMAT:
+        from ..analyses.risk import stored_figure as stored_risk_figure
+        from ..plots import save_figure
+        given = [option for option, value, default in (("--time-shift", shift, 0.0), ("--window", zoom, "auto"),
+                                                       ("--crop", span, "auto")) if value != default]
+        if given:
+            raise CaseError("applies to result files, not to risk files", source=given[0])
+        stored = results.read_dataset(result_file, format=results.RISK_FORMAT)
+        save_figure(stored_risk_figure(stored.coords, stored.variables, stored.attrs), png, overwrite=replace,
+                    dpi=dpi)
     else:
         stored = results.read_result(result_file)
         times = stored.result.ground_time
