@@ -270,6 +270,9 @@ def test_command_writes_file_figure_and_json(tmp_path):
     assert not (tmp_path / "block.risk.png").exists()
     redrawn = invoke("plot", tmp_path / "block.risk.h5", "-o", tmp_path / "again.png")
     assert redrawn.exit_code == 0 and (tmp_path / "again.png").stat().st_size > 10_000
+    described = invoke("info", tmp_path / "block.risk.h5", "--json")
+    assert described.exit_code == 0
+    assert [c["rate"] for c in json.loads(described.stdout)["rates"].values()] == pytest.approx(rates, rel=1e-12)
 
 
 def test_truncation_warning_on_the_command_line(tmp_path):
