@@ -178,27 +178,18 @@ def plot(result_file, output, time_shift, window, crop, dpi, overwrite):
     if kind == results.SWEEP_FORMAT:
         from ..analyses.sweep import stored_figure
         from ..plots import save_figure
-        given = [option for option, value, default in (("--time-shift", shift, 0.0), ("--window", zoom, "auto"),
-                                                       ("--crop", span, "auto")) if value != default]
-        if given:
-            raise CaseError("applies to result files, not to sweep files", source=given[0])
+        _only_for_results(shift, zoom, span, "sweep files")
         save_figure(stored_figure(results.read_sweep(result_file)), png, overwrite=replace, dpi=dpi)
     elif kind == results.FRAGILITY_FORMAT:
         from ..analyses.fragility import stored_figure as stored_fragility_figure
         from ..plots import save_figure
-        given = [option for option, value, default in (("--time-shift", shift, 0.0), ("--window", zoom, "auto"),
-                                                       ("--crop", span, "auto")) if value != default]
-        if given:
-            raise CaseError("applies to result files, not to fragility files", source=given[0])
+        _only_for_results(shift, zoom, span, "fragility files")
         stored = results.read_dataset(result_file, format=results.FRAGILITY_FORMAT)
         save_figure(stored_fragility_figure(stored), png, overwrite=replace, dpi=dpi)
     elif kind == results.RISK_FORMAT:
         from ..analyses.risk import stored_figure as stored_risk_figure
         from ..plots import save_figure
-        given = [option for option, value, default in (("--time-shift", shift, 0.0), ("--window", zoom, "auto"),
-                                                       ("--crop", span, "auto")) if value != default]
-        if given:
-            raise CaseError("applies to result files, not to risk files", source=given[0])
+        _only_for_results(shift, zoom, span, "risk files")
         stored = results.read_dataset(result_file, format=results.RISK_FORMAT)
         save_figure(stored_risk_figure(stored.coords, stored.variables, stored.attrs), png, overwrite=replace,
                     dpi=dpi)
@@ -213,6 +204,14 @@ def plot(result_file, output, time_shift, window, crop, dpi, overwrite):
                                     f"{first:g} to {last:g} s (in the figure's time)", source=option)
         _draw(stored.result, stored.name, png, overwrite=replace, time_shift=shift, zoom=zoom, crop=span, dpi=dpi)
     click.echo(f"redrew {png}")
+
+
+def _only_for_results(shift, zoom, span, what: str) -> None:
+    """Refuse ``--time-shift``, ``--window`` and ``--crop`` given for ``what`` (a study's file)."""
+    given = [option for option, value, default in (("--time-shift", shift, 0.0), ("--window", zoom, "auto"),
+                                                   ("--crop", span, "auto")) if value != default]
+    if given:
+        raise CaseError(f"applies to result files, not to {what}", source=given[0])
 
 
 def _time_range(text: str, option: str, words: dict):
