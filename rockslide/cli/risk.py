@@ -57,8 +57,8 @@ def risk(fragility_file, hazard_files, damage, stripes, median, beta, im_text, l
 
     \b
     Example:
-        rockslide risk out/example.fragility.h5 --hazard hazard_curve-mean-PGA_42.csv
-        rockslide risk --median 0.5g --beta 0.4 --hazard site.csv --age 24ka
+        rockslide risk out/example.fragility.h5 --hazard example/hazard-example-PGA.csv
+        rockslide risk --median 0.5g --beta 0.4 --hazard example/hazard-example-PGA.csv --age 24ka
     """
     from .. import api
     from ..analyses import fragility as fr

@@ -115,7 +115,8 @@ def example(folder, overwrite):
     the project's own synthetic records, and those two records (synthetic_kt_h.at2,
     synthetic_kt_v.at2); suite-synthetic.yaml, a suite of six synthetic record pairs (in
     suite-synthetic/) for 'rockslide fragility'; spectrum-one-sine.yaml, a block under a one-sine
-    pulse for overturning spectra. The examples of every command's --help work anywhere after it.
+    pulse for overturning spectra; hazard-example-PGA.csv, a made-up hazard curve in OpenQuake's
+    layout for 'rockslide risk'. The examples of every command's --help work anywhere after it.
 
     \b
     Example:
