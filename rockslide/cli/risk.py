@@ -55,10 +55,13 @@ def risk(fragility_file, hazard_files, damage, stripes, median, beta, im_text, l
     with --age a rock's survival probability and whether it rejects the curve. A hazard curve that
     ends where the fragility still rises gives a lower bound, and says by how much at most.
 
+    With a fragility file of 'rockslide fragility' (its --im pga):
+    rockslide risk out/example.fragility.h5 --hazard example/hazard-example-PGA.csv
+
     \b
     Example:
-        rockslide risk out/example.fragility.h5 --hazard example/hazard-example-PGA.csv
         rockslide risk --median 0.5g --beta 0.4 --hazard example/hazard-example-PGA.csv --age 24ka
+        rockslide risk --median 0.5g --beta 0.4 --hazard example/hazard-example-PGA.csv --name site --json
     """
     from .. import api
     from ..analyses import fragility as fr

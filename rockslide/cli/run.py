@@ -162,7 +162,6 @@ def plot(result_file, output, time_shift, window, crop, dpi, overwrite):
         rockslide plot out/example.h5 --window 6.6:7.2 -o out/example-impact.pdf
         rockslide plot out/example.sweep.h5
         rockslide plot out/example.fragility.h5
-        rockslide plot out/example.risk.h5
     """
     from ..io import results
     from ..units import parse_quantity
