@@ -319,3 +319,24 @@ def test_bad_input_is_one_line(tmp_path):
     one_line_error(invoke("risk", rocking, "--hazard", good), "PGA / (g tan", "--im")
     with pytest.raises(CaseError, match="not monotonic"):
         rockslide.risk(hazard={"up": ([1.0, 2.0], [1e-3, 2e-3])}, median="0.5g", beta=0.4)
+
+
+def test_a_file_the_openquake_engine_wrote():
+    """benchmarks/openquake_demo: OpenQuake engine 3.26.2's own export (see its README); the rates
+    are recomputed here from the file's text with the csv module."""
+    import csv
+
+    from conftest import REPO
+
+    path = REPO / "benchmarks" / "openquake_demo" / "hazard_curve-mean-PGA_1.csv"
+    rows = list(csv.reader(path.read_text().splitlines()))
+    header, sites = rows[1], rows[2:]
+    levels = [float(name.removeprefix("poe-")) for name in header[3:]]
+    tables = hz.read_hazard(path)
+    assert len(tables) == len(sites) == 2
+    for table, site in zip(tables, sites, strict=True):
+        assert table.kind == "mean" and table.investigation_time == 50.0 and table.measure == hz.Measure("pga")
+        assert table.levels == pytest.approx(np.array(levels) * G, rel=1e-15)
+        assert table.rates == pytest.approx([-math.log(1.0 - float(p)) / 50.0 for p in site[3:]], rel=1e-12)
+    ds = rockslide.risk(hazard=path, median="0.3g", beta=0.4)
+    assert ds.rate.values[0] > 0 and ds.contribution.values[0].sum() == pytest.approx(ds.rate.values[0])
