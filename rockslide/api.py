@@ -406,10 +406,17 @@ def _risk_fragility(path, *, damage, stripes, median, beta, im):
         raise CaseError(f"no lognormal fit for {damage!r} ({str(at['fit_note'].values)}); use --stripes for its "
                         "empirical fractions", source=str(path))
     bounds = [float(at[f"{name}_{side}"]) for name in ("median", "beta") for side in ("lower", "upper")]
-    variants, uncertainty = [], ""
+    variants, uncertainty, level = [], "", float(ds.attrs.get("confidence_level", 0.95))
+    if "bootstrap_median" in at:
+        pairs = np.column_stack([at["bootstrap_median"].values, at["bootstrap_beta"].values]).astype(np.float64)
+        pairs = pairs[np.isfinite(pairs).all(axis=1)]
+        if len(pairs) >= 2:
+            uncertainty = (f"the {level:.0%} percentile interval of the rate over the fits of the {len(pairs)} "
+                           "bootstrap resamples of the records")
+            return rk.FragilityUsed(rk.Lognormal(theta, b), damage, path, "lognormal fit", theta, b,
+                                    [rk.Lognormal(m, s) for m, s in pairs], uncertainty, level), measure
     if all(math.isfinite(v) for v in bounds):
         variants = rk.lognormal_box(bounds[:2], bounds[2:])
-        level = float(ds.attrs.get("confidence_level", 0.95))
         uncertainty = (f"the range of the rate over the {level:.0%} bootstrap intervals of the median "
                        f"({measure.show(bounds[0])} ... {measure.show(bounds[1])}) and of beta ({bounds[2]:.3g} ... "
                        f"{bounds[3]:.3g}), on a grid over their rectangle (marginal intervals: a wide range)")

@@ -200,8 +200,9 @@ def test_plain_table_with_and_without_header(tmp_path):
     assert plain_g.hazard_level.values[0] == pytest.approx(np.array([0.05, 0.1, 0.2]) * G)
 
 
-def fragility_file(path, *, median=0.5 * G, beta=0.4, interval=True, im="pga"):
-    """A fragility file with the variables `rockslide fragility` writes that `risk` reads."""
+def fragility_file(path, *, median=0.5 * G, beta=0.4, interval=True, im="pga", bootstrap=None):
+    """A fragility file with the variables `rockslide fragility` writes that `risk` reads
+    (``bootstrap``: ``(medians, betas)`` of resamples, for the first state)."""
     levels = np.array([0.2, 0.4, 0.6, 0.8, 1.0]) * G
     fraction = np.array([[0.0, 0.3, 0.7, 0.9, 1.0], [0.2, 0.6, 0.9, 1.0, 1.0]])
     per_state = ("damage_state",)
@@ -215,6 +216,11 @@ def fragility_file(path, *, median=0.5 * G, beta=0.4, interval=True, im="pga"):
             variables[f"{name}_{side}"] = (per_state, np.array([value * factor] * 2), {})
     coords = [("level", levels, {"units": "m/s^2"}),
               ("damage_state", np.array(["overturn", "rotation>0.5alpha"], dtype=object), {})]
+    if bootstrap is not None:
+        n = len(bootstrap[0])
+        coords.append(("resample", np.arange(n, dtype=np.float64), {}))
+        for name, values in zip(("median", "beta"), bootstrap, strict=True):
+            variables[f"bootstrap_{name}"] = (("damage_state", "resample"), np.array([values, [np.nan] * n]), {})
     results.write_dataset(path, coords, variables, format=results.FRAGILITY_FORMAT,
                           attrs={"intensity_measure": im, "confidence_level": 0.95})
     return path
@@ -242,6 +248,19 @@ def test_fragility_file_fit_stripes_and_interval(tmp_path):
         lam = K0 * np.exp(u) ** -K
         expected += (pb - pa) / (u[-1] - u[0]) * np.sum(0.5 * (lam[1:] + lam[:-1]) * np.diff(u))
     assert float(stripes.rate[0]) == pytest.approx(expected, rel=1e-6)
+
+
+def test_bootstrap_resamples_give_a_percentile_interval(tmp_path):
+    rng = np.random.default_rng(5)
+    medians, betas = 0.5 * np.exp(rng.normal(0.0, 0.1, 400)), rng.uniform(0.3, 0.5, 400)
+    frag = fragility_file(tmp_path / "boot.fragility.h5", bootstrap=(medians * G, betas))
+    x = np.geomspace(1e-3, 1e2, 200)
+    ds = rockslide.risk(frag, {"power law": (x * G, K0 * x ** -K)})
+    each = [closed_form(theta=m, beta=b) for m, b in zip(medians, betas, strict=True)]
+    low, high = np.percentile(each, [2.5, 97.5])
+    assert float(ds.rate_lower[0]) == pytest.approx(low, rel=1e-6)
+    assert float(ds.rate_upper[0]) == pytest.approx(high, rel=1e-6)
+    assert "400 bootstrap resamples" in ds.attrs["fragility_uncertainty"]
 
 
 def test_command_writes_file_figure_and_json(tmp_path):

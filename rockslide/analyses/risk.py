@@ -250,11 +250,16 @@ def rate(fragility, curve: HazardCurve) -> Rate:
                 below=float(p[0] * lam[0]))
 
 
-def rate_range(fragilities, curve: HazardCurve) -> tuple[float, float]:
-    """The smallest and largest ``lambda_F`` [1/yr] over ``fragilities`` (e.g. the fits of bootstrap
-    resamples, or a grid over the intervals of median and beta)."""
-    values = [rate(f, curve).rate for f in fragilities]
-    return float(min(values)), float(max(values))
+def rate_range(fragilities, curve: HazardCurve, confidence: float | None = None) -> tuple[float, float]:
+    """The range of ``lambda_F`` [1/yr] over ``fragilities``: with ``confidence``, its central
+    percentile interval (the fragilities are samples, e.g. the fits of bootstrap resamples); without,
+    the smallest and largest (e.g. over a grid spanning the intervals of median and beta)."""
+    values = np.array([rate(f, curve).rate for f in fragilities])
+    if confidence is None:
+        return float(values.min()), float(values.max())
+    tails = 50.0 * (1.0 - confidence)
+    low, high = np.percentile(values, (tails, 100.0 - tails))
+    return float(low), float(high)
 
 
 def lognormal_box(median_interval, beta_interval, points: int = 9) -> list[Lognormal]:
@@ -345,6 +350,9 @@ class FragilityUsed:
         Fragilities spanning its uncertainty (`rate_range` over them); empty: none known.
     uncertainty : str
         How ``variants`` were made ("" without).
+    variants_level : float or None
+        The ``variants`` are samples: the rate's interval is their central percentile interval of
+        this level. None: the rate's smallest and largest over them.
     """
 
     curve: object
@@ -355,6 +363,7 @@ class FragilityUsed:
     beta: float = math.nan
     variants: list = None
     uncertainty: str = ""
+    variants_level: float | None = None
 
 
 @dataclass
@@ -404,8 +413,8 @@ def analyse(fragility: FragilityUsed, measure: dict, curves, about, *, life: flo
     """The rate of ``fragility``'s damage state under each hazard curve, with its interval over the
     fragility's uncertainty (arguments as the attributes of `Analysis`)."""
     results = [rate(fragility.curve, c) for c in curves]
-    intervals = [rate_range(fragility.variants, c) if fragility.variants else (math.nan, math.nan)
-                 for c in curves]
+    intervals = [rate_range(fragility.variants, c, fragility.variants_level) if fragility.variants
+                 else (math.nan, math.nan) for c in curves]
     return Analysis(fragility=fragility, measure=dict(measure), curves=list(curves), about=list(about),
                     results=results, intervals=intervals, life=life, age=age, confidence=confidence)
 
