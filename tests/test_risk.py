@@ -5,8 +5,9 @@ Closed forms (independent of the code): a power-law hazard curve ``lambda(x) = k
 lognormal fragility give ``lambda_F = k0 theta^-k exp(k^2 beta^2 / 2)`` (the expectation of
 ``k0 C^-k`` for a lognormal capacity C); a step fragility at theta gives ``lambda(theta)``.
 The OpenQuake files are written here in the layout the engine's manual shows ("Outputs from
-Classical PSHA": one comment line, ``lon,lat,depth,poe-<IML>...``, one row per site); the engine
-itself is not installed in the test environment.
+Classical PSHA": one comment line, ``lon,lat,depth,poe-<IML>...``, one row per site), and one file
+is the engine's own output (benchmarks/openquake_demo: OpenQuake engine 3.26.2, run once outside
+the test environment, which does not have the engine).
 """
 
 from __future__ import annotations
