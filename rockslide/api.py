@@ -292,7 +292,7 @@ def ensemble(case: Case | Mapping | str | Path, n: int = 200, *, seed: int = 1,
 def risk(fragility: str | Path | None = None, hazard=None, *, damage: str = "overturn", stripes: bool = False,
          median: str | float | None = None, beta: float | None = None, im: str = "pga",
          life: str | float = 50.0, age: str | float | None = None, confidence: float = 0.95,
-         hazard_units: str | None = None):
+         hazard_units: str | None = None, drop_zero_poe: bool = False):
     """The annual rate of a damage state at a site: a fragility integrated over hazard curves, as
     ``rockslide risk`` (`analyses.risk`; docs/risk.md).
 
@@ -324,6 +324,10 @@ def risk(fragility: str | Path | None = None, hazard=None, *, damage: str = "ove
         have toppled with more than 95 % probability).
     hazard_units : str, optional
         The unit of a plain table's levels when its header does not say (default g, cm/s for PGV).
+    drop_zero_poe : bool
+        End each hazard curve at its last positive PoE (rate): OpenQuake writes 0 where the PoE is
+        below its precision. The rate is then a lower bound (``rate_missing_max`` says by how much
+        at most). Without it a PoE of 0 is refused.
 
     Returns
     -------
@@ -339,17 +343,19 @@ def risk(fragility: str | Path | None = None, hazard=None, *, damage: str = "ove
     from .io import datasets
 
     analysis = risk_analysis(fragility, hazard, damage=damage, stripes=stripes, median=median, beta=beta, im=im,
-                             life=life, age=age, confidence=confidence, hazard_units=hazard_units)
+                             life=life, age=age, confidence=confidence, hazard_units=hazard_units,
+                             drop_zero_poe=drop_zero_poe)
     return datasets.study_dataset(*rk.dataset(analysis))
 
 
 def risk_analysis(fragility=None, hazard=None, *, damage: str = "overturn", stripes: bool = False, median=None,
-                  beta=None, im: str = "pga", life=50.0, age=None, confidence: float = 0.95, hazard_units=None):
+                  beta=None, im: str = "pga", life=50.0, age=None, confidence: float = 0.95, hazard_units=None,
+                  drop_zero_poe: bool = False):
     """`risk`'s `analyses.risk.Analysis` (for the command's printout and figure); same arguments."""
     from .analyses import risk as rk
 
     used, measure = _risk_fragility(fragility, damage=damage, stripes=stripes, median=median, beta=beta, im=im)
-    curves, about = _hazard_curves(hazard, measure, hazard_units)
+    curves, about = _hazard_curves(hazard, measure, hazard_units, drop_zero_poe)
     if not 0.0 < float(confidence) < 1.0:
         raise CaseError(f"must be within 0 and 1 (e.g. 0.95), got {confidence!r}", source="--confidence")
     years = rk.parse_years(life, source="--life")
@@ -424,7 +430,7 @@ def _risk_fragility(path, *, damage, stripes, median, beta, im):
                             uncertainty), measure
 
 
-def _hazard_curves(hazard, measure, units):
+def _hazard_curves(hazard, measure, units, drop_zeros: bool):
     """`analyses.risk.HazardCurve` s from `risk`'s ``hazard`` (files or arrays), checked against the
     fragility's ``measure``; and what is known of each (file, kind, site)."""
     from .analyses import risk as rk
@@ -444,7 +450,7 @@ def _hazard_curves(hazard, measure, units):
     else:
         for path in [hazard] if isinstance(hazard, (str, Path)) else hazard:
             tables += [hz.matching(t, measure.name, measure.period, measure.kind, measure.label)
-                       for t in hz.read_hazard(path, units=units)]
+                       for t in hz.read_hazard(path, units=units, drop_zeros=drop_zeros)]
     names = [t.name for t in tables]
     curves, about = [], []
     for t in tables:

@@ -190,6 +190,20 @@ def test_spectral_acceleration_and_pgv_units(tmp_path):
     assert ds.hazard_level.values[0] == pytest.approx([0.05, 0.10, 0.20])      # cm/s -> m/s
 
 
+def test_zeros_at_the_top_of_a_curve_only_with_drop_zero_poe(tmp_path):
+    # OpenQuake writes 0.000000E+00 where the PoE is below its precision (the manual's example)
+    path = openquake_csv(tmp_path / "z.csv", [0.1, 0.2, 0.4, 0.8, 1.6], [[0.3, 0.1, 0.01, 0.0, 0.0]])
+    with pytest.raises(CaseError, match="--drop-zero-poe"):
+        rockslide.risk(hazard=path, median="0.5g", beta=0.4)
+    ds = rockslide.risk(hazard=path, median="0.5g", beta=0.4, drop_zero_poe=True)
+    assert np.isfinite(ds.hazard_level.values[0]).sum() == 3
+    assert ds.hazard_rate.values[0][:3] == pytest.approx(-np.log1p(-np.array([0.3, 0.1, 0.01])) / 50.0)
+    assert float(ds.rate_missing_max[0]) > 0                       # ends at 0.4 g: P(F) < 1 there
+    inside = openquake_csv(tmp_path / "in.csv", [0.1, 0.2, 0.4], [[0.3, 0.0, 0.01]])
+    with pytest.raises(CaseError, match="poe-0.2000000"):
+        rockslide.risk(hazard=inside, median="0.5g", beta=0.4, drop_zero_poe=True)
+
+
 def test_plain_table_with_and_without_header(tmp_path):
     plain = tmp_path / "site.csv"
     plain.write_text("# a site\nPGA [gal], rate\n50, 1e-2\n100, 2e-3\n200, 3e-4\n")

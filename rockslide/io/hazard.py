@@ -157,7 +157,7 @@ def curve_problem(levels, rates) -> str:
     return ""
 
 
-def read_hazard(path, *, units: str | None = None) -> list[HazardTable]:
+def read_hazard(path, *, units: str | None = None, drop_zeros: bool = False) -> list[HazardTable]:
     """The hazard curves of a file: OpenQuake's CSV export (one per site), or a plain table (one).
 
     Parameters
@@ -166,6 +166,10 @@ def read_hazard(path, *, units: str | None = None) -> list[HazardTable]:
     units : str, optional
         The unit of a plain table's levels when its header does not say (``g``, ``gal``, ``cm/s``);
         default OpenQuake's (g, or cm/s for PGV).
+    drop_zeros : bool
+        End each curve at its last positive PoE or rate: the levels above it, where the PoE is 0
+        (OpenQuake writes 0 below its precision), are left out (the rate is then a lower bound,
+        and says by how much at most). A 0 below a positive value is refused still.
 
     Raises
     ------
@@ -191,11 +195,17 @@ def read_hazard(path, *, units: str | None = None) -> list[HazardTable]:
     filled = [line.strip() for line in lines if line.strip()][:2]
     if filled and filled[0].startswith("#") and ("investigation_time" in filled[0] or "imt=" in filled[0]
                                                  or filled[-1].replace(" ", "").startswith("lon,lat,")):
-        return _read_openquake(lines, source)
-    return _read_plain(lines, source, units)
+        return _read_openquake(lines, source, drop_zeros)
+    return _read_plain(lines, source, units, drop_zeros)
 
 
-def _read_openquake(lines: list[str], source: str) -> list[HazardTable]:
+def _without_top_zeros(values: np.ndarray) -> int:
+    """How many leading values to keep: all but the zeros at the end."""
+    positive = np.flatnonzero(values != 0)
+    return int(positive[-1]) + 1 if positive.size else 0
+
+
+def _read_openquake(lines: list[str], source: str, drop_zeros: bool) -> list[HazardTable]:
     numbered = [(n, line) for n, line in enumerate(lines, 1) if line.strip()]
     (_, comment), rest = numbered[0], numbered[1:]
     fields = {key: value.strip("'\"") for key, value in _FIELD.findall(comment)}
@@ -243,19 +253,20 @@ def _read_openquake(lines: list[str], source: str) -> list[HazardTable]:
         except ValueError:
             raise CaseError(f"not numbers: {line.strip()[:60]!r}", source=source, field=where) from None
         poe = np.array(values[first_poe:])
-        bad = ~((poe > 0) & (poe < 1))
+        kept = _without_top_zeros(poe) if drop_zeros else poe.size
+        bad = ~((poe[:kept] > 0) & (poe[:kept] < 1))
         if bad.any():
             i = int(np.argmax(bad))
             raise CaseError(f"PoE {poe[i]:g} at {level_columns[i]}: a probability of exceedance must be "
                             "strictly between 0 and 1 (1 is an infinite rate, 0 has no logarithm to interpolate; "
-                            "leave those levels out or compute the curve over a narrower range)",
-                            source=source, field=where)
+                            "leave those levels out, or end each curve at its last positive PoE with "
+                            "--drop-zero-poe)", source=source, field=where)
         site = (values[0], values[1], values[2] if first_poe == 3 else math.nan)
         name = kind or "curve"
         curves.append(HazardTable(name=f"{name} at {site[0]:g},{site[1]:g}", measure=measure,
-                                  levels=np.array(levels) * scale, rates=rate_from_poe(poe, years),
+                                  levels=np.array(levels[:kept]) * scale, rates=rate_from_poe(poe[:kept], years),
                                   source=source, kind=kind, investigation_time=years, site=site))
-        problem = curve_problem(levels, curves[-1].rates)
+        problem = curve_problem(levels[:kept], curves[-1].rates)
         if problem:
             raise CaseError(f"{problem} (levels in {display_unit})", source=source, field=where)
     if not curves:
@@ -263,7 +274,7 @@ def _read_openquake(lines: list[str], source: str) -> list[HazardTable]:
     return curves
 
 
-def _read_plain(lines: list[str], source: str, units: str | None) -> list[HazardTable]:
+def _read_plain(lines: list[str], source: str, units: str | None, drop_zeros: bool) -> list[HazardTable]:
     rows, header, header_line = [], None, 0
     for line_number, line in enumerate(lines, 1):
         text = line.split("#", 1)[0].strip()
@@ -293,7 +304,8 @@ def _read_plain(lines: list[str], source: str, units: str | None) -> list[Hazard
                                 source=source, field=f"line {header_line}")
             unit = header_unit
     table = np.array(rows, dtype=np.float64).reshape(-1, 2)
-    levels, rates = table[:, 0], table[:, 1]
+    kept = _without_top_zeros(table[:, 1]) if drop_zeros else len(table)
+    levels, rates = table[:kept, 0], table[:kept, 1]
     return [_plain_table(source, measure, levels, rates, unit)]
 
 
