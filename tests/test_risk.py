@@ -66,6 +66,30 @@ def test_result_does_not_depend_on_the_sampling_of_a_power_law():
         assert coarse == pytest.approx(fine, rel=1e-6)
 
 
+def test_a_curved_hazard_curve_against_quadrature_of_eq_1():
+    # eq. (1) as written, P(F|x) |d lambda / d ln x| integrated by scipy's adaptive quadrature over
+    # each interval of a curve whose log-log slope changes from 0.5 to 6 (an OpenQuake-like shape),
+    # plus the motions above the last level at P(F|x_max): independent of the by-parts closed forms
+    from scipy import integrate
+
+    x = np.array([0.01, 0.02, 0.05, 0.1, 0.2, 0.3, 0.5, 0.7, 1.0, 1.5, 2.0])
+    lam = 0.2 * np.exp(-1.2 * np.log(x / 0.01) ** 1.35)
+    fragility = rk.Lognormal(0.4 * G, 0.5)
+    total = 0.0
+    for x0, x1, l0, l1 in zip(x[:-1], x[1:], lam[:-1], lam[1:], strict=True):
+        k = -math.log(l1 / l0) / math.log(x1 / x0)
+        piece, _ = integrate.quad(lambda u, x0=x0, l0=l0, k=k: float(fragility(np.exp(u) * G))
+                                  * k * l0 * math.exp(-k * (u - math.log(x0))),
+                                  math.log(x0), math.log(x1), epsabs=0.0, epsrel=1e-12)
+        total += piece
+    total += lam[-1] * float(fragility(x[-1] * G))
+    result = rk.rate(fragility, rk.HazardCurve("curved", x * G, lam))
+    assert result.rate == pytest.approx(total, rel=1e-9)
+    steep = rk.rate(rk.Lognormal(0.5 * G, 0.6), power_law(300, k=8.0, low=1e-4, high=1e2))
+    # exp(k^2 beta^2 / 2) = 1e5 and the integrand peaks near 0.03 g: no loss of digits
+    assert steep.rate == pytest.approx(closed_form(k=8.0, beta=0.6), rel=1e-9)
+
+
 def test_doubling_the_rates_doubles_the_rate():
     curve = rk.HazardCurve("site", np.array([0.05, 0.1, 0.2, 0.4, 0.8, 1.6]) * G,
                            np.array([3e-2, 1e-2, 2.5e-3, 6e-4, 9e-5, 1e-5]))

@@ -54,7 +54,7 @@ hazard branches under which the rock would have toppled with more than 95 % prob
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.special import log_ndtr, ndtr
@@ -361,7 +361,7 @@ class FragilityUsed:
     form: str
     median: float = math.nan
     beta: float = math.nan
-    variants: list = None
+    variants: list = field(default_factory=list)
     uncertainty: str = ""
     variants_level: float | None = None
 
