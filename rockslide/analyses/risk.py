@@ -63,6 +63,8 @@ from ..errors import CaseError
 
 #: Fraction of the rate below which the hazard curve's ends are of no consequence (no note).
 NEGLIGIBLE = 1e-3
+#: Intervals of the hazard curve the printout names, those that contribute most first.
+TOP_INTERVALS = 3
 #: Levels the disaggregation's density is given at (geometric over the hazard curves' levels).
 DENSITY_POINTS = 400
 
@@ -562,11 +564,15 @@ def summary_lines(analysis: Analysis, show) -> list[str]:
             text += (f"; survives {analysis.age:g} yr with probability {survivals[i]:.3g}: {verdict} at "
                      f"{analysis.confidence:.0%}")
         lines.append(text)
-        top = int(np.argmax(r.contributions))
-        where = (f"above {show(c.levels[-1])}" if top == c.levels.size - 1 else
-                 f"{show(c.levels[top])} ... {show(c.levels[top + 1])}")
-        lines.append(f"    most from {where} ({100 * r.contributions[top] / r.rate:.3g} %)" if r.rate > 0 else
-                     "    no contribution")
+        if r.rate <= 0:
+            lines.append("    no contribution")
+            continue
+        parts = []
+        for top in np.argsort(r.contributions)[::-1][:TOP_INTERVALS]:
+            where = (f"above {show(c.levels[-1])}" if top == c.levels.size - 1 else
+                     f"{show(c.levels[top])} ... {show(c.levels[top + 1])}")
+            parts.append(f"{where} {100 * r.contributions[top] / r.rate:.3g} %")
+        lines.append("    most from " + ", ".join(parts))
     return lines
 
 
