@@ -300,6 +300,9 @@ def test_bootstrap_resamples_give_a_percentile_interval(tmp_path):
     assert float(ds.rate_lower[0]) == pytest.approx(low, rel=1e-6)
     assert float(ds.rate_upper[0]) == pytest.approx(high, rel=1e-6)
     assert "400 bootstrap resamples" in ds.attrs["fragility_uncertainty"]
+    aged = rockslide.risk(frag, {"power law": (x * G, K0 * x ** -K)}, age="1ka")
+    assert [float(aged.survival_lower[0]), float(aged.survival_upper[0])] == pytest.approx(
+        [math.exp(-high * 1000.0), math.exp(-low * 1000.0)], rel=1e-6)
 
 
 def test_command_writes_file_figure_and_json(tmp_path):

@@ -494,6 +494,12 @@ def dataset(analysis: Analysis, command_line: str = "") -> tuple[list, dict, dic
         alive = analysis.survivals
         variables["survival"] = (per_curve, alive, {"units": "1", "long_name": f"probability of standing "
                                                     f"{analysis.age:g} years: exp(-rate T_age)"})
+        variables["survival_lower"] = (per_curve, survival(intervals[:, 1], analysis.age),
+                                       {"units": "1", "long_name": "survival probability at rate_upper (NaN: no "
+                                        "interval)"})
+        variables["survival_upper"] = (per_curve, survival(intervals[:, 0], analysis.age),
+                                       {"units": "1", "long_name": "survival probability at rate_lower (NaN: no "
+                                        "interval)"})
         variables["rejected"] = (per_curve, rejected(alive, analysis.confidence).astype(np.int8),
                                  {"units": "1", "long_name": f"the rock standing rejects the curve at "
                                   f"{analysis.confidence:.0%} confidence (survival < {1 - analysis.confidence:g})"})
@@ -536,6 +542,7 @@ def json_summary(analysis: Analysis) -> dict:
                  "contributions": {"levels": [float(v) for v in c.levels], "rate": [float(v) for v in r.contributions]}}
         if survivals is not None:
             entry.update({"survival": float(survivals[i]),
+                          "survival_interval": [number(v) for v in survival(analysis.intervals[i][::-1], analysis.age)],
                           "rejected": bool(rejected(survivals[i], analysis.confidence))})
         curves.append(entry)
     return {"damage_state": f.damage_state, "fragility": {"source": f.source, "form": f.form,
@@ -561,7 +568,9 @@ def summary_lines(analysis: Analysis, show) -> list[str]:
                 f"{100 * float(probability_in(r.rate, analysis.life)):.3g} % in {analysis.life:g} yr")
         if survivals is not None:
             verdict = "rejected" if rejected(survivals[i], analysis.confidence) else "not rejected"
-            text += (f"; survives {analysis.age:g} yr with probability {survivals[i]:.3g}: {verdict} at "
+            spread = survival(np.array([high, low]), analysis.age)
+            shown = f" ({spread[0]:.3g} ... {spread[1]:.3g})" if math.isfinite(low) else ""
+            text += (f"; survives {analysis.age:g} yr with probability {survivals[i]:.3g}{shown}: {verdict} at "
                      f"{analysis.confidence:.0%}")
         lines.append(text)
         if r.rate <= 0:
