@@ -8,17 +8,18 @@ The Python API (`rockslide.api`, loaded on first use so that ``import rockslide`
 - `load_case` (a case file or a mapping), `case_with` / ``Case.with_``;
 - `run` -> `RunResult` (``.summary``, ``.history``, ``.events``, ``.to_xarray()``);
 - `sweep`, `fragility` and `ensemble` (a verdict's neighbourhood) -> ``xarray.Dataset``;
+- `risk`: a fragility over a site's hazard curves -> annual rates (``xarray.Dataset``);
 - `read_result`: any file rockslide writes;
 - `plot_results`: the figure of a result, or of several of one kind overlaid (``size="column"``...).
 """
 
 from ._version import __version__
 
-__all__ = ["__version__", "load_case", "case_with", "run", "sweep", "fragility", "ensemble", "read_result",
+__all__ = ["__version__", "load_case", "case_with", "run", "sweep", "fragility", "ensemble", "risk", "read_result",
            "plot_results", "RunResult"]
 
-_API = {"load_case", "case_with", "run", "sweep", "fragility", "ensemble", "read_result", "plot_results", "RunResult",
-        "Case", "Summary"}
+_API = {"load_case", "case_with", "run", "sweep", "fragility", "ensemble", "risk", "read_result", "plot_results",
+        "RunResult", "Case", "Summary"}
 
 
 def __getattr__(name: str):

@@ -19,15 +19,18 @@ each variable's ``units`` attribute.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+
+import numpy as np
 
 from .case import Case, case_with, load_case
 from .core.simulate import Result, Summary
 from .errors import CaseError
 
-__all__ = ["load_case", "case_with", "run", "sweep", "fragility", "ensemble", "read_result", "plot_results",
+__all__ = ["load_case", "case_with", "run", "sweep", "fragility", "ensemble", "risk", "read_result", "plot_results",
            "RunResult", "Case", "Summary"]
 
 
@@ -299,6 +302,178 @@ def ensemble(case: Case | Mapping | str | Path, n: int = 200, *, seed: int = 1,
     return datasets.study_dataset([members], variables, attrs)
 
 
+def risk(fragility: str | Path | None = None, hazard=None, *, damage: str = "overturn", stripes: bool = False,
+         median: str | float | None = None, beta: float | None = None, im: str = "pga",
+         life: str | float = 50.0, age: str | float | None = None, confidence: float = 0.95,
+         hazard_units: str | None = None, drop_zero_poe: bool = False):
+    """The annual rate of a damage state at a site: a fragility integrated over hazard curves, as
+    ``rockslide risk`` (`analyses.risk`; docs/risk.md).
+
+    Parameters
+    ----------
+    fragility : str, Path or xarray.Dataset, optional
+        A ``NAME.fragility.h5`` of `fragility`, or the dataset `fragility` returned (its lognormal
+        fit, or with ``stripes`` its empirical fractions). Without it, ``median`` and ``beta`` give
+        a lognormal.
+    hazard : str, Path, sequence of them, or mapping
+        Hazard files (OpenQuake's hazard-curve CSV export: one curve per site; or a plain table of
+        level and annual rate), or ``{name: (levels, rates)}`` with levels in SI [m/s^2, m/s] and
+        annual rates of exceedance [1/yr].
+    damage : str
+        The fragility file's damage state (``overturn``, ``rotation>0.5alpha``...).
+    stripes : bool
+        Use the fraction of runs reaching the state at each stripe (linear in ln x between them)
+        instead of the lognormal fit.
+    median, beta : str or float, float
+        A lognormal fragility: its median (``"0.5g"``, or SI) and logarithmic standard deviation.
+    im : str
+        The intensity measure of ``median`` (``pga``, ``pgv``, ``sa(0.3s)``).
+    life : str or float
+        Service life [yr] (``50``, ``"50yr"``) of ``probability_in_life``.
+    age : str or float, optional
+        Age of a precariously balanced rock [yr] (``"24ka"``): adds ``survival`` and ``rejected``.
+    confidence : float
+        Of the rejection of a hazard curve by a rock's survival (0.95: rejected when the rock would
+        have toppled with more than 95 % probability).
+    hazard_units : str, optional
+        The unit of a plain table's levels when its header does not say (default g, cm/s for PGV).
+    drop_zero_poe : bool
+        End each hazard curve at its last positive PoE (rate): OpenQuake writes 0 where the PoE is
+        below its precision. The rate is then a lower bound (``rate_missing_max`` says by how much
+        at most). Without it a PoE of 0 is refused.
+
+    Returns
+    -------
+    xarray.Dataset
+        Per ``curve``: ``rate`` [1/yr] (a lower bound if the curve is truncated),
+        ``rate_missing_max`` [1/yr], ``rate_lower`` / ``rate_upper`` over the fragility's
+        uncertainty, ``probability_in_life``, ``return_period`` [yr] (``survival``, ``rejected``
+        with ``age``); per curve and ``point`` the hazard curve and the disaggregation
+        ``contribution`` [1/yr]; per curve and ``im`` the disaggregation ``density``; the
+        fragility on ``im``.
+    """
+    from .analyses import risk as rk
+    from .io import datasets
+
+    analysis = risk_analysis(fragility, hazard, damage=damage, stripes=stripes, median=median, beta=beta, im=im,
+                             life=life, age=age, confidence=confidence, hazard_units=hazard_units,
+                             drop_zero_poe=drop_zero_poe)
+    return datasets.study_dataset(*rk.dataset(analysis))
+
+
+def risk_analysis(fragility=None, hazard=None, *, damage: str = "overturn", stripes: bool = False, median=None,
+                  beta=None, im: str = "pga", life=50.0, age=None, confidence: float = 0.95, hazard_units=None,
+                  drop_zero_poe: bool = False):
+    """`risk`'s `analyses.risk.Analysis` (for the command's printout and figure); same arguments."""
+    from .analyses import risk as rk
+
+    used, measure = _risk_fragility(fragility, damage=damage, stripes=stripes, median=median, beta=beta, im=im)
+    curves, about = _hazard_curves(hazard, measure, hazard_units, drop_zero_poe)
+    if not 0.0 < float(confidence) < 1.0:
+        raise CaseError(f"must be within 0 and 1 (e.g. 0.95), got {confidence!r}", source="--confidence")
+    years = rk.parse_years(life, source="--life")
+    age_years = None if age is None else rk.parse_years(age, source="--age")
+    about_measure = {key: getattr(measure, key) for key in ("name", "units", "long_name", "label", "display_unit",
+                                                            "display_scale")}
+    return rk.analyse(used, about_measure, curves, about, life=years, age=age_years, confidence=float(confidence))
+
+
+def _risk_fragility(path, *, damage, stripes, median, beta, im):
+    """The fragility of `risk` and its intensity measure."""
+    from .analyses import fragility as fr
+    from .analyses import risk as rk
+    from .units import parse_quantity
+
+    if path is None:
+        if median is None or beta is None:
+            raise CaseError("give a fragility file, or a lognormal with both --median and --beta "
+                            "(e.g. --median 0.5g --beta 0.4)", source="FRAGILITY")
+        measure = fr.parse_im(im)
+        theta = parse_quantity(median, measure.kind, source="--median")
+        try:
+            b = float(beta)
+        except (TypeError, ValueError):
+            b = math.nan
+        if not (theta > 0 and math.isfinite(b) and b > 0):
+            raise CaseError(f"the lognormal needs a positive median and beta, got {median!r} and {beta!r}",
+                            source="--median/--beta")
+        return rk.FragilityUsed(rk.Lognormal(theta, b), damage, "--median/--beta", "lognormal given", theta, b,
+                                [], ""), measure
+    if median is not None or beta is not None:
+        raise CaseError("give either a fragility file or --median/--beta, not both", source="--median/--beta")
+    given = hasattr(path, "data_vars")
+    ds = path if given else read_result(path)
+    path = "the fragility dataset given" if given else str(path)
+    if isinstance(ds, RunResult) or "damage_state" not in ds.coords:
+        raise CaseError("not a fragility file (NAME.fragility.h5 of 'rockslide fragility')", source=path)
+    measure = fr.parse_im(ds.attrs["intensity_measure"])
+    states = [str(s) for s in ds["damage_state"].values]
+    if damage not in states:
+        raise CaseError(f"no damage state {damage!r} in the file; it has {', '.join(states)}", source="--damage")
+    at = ds.sel(damage_state=damage)
+    if stripes:
+        fraction = np.asarray(at["fraction_exceeded"].values, dtype=np.float64)
+        levels = np.asarray(ds["level"].values, dtype=np.float64)
+        known = np.isfinite(fraction)
+        if not known.any():
+            raise CaseError(f"no stripe has a run inside the model for {damage!r}", source=str(path))
+        return rk.FragilityUsed(rk.Tabulated(levels[known], fraction[known]), damage, str(path),
+                                "empirical stripes (linear in ln x between them, constant outside)",
+                                variants=[]), measure
+    theta, b = float(at["median"]), float(at["beta"])
+    if not (math.isfinite(theta) and math.isfinite(b)):
+        raise CaseError(f"no lognormal fit for {damage!r} ({str(at['fit_note'].values)}); use --stripes for its "
+                        "empirical fractions", source=str(path))
+    bounds = [float(at[f"{name}_{side}"]) for name in ("median", "beta") for side in ("lower", "upper")]
+    variants, uncertainty, level = [], "", float(ds.attrs.get("confidence_level", 0.95))
+    if "bootstrap_median" in at:
+        pairs = np.column_stack([at["bootstrap_median"].values, at["bootstrap_beta"].values]).astype(np.float64)
+        pairs = pairs[np.isfinite(pairs).all(axis=1)]
+        if len(pairs) >= 2:
+            uncertainty = (f"the {level:.0%} percentile interval of the rate over the fits of the {len(pairs)} "
+                           "bootstrap resamples of the records")
+            return rk.FragilityUsed(rk.Lognormal(theta, b), damage, path, "lognormal fit", theta, b,
+                                    [rk.Lognormal(m, s) for m, s in pairs], uncertainty, level), measure
+    if all(math.isfinite(v) for v in bounds):
+        variants = rk.lognormal_box(bounds[:2], bounds[2:])
+        uncertainty = (f"the range of the rate over the {level:.0%} bootstrap intervals of the median "
+                       f"({measure.show(bounds[0])} ... {measure.show(bounds[1])}) and of beta ({bounds[2]:.3g} ... "
+                       f"{bounds[3]:.3g}), on a grid over their rectangle (marginal intervals: a wide range)")
+    return rk.FragilityUsed(rk.Lognormal(theta, b), damage, str(path), "lognormal fit", theta, b, variants,
+                            uncertainty), measure
+
+
+def _hazard_curves(hazard, measure, units, drop_zeros: bool):
+    """`analyses.risk.HazardCurve` s from `risk`'s ``hazard`` (files or arrays), checked against the
+    fragility's ``measure``; and what is known of each (file, kind, site)."""
+    from .analyses import risk as rk
+    from .io import hazard as hz
+
+    if hazard is None or (not isinstance(hazard, (str, Path, Mapping)) and len(hazard) == 0):
+        raise CaseError("give one or more hazard curves (OpenQuake's hazard-curve CSV, or a CSV of level and annual "
+                        "rate)", source="--hazard")
+    tables = []
+    if isinstance(hazard, Mapping):
+        for name, (levels, rates) in hazard.items():
+            problem = hz.curve_problem(levels, rates)
+            if problem:
+                raise CaseError(problem, source=f"hazard[{name!r}]")
+            tables.append(hz.HazardTable(str(name), None, np.asarray(levels, dtype=np.float64),
+                                         np.asarray(rates, dtype=np.float64), "", level_units=None))
+    else:
+        for path in [hazard] if isinstance(hazard, (str, Path)) else hazard:
+            tables += [hz.matching(t, measure.name, measure.period, measure.kind, measure.label)
+                       for t in hz.read_hazard(path, units=units, drop_zeros=drop_zeros)]
+    names = [t.name for t in tables]
+    curves, about = [], []
+    for t in tables:
+        name = t.name if names.count(t.name) == 1 else f"{Path(t.source).name}: {t.name}"
+        curves.append(rk.HazardCurve(name, t.levels, t.rates))
+        about.append({"source": t.source, "kind": t.kind, "lon": t.site[0], "lat": t.site[1],
+                      "investigation_time": t.investigation_time})
+    return curves, about
+
+
 def read_result(path: str | Path):
     """Read any file rockslide writes.
 
@@ -307,8 +482,8 @@ def read_result(path: str | Path):
     RunResult
         For a run's result file (``NAME.h5``).
     xarray.Dataset
-        For a sweep (``NAME.sweep.h5``) or a fragility file (``NAME.fragility.h5``): the same
-        dataset `sweep` or `fragility` returned.
+        For a sweep (``NAME.sweep.h5``), a fragility file (``NAME.fragility.h5``) or a risk file
+        (``NAME.risk.h5``): the same dataset `sweep`, `fragility` or `risk` returned.
 
     Raises
     ------
@@ -318,7 +493,7 @@ def read_result(path: str | Path):
     from .io import datasets, results
 
     kind = results.file_format(path)
-    if kind in (results.SWEEP_FORMAT, results.FRAGILITY_FORMAT):
+    if kind in (results.SWEEP_FORMAT, results.FRAGILITY_FORMAT, results.RISK_FORMAT):
         stored = results.read_dataset(path, format=kind)
         return datasets.study_dataset(stored.coords, stored.variables, stored.attrs)
     stored = results.read_result(path)

@@ -1802,3 +1802,71 @@ def _ensemble_figure(ratios, overturned, nominal_ratio, *, summary_text, title, 
     _headline(fig, title, caption)
     _freeze_ticks(fig)
     return fig
+
+
+# --------------------------------------------------------------------------------------------------
+# Risk: a fragility over hazard curves
+# --------------------------------------------------------------------------------------------------
+
+#: Hazard curves drawn at most (the others are in the file and the printout).
+RISK_MAX_CURVES = len(FRAGILITY_COLOURS)
+
+
+def risk_figure(curves, grid, fragility, *, xlabel: str, state: str, title: str = "", size=None) -> Figure:
+    """Hazard curves, the fragility and the integrand of the rate on one intensity axis.
+
+    Parameters
+    ----------
+    curves : list of dict
+        One per hazard curve: ``label``, ``levels`` (in the unit shown), ``rates`` [1/yr] and
+        ``share`` (the integrand P(F|x) |d lambda / d log10 x| over the rate, per decade, on
+        ``grid``; NaN outside the curve).
+    grid : array_like
+        Levels of ``fragility`` and of each ``share`` (unit shown).
+    fragility : array_like
+        P(F | x) on ``grid``.
+    xlabel : str
+        The intensity measure and its unit.
+    state : str
+        The damage state, for the labels.
+    title : str
+    size : None, "column", "page", "slide", "WxH" or (width, height)
+        The figure's size [in] (`figure_size`; default 9 x 7.5 in); fonts follow its width.
+    """
+    figsize = figure_size(size, (9.0, 7.5), column=4.6, page=6.5)
+    with _style(figsize[0]):
+        return _risk_figure(curves, grid, fragility, xlabel=xlabel, state=state, title=title, figsize=figsize)
+
+
+def _risk_figure(curves, grid, fragility, *, xlabel, state, title, figsize) -> Figure:
+    fig = Figure(figsize=figsize, dpi=DPI, layout="constrained")
+    top, bottom = fig.subplots(2, 1, sharex=True, height_ratios=(3, 2))
+    right = top.twinx()
+    grid = np.asarray(grid, dtype=float)
+    for i, curve in enumerate(curves[:RISK_MAX_CURVES]):
+        colour = FRAGILITY_COLOURS[(i + 1) % len(FRAGILITY_COLOURS)]
+        top.loglog(curve["levels"], curve["rates"], "-", color=colour, lw=1.8, marker="." if
+                   len(curve["levels"]) <= 40 else None, label=curve["label"])
+        bottom.semilogx(grid, curve["share"], color=colour, lw=1.8)
+    right.plot(grid, fragility, color="black", lw=1.5, ls="--")
+    right.set_ylim(0.0, 1.02)
+    right.set_ylabel(f"P({state} | x)")
+    handles, labels = top.get_legend_handles_labels()
+    handles.append(Line2D([], [], color="black", lw=1.5, ls="--"))
+    labels.append(f"fragility: P({state} | x), right axis")
+    if len(curves) > RISK_MAX_CURVES:
+        handles.append(Line2D([], [], color="none"))
+        labels.append(f"and {len(curves) - RISK_MAX_CURVES} more curves (in the file)")
+    top.legend(handles, labels, loc="lower left", fontsize=_pt(8), frameon=True, framealpha=0.9)
+    top.set_ylabel("annual rate of exceedance λ(x) [1/yr]")
+    top.grid(True, which="both", color="0.92")
+    bottom.set_ylabel("share of the rate per decade of x\n" r"$P(F|x)\,|d\lambda/d\log_{10}x|\,/\,\lambda_F$",
+                      fontsize=_pt(9))
+    bottom.set_ylim(bottom=0.0)
+    bottom.set_xlabel(xlabel)
+    bottom.grid(True, which="both", color="0.92")
+    top.set_xlim(float(grid[0]), float(grid[-1]))
+    if title:
+        top.set_title(title, fontsize=_pt(11))
+    _freeze_ticks(fig)
+    return fig

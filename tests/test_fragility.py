@@ -450,7 +450,13 @@ def test_xarray_opens_the_fragility_file(analysed):
     pytest.importorskip("h5netcdf")
     out, payload = analysed
     with xr.open_dataset(out / "example.fragility.h5", engine="h5netcdf") as ds:
-        assert dict(ds.sizes) == {"record": 6, "level": 6, "damage_state": 3}
+        fitted = int(ds["resamples_fitted"].max())
+        assert dict(ds.sizes) == {"record": 6, "level": 6, "damage_state": 3, "resample": fitted}
+        # the resamples' fits are those the intervals are the percentiles of
+        boot = ds["bootstrap_median"].sel(damage_state="overturn").values
+        boot = boot[np.isfinite(boot)]
+        assert boot.size == int(ds["resamples_fitted"].sel(damage_state="overturn"))
+        assert np.percentile(boot, 2.5) == float(ds["median_lower"].sel(damage_state="overturn"))
         assert ds["record"].values.tolist() == payload["records"]
         assert ds["damage_state"].values.tolist() == list(payload["damage_states"])
         assert ds["level"].attrs["units"] == "m/s^2" and ds["level"].values.tolist() == payload["levels"]

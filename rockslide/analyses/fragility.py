@@ -1248,6 +1248,19 @@ def dataset(fplan: FragilityPlan, analysis: Analysis, command_line: str = "") ->
             variables[f"{name}_{side}"] = (per_state, bounds, {
                 "units": units[unit], "long_name": f"{side} bound of the {CONFIDENCE:.0%} bootstrap "
                 f"interval of {name} (NaN: none)"})
+    fitted = max((f.samples.shape[0] for f in analysis.fits), default=0)
+    if fitted:
+        # the fits of the bootstrap resamples themselves, for what is computed from the curve
+        # (`rockslide risk` propagates them to an interval on a rate)
+        coords.append(("resample", np.arange(fitted, dtype=np.float64),
+                       {"long_name": "bootstrap resample of the records whose maximum-likelihood fit converged"}))
+        for column, (name, unit) in enumerate((("median", "m"), ("beta", "b"))):
+            values = np.full((len(analysis.fits), fitted), np.nan)
+            for i, f in enumerate(analysis.fits):
+                values[i, :f.samples.shape[0]] = f.samples[:, column]
+            variables[f"bootstrap_{name}"] = (("damage_state", "resample"), values, {
+                "units": units[unit], "long_name": f"{words[name]} of each bootstrap resample (NaN: past the "
+                "state's resamples_fitted)"})
     if fplan.samples:
         for name, unit in (("median", "m"), ("beta", "b")):
             values = np.array([_nan(getattr(f, name)) for f in analysis.nominal_fits])

@@ -4,10 +4,11 @@
   console's helpers;
 - `run`: ``rockslide run`` and ``rockslide plot``;
 - `studies`: ``rockslide sweep`` and ``rockslide fragility``;
-- `tools`: ``info``, ``table1``, ``example``, ``criteria``.
+- `tools`: ``info``, ``table1``, ``example``, ``criteria``;
+- `risk`: ``rockslide risk``.
 """
 
-from . import run, studies, tools  # noqa: F401  (each registers its commands on `main`)
+from . import risk, run, studies, tools  # noqa: F401  (each registers its commands on `main`)
 from .app import entry, main
 
 __all__ = ["entry", "main"]

@@ -198,20 +198,21 @@ def plot(result_files, output, time_shift, window, crop, dpi, overwrite, size):
     # the result's own figure is the one redrawn; another file is replaced only when asked to
     replace = overwrite or png.resolve() == own.resolve()
     kind = results.file_format(result_file)
-    if kind in (results.SWEEP_FORMAT, results.FRAGILITY_FORMAT):
+    if kind in (results.SWEEP_FORMAT, results.FRAGILITY_FORMAT, results.RISK_FORMAT):
         from ..plots import save_figure
-        what = "sweep" if kind == results.SWEEP_FORMAT else "fragility"
-        given = [option for option, value, default in (("--time-shift", shift, 0.0), ("--window", zoom, "auto"),
-                                                       ("--crop", span, "auto")) if value != default]
-        if given:
-            raise CaseError(f"applies to result files, not to {what} files", source=given[0])
+        what = {results.SWEEP_FORMAT: "sweep", results.FRAGILITY_FORMAT: "fragility"}.get(kind, "risk")
+        _only_for_results(shift, zoom, span, f"{what} files")
         if kind == results.SWEEP_FORMAT:
             from ..analyses.sweep import stored_figure
             figure = stored_figure(results.read_sweep(result_file), size=size)
-        else:
+        elif kind == results.FRAGILITY_FORMAT:
             from ..analyses.fragility import stored_figure as stored_fragility_figure
             figure = stored_fragility_figure(results.read_dataset(result_file, format=results.FRAGILITY_FORMAT),
                                              size=size)
+        else:
+            from ..analyses.risk import stored_figure as stored_risk_figure
+            stored = results.read_dataset(result_file, format=results.RISK_FORMAT)
+            figure = stored_risk_figure(stored.coords, stored.variables, stored.attrs, size=size)
         save_figure(figure, png, overwrite=replace, dpi=dpi)
     else:
         stored = results.read_result(result_file)
@@ -225,6 +226,14 @@ def plot(result_files, output, time_shift, window, crop, dpi, overwrite, size):
         _draw(stored.result, stored.name, png, overwrite=replace, time_shift=shift, zoom=zoom, crop=span, dpi=dpi,
               size=size, about=_stored_about(stored))
     click.echo(f"redrew {png}")
+
+
+def _only_for_results(shift, zoom, span, what: str) -> None:
+    """Refuse ``--time-shift``, ``--window`` and ``--crop`` given for ``what`` (a study's file)."""
+    given = [option for option, value, default in (("--time-shift", shift, 0.0), ("--window", zoom, "auto"),
+                                                   ("--crop", span, "auto")) if value != default]
+    if given:
+        raise CaseError(f"applies to result files, not to {what}", source=given[0])
 
 
 def _time_range(text: str, option: str, words: dict):

@@ -284,8 +284,9 @@ def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, 
             save_figure(fr.figure(fplan, analysis, size=size), png_path, overwrite=overwrite, dpi=dpi, staging=staging)
         if as_csv:
             from ..io.datasets import study_dataset
-            _write_csv(study_dataset(coords, variables), [name for name, _, _ in coords if name != "damage_state"],
-                       h5_path.with_suffix(".csv"), overwrite=overwrite, staging=staging)
+            per_run = [name for name, _, _ in coords if name not in ("damage_state", "resample")]
+            _write_csv(study_dataset(coords, variables), per_run, h5_path.with_suffix(".csv"), overwrite=overwrite,
+                       staging=staging)
         staging.publish(remove=[png_path] if no_plot else [])
     done.store.remove()
     elapsed = time.perf_counter() - started

@@ -27,8 +27,8 @@ from .app import _json_default, dpi_option, main, records_dir_option, size_optio
 @click.option("--skip-lines", type=int, default=0, help="Header lines to skip (values format).")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object.")
 def info(record, fmt, units, time_column, column, dt, skip_lines, as_json):
-    """Describe an accelerogram (format, dt, duration, units and peaks), or what a result, sweep or
-    fragility file of rockslide holds (its summary, read back: nothing is computed again).
+    """Describe an accelerogram (format, dt, duration, units and peaks), or what a result, sweep,
+    fragility or risk file of rockslide holds (its summary, read back: nothing is computed again).
 
     \b
     Example:
@@ -47,6 +47,9 @@ def info(record, fmt, units, time_column, column, dt, skip_lines, as_json):
             lines = [f"{record}", *(f"  {k:<18}{v}" for k, v in details.items() if not isinstance(v, (dict, list)))]
             lines += [f"  {state}: median {fit['median']}, beta {fit['beta']}" for state, fit in
                       details.get("fits", {}).items()]
+            lines += [f"  {curve}: " + ", ".join(f"{key} {value:.4g}" for key, value in numbers.items()
+                                                 if value is not None)
+                      for curve, numbers in details.get("rates", {}).items()]
             click.echo("\n".join(lines))
         return
 
@@ -112,7 +115,8 @@ def example(folder, overwrite):
     the project's own synthetic records, and those two records (synthetic_kt_h.at2,
     synthetic_kt_v.at2); suite-synthetic.yaml, a suite of six synthetic record pairs (in
     suite-synthetic/) for 'rockslide fragility'; spectrum-one-sine.yaml, a block under a one-sine
-    pulse for overturning spectra. The examples of every command's --help work anywhere after it.
+    pulse for overturning spectra; hazard-example-PGA.csv, a made-up hazard curve in OpenQuake's
+    layout for 'rockslide risk'. The examples of every command's --help work anywhere after it.
 
     \b
     Example:
@@ -219,6 +223,18 @@ def _stored_summary(path: Path) -> dict:
     from ..io import results
 
     kind = results.file_format(path)
+    if kind == results.RISK_FORMAT:
+        stored = results.read_dataset(path, format=kind)
+        v, attrs = stored.variables, stored.attrs
+        curves = [str(c) for c in dict((n, vals) for n, vals, _ in stored.coords)["curve"]]
+        shown = [key for key in ("rate", "rate_missing_max", "return_period", "probability_in_life", "survival",
+                                 "rejected") if key in v]
+        return {"file": str(path), "kind": "risk", "damage_state": attrs.get("damage_state"),
+                "fragility": attrs.get("fragility_source"), "intensity_measure": attrs.get("intensity_measure"),
+                "command_line": attrs.get("command_line"),
+                "rates": {curve: {key: _number(np.asarray(v[key][1])[i]) for key in shown}
+                          for i, curve in enumerate(curves)},
+                "rockslide_version": attrs.get("rockslide_version")}
     if kind in (results.SWEEP_FORMAT, results.FRAGILITY_FORMAT):
         stored = results.read_dataset(path, format=kind)
         v, attrs = stored.variables, stored.attrs

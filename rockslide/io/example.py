@@ -2,7 +2,8 @@
 ``rockslide/example.yaml``) and its two synthetic records, made by `synthetic.example_pair`
 exactly as ``records/make_example_records.py`` makes the copies in the repository; the synthetic
 record suite (``suite-synthetic.yaml`` and its records, `synthetic.suite_pair`) for
-``rockslide fragility``; and a pulse case (``spectrum-one-sine.yaml``) for overturning spectra.
+``rockslide fragility``; a pulse case (``spectrum-one-sine.yaml``) for overturning spectra; and a
+made-up hazard curve in OpenQuake's CSV layout (``hazard-example-PGA.csv``) for ``rockslide risk``.
 The YAML files are package data, identical to the repository's ``configs/example.yaml``,
 ``records/suite-synthetic.yaml`` and ``configs/spectrum-one-sine.yaml`` (a test says so)."""
 
@@ -18,14 +19,16 @@ from .synthetic import SUITE, example_pair, suite_pair
 CASE_FILE = "example.yaml"
 SUITE_FILE = "suite-synthetic.yaml"
 SPECTRUM_FILE = "spectrum-one-sine.yaml"
+#: A made-up hazard curve in OpenQuake's hazard-curve CSV layout, for ``rockslide risk``.
+HAZARD_FILE = "hazard-example-PGA.csv"
 #: The example's records: file name, seed (in the title), component.
 RECORDS = (("synthetic_kt_h.at2", 1995, "horizontal"), ("synthetic_kt_v.at2", 1996, "vertical"))
 RECORD_DT = 0.01   # [s]
 
 
 def case_text(name: str = CASE_FILE) -> str:
-    """A shipped YAML file: the example's case file (its records named as files beside it), the
-    suite file or the spectrum case."""
+    """A shipped text file: the example's case file (its records named as files beside it), the
+    suite file, the spectrum case or the hazard curve."""
     return resources.files("rockslide").joinpath(name).read_text(encoding="utf-8")
 
 
@@ -60,9 +63,9 @@ def write_suite_records(folder, staging=None) -> list[Path]:
 
 def write_example(folder, *, overwrite: bool = False) -> list[Path]:
     """Write ``folder/example.yaml`` and its records, ``folder/suite-synthetic.yaml`` and its
-    records, and ``folder/spectrum-one-sine.yaml``, published together (`files.Staging`): nothing
-    is written if one of them exists and ``overwrite`` is false, and after Ctrl-C or an error the
-    folders this made are removed again.
+    records, ``folder/spectrum-one-sine.yaml`` and ``folder/hazard-example-PGA.csv``, published
+    together (`files.Staging`): nothing is written if one of them exists and ``overwrite`` is
+    false, and after Ctrl-C or an error the folders this made are removed again.
 
     Raises
     ------
@@ -70,7 +73,7 @@ def write_example(folder, *, overwrite: bool = False) -> list[Path]:
         A file exists (without ``overwrite``), or the folder cannot be created or written.
     """
     folder = Path(folder)
-    texts = (CASE_FILE, SUITE_FILE, SPECTRUM_FILE)
+    texts = (CASE_FILE, SUITE_FILE, SPECTRUM_FILE, HAZARD_FILE)
     names = [*texts, *(name for name, _, _ in RECORDS), *suite_record_names()]
     made = [path for path in (*reversed(folder.parents), folder, folder / "suite-synthetic") if not path.exists()]
     try:

@@ -938,12 +938,15 @@ SWEEP_FORMAT = "rockslide-sweep"
 SWEEP_FORMAT_VERSION = 1
 FRAGILITY_FORMAT = "rockslide-fragility"
 FRAGILITY_FORMAT_VERSION = 1
+RISK_FORMAT = "rockslide-risk"
+RISK_FORMAT_VERSION = 1
 #: The ``format`` of each kind of rockslide file and its version (`file_format`).
 FORMATS = {FORMAT: FORMAT_VERSION, SWEEP_FORMAT: SWEEP_FORMAT_VERSION,
-           FRAGILITY_FORMAT: FRAGILITY_FORMAT_VERSION}
+           FRAGILITY_FORMAT: FRAGILITY_FORMAT_VERSION, RISK_FORMAT: RISK_FORMAT_VERSION}
 #: What messages call each kind of file, and what it is a "rockslide ..." of; its name's ending.
 _FORMAT_WHAT = {SWEEP_FORMAT: ("sweep file", "sweep", ".sweep.h5"),
-                FRAGILITY_FORMAT: ("fragility file", "fragility analysis", ".fragility.h5")}
+                FRAGILITY_FORMAT: ("fragility file", "fragility analysis", ".fragility.h5"),
+                RISK_FORMAT: ("risk file", "risk analysis", ".risk.h5")}
 
 
 @dataclass

@@ -1,0 +1,111 @@
+"""``rockslide risk``: a fragility curve over a site's hazard curves, to an annual rate of reaching
+a damage state (`api.risk_analysis`, `analyses.risk`)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import click
+
+from .app import _json_default, _result_set, dpi_option, main, show_warnings, size_option
+from .studies import _command_line
+
+
+@main.command()
+@click.argument("fragility_file", required=False, type=click.Path(path_type=Path))
+@click.option("--hazard", "hazard_files", multiple=True, required=True, type=click.Path(path_type=Path),
+              metavar="FILE", help="Hazard curves: OpenQuake's hazard-curve CSV export (one curve per site; give "
+              "several files for branches or quantiles), or a CSV of IM level and annual rate of exceedance. "
+              "Repeat for more files.")
+@click.option("--damage", default="overturn", show_default=True, metavar="STATE",
+              help="The fragility file's damage state (e.g. 'rotation>0.5alpha').")
+@click.option("--stripes", is_flag=True, help="Use the fragility file's empirical fractions per stripe (linear "
+              "in ln x between them) instead of its lognormal fit.")
+@click.option("--median", default=None, metavar="LEVEL", help="Without a fragility file: the median of a "
+              "lognormal fragility, with its unit (0.5g).")
+@click.option("--beta", type=float, default=None, help="Without a fragility file: its logarithmic standard "
+              "deviation.")
+@click.option("--im", "im_text", default="pga", show_default=True, metavar="IM",
+              help="Intensity measure of --median: pga, pgv or sa(T), e.g. 'sa(0.3s)'.")
+@click.option("--life", default="50yr", show_default=True, metavar="YEARS",
+              help="Service life for the probability of the damage state (50yr, 100).")
+@click.option("--age", default=None, metavar="YEARS", help="Age of a precariously balanced rock (24ka): its "
+              "survival probability under each hazard curve, and the curves it rejects.")
+@click.option("--confidence", type=float, default=0.95, show_default=True,
+              help="A curve is rejected when the rock would have toppled with more than this probability.")
+@click.option("--hazard-units", default=None, metavar="UNIT", help="Unit of a plain table's levels when its "
+              "header does not say (default: OpenQuake's, g; cm/s for PGV).")
+@click.option("--drop-zero-poe", is_flag=True, help="End each hazard curve at its last positive PoE (OpenQuake "
+              "writes 0 below its precision): the rate is then a lower bound, and says by how much at most. "
+              "Without it a PoE of 0 is refused.")
+@click.option("--out-dir", type=click.Path(file_okay=False, path_type=Path), default=None,
+              help="Output folder (default: the fragility file's folder, else the current one).")
+@click.option("--name", default=None, help="Name of the outputs OUT/NAME.risk.h5 and .png (default: the "
+              "fragility file's name, else 'lognormal').")
+@click.option("--overwrite", is_flag=True, help="Replace an existing result.")
+@click.option("--no-plot", is_flag=True, help="Do not draw the PNG figure.")
+@click.option("--json", "as_json", is_flag=True, help="Print the result as one JSON object on stdout.")
+@dpi_option("PNG figure")
+@size_option
+def risk(fragility_file, hazard_files, damage, stripes, median, beta, im_text, life, age, confidence, hazard_units,
+         drop_zero_poe, out_dir, name, overwrite, no_plot, as_json, dpi, size):
+    """Annual rate of a damage state at a site: a fragility integrated over hazard curves,
+    FRAGILITY_FILE (NAME.fragility.h5) or --median/--beta -> OUT/NAME.risk.h5 and OUT/NAME.risk.png.
+
+    lambda_F = integral of P(F|x) |d lambda(x)|, the hazard curve log-log interpolated between its
+    levels (a power law on each interval) and integrated exactly. Prints per hazard curve the rate,
+    the return period, the probability in --life years, the intensities that contribute most, and
+    with --age a rock's survival probability and whether it rejects the curve. A hazard curve that
+    ends where the fragility still rises gives a lower bound, and says by how much at most.
+
+    With a fragility file of 'rockslide fragility' (its --im pga):
+    rockslide risk out/example.fragility.h5 --hazard example/hazard-example-PGA.csv
+
+    \b
+    Example:
+        rockslide risk --median 0.5g --beta 0.4 --hazard example/hazard-example-PGA.csv --age 24ka
+        rockslide risk --median 0.5g --beta 0.4 --hazard example/hazard-example-PGA.csv --name site --json
+    """
+    from .. import api
+    from ..analyses import fragility as fr
+    from ..analyses import risk as rk
+    from ..io import files, results
+    from ..io.files import expand_user
+    from ..plots import save_figure
+
+    ctx = click.get_current_context()
+    analysis = api.risk_analysis(fragility_file, list(hazard_files), damage=damage, stripes=stripes, median=median,
+                                 beta=beta, im=im_text, life=life, age=age, confidence=confidence,
+                                 hazard_units=hazard_units, drop_zero_poe=drop_zero_poe)
+    folder = expand_user(out_dir, source="--out-dir") if out_dir is not None else \
+        (fragility_file.parent if fragility_file is not None else Path("."))
+    stem = name or (fragility_file.name.removesuffix(".h5").removesuffix(".fragility") if fragility_file
+                    else "lognormal")
+    h5_path, png_path = folder / f"{stem}.risk.h5", folder / f"{stem}.risk.png"
+    if _result_set(h5_path, png_path, overwrite=overwrite, no_plot=no_plot, example="out/case.risk"):
+        files.refuse_existing(h5_path, overwrite=False)
+    files.remove_stale_temporaries([h5_path, png_path])
+    show_warnings()
+    command_line = _command_line(ctx, fragility_file if fragility_file is not None else "")
+    coords, variables, attrs = rk.dataset(analysis, command_line.replace(" '' ", " ", 1))
+    with files.Staging(overwrite=overwrite) as staging:
+        results.write_dataset(h5_path, coords, variables, format=results.RISK_FORMAT, attrs=attrs,
+                              overwrite=overwrite, staging=staging)
+        if not no_plot:
+            save_figure(rk.figure(analysis, size=size), png_path, overwrite=overwrite, dpi=dpi, staging=staging)
+        staging.publish(remove=[png_path] if no_plot else [])
+    show = fr.parse_im(analysis.measure["name"]).show
+    for line in rk.warnings_of(analysis, show):
+        click.echo(f"rockslide: warning: {line}", err=True)
+    if as_json:
+        payload = {**rk.json_summary(analysis),
+                   "files": {"hdf5": str(h5_path), "png": None if no_plot else str(png_path)}}
+        click.echo(json.dumps(payload, allow_nan=False, default=_json_default))
+        return
+    for line in rk.summary_lines(analysis, show):
+        click.echo(line)
+    if analysis.fragility.uncertainty:
+        click.echo(f"  (in parentheses: {analysis.fragility.uncertainty})")
+    click.echo(f"  wrote {h5_path}" + ("" if no_plot else f" and {png_path}"))
+

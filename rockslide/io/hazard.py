@@ -1,0 +1,359 @@
+"""Hazard curves (``rockslide risk --hazard``): OpenQuake's CSV export and plain two-column tables.
+
+**OpenQuake engine** (``oq export hcurves``: ``hazard_curve-<kind>-<IMT>_<calc>.csv``; the
+engine's manual, "Outputs from Classical PSHA")::
+
+    #,,,,,"generated_by='OpenQuake engine 3.18.0', start_date=..., kind='mean', investigation_time=1.0, imt='PGA'"
+    lon,lat,depth,poe-0.1000000,poe-0.4000000,poe-0.6000000
+    0.00000,0.00000,-0.10000,4.553860E-01,5.754042E-02,6.354511E-03
+
+One comment line (``kind``: ``mean``, ``quantile-0.15``, ``rlz-003``...; ``investigation_time``
+[yr]; ``imt``: ``PGA``, ``PGV``, ``SA(0.3)``), a header whose columns after ``lon,lat,depth`` are
+``poe-<IML>``, and one row per site of probabilities of exceedance in the investigation time. The
+annual rate is ``-ln(1 - PoE) / T`` (the engine's Poisson assumption). OpenQuake's IMLs are in g
+for PGA and SA, in cm/s for PGV.
+
+**Plain table**: two columns, the IM level and the annual rate of exceedance [1/yr], comma,
+semicolon or white-space separated; ``#`` comments; an optional header whose first cell may name
+the measure and its unit (``PGA [g]``, ``sa(0.3s) [g]``, ``pgv [cm/s]``); without a unit in the
+header the levels are in OpenQuake's units (g, or cm/s for PGV).
+
+Every curve read is checked (`curve_problem`): two levels or more, increasing; rates positive and
+not increasing; PoE strictly between 0 and 1. A problem is one `CaseError` naming the file, the
+row or column, and what would work.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import CaseError
+from ..units import STANDARD_GRAVITY, unit_factor
+
+#: OpenQuake's units of intensity measure levels, by kind of measure [their size in SI].
+OPENQUAKE_UNITS = {"acceleration": ("g", STANDARD_GRAVITY), "velocity": ("cm/s", 0.01)}
+#: Relative tolerance of two spectral periods that are the same period.
+PERIOD_TOLERANCE = 1e-6
+#: Largest hazard file read [bytes] (a national model's export for thousands of sites is < 100 MB).
+MAX_BYTES = 200 * 2**20
+
+_IMT = re.compile(r"^\s*(?P<name>pga|pgv|sa)\s*(?:\(\s*(?P<period>[^()]*?)\s*\))?\s*$", re.IGNORECASE)
+_FIELD = re.compile(r"(\w+)\s*=\s*('[^']*'|\"[^\"]*\"|[^,\s\"]+)")
+_HEADER_CELL = re.compile(r"^\s*(?P<name>[^\[\]]*?)\s*(?:\[\s*(?P<unit>[^\[\]]*?)\s*\])?\s*$")
+
+
+@dataclass(frozen=True)
+class Measure:
+    """An intensity measure as a hazard curve names it: ``pga``, ``pgv`` or ``sa`` with its
+    ``period`` [s]."""
+
+    name: str
+    period: float | None = None
+
+    @property
+    def kind(self) -> str:
+        return "velocity" if self.name == "pgv" else "acceleration"
+
+    def __str__(self) -> str:
+        return f"SA({self.period:g})" if self.name == "sa" else self.name.upper()
+
+    def same_as(self, name: str, period: float | None) -> bool:
+        """Whether this is the measure a fragility names ``name`` (``pga``, ``pgv``, ``sa(0.3 s)``)
+        with ``period`` [s]."""
+        if self.name == "sa":
+            return period is not None and abs(self.period - period) <= PERIOD_TOLERANCE * period
+        return period is None and name == self.name
+
+
+@dataclass(frozen=True)
+class HazardTable:
+    """One hazard curve read from a file.
+
+    Attributes
+    ----------
+    name : str
+        Which curve: the file's ``kind`` and the site (``mean at 12.5,41.9``), or the file's name.
+    measure : Measure
+    levels : numpy.ndarray
+        [SI: m/s^2 or m/s] the intensity levels, increasing.
+    rates : numpy.ndarray
+        [1/yr] the annual rates of exceedance.
+    source : str
+        The file.
+    kind : str
+        OpenQuake's ``kind`` (``mean``, ``quantile-0.15``, ``rlz-000``); "" for a plain table.
+    investigation_time : float
+        [yr] OpenQuake's; NaN for a plain table.
+    site : tuple of float
+        (lon, lat, depth) for OpenQuake's; NaNs for a plain table.
+    level_units : str or None
+        None when ``levels`` are SI; else the unit a plain table's levels are in ("": not said,
+        OpenQuake's), converted by `matching`.
+    """
+
+    name: str
+    measure: Measure
+    levels: np.ndarray
+    rates: np.ndarray
+    source: str
+    kind: str = ""
+    investigation_time: float = math.nan
+    site: tuple = (math.nan, math.nan, math.nan)
+    level_units: str | None = None
+
+
+def parse_measure(text: str, *, source: str, field: str | None = None) -> Measure:
+    """``PGA``, ``PGV``, ``SA(0.3)`` (OpenQuake) or ``sa(0.3s)`` (rockslide) as a `Measure`."""
+    match = _IMT.match(str(text))
+    if match is None or (match.group("name").lower() == "sa") != (match.group("period") is not None):
+        raise CaseError(f"unknown intensity measure {text!r}; a hazard curve's is PGA, PGV or SA(T) with T in s",
+                        source=source, field=field)
+    name = match.group("name").lower()
+    if name != "sa":
+        return Measure(name)
+    period_text = match.group("period").strip()
+    period_text = period_text[:-1].strip() if period_text.endswith("s") and not period_text.endswith("ms") \
+        else period_text
+    try:
+        period = float(period_text) if not period_text.endswith("ms") else float(period_text[:-2]) * 1e-3
+    except ValueError:
+        raise CaseError(f"cannot read the period of {text!r}", source=source, field=field) from None
+    if not (math.isfinite(period) and period > 0):
+        raise CaseError(f"the period of {text!r} must be positive", source=source, field=field)
+    return Measure("sa", period)
+
+
+def rate_from_poe(poe, investigation_time: float) -> np.ndarray:
+    """Annual rate [1/yr] from probabilities of exceedance in ``investigation_time`` [yr] (a Poisson
+    process, as OpenQuake computes them): ``-ln(1 - PoE) / T``."""
+    return -np.log1p(-np.asarray(poe, dtype=np.float64)) / investigation_time
+
+
+def curve_problem(levels, rates) -> str:
+    """Why ``levels`` and ``rates`` are not a hazard curve, or "" when they are: two levels or more,
+    positive and increasing; rates positive, finite and not increasing."""
+    levels, rates = np.asarray(levels, dtype=np.float64), np.asarray(rates, dtype=np.float64)
+    if levels.size < 2:
+        return (f"{levels.size} intensity level(s); a hazard curve needs two or more to interpolate "
+                "between")
+    if not (np.isfinite(levels).all() and (levels > 0).all()):
+        return "the intensity levels must be positive numbers"
+    if not (np.diff(levels) > 0).all():
+        i = int(np.argmax(np.diff(levels) <= 0))
+        return f"the intensity levels must increase ({levels[i]:g} is followed by {levels[i + 1]:g})"
+    if not (np.isfinite(rates).all() and (rates > 0).all()):
+        i = int(np.argmax(~(np.isfinite(rates) & (rates > 0))))
+        return (f"the rate at level {levels[i]:g} is {rates[i]:g}: rates must be positive and finite (a rate "
+                "of 0 has no logarithm to interpolate; leave out the levels where it is 0)")
+    if (np.diff(rates) > 0).any():
+        i = int(np.argmax(np.diff(rates) > 0))
+        return (f"not monotonic: the rate of exceeding {levels[i + 1]:g} is larger than that of exceeding "
+                f"{levels[i]:g} ({rates[i + 1]:.4g} > {rates[i]:.4g} /yr)")
+    return ""
+
+
+def read_hazard(path, *, units: str | None = None, drop_zeros: bool = False) -> list[HazardTable]:
+    """The hazard curves of a file: OpenQuake's CSV export (one per site), or a plain table (one).
+
+    Parameters
+    ----------
+    path : str or Path
+    units : str, optional
+        The unit of a plain table's levels when its header does not say (``g``, ``gal``, ``cm/s``);
+        default OpenQuake's (g, or cm/s for PGV).
+    drop_zeros : bool
+        End each curve at its last positive PoE or rate: the levels above it, where the PoE is 0
+        (OpenQuake writes 0 below its precision), are left out (the rate is then a lower bound,
+        and says by how much at most). A 0 below a positive value is refused still.
+
+    Raises
+    ------
+    CaseError
+        The file is missing, unreadable, or not a hazard curve (the message names the row or
+        column and why).
+    """
+    source = str(path)
+    path = Path(path)
+    if not path.is_file():
+        raise CaseError("hazard file not found" if not path.exists() else "is a folder, expected a hazard "
+                        "curve file (CSV)", source=source)
+    if path.stat().st_size > MAX_BYTES:
+        raise CaseError(f"larger than {MAX_BYTES >> 20} MB: not a hazard curve file", source=source)
+    try:
+        text = path.read_bytes().decode("utf-8-sig")
+    except UnicodeDecodeError:
+        raise CaseError("not a text file (expected a CSV hazard curve: OpenQuake's export or two columns of "
+                        "level and annual rate)", source=source) from None
+    except OSError as exc:
+        raise CaseError(f"cannot read the file: {exc.strerror or exc}", source=source) from None
+    lines = text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
+    filled = [line.strip() for line in lines if line.strip()][:2]
+    if filled and filled[0].startswith("#") and ("investigation_time" in filled[0] or "imt=" in filled[0]
+                                                 or filled[-1].replace(" ", "").startswith("lon,lat,")):
+        return _read_openquake(lines, source, drop_zeros)
+    return _read_plain(lines, source, units, drop_zeros)
+
+
+def _without_top_zeros(values: np.ndarray) -> int:
+    """How many leading values to keep: all but the zeros at the end."""
+    positive = np.flatnonzero(values != 0)
+    return int(positive[-1]) + 1 if positive.size else 0
+
+
+def _read_openquake(lines: list[str], source: str, drop_zeros: bool) -> list[HazardTable]:
+    numbered = [(n, line) for n, line in enumerate(lines, 1) if line.strip()]
+    (_, comment), rest = numbered[0], numbered[1:]
+    fields = {key: value.strip("'\"") for key, value in _FIELD.findall(comment)}
+    for key in ("investigation_time", "imt"):
+        if key not in fields:
+            raise CaseError(f"the comment line has no {key}=... (OpenQuake's hazard curve export states it)",
+                            source=source, field="line 1")
+    try:
+        years = float(fields["investigation_time"])
+    except ValueError:
+        years = math.nan
+    if not (math.isfinite(years) and years > 0):
+        raise CaseError(f"investigation_time={fields['investigation_time']!r} is not a positive number of years",
+                        source=source, field="line 1")
+    measure = parse_measure(fields["imt"], source=source, field="imt")
+    kind = fields.get("kind", "")
+    if not rest:
+        raise CaseError("no header line 'lon,lat,depth,poe-<level>,...' after the comment line", source=source)
+    header_line, header = rest[0]
+    columns = [c.strip() for c in header.split(",")]
+    if columns[:2] != ["lon", "lat"]:
+        raise CaseError(f"expected the header 'lon,lat,depth,poe-<level>,...', got {header.strip()[:60]!r}",
+                        source=source, field=f"line {header_line}")
+    first_poe = 3 if len(columns) > 2 and columns[2] == "depth" else 2
+    level_columns = columns[first_poe:]
+    levels = []
+    for column in level_columns:
+        if not column.startswith("poe-"):
+            raise CaseError(f"column {column!r} is not poe-<level>", source=source, field=f"line {header_line}")
+        try:
+            levels.append(float(column[4:]))
+        except ValueError:
+            raise CaseError(f"cannot read the level of column {column!r}", source=source,
+                            field=f"line {header_line}") from None
+    display_unit, scale = OPENQUAKE_UNITS[measure.kind]
+    curves = []
+    for line_number, line in rest[1:]:
+        where = f"line {line_number}"
+        cells = [c.strip() for c in line.split(",")]
+        if len(cells) != len(columns):
+            raise CaseError(f"{len(cells)} values, the header has {len(columns)} columns", source=source,
+                            field=where)
+        try:
+            values = [float(c) for c in cells]
+        except ValueError:
+            raise CaseError(f"not numbers: {line.strip()[:60]!r}", source=source, field=where) from None
+        poe = np.array(values[first_poe:])
+        kept = _without_top_zeros(poe) if drop_zeros else poe.size
+        bad = ~((poe[:kept] > 0) & (poe[:kept] < 1))
+        if bad.any():
+            i = int(np.argmax(bad))
+            raise CaseError(f"PoE {poe[i]:g} at {level_columns[i]}: a probability of exceedance must be "
+                            "strictly between 0 and 1 (1 is an infinite rate, 0 has no logarithm to interpolate; "
+                            "leave those levels out, or end each curve at its last positive PoE with "
+                            "--drop-zero-poe)", source=source, field=where)
+        site = (values[0], values[1], values[2] if first_poe == 3 else math.nan)
+        name = kind or "curve"
+        curves.append(HazardTable(name=f"{name} at {site[0]:g},{site[1]:g}", measure=measure,
+                                  levels=np.array(levels[:kept]) * scale, rates=rate_from_poe(poe[:kept], years),
+                                  source=source, kind=kind, investigation_time=years, site=site))
+        problem = curve_problem(levels[:kept], curves[-1].rates)
+        if problem:
+            raise CaseError(f"{problem} (levels in {display_unit})", source=source, field=where)
+    if not curves:
+        raise CaseError("no site rows after the header", source=source)
+    return curves
+
+
+def _read_plain(lines: list[str], source: str, units: str | None, drop_zeros: bool) -> list[HazardTable]:
+    rows, header, header_line = [], None, 0
+    for line_number, line in enumerate(lines, 1):
+        text = line.split("#", 1)[0].strip()
+        if not text:
+            continue
+        cells = [c for c in re.split(r"[,;\s]+", text) if c] if "[" not in text else \
+            [c.strip() for c in re.split(r"[,;\t]", text) if c.strip()]
+        if len(cells) != 2:
+            raise CaseError(f"{len(cells)} values; a plain hazard curve has two columns: the IM level and its "
+                            "annual rate of exceedance [1/yr] (or give OpenQuake's export as written)",
+                            source=source, field=f"line {line_number}")
+        try:
+            rows.append((float(cells[0]), float(cells[1])))
+        except ValueError:
+            if rows or header is not None:
+                raise CaseError(f"not numbers: {text[:60]!r}", source=source, field=f"line {line_number}") from None
+            header, header_line = cells, line_number
+    measure, unit = None, units
+    if header is not None:
+        match = _HEADER_CELL.match(header[0])
+        name, header_unit = (match.group("name"), match.group("unit")) if match else (header[0], None)
+        if _IMT.match(name):
+            measure = parse_measure(name, source=source, field=f"line {header_line}")
+        if header_unit:
+            if units is not None and units.strip() != header_unit:
+                raise CaseError(f"the header says the levels are in {header_unit}, --hazard-units says {units}",
+                                source=source, field=f"line {header_line}")
+            unit = header_unit
+    table = np.array(rows, dtype=np.float64).reshape(-1, 2)
+    kept = _without_top_zeros(table[:, 1]) if drop_zeros else len(table)
+    levels, rates = table[:kept, 0], table[:kept, 1]
+    return [_plain_table(source, measure, levels, rates, unit)]
+
+
+def _plain_table(source: str, measure: Measure | None, levels, rates, unit: str | None) -> HazardTable:
+    """A plain table's curve; ``measure`` None (the header does not name one) is settled by
+    `matching` with the fragility's."""
+    problem = curve_problem(levels, rates)
+    if problem:
+        raise CaseError(problem, source=source)
+    return HazardTable(name=Path(source).name, measure=measure, levels=np.asarray(levels), rates=np.asarray(rates),
+                       source=source, level_units=unit or "")
+
+
+def matching(table: HazardTable, im_name: str, period: float | None, kind: str, label: str) -> HazardTable:
+    """``table`` with its levels in SI, once its measure is checked against a fragility's.
+
+    Parameters
+    ----------
+    im_name, period, kind
+        The fragility's measure: ``pga``, ``pgv``, ``sa(0.3 s)``; its period [s] or None; the unit
+        kind of its levels (``acceleration``, ``velocity``, ``dimensionless``).
+    label : str
+        The fragility's measure for messages (``PGA``, ``Sa(0.3 s, 5 %)``).
+
+    Raises
+    ------
+    CaseError
+        The measures differ, or the fragility's has no hazard curve (``pga_rocking``).
+    """
+    if kind not in OPENQUAKE_UNITS:
+        raise CaseError(f"the fragility's intensity measure {label} is not one a hazard curve gives (PGA, PGV or "
+                        "SA(T)): run 'rockslide fragility' with --im pga, pgv or sa(T)", source=table.source)
+    if table.measure is not None and not table.measure.same_as(im_name, period):
+        raise CaseError(f"the hazard curve is of {table.measure}, the fragility of {label}: give a hazard curve of "
+                        f"{label} (or a fragility computed with --im {_rockslide_name(table.measure)})",
+                        source=table.source)
+    if table.level_units is None:                  # OpenQuake's: levels already SI
+        return table
+    unit = table.level_units or OPENQUAKE_UNITS[kind][0]
+    scale = unit_factor(unit, kind, source=table.source, field="level unit")
+    measure = table.measure or _from_fragility(im_name, period)
+    return HazardTable(name=table.name, measure=measure, levels=table.levels * scale, rates=table.rates,
+                       source=table.source)
+
+
+def _from_fragility(im_name: str, period: float | None) -> Measure:
+    return Measure("sa", period) if period is not None else Measure(im_name)
+
+
+def _rockslide_name(measure: Measure) -> str:
+    return f"'sa({measure.period:g}s)'" if measure.name == "sa" else measure.name
