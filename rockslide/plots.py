@@ -1847,7 +1847,8 @@ def _risk_figure(curves, grid, fragility, *, xlabel, state, title, figsize) -> F
         colour = FRAGILITY_COLOURS[(i + 1) % len(FRAGILITY_COLOURS)]
         top.loglog(curve["levels"], curve["rates"], "-", color=colour, lw=1.8, marker="." if
                    len(curve["levels"]) <= 40 else None, label=curve["label"])
-        bottom.semilogx(grid, curve["share"], color=colour, lw=1.8)
+        # dashes in turn: curves of one shape (hazard curves of one slope) would hide each other
+        bottom.semilogx(grid, curve["share"], color=colour, lw=1.8, ls=("-", "--", ":", "-.")[i % 4])
     right.plot(grid, fragility, color="black", lw=1.5, ls="--")
     right.set_ylim(0.0, 1.02)
     right.set_ylabel(f"P({state} | x)")
