@@ -567,7 +567,7 @@ def plan_fragility(case: Case, suite: Suite, im: IntensityMeasure, levels: sw.Ax
         measures["pgv"][r] = intensity.peak_velocity(h, dt)
         measures["pgv_pga"][r] = measures["pgv"][r] / measures["pga"][r] if measures["pga"][r] else math.nan
         if im.period is not None:                      # the oscillator's memory, known before it runs
-            points = (h.size - 1) * max(1, math.ceil(intensity.POINTS_PER_PERIOD * dt / im.period - 1e-9)) + 1
+            points = (h.size - 1) * intensity.substeps_for(dt, im.period) + 1
             if points > MAX_OSCILLATOR_POINTS:
                 raise CaseError(f"{im.label} of the record {where} takes {points:.3g} points of the oscillator's "
                                 f"response; expected at most {MAX_OSCILLATOR_POINTS:.0e} (a longer period, or a "
