@@ -8,16 +8,17 @@ The Python API (`rockslide.api`, loaded on first use so that ``import rockslide`
 - `load_case` (a case file or a mapping), `case_with` / ``Case.with_``;
 - `run` -> `RunResult` (``.summary``, ``.history``, ``.events``, ``.to_xarray()``);
 - `sweep`, `fragility` and `ensemble` (a verdict's neighbourhood) -> ``xarray.Dataset``;
-- `read_result`: any file rockslide writes.
+- `read_result`: any file rockslide writes;
+- `export_pelicun`: a fragility as a row of pelicun's fragility CSV and its JSON metadata.
 """
 
 from ._version import __version__
 
 __all__ = ["__version__", "load_case", "case_with", "run", "sweep", "fragility", "ensemble", "read_result",
-           "RunResult"]
+           "export_pelicun", "RunResult"]
 
-_API = {"load_case", "case_with", "run", "sweep", "fragility", "ensemble", "read_result", "RunResult", "Case",
-        "Summary"}
+_API = {"load_case", "case_with", "run", "sweep", "fragility", "ensemble", "read_result", "export_pelicun", "RunResult",
+        "Case", "Summary"}
 
 
 def __getattr__(name: str):

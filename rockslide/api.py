@@ -27,7 +27,7 @@ from .case import Case, case_with, load_case
 from .core.simulate import Result, Summary
 from .errors import CaseError
 
-__all__ = ["load_case", "case_with", "run", "sweep", "fragility", "ensemble", "read_result", "RunResult",
+__all__ = ["load_case", "case_with", "run", "sweep", "fragility", "ensemble", "read_result", "export_pelicun", "RunResult",
            "Case", "Summary"]
 
 
@@ -327,3 +327,37 @@ def _axis_text(values, kind: str) -> str:
 
     unit = SI_UNITS.get(kind, "") if kind != "dimensionless" else ""
     return ",".join(value if isinstance(value, str) else f"{float(value)!r}{unit}" for value in values)
+
+
+def export_pelicun(fragility, component_id: str, path: str | Path, *, family: str = "lognormal",
+                   description: str = "", overwrite: bool = False) -> tuple[Path, Path]:
+    """Write a fragility as a row of pelicun's fragility CSV and its JSON metadata entry, as
+    ``rockslide fragility ... --export pelicun ID`` does (`io.pelicun`; docs/floors.md).
+
+    Parameters
+    ----------
+    fragility : xarray.Dataset or str or Path
+        The dataset `fragility` returned, or a ``NAME.fragility.h5`` file.
+    component_id : str
+        The row's ID, e.g. ``"RS.cabinet.5F"``.
+    path : str or Path
+        The CSV file; the JSON is written beside it with the suffix ``.json``.
+    family : str
+        ``"lognormal"`` (the maximum-likelihood fits; demand unit g or cm/s) or ``"multilinear_CDF"``
+        (the stripes, made monotone).
+    description : str
+        The component's description in the JSON.
+    overwrite : bool
+        Replace existing files.
+
+    Returns
+    -------
+    csv, json : Path
+    """
+    from .io import pelicun
+
+    if isinstance(fragility, (str, Path)):
+        fragility = read_result(fragility)
+    csv_path, json_path, _ = pelicun.write_pelicun(fragility, component_id, path, family=family,
+                                                   description=description, overwrite=overwrite)
+    return csv_path, json_path

@@ -203,11 +203,18 @@ def sweep(case_file, mu_kinetic_ratio, records_dir, out_dir, overwrite, no_plot,
 @click.option("--seed", type=click.IntRange(0, 2**62), default=1, show_default=True,
               help="Seed of the parameter samples' Latin hypercube (record r uses seed + r).")
 @click.option("--json", "as_json", is_flag=True, help="Print the fits as one JSON object on stdout.")
+@click.option("--export", "export", type=(click.Choice(["pelicun"]), str), default=(None, None),
+              metavar="pelicun ID",
+              help="Also write the fragility as a row of pelicun's fragility CSV with component ID ID, and its "
+                   "JSON metadata: OUT/NAME.fragility.pelicun.csv and .json (docs/floors.md).")
+@click.option("--export-family", type=click.Choice(["lognormal", "multilinear_CDF"]), default="lognormal",
+              show_default=True, help="The exported limit states: the lognormal fits, or the stripes as "
+                                      "pelicun's multilinear_CDF.")
 @records_dir_option
 @where_options("fragility analysis", "run")
 def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, resamples, case_vertical, samples,
-              seed, as_json, records_dir, out_dir, overwrite, no_plot, workers, scheduler, device, chunk_size,
-              no_progress, dpi, as_csv):
+              seed, as_json, export, export_family, records_dir, out_dir, overwrite, no_plot, workers, scheduler,
+              device, chunk_size, no_progress, dpi, as_csv):
     """Fragility curves of a block over a record suite scaled to levels of an intensity measure:
     CASE_FILE (YAML) -> OUT/NAME.fragility.h5 and OUT/NAME.fragility.png.
 
@@ -224,6 +231,8 @@ def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, 
         rockslide fragility example/example.yaml --suite example/suite-synthetic.yaml --levels 0.1g:1.5g:0.1g
         rockslide fragility example/example.yaml --suite example/suite-synthetic.yaml --json \\
             --im 'sa(0.3s)' --levels 0.25g:3g:0.25g --damage 'rotation>0.5alpha' --damage 'slip>50mm'
+        rockslide fragility cabinet.yaml --suite floors.yaml --im pfa --levels 0.2g:2g:0.2g \\
+            --export pelicun RS.cabinet.5F
     """
     from ..analyses import fragility as fr
     from ..case import load_case
@@ -242,6 +251,13 @@ def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, 
     fplan = fr.plan_fragility(case, suite, im, levels, records_dir=records.records_dir(records_dir),
                               chunk_size=chunk_size, case_vertical=case_vertical, samples=samples, seed=seed)
     h5_path, png_path = _outputs(case, out_dir, ".fragility")
+    export_path = None
+    if export[0] == "pelicun":
+        from ..io import pelicun
+        pelicun.check_export(im, export[1])
+        export_path = h5_path.with_suffix(".pelicun.csv")
+        for path in (export_path, export_path.with_suffix(".json")):
+            files.refuse_existing(path, overwrite)
     if _result_set(h5_path, png_path, overwrite=overwrite, no_plot=no_plot, example="out/case.fragility"):
         files.refuse_existing(h5_path, overwrite=False)           # input errors first, then outputs
     files.remove_stale_temporaries([h5_path, png_path])
@@ -262,6 +278,10 @@ def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, 
             from ..io.datasets import study_dataset
             _write_csv(study_dataset(coords, variables), [name for name, _, _ in coords if name != "damage_state"],
                        h5_path.with_suffix(".csv"), overwrite=overwrite, staging=staging)
+        if export_path is not None:
+            from ..io.datasets import study_dataset
+            *_, left_out = pelicun.write_pelicun(study_dataset(coords, variables, attrs), export[1], export_path,
+                                                 family=export_family, overwrite=overwrite, staging=staging)
         staging.publish(remove=[png_path] if no_plot else [])
     done.store.remove()
     elapsed = time.perf_counter() - started
@@ -283,6 +303,9 @@ def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, 
         if analysis.nominal_fits:
             click.echo("    without parameter uncertainty (the case's values): "
                        + fr.describe_fit(state, analysis.nominal_fits[i], im).split(": ", 1)[1])
+    if export_path is not None:
+        click.echo(f"  pelicun: {export_path} and {export_path.with_suffix('.json').name} ({export_family}, "
+                   f"ID {export[1]})" + (f"; not exported: {'; '.join(left_out)}" if left_out else ""))
     click.echo(f"  wrote {_written(h5_path, png_path, no_plot, as_csv)} in {elapsed:.1f} s")
 
 
