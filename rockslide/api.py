@@ -27,8 +27,8 @@ from .case import Case, case_with, load_case
 from .core.simulate import Result, Summary
 from .errors import CaseError
 
-__all__ = ["load_case", "case_with", "run", "sweep", "fragility", "ensemble", "read_result", "export_pelicun", "RunResult",
-           "Case", "Summary"]
+__all__ = ["load_case", "case_with", "run", "sweep", "fragility", "ensemble", "read_result", "export_pelicun",
+           "RunResult", "Case", "Summary"]
 
 
 @dataclass

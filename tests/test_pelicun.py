@@ -23,6 +23,8 @@ from rockslide.io import pelicun as pl
 from rockslide.io.datasets import study_dataset
 
 G = 9.80665
+EXAMPLE = REPO / "configs" / "example.yaml"
+SUITE = REPO / "records" / "suite-synthetic.yaml"
 #: Realisations of pelicun's sampling: the standard error of a fraction 0.5 is sqrt(0.25 / N) = 0.0035,
 #: and the checks allow 5 of them (a false failure once in 1.7 million).
 N = 20_000
@@ -160,7 +162,7 @@ def test_pelicun_accepts_the_multilinear_rows(tmp_path):
 
 def test_fragility_exports_a_row_beside_its_file(tmp_path):
     out = tmp_path / "out"
-    result = invoke("fragility", REPO / "configs" / "example.yaml", "--suite", REPO / "records" / "suite-synthetic.yaml",
+    result = invoke("fragility", EXAMPLE, "--suite", SUITE,
                     "--levels", "0.2g:1.6g:0.2g", "--bootstrap", "0", "--no-plot", "--no-progress",
                     "--out-dir", out, "--export", "pelicun", "RS.example")
     assert result.exit_code == 0, (result.output, result.exception)
@@ -175,7 +177,7 @@ def test_fragility_exports_a_row_beside_its_file(tmp_path):
 @pytest.mark.parametrize("args, part", [(["--export", "pelicun", "a b"], "component ID"),
                                         (["--im", "pga_rocking", "--export", "pelicun", "X"], "no pelicun demand")])
 def test_bad_exports_are_one_line_before_any_run(tmp_path, args, part):
-    result = invoke("fragility", REPO / "configs" / "example.yaml", "--suite", REPO / "records" / "suite-synthetic.yaml",
+    result = invoke("fragility", EXAMPLE, "--suite", SUITE,
                     "--levels", "0.2:1:0.2" if "pga_rocking" in args else "0.2g:1g:0.2g", "--out-dir", tmp_path,
                     *args)
     one_line_error(result, part)

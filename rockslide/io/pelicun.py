@@ -42,7 +42,8 @@ from ..errors import CaseError
 from ..units import STANDARD_GRAVITY
 from .files import atomic_write
 
-__all__ = ["FAMILIES", "COLUMNS", "check_export", "pelicun_row", "pelicun_metadata", "write_pelicun", "monotone_stripes"]
+__all__ = ["FAMILIES", "COLUMNS", "check_export", "pelicun_row", "pelicun_metadata", "write_pelicun",
+           "monotone_stripes"]
 
 FAMILIES = ("lognormal", "multilinear_CDF")
 #: The fixed columns of pelicun's fragility CSV, before the limit states' four columns each.
