@@ -7,8 +7,8 @@ another, each:
 1. **Text header**: line 1 names the data (``Corrected acceleration`` for a V2 record) and says
    ``(Format v01.20 with 13 text lines)``; line 5 has the network and station code after ``Code:``
    (``CE-24601``; columns 26-27 and 29-34) and the station's name after them (from column 41);
-   line 9 names the channel, its orientation and its ``Location:`` in the structure; line 13 the values that mean "unknown" (columns 65-71, e.g.
-   ``-999``).
+   line 9 names the channel, its orientation and its ``Location:`` in the structure; line 13 the
+   values that mean "unknown" (columns 65-71, e.g. ``-999``).
 2. **Integer header**: a line ``  100 Integer-header values follow on  10 lines, Format= (10I8)``
    and the values in that Fortran format. Used here (1-based, as the format numbers them):
    ``Int(1)`` the processing stage (2: V2), ``Int(2)`` the kind of series (1: acceleration),
