@@ -282,7 +282,8 @@ def _code(name) -> int:
 
 
 def response_figure(result, *, title: str = "", time_shift: float = 0.0,
-                    zoom: tuple | None | str = "auto", crop: tuple | None | str = "auto") -> Figure:
+                    zoom: tuple | None | str = "auto", crop: tuple | None | str = "auto",
+                    base: dict | None = None) -> Figure:
     """The response of one simulation in the paper's style (module docstring).
 
     Parameters
@@ -300,6 +301,9 @@ def response_figure(result, *, title: str = "", time_shift: float = 0.0,
     crop : "auto", (t0, t1) or None
         The time range of the response and ground panels: ``"auto"`` = `motion_range`;
         ``(t0, t1)`` in the figure's time [s]; None = the whole record.
+    base : dict, optional
+        For a block on a floor: the ground under the building (``time`` [s], ``horizontal`` [m/s^2],
+        as `StoredResult.base`), drawn in grey under the floor's motion; a `StoredResult` gives its own.
 
     Returns
     -------
@@ -311,6 +315,7 @@ def response_figure(result, *, title: str = "", time_shift: float = 0.0,
     """
     if hasattr(result, "result") and hasattr(result, "case_text"):   # a StoredResult
         title = title or result.name
+        base = base or result.base or None
         result = result.result
     shift = float(time_shift)
     t0, t1 = _choose_range(result, crop, shift)
@@ -336,15 +341,15 @@ def response_figure(result, *, title: str = "", time_shift: float = 0.0,
         # round first: a pulse's ground starts a sample before 0 (-0.00 otherwise)
         zax.set_title(f"magnified: {round(window[0], 2) + 0.0:.2f} to {window[1]:.2f} s", loc="left",
                       fontsize=10, y=title_y)
-    _ground_panel(ground, result, shift, (t0, t1))
+    _ground_panel(ground, result, shift, (t0, t1), base=base)
     ground.set_label("ground")
     ground.set_xlim(t0 + shift, t1 + shift)
     for ax in axes:
         ax.set_xlabel("time [s]")
 
     suptitle = fig.suptitle(_title(result, title), fontsize=12)
-    legend = fig.legend(handles=_legend_handles(result), loc="lower center", ncols=6, frameon=False,
-                        fontsize=9)
+    legend = fig.legend(handles=_legend_handles(result, floor=base is not None), loc="lower center", ncols=6,
+                        frameon=False, fontsize=9)
     _fit_column(fig, suptitle=suptitle, legend=legend, title_size=10)
     return fig
 
@@ -668,14 +673,19 @@ def _mark_end(ax, result, shift, span, *, hatch):
     return text, colour
 
 
-def _ground_panel(ax, result, shift, span):
+def _ground_panel(ax, result, shift, span, base=None):
+    if base is not None:                     # the ground under the building, beneath the floor's motion
+        tb = np.asarray(base["time"])
+        inside = _within(tb, span)
+        ax.plot(*_envelope(tb[inside] + shift, np.asarray(base["horizontal"])[inside] / GAL), color="0.55",
+                lw=0.8, label="ground horizontal (under the building)")
     t = np.asarray(result.ground_time)
     shown = _within(t, span)
     for key, values in (("horizontal", result.ground_horizontal), ("vertical", result.ground_vertical)):
         ax.plot(*_envelope(t[shown] + shift, np.asarray(values)[shown] / GAL), color=GROUND_COLOURS[key],
                 lw=0.8, label=key, alpha=0.9 if key == "horizontal" else 0.8)
     ax.axhline(0.0, color="0.6", lw=0.5)
-    ax.set_ylabel("ground acc. [gal]")
+    ax.set_ylabel("floor acc. [gal]" if base is not None else "ground acc. [gal]")
     ax.grid(True, axis="x", color="0.88", lw=0.6)
     _mark_end(ax, result, shift, span, hatch=False)
     peak = max(float(np.max(np.abs(result.ground_horizontal), initial=0.0)),
@@ -683,19 +693,24 @@ def _ground_panel(ax, result, shift, span):
     if peak == 0.0:
         ax.set_ylim(-1.0, 1.0)
     title_y = _title_height(ax)
-    ax.set_title("ground acceleration as applied", loc="left", fontsize=10, y=title_y)
+    ax.set_title("floor acceleration the block stands on (in colour) and the ground under the building "
+                 "(grey, horizontal)" if base is not None else "ground acceleration as applied",
+                 loc="left", fontsize=10, y=title_y)
     if peak == 0.0:
         ax.set_title("still ground (no record)", loc="right", fontsize=9, color="0.3", y=title_y)
 
 
-def _legend_handles(result, *, ground: bool = True) -> list:
+def _legend_handles(result, *, ground: bool = True, floor: bool = False) -> list:
     handles = [Line2D([], [], color=ROTATION_COLOUR, lw=1.5, label="liftoff angle φ"),
                Line2D([], [], color=SLIP_COLOUR, lw=1.5, label="slip x")]
     if math.isfinite(result.summary.alpha):
         handles.append(Line2D([], [], color=ALPHA_COLOUR, ls="--", lw=0.9, label="±α (tips over past it)"))
     if ground:
-        handles += [Line2D([], [], color=GROUND_COLOURS[key], lw=1.0, label=f"ground {key}")
+        support = "floor" if floor else "ground"
+        handles += [Line2D([], [], color=GROUND_COLOURS[key], lw=1.0, label=f"{support} {key}")
                     for key in ("horizontal", "vertical")]
+    if floor:
+        handles.append(Line2D([], [], color="0.55", lw=1.0, label="ground horizontal, under the building"))
     handles += [Patch(facecolor="white", edgecolor="0.6", lw=0.5, label="REST"),
                 Patch(facecolor=STATE_COLOURS[SLIP], label="SLIP"),
                 Patch(facecolor=STATE_COLOURS[ROCK], label="ROCK (liftoff)"),

@@ -99,12 +99,14 @@ def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, members, s
                 writer.finish(result, name=case.name, case_text=case.text, case=case_to_dict(case, case_file=False),
                               records=runner.record_entries(prepared), ground=ground,
                               extra_attrs={} if neighbourhood is None else ens.attributes(neighbourhood),
-                              extra_groups=None if group is None else {"ensemble": (dimension, group)})
+                              extra_groups={**(runner.base_motion(prepared) or {}),
+                                            **({} if group is None else {"ensemble": (dimension, group)})} or None)
             ensemble_png = folder / f"{case.name}.ensemble.png"
             if not no_plot:
                 kept = writer.written_result()
                 _draw(kept if kept is not None else results.read_result(writer.tmp).result, case.name,
-                      png_path, overwrite=overwrite, dpi=dpi, staging=staging)
+                      png_path, overwrite=overwrite, dpi=dpi, staging=staging,
+                      base=_base_of(runner.base_motion(prepared)))
                 if neighbourhood is not None:
                     _draw_ensemble(neighbourhood, group, result.summary, case.name, ensemble_png,
                                    overwrite=overwrite, dpi=dpi, staging=staging)
@@ -117,7 +119,8 @@ def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, members, s
             written += f" and {ensemble_png}"
     else:
         with files.Staging(overwrite=False) as staging:
-            _draw(stored.result, stored.name, png_path, overwrite=False, dpi=dpi, staging=staging)
+            _draw(stored.result, stored.name, png_path, overwrite=False, dpi=dpi, staging=staging,
+                  base=stored.base or None)
             staging.publish()
         result = stored.result
         neighbourhood = None if eplan is None else json.loads(stored.attrs["ensemble"])
@@ -132,6 +135,9 @@ def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, members, s
         click.echo(json.dumps(payload, allow_nan=False, default=_json_default))
     else:
         click.echo(run_text(case.name, summary, neighbourhood, ground=ground, units=case.units))
+        floor = runner.floor_text(case, prepared)
+        if floor:
+            click.echo(f"  {floor}")
         click.echo(f"  wrote {written} in {elapsed:.2f} s")
 
 
@@ -222,12 +228,22 @@ def _time_range(text: str, option: str, words: dict):
     return start, end
 
 
-def _draw(result, name, path, *, overwrite, dpi=None, time_shift=0.0, zoom="auto", crop="auto", staging=None):
-    """Draw the figure of one run (`plots.response_figure`) and save it (`plots.save_figure`)."""
+def _draw(result, name, path, *, overwrite, dpi=None, time_shift=0.0, zoom="auto", crop="auto", staging=None,
+          base=None):
+    """Draw the figure of one run (`plots.response_figure`, with the ground under the building ``base``
+    of a case on a floor) and save it (`plots.save_figure`)."""
     from ..plots import response_figure, save_figure
 
-    figure = response_figure(result, title=name, time_shift=time_shift, zoom=zoom, crop=crop)
+    figure = response_figure(result, title=name, time_shift=time_shift, zoom=zoom, crop=crop, base=base)
     save_figure(figure, path, overwrite=overwrite, dpi=dpi, staging=staging)
+
+
+def _base_of(group: dict | None) -> dict | None:
+    """``{time, horizontal, vertical}`` of `prepare.base_motion`'s group (None without a floor)."""
+    if group is None:
+        return None
+    (_, time, _), variables = group["base"]
+    return {"time": time, **{role: values for role, (_, values, _) in variables.items()}}
 
 
 def _same_result(case, prepared, h5_path: Path, *, eplan=None):

@@ -252,7 +252,7 @@ def spectral_absolute_acceleration(acceleration, dt: float, period: float, dampi
     return float(np.max(np.abs(absolute)))
 
 
-def floor_acceleration(acceleration, dt: float, modes) -> tuple[np.ndarray, float]:
+def floor_acceleration(acceleration, dt: float, modes, substeps: int | None = None) -> tuple[np.ndarray, float]:
     """Absolute acceleration of a floor of a linear building on the ground record (modal superposition).
 
     Parameters
@@ -265,6 +265,9 @@ def floor_acceleration(acceleration, dt: float, modes) -> tuple[np.ndarray, floa
         Each mode ``i``: period ``T_i`` [s] (> 0), damping ratio ``zeta_i`` [-] in [0, 1) and
         participation ``p_i = Gamma_i phi_i`` [-] at the floor (the mode's participation factor
         times its shape at the floor; 1 for one mode that carries the floor alone).
+    substeps : int, optional
+        Equal steps per record interval ``m``; default `substeps_for` (dt, shortest period), 1
+        without modes (a common ``m`` puts two components on one grid).
 
     Returns
     -------
@@ -274,14 +277,14 @@ def floor_acceleration(acceleration, dt: float, modes) -> tuple[np.ndarray, floa
         oscillator's absolute acceleration ``-(2 zeta omega u' + omega^2 u)``. Exact at every step
         (Nigam-Jennings, module notes); ``a_g`` at the steps is the record's linear interpolation.
     step : float
-        [s] ``dt / m``, with ``m`` = `substeps_for` (dt, shortest period): the floor motion is seen
-        `POINTS_PER_PERIOD` times per period of its fastest mode, as the spectra see it.
+        [s] ``dt / m``; by default the floor motion is seen `POINTS_PER_PERIOD` times per period of
+        its fastest mode, as the spectra see it.
     """
     a = _samples(acceleration)
     modes = [tuple(float(x) for x in mode) for mode in modes]
-    if not modes:
+    m = substeps if substeps is not None else max((substeps_for(dt, p) for p, _, _ in modes), default=1)
+    if m == 1 and not modes:
         return a.copy(), float(dt)
-    m = max(substeps_for(dt, period) for period, _, _ in modes)
     fine = np.linspace(0.0, 1.0, m + 1)[:-1]
     ground = np.append((a[:-1, None] * (1.0 - fine) + a[1:, None] * fine).ravel(), a[-1]) if a.size > 1 else a.copy()
     floor = ground.copy()

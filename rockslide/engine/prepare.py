@@ -8,6 +8,7 @@ pure core and calls `simulate` (or the reference solver).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import warnings
 from dataclasses import dataclass
@@ -17,6 +18,7 @@ import numpy as np
 
 from .. import pulses
 from ..case import Case
+from ..core import intensity
 from ..core.layout import P_G, P_R, P_STEP
 from ..core.simulate import Model, Result, Settings, interval_count, parameters, simulate, substeps, tail_samples
 from ..errors import CaseError, RecordError
@@ -27,12 +29,15 @@ from ..units import STANDARD_GRAVITY
 
 @dataclass(frozen=True)
 class Prepared:
-    """A case with its ground motion loaded: everything needed to simulate it."""
+    """A case with its ground motion loaded: everything needed to simulate it. ``ground`` is the
+    motion the block stands on (the floor's, with ``ground.floor``); ``base`` the ground motion under
+    the building when there is a floor (else None)."""
 
     case: Case
     ground: rec.GroundMotion
     model: Model
     settings: Settings
+    base: rec.GroundMotion | None = None
 
 
 def read_records(case: Case, records_dir: Path | None = None) -> dict[str, rec.Record | None]:
@@ -71,6 +76,81 @@ def load_ground(case: Case, records_dir: Path | None = None) -> rec.GroundMotion
             raise
         # combine names its scale options; in the case file they are keys of ground.scale
         raise RecordError(exc.message, source=exc.source, field=f"ground.scale.{exc.field}") from None
+
+
+def floor_ground(case: Case, ground: rec.GroundMotion) -> rec.GroundMotion:
+    """The motion of the floor the block stands on (``ground.floor``), from the ground motion under the
+    building: each component through its modes (`core.intensity.floor_acceleration`, exact for the
+    piecewise-linear record) on one grid of ``dt / m``, ``m`` the steps the fastest mode needs (at
+    most as many as keep the grid's step >= ``solver.dt``, `simulate.substeps`' condition); or the
+    ground times the screening factor ``1 + 2 z/h``. Without a floor, ``ground`` itself.
+
+    Raises
+    ------
+    CaseError
+        A floor under analytic pulses (sampled with jumps, not as a piecewise-linear record).
+    """
+    floor = case.ground.floor
+    if not floor.given:
+        return ground
+    if np.ndim(ground.horizontal) != 1:
+        raise CaseError("a floor's motion is computed from record files; this case's ground is an analytic "
+                        "pulse: write the pulse as a record, or remove ground.floor", source=case.source,
+                        field="ground.floor")
+    if floor.z_over_h is not None:
+        factor = floor.amplification()
+        return dataclasses.replace(ground, horizontal=rec._frozen(factor * ground.horizontal),
+                                   vertical=rec._frozen(factor * ground.vertical))
+    modes = {role: [(m.period, m.damping, m.participation) for m in getattr(floor, role)]
+             for role in ("horizontal", "vertical")}
+    needed = max(intensity.substeps_for(ground.dt, period) for role in modes for period, _, _ in modes[role])
+    m = max(1, min(needed, int(ground.dt / case.solver.dt * (1.0 + 1e-9))))
+    components = {}
+    for role, role_modes in modes.items():
+        components[role], step = intensity.floor_acceleration(getattr(ground, role), ground.dt, role_modes, m)
+    return dataclasses.replace(ground, dt=step, horizontal=rec._frozen(components["horizontal"]),
+                               vertical=rec._frozen(components["vertical"]))
+
+
+def floor_text(case: Case, prepared: Prepared | None = None) -> str | None:
+    """One line on the floor the block stands on, for printouts (None without a floor); the screening
+    factor is said to be one."""
+    floor = case.ground.floor
+    if not floor.given:
+        return None
+    if floor.z_over_h is not None:
+        return (f"floor: screening only, the ground times 1 + 2 z/h = {floor.amplification():g} (z/h = "
+                f"{floor.z_over_h:g}, ASCE 7-16 Eq. 13.3-1), not a building's response")
+    parts = []
+    for role in ("horizontal", "vertical"):
+        modes = getattr(floor, role)
+        if modes:
+            parts.append(f"{role} " + ", ".join(f"T = {m.period:g} s, zeta = {m.damping:g}, participation "
+                                                f"{m.participation:g}" for m in modes))
+    text = "floor of a linear building: " + "; ".join(parts)
+    if prepared is not None and prepared.base is not None:
+        g = prepared.ground
+        text += (f"; PFA {intensity.peak_acceleration(g.horizontal) / STANDARD_GRAVITY:.3g} g over PGA "
+                 f"{intensity.peak_acceleration(prepared.base.horizontal) / STANDARD_GRAVITY:.3g} g, PFV "
+                 f"{intensity.peak_velocity(g.horizontal, g.dt) * 100:.3g} cm/s")
+    return text
+
+
+def base_motion(prepared: Prepared) -> dict | None:
+    """The ground motion under the building of a case on a floor, as the result file's ``/base`` group
+    holds it (`results.ResultWriter.finish`'s ``extra_groups``): ``{"base": (time, variables)}`` with
+    the times [s] (``ground.time_shift`` added, as the run's) and the scaled horizontal and vertical
+    ground accelerations [m/s^2]; None without a floor."""
+    base = prepared.base
+    if base is None:
+        return None
+    time = start_time(prepared) + base.dt * np.arange(base.horizontal.size)
+    words = {"horizontal": "horizontal", "vertical": "vertical (up positive)"}
+    return {"base": (("time", time, {"units": "s", "long_name": "time"}),
+                     {role: (("time",), getattr(base, role), {
+                         "units": "m/s^2", "long_name": f"{words[role]} ground acceleration under the building "
+                         "(scaled), the input of the floor the block stands on (/ground)"})
+                      for role in ("horizontal", "vertical")})}
 
 
 def is_pulse_case(case: Case) -> bool:
@@ -358,7 +438,9 @@ def prepare(case: Case, records_dir: Path | None = None, *, history: bool = True
     """Load the case's records and run every check that needs no computation (the parameters'
     ranges, the ground motion, the sizes), warning when the step is too coarse for the block."""
     check_parameters(case)
-    ground = load_ground(case, records_dir)
+    base = load_ground(case, records_dir)
+    check_step(case, base)
+    ground = floor_ground(case, base)
     check_against_ground(case, ground)
     check_size(case, ground, history=history)
     model = model_for(case)
@@ -366,7 +448,7 @@ def prepare(case: Case, records_dir: Path | None = None, *, history: bool = True
     warning = coarse_step_warning(case.source, parameters(model, ground.dt, settings))
     if warning:
         warnings.warn(warning, RunWarning, stacklevel=2)
-    return Prepared(case, ground, model, settings)
+    return Prepared(case, ground, model, settings, base=base if ground is not base else None)
 
 
 def start_time(prepared: Prepared) -> float:
@@ -403,7 +485,7 @@ def record_entries(prepared: Prepared) -> list[dict]:
     return out
 
 
-__all__ = ["Prepared", "load_ground", "is_pulse_case", "unit_pulses", "pulse_ground", "model_for",
+__all__ = ["Prepared", "load_ground", "floor_ground", "floor_text", "base_motion", "is_pulse_case", "unit_pulses", "pulse_ground", "model_for",
            "settings_for", "check_parameters", "check_against_ground", "check_step", "check_size", "prepare",
            "simulate_prepared", "run_case", "record_entries", "start_time", "verdict_robustness", "work", "Work",
            "step_warning", "RunWarning"]

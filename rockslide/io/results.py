@@ -25,6 +25,8 @@ Layout (format ``rockslide-result``, version 1):
 | `/ground/time` | float64[m] | s | sample times |
 | `/ground/horizontal` | float64[m] | m/s^2 | horizontal ground acceleration |
 | `/ground/vertical` | float64[m] | m/s^2 | vertical ground acceleration (up positive) |
+| `/base` | group | | a block on a floor (``ground.floor``): the ground under the building; `/ground` is then the floor's motion |
+| `/base/time`, `horizontal`, `vertical` | float64[k] | s, m/s^2 | its times and accelerations (scaled, no tail) |
 | `/events` | compound[k] | | the event log (fields below) |
 | `/event` | int64[k] | 1 | the event log's index: its netCDF-4 dimension `event` |
 | `/case` | group (attrs) | | if a case is given: `yaml` (the case file's text) and the case's keys |
@@ -160,6 +162,9 @@ class StoredResult:
     ground : dict
         The ground motion as applied (keys ``GROUND_KEYS``, SI; None where not stored), ``{}`` if
         the file has none.
+    base : dict
+        For a block on a floor, the ground motion under the building (``/base``): ``time`` [s],
+        ``horizontal`` and ``vertical`` [m/s^2]; ``{}`` otherwise.
     """
 
     name: str
@@ -169,6 +174,7 @@ class StoredResult:
     records: list[dict]
     attrs: dict
     ground: dict = dataclasses.field(default_factory=dict)
+    base: dict = dataclasses.field(default_factory=dict)
 
 
 # --------------------------------------------------------------------------------------------------
@@ -854,8 +860,10 @@ def _read_body(f: h5py.File) -> StoredResult:
                                 for key in RECORD_KEYS})
     ground = {key: None if math.isnan(attrs[f"ground_{key}"]) else float(attrs[f"ground_{key}"])
               for key in GROUND_KEYS if f"ground_{key}" in attrs}
+    base = {key: f["base"][key][()].astype(np.float64) for key in ("time", "horizontal", "vertical")} \
+        if "base" in f else {}
     return StoredResult(name=str(attrs.get("name", "")), result=result, case_text=case_text,
-                        case=case, records=records, attrs=attrs, ground=ground)
+                        case=case, records=records, attrs=attrs, ground=ground, base=base)
 
 
 def _summary_from_attrs(attrs: dict) -> Summary:
