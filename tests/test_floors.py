@@ -98,3 +98,80 @@ def test_modes_superpose():
     m = round(dt / step)
     ground = both[::m] - (first[::round(dt / step1)] - a) - (second[::m] - a)
     assert np.max(np.abs(ground - a)) <= 1e-12 * np.max(np.abs(both))
+
+
+# --------------------------------------------------------------------------------------------------
+# A case on a floor: ground.floor through the engine, the result file and the command
+# --------------------------------------------------------------------------------------------------
+
+import h5py  # noqa: E402
+from conftest import REPO, invoke, one_line_error  # noqa: E402
+
+from rockslide.case import case_with, load_case  # noqa: E402
+from rockslide.engine import prepare as runner  # noqa: E402
+
+EXAMPLE = REPO / "configs" / "example.yaml"
+MODES = {"horizontal": [{"period": "0.6 s", "participation": 1.3}, {"period": 0.2, "damping": 0.03,
+                                                                    "participation": -0.4}],
+         "vertical": {"period": "0.08 s"}}
+
+
+def test_the_block_stands_on_the_floor_and_the_base_is_the_ground():
+    case = load_case(EXAMPLE)
+    plain = runner.prepare(case)
+    on_floor = runner.prepare(case_with(case, {"ground.floor": MODES}))
+    base, floor = on_floor.base, on_floor.ground
+    assert plain.base is None
+    np.testing.assert_array_equal(base.horizontal, plain.ground.horizontal)      # scaled as without a floor
+    m = im.substeps_for(base.dt, 0.08)                                           # the fastest mode decides
+    assert floor.dt == pytest.approx(base.dt / m, rel=1e-15) and floor.horizontal.size == (base.horizontal.size - 1) * m + 1
+    expected, _ = im.floor_acceleration(base.horizontal, base.dt, [(0.6, 0.05, 1.3), (0.2, 0.03, -0.4)], m)
+    np.testing.assert_array_equal(floor.horizontal, expected)
+    vertical, _ = im.floor_acceleration(base.vertical, base.dt, [(0.08, 0.05, 1.0)], m)
+    np.testing.assert_array_equal(floor.vertical, vertical)
+
+
+def test_screening_multiplies_the_ground_by_one_plus_two_z_over_h():
+    case = load_case(EXAMPLE)
+    screened = runner.prepare(case_with(case, {"ground.floor.z_over_h": 0.75}))
+    np.testing.assert_array_equal(screened.ground.horizontal, 2.5 * screened.base.horizontal)
+    assert "screening only" in runner.floor_text(screened.case)
+
+
+def test_the_result_file_keeps_the_ground_and_the_floor(tmp_path):
+    case = tmp_path / "cabinet.yaml"
+    text = EXAMPLE.read_text().replace("../records/", str(REPO / "records") + "/")
+    case.write_text(text.replace("  tail: 2 s", "  tail: 2 s\n  floor: {horizontal: {period: 0.5 s}}"))
+    result = invoke("run", case, "--out-dir", tmp_path, "--no-plot")
+    assert result.exit_code == 0, result.output
+    assert "floor of a linear building: horizontal T = 0.5 s" in result.output and "PFA" in result.output
+    plain = runner.prepare(load_case(EXAMPLE)).ground
+    with h5py.File(tmp_path / "example.h5") as f:
+        np.testing.assert_array_equal(f["base/horizontal"][()], plain.horizontal)
+        assert f["base/horizontal"].attrs["units"] == "m/s^2"
+        floor = f["ground/horizontal"][()]
+    n = plain.horizontal.size
+    assert np.max(np.abs(floor[:n])) > np.max(np.abs(plain.horizontal))   # a 0.5 s floor amplifies this record
+
+
+@pytest.mark.parametrize("floor, part", [
+    ({"z_over_h": 0.5, "horizontal": {"period": 1.0}}, "give z_over_h or modes"),
+    ({"horizontal": {"period": "0 s"}}, "ground.floor.horizontal.period"),
+    ({"horizontal": [{"period": 1.0}, {"periode": 1.0}]}, "ground.floor.horizontal[1].periode"),
+    ({"z_over_h": 1.5}, "ground.floor.z_over_h"),
+])
+def test_bad_floors_are_one_line(tmp_path, floor, part):
+    import yaml
+
+    data = yaml.safe_load(EXAMPLE.read_text())
+    data["ground"]["floor"] = floor
+    path = tmp_path / "bad.yaml"
+    path.write_text(yaml.safe_dump(data))
+    one_line_error(invoke("run", path, "--out-dir", tmp_path), part)
+
+
+def test_a_pulse_under_a_floor_is_refused(tmp_path):
+    path = tmp_path / "pulse.yaml"
+    path.write_text((REPO / "rockslide" / "spectrum-one-sine.yaml").read_text().replace(
+        "ground:", "ground:\n  floor: {horizontal: {period: 0.5 s}}", 1))
+    one_line_error(invoke("run", path, "--out-dir", tmp_path), "ground.floor", "analytic pulse")

@@ -25,8 +25,6 @@ Layout (format ``rockslide-result``, version 1):
 | `/ground/time` | float64[m] | s | sample times |
 | `/ground/horizontal` | float64[m] | m/s^2 | horizontal ground acceleration |
 | `/ground/vertical` | float64[m] | m/s^2 | vertical ground acceleration (up positive) |
-| `/base` | group | | a block on a floor (``ground.floor``): the ground under the building; `/ground` is then the floor's motion |
-| `/base/time`, `horizontal`, `vertical` | float64[k] | s, m/s^2 | its times and accelerations (scaled, no tail) |
 | `/events` | compound[k] | | the event log (fields below) |
 | `/event` | int64[k] | 1 | the event log's index: its netCDF-4 dimension `event` |
 | `/case` | group (attrs) | | if a case is given: `yaml` (the case file's text) and the case's keys |
@@ -34,6 +32,9 @@ Layout (format ``rockslide-result``, version 1):
 | `/records/horizontal` | group (attrs) | | the horizontal record file (attributes below) |
 | `/records/vertical` | group (attrs) | | the same for the vertical record |
 
+- A block on a floor (``ground.floor``): ``/ground`` is the floor's motion, the block's support, and
+  a group ``/base`` holds the ground under the building (``time`` [s], ``horizontal`` and
+  ``vertical`` [m/s^2], scaled, without the tail), labelled as ``/ground`` is.
 - ``/time_history/state`` attribute ``codes`` = "0 REST, 1 SLIP, 2 ROCK, 3 ROCKSLIP, 4 OVERTURNED".
 - ``/events`` fields: ``time`` (f8) [s]; ``from``, ``to`` (UTF-8 text, state names); ``cause``
   (UTF-8 text: slip-start, liftoff, slip-stop, slip-reversal, impact, liftoff-end, overturn, flight,
