@@ -194,7 +194,9 @@ def fragility(case: Case | Mapping | str | Path, suite: str | Path, *, im: str =
     suite : str or Path
         A suite file (YAML), a folder of horizontal records, or a glob of them.
     im : str
-        The intensity measure: ``pga``, ``pgv``, ``pga_rocking`` or ``sa(T)`` (e.g. ``"sa(0.5s)"``).
+        The intensity measure: ``pga``, ``pgv``, ``pga_rocking``, ``sa(T)`` (e.g. ``"sa(0.5s)"``) of the
+        records as read, or ``pfa``, ``pfv`` of the motion the block stands on (the floor's, with the
+        case's ``ground.floor``; else the records', floor records).
     levels : str or sequence
         ``"0.1g:1.5g:0.1g"`` or a comma list as on the command line, or a sequence of values (SI
         numbers of the measure, or strings with units).

@@ -208,8 +208,9 @@ class Floor:
     horizontal, vertical : tuple of Mode
         The building's modes in each direction (none: that component is the ground's).
     z_over_h : float or None
-        Screening instead of modes: the floor's motion is the ground's times ``1 + 2 z/h`` (the height
-        factor of ASCE 7-16 Eq. 13.3-1), ``z/h`` the floor's height over the roof's, within [0, 1].
+        Screening instead of modes: the floor's horizontal motion is the ground's times ``1 + 2 z/h``
+        (the height factor of ASCE 7-16 Eq. 13.3-1), ``z/h`` the floor's height over the roof's,
+        within [0, 1]; the vertical is the ground's.
     """
 
     horizontal: tuple = ()
@@ -560,8 +561,8 @@ CASE_KEYS: dict[str, dict] = {
                       keys={
             "horizontal": _modes_key("horizontal"),
             "vertical": _modes_key("vertical"),
-            "z_over_h": _key("dimensionless", "screening only, instead of modes: the floor's motion is the "
-                             "ground's times 1 + 2 z/h (ASCE 7-16 Eq. 13.3-1), z/h = floor height / roof height",
+            "z_over_h": _key("dimensionless", "screening only, instead of modes: the floor's horizontal motion is "
+                             "the ground's times 1 + 2 z/h (ASCE 7-16 Eq. 13.3-1), z/h = floor height / roof height",
                              bounds=[(">=", 0.0), ("<=", 1.0)]),
         }),
     }),

@@ -10,10 +10,16 @@ from __future__ import annotations
 
 import math
 
+import h5py
 import numpy as np
 import pytest
+import yaml
+from conftest import REPO, invoke, one_line_error
 
+from rockslide.analyses import fragility as fr
+from rockslide.case import case_with, load_case
 from rockslide.core import intensity as im
+from rockslide.engine import prepare as runner
 
 
 def transmissibility(r: float, zeta: float) -> float:
@@ -104,12 +110,6 @@ def test_modes_superpose():
 # A case on a floor: ground.floor through the engine, the result file and the command
 # --------------------------------------------------------------------------------------------------
 
-import h5py  # noqa: E402
-from conftest import REPO, invoke, one_line_error  # noqa: E402
-
-from rockslide.case import case_with, load_case  # noqa: E402
-from rockslide.engine import prepare as runner  # noqa: E402
-
 EXAMPLE = REPO / "configs" / "example.yaml"
 MODES = {"horizontal": [{"period": "0.6 s", "participation": 1.3}, {"period": 0.2, "damping": 0.03,
                                                                     "participation": -0.4}],
@@ -124,7 +124,8 @@ def test_the_block_stands_on_the_floor_and_the_base_is_the_ground():
     assert plain.base is None
     np.testing.assert_array_equal(base.horizontal, plain.ground.horizontal)      # scaled as without a floor
     m = im.substeps_for(base.dt, 0.08)                                           # the fastest mode decides
-    assert floor.dt == pytest.approx(base.dt / m, rel=1e-15) and floor.horizontal.size == (base.horizontal.size - 1) * m + 1
+    assert floor.dt == pytest.approx(base.dt / m, rel=1e-15)
+    assert floor.horizontal.size == (base.horizontal.size - 1) * m + 1
     expected, _ = im.floor_acceleration(base.horizontal, base.dt, [(0.6, 0.05, 1.3), (0.2, 0.03, -0.4)], m)
     np.testing.assert_array_equal(floor.horizontal, expected)
     vertical, _ = im.floor_acceleration(base.vertical, base.dt, [(0.08, 0.05, 1.0)], m)
@@ -161,8 +162,6 @@ def test_the_result_file_keeps_the_ground_and_the_floor(tmp_path):
     ({"z_over_h": 1.5}, "ground.floor.z_over_h"),
 ])
 def test_bad_floors_are_one_line(tmp_path, floor, part):
-    import yaml
-
     data = yaml.safe_load(EXAMPLE.read_text())
     data["ground"]["floor"] = floor
     path = tmp_path / "bad.yaml"
@@ -175,3 +174,27 @@ def test_a_pulse_under_a_floor_is_refused(tmp_path):
     path.write_text((REPO / "rockslide" / "spectrum-one-sine.yaml").read_text().replace(
         "ground:", "ground:\n  floor: {horizontal: {period: 0.5 s}}", 1))
     one_line_error(invoke("run", path, "--out-dir", tmp_path), "ground.floor", "analytic pulse")
+
+
+def test_fragility_levels_of_pfa_are_the_peaks_of_each_runs_floor():
+    """``--im pfa``: each record's floor motion is scaled so that its peak is the level; `rockslide run`
+    of a run's case (`point_case`: the ground scaled, then filtered) has that PFA to round-off (the
+    filter is linear), while its PGA is the ground's."""
+    case = case_with(load_case(EXAMPLE), {"ground.floor": {"horizontal": {"period": 0.4, "participation": 1.2}}})
+    im_pfa = fr.parse_im("pfa")
+    fplan = fr.plan_fragility(case, fr.suite_from(str(REPO / "records" / "suite-synthetic.yaml")), im_pfa,
+                              fr.parse_levels("0.5g,1g", im_pfa), records_dir=REPO / "records")
+    for record in (0, 3):
+        for level, value in enumerate((0.5 * 9.80665, 9.80665)):
+            prepared = runner.prepare(fr.point_case(fplan, record, level))
+            assert im.peak_acceleration(prepared.ground.horizontal) == pytest.approx(value, rel=1e-12)
+            assert im.peak_acceleration(prepared.base.horizontal) < value      # the 0.4 s floor amplifies
+        assert fplan.measures["im"][record] > fplan.measures["pga"][record]
+
+
+def test_pfa_of_a_case_without_floor_is_its_record_peak():
+    """A floor record read as it is (a COSMOS file of a building's floor): PFA is its PGA."""
+    fplan = fr.plan_fragility(load_case(EXAMPLE), fr.suite_from(str(REPO / "records" / "suite-synthetic.yaml")),
+                              fr.parse_im("pfa"), fr.parse_levels("0.5g", fr.parse_im("pfa")),
+                              records_dir=REPO / "records")
+    np.testing.assert_array_equal(fplan.measures["im"], fplan.measures["pga"])

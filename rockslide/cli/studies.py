@@ -180,7 +180,8 @@ def sweep(case_file, mu_kinetic_ratio, records_dir, out_dir, overwrite, no_plot,
                    "folder of horizontal records, or a quoted glob of them ('records/*.csv').")
 @click.option("--im", "im_text", default="pga", show_default=True, metavar="IM",
               help="Intensity measure each record is scaled to: pga, pgv, pga_rocking (PGA / (g tan "
-                   "alpha)) or sa(T) (5 %-damped spectral acceleration, e.g. 'sa(0.5s)').")
+                   "alpha)) or sa(T) (5 %-damped spectral acceleration, e.g. 'sa(0.5s)') of the records; "
+                   "pfa, pfv of the floor the block stands on (the case's ground.floor).")
 @click.option("--levels", "levels_text", required=True, metavar="SPEC",
               help="Levels of the IM: START:STOP:STEP or a comma list, with units as in case files, "
                    "e.g. 0.1g:1.5g:0.1g (pgv: 10cm/s:100cm/s:10cm/s; pga_rocking: no unit).")

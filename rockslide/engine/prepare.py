@@ -83,7 +83,8 @@ def floor_ground(case: Case, ground: rec.GroundMotion) -> rec.GroundMotion:
     building: each component through its modes (`core.intensity.floor_acceleration`, exact for the
     piecewise-linear record) on one grid of ``dt / m``, ``m`` the steps the fastest mode needs (at
     most as many as keep the grid's step >= ``solver.dt``, `simulate.substeps`' condition); or the
-    ground times the screening factor ``1 + 2 z/h``. Without a floor, ``ground`` itself.
+    horizontal ground times the screening factor ``1 + 2 z/h`` (the code's factor is horizontal: the
+    vertical is left as it is). Without a floor, ``ground`` itself.
 
     Raises
     ------
@@ -98,9 +99,7 @@ def floor_ground(case: Case, ground: rec.GroundMotion) -> rec.GroundMotion:
                         "pulse: write the pulse as a record, or remove ground.floor", source=case.source,
                         field="ground.floor")
     if floor.z_over_h is not None:
-        factor = floor.amplification()
-        return dataclasses.replace(ground, horizontal=rec._frozen(factor * ground.horizontal),
-                                   vertical=rec._frozen(factor * ground.vertical))
+        return dataclasses.replace(ground, horizontal=rec._frozen(floor.amplification() * ground.horizontal))
     modes = {role: [(m.period, m.damping, m.participation) for m in getattr(floor, role)]
              for role in ("horizontal", "vertical")}
     needed = max(intensity.substeps_for(ground.dt, period) for role in modes for period, _, _ in modes[role])
@@ -485,10 +484,11 @@ def record_entries(prepared: Prepared) -> list[dict]:
     return out
 
 
-__all__ = ["Prepared", "load_ground", "floor_ground", "floor_text", "base_motion", "is_pulse_case", "unit_pulses", "pulse_ground", "model_for",
-           "settings_for", "check_parameters", "check_against_ground", "check_step", "check_size", "prepare",
-           "simulate_prepared", "run_case", "record_entries", "start_time", "verdict_robustness", "work", "Work",
-           "step_warning", "RunWarning"]
+__all__ = ["Prepared", "load_ground", "floor_ground", "floor_text", "base_motion", "is_pulse_case",
+           "unit_pulses", "pulse_ground", "model_for", "settings_for", "check_parameters",
+           "check_against_ground", "check_step", "check_size", "prepare", "simulate_prepared", "run_case",
+           "record_entries", "start_time", "verdict_robustness", "work", "Work", "step_warning",
+           "RunWarning"]
 
 
 ROBUSTNESS_VARIANTS = (("dt/2", 0.5, 1.0), ("mu-1%", 1.0, 0.99), ("mu+1%", 1.0, 1.01))
