@@ -19,6 +19,7 @@ from conftest import REPO, invoke, one_line_error
 from rockslide.analyses import fragility as fr
 from rockslide.case import case_with, load_case
 from rockslide.core import intensity as im
+from rockslide.core import kernel as K
 from rockslide.engine import prepare as runner
 
 
@@ -198,3 +199,18 @@ def test_pfa_of_a_case_without_floor_is_its_record_peak():
                               fr.parse_im("pfa"), fr.parse_levels("0.5g", fr.parse_im("pfa")),
                               records_dir=REPO / "records")
     np.testing.assert_array_equal(fplan.measures["im"], fplan.measures["pga"])
+
+
+def test_a_sweep_runs_the_block_on_the_floor():
+    """`rockslide sweep` of a case on a floor: its kernel input is the floor's motion (`floor_ground`)
+    scaled, as `rockslide run` of each point has it (to round-off: the filter is linear)."""
+    from rockslide.analyses import sweep as sw
+
+    case = case_with(load_case(EXAMPLE), {"ground.floor": {"horizontal": {"period": 0.4, "participation": 1.2}}})
+    plan = sw.plan_sweep(case, [sw.parse_axis("pga", "200gal,400gal")], records_dir=REPO / "records")
+    for i, pga in enumerate((2.0, 4.0)):
+        point = runner.prepare(case_with(case, {"ground.scale.pga_horizontal": pga})).ground
+        n = point.horizontal.size - 1                      # base row 0: each interval's starting value
+        assert plan.params[i, K.P_STEP] <= point.dt
+        np.testing.assert_allclose(plan.factor_h[i] * plan.base[0, :n], point.horizontal[:n], rtol=0,
+                                   atol=1e-12 * np.max(np.abs(point.horizontal)))

@@ -65,6 +65,7 @@ from ..engine.prepare import (
     check_size,
     coarse_step_warning,
     flight_warning,
+    floor_ground,
     is_pulse_case,
     model_for,
     pulse_ground,
@@ -382,11 +383,13 @@ def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = N
             raise CaseError("scales record files; a pulse is scaled by its amplitude (--amplitude)",
                             source=axis.kind.option)
     if pulses:
+        if case.ground.floor.given:
+            floor_ground(case, pulse_ground(case))           # refuses a floor under pulses, in one line
         return _plan_pulses(case, axes, ratio, chunk_size, n, progress)
 
     records, entries = _read_records(case, records_dir)
-    unscaled = rec.combine(records["horizontal"], records["vertical"], source=case.source,
-                           still_dt=case.solver.dt)
+    unscaled = floor_ground(case, rec.combine(records["horizontal"], records["vertical"], source=case.source,
+                                              still_dt=case.solver.dt))    # the floor's, with ground.floor
     check_size(case, unscaled, history=False)
 
     settings = settings_for(case, history=False, energy=False)
@@ -410,10 +413,10 @@ def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = N
             if scale not in grounds:
                 if len(grounds) >= 16:
                     grounds.clear()
-                grounds[scale] = rec.combine(records["horizontal"], records["vertical"],
-                                             pga_horizontal=scale[0], factor=scale[1],
-                                             pga_vertical=scale[2], vertical_factor=scale[3],
-                                             source=case.source, still_dt=case.solver.dt)
+                grounds[scale] = floor_ground(point, rec.combine(records["horizontal"], records["vertical"],
+                                                                 pga_horizontal=scale[0], factor=scale[1],
+                                                                 pga_vertical=scale[2], vertical_factor=scale[3],
+                                                                 source=case.source, still_dt=case.solver.dt))
             ground = grounds[scale]
             try:
                 peak = check_against_ground(point, ground, warn=False)
