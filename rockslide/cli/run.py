@@ -135,9 +135,11 @@ def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, members, s
         click.echo(json.dumps(payload, allow_nan=False, default=_json_default))
     else:
         click.echo(run_text(case.name, summary, neighbourhood, ground=ground, units=case.units))
-        floor = runner.floor_text(case, prepared)
+        floor = runner.floor_text(case)
         if floor:
             click.echo(f"  {floor}")
+            peaks = runner.floor_peaks_text(result.ground_time, result.ground_horizontal, prepared.base.horizontal)
+            click.echo(f"  {peaks}")
         click.echo(f"  wrote {written} in {elapsed:.2f} s")
 
 

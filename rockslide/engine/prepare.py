@@ -111,28 +111,32 @@ def floor_ground(case: Case, ground: rec.GroundMotion) -> rec.GroundMotion:
                                vertical=rec._frozen(components["vertical"]))
 
 
-def floor_text(case: Case, prepared: Prepared | None = None) -> str | None:
+def floor_text(case: Case) -> str | None:
     """One line on the floor the block stands on, for printouts (None without a floor); the screening
     factor is said to be one."""
     floor = case.ground.floor
     if not floor.given:
         return None
     if floor.z_over_h is not None:
-        return (f"floor: screening only, the ground times 1 + 2 z/h = {floor.amplification():g} (z/h = "
-                f"{floor.z_over_h:g}, ASCE 7-16 Eq. 13.3-1), not a building's response")
+        return (f"floor: screening only, the horizontal ground times 1 + 2 z/h = {floor.amplification():g} "
+                f"(z/h = {floor.z_over_h:g}, ASCE 7-16 Eq. 13.3-1), not a building's response")
     parts = []
     for role in ("horizontal", "vertical"):
         modes = getattr(floor, role)
         if modes:
             parts.append(f"{role} " + ", ".join(f"T = {m.period:g} s, zeta = {m.damping:g}, participation "
                                                 f"{m.participation:g}" for m in modes))
-    text = "floor of a linear building: " + "; ".join(parts)
-    if prepared is not None and prepared.base is not None:
-        g = prepared.ground
-        text += (f"; PFA {intensity.peak_acceleration(g.horizontal) / STANDARD_GRAVITY:.3g} g over PGA "
-                 f"{intensity.peak_acceleration(prepared.base.horizontal) / STANDARD_GRAVITY:.3g} g, PFV "
-                 f"{intensity.peak_velocity(g.horizontal, g.dt) * 100:.3g} cm/s")
-    return text
+    return "floor of a linear building: " + "; ".join(parts)
+
+
+def floor_peaks_text(time, floor_horizontal, base_horizontal) -> str:
+    """PFA and PFV [g, cm/s] of the floor's horizontal motion as the block felt it (samples at
+    ``time`` [s], the run's tail included) and the PGA of the ground under the building, in one line."""
+    time = np.asarray(time)
+    dt = float(time[1] - time[0]) if time.size > 1 else 1.0
+    return (f"on a floor: PFA {intensity.peak_acceleration(floor_horizontal) / STANDARD_GRAVITY:.3g} g, PFV "
+            f"{intensity.peak_velocity(floor_horizontal, dt) * 100:.3g} cm/s; the ground under the building: "
+            f"PGA {intensity.peak_acceleration(base_horizontal) / STANDARD_GRAVITY:.3g} g")
 
 
 def base_motion(prepared: Prepared) -> dict | None:
@@ -484,8 +488,8 @@ def record_entries(prepared: Prepared) -> list[dict]:
     return out
 
 
-__all__ = ["Prepared", "load_ground", "floor_ground", "floor_text", "base_motion", "is_pulse_case",
-           "unit_pulses", "pulse_ground", "model_for", "settings_for", "check_parameters",
+__all__ = ["Prepared", "load_ground", "floor_ground", "floor_text", "floor_peaks_text", "base_motion",
+           "is_pulse_case", "unit_pulses", "pulse_ground", "model_for", "settings_for", "check_parameters",
            "check_against_ground", "check_step", "check_size", "prepare", "simulate_prepared", "run_case",
            "record_entries", "start_time", "verdict_robustness", "work", "Work", "step_warning",
            "RunWarning"]

@@ -374,7 +374,8 @@ def record_info(path, **options) -> dict:
         ``format``, ``path``, ``npts``, ``dt`` [s], ``duration`` [s] (``npts * dt``, as PEER
         counts it), ``units`` (of the file), ``start`` [s], ``peak`` [m/s^2] (max ``|a|``),
         ``peak_gal``, ``peak_g``, ``peak_signed`` [m/s^2] (the sample at the peak, with its sign),
-        ``peak_time`` [s] (its time, first one if tied), ``mean`` [m/s^2], ``sha256``.
+        ``peak_time`` [s] (its time, first one if tied), ``mean`` [m/s^2], ``sha256``; ``cosmos``:
+        a COSMOS file's station, structure type, orientation and location (`io.cosmos`), else None.
     """
     record = load_record(path, **options)
     data = record.data
@@ -396,6 +397,7 @@ def record_info(path, **options) -> dict:
         "peak_time": record.start + index * dt,
         "mean": float(np.mean(data)),
         "sha256": record.sha256,
+        "cosmos": dict(record.header["cosmos"]) if record.format == "cosmos" else None,
     }
 
 
