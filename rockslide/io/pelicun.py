@@ -144,7 +144,7 @@ def _limit_states(fragility, family: str, scale: float):
         if family == "lognormal":
             if not (math.isfinite(medians[i]) and math.isfinite(betas[i])):
                 note = str(fragility["fit_note"].values[i]) if "fit_note" in fragility else ""
-                left_out.append(f"{name}: no fit ({note or 'see the fragility file'})")
+                left_out.append(f"{name}: {note or 'no fit'}")
                 continue
             states.append((medians[i], name, definitions[i], family, _number(medians[i] / scale),
                            _number(betas[i])))
