@@ -211,24 +211,13 @@ def oscillator_history(acceleration, dt: float, period: float, damping: float = 
     spectra (`spectral_acceleration`, `spectral_absolute_acceleration`) and of floor motions
     (`floor_acceleration`).
 
-    Parameters
-    ----------
-    acceleration : array_like
-        [m/s^2] ground acceleration at step ``dt``, linear in between.
-    dt : float
-        [s] sampling step.
-    period : float
-        [s] natural period ``T``, > 0.
-    damping : float
-        [-] damping ratio ``zeta``, within [0, 1).
-    substeps : int, optional
-        Equal steps per record interval; default `substeps_for` (dt, period).
+    The parameters are `sdof_response`'s, with ``substeps`` by default `substeps_for` (dt, period).
 
     Returns
     -------
     u, velocity, absolute : numpy.ndarray
-        [m], [m/s], [m/s^2] at ``t = j dt / substeps``: the relative displacement and velocity, and
-        the absolute acceleration ``a + u'' = -(2 zeta omega u' + omega^2 u)`` (the equation of
+        [m], [m/s], [m/s^2] at ``t = j dt / substeps``: `sdof_response`'s relative displacement and
+        velocity, and the absolute acceleration ``a + u'' = -(2 zeta omega u' + omega^2 u)`` (the equation of
         motion), exact at every step for the piecewise-linear input.
     """
     m = substeps_for(dt, period) if substeps is None else substeps
