@@ -232,8 +232,8 @@ def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, 
         rockslide fragility example/example.yaml --suite example/suite-synthetic.yaml --levels 0.1g:1.5g:0.1g
         rockslide fragility example/example.yaml --suite example/suite-synthetic.yaml --json \\
             --im 'sa(0.3s)' --levels 0.25g:3g:0.25g --damage 'rotation>0.5alpha' --damage 'slip>50mm'
-        rockslide fragility cabinet.yaml --suite floors.yaml --im pfa --levels 0.2g:2g:0.2g \\
-            --export pelicun RS.cabinet.5F
+        rockslide fragility example/example.yaml --suite example/suite-synthetic.yaml --levels 0.1g:1.5g:0.1g \\
+            --export pelicun RS.example
     """
     from ..analyses import fragility as fr
     from ..case import load_case

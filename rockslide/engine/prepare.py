@@ -18,7 +18,6 @@ import numpy as np
 
 from .. import pulses
 from ..case import Case
-from ..core import intensity
 from ..core.layout import P_G, P_R, P_STEP
 from ..core.simulate import Model, Result, Settings, interval_count, parameters, simulate, substeps, tail_samples
 from ..errors import CaseError, RecordError
@@ -94,6 +93,8 @@ def floor_ground(case: Case, ground: rec.GroundMotion) -> rec.GroundMotion:
     floor = case.ground.floor
     if not floor.given:
         return ground
+    from ..core import intensity  # numba and scipy: only for a floor (`rockslide run` stays light)
+
     if np.ndim(ground.horizontal) != 1:
         raise CaseError("a floor's motion is computed from record files; this case's ground is an analytic "
                         "pulse: write the pulse as a record, or remove ground.floor", source=case.source,
@@ -132,6 +133,8 @@ def floor_text(case: Case) -> str | None:
 def floor_peaks_text(time, floor_horizontal, base_horizontal) -> str:
     """PFA and PFV [g, cm/s] of the floor's horizontal motion as the block felt it (samples at
     ``time`` [s], the run's tail included) and the PGA of the ground under the building, in one line."""
+    from ..core import intensity
+
     time = np.asarray(time)
     dt = float(time[1] - time[0]) if time.size > 1 else 1.0
     return (f"on a floor: PFA {intensity.peak_acceleration(floor_horizontal) / STANDARD_GRAVITY:.3g} g, PFV "
