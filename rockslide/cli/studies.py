@@ -258,7 +258,7 @@ def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, 
         pelicun.check_export(im, export[1])
         export_path = h5_path.with_suffix(".pelicun.csv")
         for path in (export_path, export_path.with_suffix(".json")):
-            files.refuse_existing(path, overwrite)
+            files.check_destination(path, overwrite=overwrite, example="out/case.fragility.pelicun.csv")
     if _result_set(h5_path, png_path, overwrite=overwrite, no_plot=no_plot, example="out/case.fragility"):
         files.refuse_existing(h5_path, overwrite=False)           # input errors first, then outputs
     files.remove_stale_temporaries([h5_path, png_path])

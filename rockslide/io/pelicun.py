@@ -40,7 +40,7 @@ import numpy as np
 
 from ..errors import CaseError
 from ..units import STANDARD_GRAVITY
-from .files import atomic_write
+from .files import atomic_write, check_destination
 
 __all__ = ["FAMILIES", "COLUMNS", "check_export", "pelicun_row", "pelicun_metadata", "write_pelicun",
            "monotone_stripes"]
@@ -240,6 +240,8 @@ def write_pelicun(fragility, component_id: str, path, *, family: str = "lognorma
     metadata = pelicun_metadata(fragility, component_id, family=family, description=description)
     csv_path = Path(path).with_suffix(".csv")
     json_path = csv_path.with_suffix(".json")
+    for target in (csv_path, json_path):         # both refused before either is written
+        check_destination(target, overwrite=overwrite, example="out/cabinet.pelicun.csv")
     states = (len(row) - len(COLUMNS)) // len(_LS_COLUMNS)
     header = list(COLUMNS) + [f"LS{k}-{c}" for k in range(1, states + 1) for c in _LS_COLUMNS]
     with atomic_write(csv_path, overwrite=overwrite, mode="w", what="pelicun fragility", staging=staging) as f:
