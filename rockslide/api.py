@@ -135,7 +135,8 @@ def sweep(case: Case | Mapping | str | Path, *, mu_kinetic_ratio: float | None =
     case : Case, mapping or path
     **axes : str or sequence
         The axes, in dimension order: ``mu``, ``pga``, ``vertical_factor``, ``restitution``,
-        ``slenderness`` (width / height, the height kept), ``gravity``, and for a pulse case
+        ``slenderness`` (width / height, the height kept), ``gravity``, ``floor_period`` (the period
+        of the floor's first horizontal mode, docs/floors.md), and for a pulse case
         ``amplitude``, ``period``, ``duration``. Each is ``"start:stop:step"`` or a comma list as
         on the command line (``pga="100gal:1000gal:25gal"``), or a sequence of values: SI numbers
         or strings with units (``pga=[1.0, 2.0]`` in m/s^2, ``pga=["0.1g", "0.2g"]``).

@@ -214,3 +214,26 @@ def test_a_sweep_runs_the_block_on_the_floor():
         assert plan.params[i, K.P_STEP] <= point.dt
         np.testing.assert_allclose(plan.factor_h[i] * plan.base[0, :n], point.horizontal[:n], rtol=0,
                                    atol=1e-12 * np.max(np.abs(point.horizontal)))
+
+
+def test_a_floor_period_axis_runs_each_point_on_its_own_floor():
+    """``--floor-period``: the case's first mode takes each period (its other modes kept); each point's
+    kernel input is its own floor's motion, at its own step, as `rockslide run` of the point has it."""
+    from rockslide.analyses import sweep as sw
+
+    case = case_with(load_case(EXAMPLE), {"ground.floor": MODES})
+    plan = sw.plan_sweep(case, [sw.parse_axis("floor_period", "0.3s,1.2s")], records_dir=REPO / "records")
+    assert len(set(plan.first)) == 2
+    for i, period in enumerate((0.3, 1.2)):
+        point = case_with(case, {"ground.floor.horizontal": [{**MODES["horizontal"][0], "period": period},
+                                                             MODES["horizontal"][1]]})
+        ground = runner.prepare(point).ground
+        n = ground.horizontal.size - 1
+        assert plan.params[i, K.P_STEP] <= ground.dt
+        np.testing.assert_allclose(plan.factor_h[i] * plan.base[0, plan.first[i]:plan.first[i] + n],
+                                   ground.horizontal[:n], rtol=0, atol=1e-12 * np.max(np.abs(ground.horizontal)))
+    one = sw.plan_sweep(load_case(EXAMPLE), [sw.parse_axis("floor_period", "0.5s")], records_dir=REPO / "records")
+    single = runner.prepare(case_with(load_case(EXAMPLE), {"ground.floor.horizontal": {"period": 0.5}})).ground
+    n = single.horizontal.size - 1                       # a case without floor gets one of one mode
+    np.testing.assert_allclose(one.factor_h[0] * one.base[0, :n], single.horizontal[:n], rtol=0,
+                               atol=1e-12 * np.max(np.abs(single.horizontal)))

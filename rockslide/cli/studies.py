@@ -94,15 +94,18 @@ def where_options(what: str, unit: str):
               "--amplitude, an overturning spectrum", "0.1:1:0.05")
 @_axis_option("duration", "time", "Duration of a rectangular or half-sine horizontal pulse "
               "(ground.horizontal.duration)", "0.05:0.5:0.01")
+@_axis_option("floor_period", "time", "Period of the first horizontal mode of the floor the block stands on "
+              "(ground.floor.horizontal; a floor of one mode, 5 % damping and participation 1 when the case "
+              "has none): the block's response over the building's period", "0.1s:3s:0.1s")
 @click.option("--mu-kinetic-ratio", type=float, default=None, metavar="R",
               help="mu_kinetic = R * mu_static for --mu (default: the case's ratio).")
 @records_dir_option
 @where_options("sweep", "case")
 def sweep(case_file, mu_kinetic_ratio, records_dir, out_dir, overwrite, no_plot, workers, scheduler, device,
           chunk_size, no_progress, dpi, as_csv, **_axes):
-    """Grid of cases over friction, intensity, vertical factor, restitution, slenderness or gravity,
-    or over a pulse's amplitude and period or duration: CASE_FILE (YAML) -> OUT/NAME.sweep.h5 and
-    OUT/NAME.sweep.png.
+    """Grid of cases over friction, intensity, vertical factor, restitution, slenderness, gravity or
+    the period of the floor the block stands on, or over a pulse's amplitude and period or duration:
+    CASE_FILE (YAML) -> OUT/NAME.sweep.h5 and OUT/NAME.sweep.png.
 
     Every point is the case file with the axis values replaced (and validated as a case file), run
     with the compiled kernel on all cores (or a dask cluster), without history. Dimension i of the
