@@ -8,6 +8,7 @@ stiff limit, and the undamped identity PFA = Sa.
 
 from __future__ import annotations
 
+import json
 import math
 
 import h5py
@@ -147,6 +148,8 @@ def test_the_result_file_keeps_the_ground_and_the_floor(tmp_path):
     result = invoke("run", case, "--out-dir", tmp_path, "--no-plot")
     assert result.exit_code == 0, result.output
     assert "floor of a linear building: horizontal T = 0.5 s" in result.output and "PFA" in result.output
+    as_json = invoke("run", case, "--out-dir", tmp_path, "--no-plot", "--overwrite", "--json")
+    floor_json = json.loads(as_json.stdout)["floor"]
     plain = runner.prepare(load_case(EXAMPLE)).ground
     with h5py.File(tmp_path / "example.h5") as f:
         np.testing.assert_array_equal(f["base/horizontal"][()], plain.horizontal)
@@ -154,6 +157,9 @@ def test_the_result_file_keeps_the_ground_and_the_floor(tmp_path):
         floor = f["ground/horizontal"][()]
     n = plain.horizontal.size
     assert np.max(np.abs(floor[:n])) > np.max(np.abs(plain.horizontal))   # a 0.5 s floor amplifies this record
+    assert floor_json["pfa"] == im.peak_acceleration(floor) and floor_json["pga_base"] == im.peak_acceleration(
+        plain.horizontal)
+    assert floor_json["pfv"] == pytest.approx(im.peak_velocity(floor, 0.01 / im.substeps_for(0.01, 0.5)), rel=1e-9)
 
 
 @pytest.mark.parametrize("floor, part", [

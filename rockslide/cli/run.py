@@ -127,9 +127,13 @@ def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, members, s
         written = f"{png_path} (the missing figure of the complete {h5_path})"
     elapsed = time.perf_counter() - started
     summary = result.summary
+    floor_peaks = None if prepared.base is None else \
+        runner.floor_peaks(result.ground_time, result.ground_horizontal, prepared.base.horizontal)
     if as_json:
         payload = {"name": case.name, **results.summary_to_json_dict(summary, result.events),
-                   "ground": ground, "ensemble": results.json_ready(neighbourhood),
+                   "ground": ground, "floor": None if floor_peaks is None else
+                   {"description": runner.floor_text(case), **floor_peaks},
+                   "ensemble": results.json_ready(neighbourhood),
                    "files": {"hdf5": str(h5_path), "png": None if no_plot else str(png_path)},
                    "elapsed_s": round(elapsed, 3)}
         click.echo(json.dumps(payload, allow_nan=False, default=_json_default))
@@ -138,8 +142,7 @@ def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, members, s
         floor = runner.floor_text(case)
         if floor:
             click.echo(f"  {floor}")
-            peaks = runner.floor_peaks_text(result.ground_time, result.ground_horizontal, prepared.base.horizontal)
-            click.echo(f"  {peaks}")
+            click.echo(f"  {runner.floor_peaks_text(floor_peaks)}")
         click.echo(f"  wrote {written} in {elapsed:.2f} s")
 
 

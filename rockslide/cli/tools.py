@@ -256,7 +256,7 @@ def _stored_run_text(path: Path) -> str:
     neighbourhood = json.loads(stored.attrs["ensemble"]) if "ensemble" in stored.attrs else None
     text = run_text(stored.name, stored.result.summary, neighbourhood, ground=stored.ground or None)
     if stored.base:                          # a block on a floor: PFA and PFV of what it stood on
-        from ..engine.prepare import floor_peaks_text
+        from ..engine.prepare import floor_peaks, floor_peaks_text
         r = stored.result
-        text += f"\n  {floor_peaks_text(r.ground_time, r.ground_horizontal, stored.base['horizontal'])}"
+        text += f"\n  {floor_peaks_text(floor_peaks(r.ground_time, r.ground_horizontal, stored.base['horizontal']))}"
     return f"{text}\n  (read from {path}; rockslide {stored.attrs.get('rockslide_version', '?')})"

@@ -130,16 +130,22 @@ def floor_text(case: Case) -> str | None:
     return "floor of a linear building: " + "; ".join(parts)
 
 
-def floor_peaks_text(time, floor_horizontal, base_horizontal) -> str:
-    """PFA and PFV [g, cm/s] of the floor's horizontal motion as the block felt it (samples at
-    ``time`` [s], the run's tail included) and the PGA of the ground under the building, in one line."""
+def floor_peaks(time, floor_horizontal, base_horizontal) -> dict:
+    """``pfa`` [m/s^2] and ``pfv`` [m/s] of the floor's horizontal motion as the block felt it
+    (samples at ``time`` [s], the run's tail included; PFV baseline-corrected as PGV is) and
+    ``pga_base`` [m/s^2], the peak of the ground under the building."""
     from ..core import intensity
 
     time = np.asarray(time)
     dt = float(time[1] - time[0]) if time.size > 1 else 1.0
-    return (f"on a floor: PFA {intensity.peak_acceleration(floor_horizontal) / STANDARD_GRAVITY:.3g} g, PFV "
-            f"{intensity.peak_velocity(floor_horizontal, dt) * 100:.3g} cm/s; the ground under the building: "
-            f"PGA {intensity.peak_acceleration(base_horizontal) / STANDARD_GRAVITY:.3g} g")
+    return {"pfa": intensity.peak_acceleration(floor_horizontal), "pfv": intensity.peak_velocity(floor_horizontal, dt),
+            "pga_base": intensity.peak_acceleration(base_horizontal)}
+
+
+def floor_peaks_text(peaks: dict) -> str:
+    """`floor_peaks` in one line [g, cm/s]."""
+    return (f"on a floor: PFA {peaks['pfa'] / STANDARD_GRAVITY:.3g} g, PFV {peaks['pfv'] * 100:.3g} cm/s; the "
+            f"ground under the building: PGA {peaks['pga_base'] / STANDARD_GRAVITY:.3g} g")
 
 
 def base_motion(prepared: Prepared) -> dict | None:
@@ -491,7 +497,7 @@ def record_entries(prepared: Prepared) -> list[dict]:
     return out
 
 
-__all__ = ["Prepared", "load_ground", "floor_ground", "floor_text", "floor_peaks_text", "base_motion",
+__all__ = ["Prepared", "load_ground", "floor_ground", "floor_text", "floor_peaks", "floor_peaks_text", "base_motion",
            "is_pulse_case", "unit_pulses", "pulse_ground", "model_for", "settings_for", "check_parameters",
            "check_against_ground", "check_step", "check_size", "prepare", "simulate_prepared", "run_case",
            "record_entries", "start_time", "verdict_robustness", "work", "Work", "step_warning",
