@@ -11,15 +11,16 @@ The Python API (`rockslide.api`, loaded on first use so that ``import rockslide`
 - `risk`: a fragility over a site's hazard curves -> annual rates (``xarray.Dataset``);
 - `read_result`: any file rockslide writes;
 - `plot_results`: the figure of a result, or of several of one kind overlaid (``size="column"``...).
+- `export_pelicun`: a fragility as a row of pelicun's fragility CSV and its JSON metadata.
 """
 
 from ._version import __version__
 
 __all__ = ["__version__", "load_case", "case_with", "run", "sweep", "fragility", "ensemble", "risk", "read_result",
-           "plot_results", "RunResult"]
+           "plot_results", "export_pelicun", "RunResult"]
 
 _API = {"load_case", "case_with", "run", "sweep", "fragility", "ensemble", "risk", "read_result", "plot_results",
-        "RunResult", "Case", "Summary"}
+        "export_pelicun", "RunResult", "Case", "Summary"}
 
 
 def __getattr__(name: str):

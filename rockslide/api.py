@@ -31,6 +31,7 @@ from .core.simulate import Result, Summary
 from .errors import CaseError
 
 __all__ = ["load_case", "case_with", "run", "sweep", "fragility", "ensemble", "risk", "read_result", "plot_results",
+           "export_pelicun",
            "RunResult", "Case", "Summary"]
 
 
@@ -142,7 +143,8 @@ def sweep(case: Case | Mapping | str | Path, *, mu_kinetic_ratio: float | None =
     case : Case, mapping or path
     **axes : str or sequence
         The axes, in dimension order: ``mu``, ``pga``, ``vertical_factor``, ``restitution``,
-        ``slenderness`` (width / height, the height kept), ``gravity``, and for a pulse case
+        ``slenderness`` (width / height, the height kept), ``gravity``, ``floor_period`` (the period
+        of the floor's first horizontal mode, docs/floors.md), and for a pulse case
         ``amplitude``, ``period``, ``duration``, and for a case with two horizontal components
         ``azimuth`` (``block.orientation``). Each is ``"start:stop:step"`` or a comma list as
         on the command line (``pga="100gal:1000gal:25gal"``, ``azimuth="0:180:5"`` in degrees), or a
@@ -205,7 +207,9 @@ def fragility(case: Case | Mapping | str | Path, suite: str | Path, *, im: str =
     im : str
         The intensity measure: ``pga``, ``pgv``, ``pga_rocking`` or ``sa(T)`` (e.g. ``"sa(0.5s)"``);
         for a suite of two horizontal components also ``rotd50_`` or ``rotd100_`` of ``pga``, ``pgv``
-        or ``sa(T)`` (``"rotd50_sa(1s)"``; the others are then of the motion along the block).
+        or ``sa(T)`` (``"rotd50_sa(1s)"``; the others are then of the motion along the block); or
+        ``pfa``, ``pfv`` of the motion the block stands on (the floor's, with the case's
+        ``ground.floor``; else the records', floor records).
     levels : str or sequence
         ``"0.1g:1.5g:0.1g"`` or a comma list as on the command line, or a sequence of values (SI
         numbers of the measure, or strings with units).
@@ -624,3 +628,37 @@ def _axis_text(values, kind: str) -> str:
 
     unit = SI_UNITS.get(kind, "") if kind != "dimensionless" else ""
     return ",".join(value if isinstance(value, str) else f"{float(value)!r}{unit}" for value in values)
+
+
+def export_pelicun(fragility, component_id: str, path: str | Path, *, family: str = "lognormal",
+                   description: str = "", overwrite: bool = False) -> tuple[Path, Path]:
+    """Write a fragility as a row of pelicun's fragility CSV and its JSON metadata entry, as
+    ``rockslide fragility ... --export pelicun ID`` does (`io.pelicun`; docs/floors.md).
+
+    Parameters
+    ----------
+    fragility : xarray.Dataset or str or Path
+        The dataset `fragility` returned, or a ``NAME.fragility.h5`` file.
+    component_id : str
+        The row's ID, e.g. ``"RS.cabinet.5F"``.
+    path : str or Path
+        The CSV file; the JSON is written beside it with the suffix ``.json``.
+    family : str
+        ``"lognormal"`` (the maximum-likelihood fits; demand unit g or cm/s) or ``"multilinear_CDF"``
+        (the stripes, made monotone).
+    description : str
+        The component's description in the JSON.
+    overwrite : bool
+        Replace existing files.
+
+    Returns
+    -------
+    csv, json : Path
+    """
+    from .io import pelicun
+
+    if isinstance(fragility, (str, Path)):
+        fragility = read_result(fragility)
+    csv_path, json_path, _ = pelicun.write_pelicun(fragility, component_id, path, family=family,
+                                                   description=description, overwrite=overwrite)
+    return csv_path, json_path

@@ -38,6 +38,8 @@ from .units import SI_UNITS, STANDARD_GRAVITY, UNIT_REQUIRED, UNITS, parse_quant
 __all__ = [
     "CASE_KEYS",
     "with_orientations",
+    "Floor",
+    "Mode",
     "Block",
     "Case",
     "Contact",
@@ -187,6 +189,55 @@ class Scale:
 
 
 @dataclass(frozen=True)
+class Mode:
+    """One mode of the building under the block (`Floor`).
+
+    Parameters
+    ----------
+    period : float
+        [s] natural period ``T``, > 0.
+    damping : float
+        [-] damping ratio ``zeta``, within [0, 1).
+    participation : float
+        [-] ``Gamma phi`` at the floor: the mode's participation factor times its shape there (1: the
+        floor moves as the oscillator's mass).
+    """
+
+    period: float
+    damping: float = 0.05
+    participation: float = 1.0
+
+
+@dataclass(frozen=True)
+class Floor:
+    """The block stands on a floor of a linear building (`core.intensity.floor_acceleration`), or on the
+    ground scaled by the code's screening amplification.
+
+    Parameters
+    ----------
+    horizontal, vertical : tuple of Mode
+        The building's modes in each direction (none: that component is the ground's).
+    z_over_h : float or None
+        Screening instead of modes: the floor's horizontal motion is the ground's times ``1 + 2 z/h``
+        (the height factor of ASCE 7-16 Eq. 13.3-1), ``z/h`` the floor's height over the roof's,
+        within [0, 1]; the vertical is the ground's.
+    """
+
+    horizontal: tuple = ()
+    vertical: tuple = ()
+    z_over_h: float | None = None
+
+    @property
+    def given(self) -> bool:
+        """Whether the block stands on a floor (modes or the screening factor)."""
+        return bool(self.horizontal or self.vertical) or self.z_over_h is not None
+
+    def amplification(self) -> float:
+        """The screening factor ``1 + 2 z/h`` (1 without ``z_over_h``)."""
+        return 1.0 if self.z_over_h is None else 1.0 + 2.0 * self.z_over_h
+
+
+@dataclass(frozen=True)
 class Ground:
     """The ground motion: one or two records (files or analytic pulses), their scaling and timing.
 
@@ -206,6 +257,8 @@ class Ground:
         The second horizontal component, orthogonal to ``horizontal`` (then the first; the case file
         names them ``horizontal_1`` and ``horizontal_2``): the block feels the motion along
         ``block.orientation`` (docs/two-components.md).
+    floor : Floor
+        The floor the block stands on; by default none (the block is on the ground).
     """
 
     horizontal: RecordSpec | Pulse | None
@@ -214,6 +267,7 @@ class Ground:
     tail: float = 0.0
     time_shift: float = 0.0
     horizontal_2: RecordSpec | None = None
+    floor: Floor = Floor()
 
     @property
     def two_components(self) -> bool:
@@ -476,6 +530,24 @@ _COMPONENT_KEYS = {**_FILE_KEYS, "azimuth": _key(
 #: Keys whose bare number is refused (an azimuth of 30 would be 30 rad): they need their unit.
 _UNIT_NEEDED = ("block.orientation", "ground.horizontal_1.azimuth", "ground.horizontal_2.azimuth")
 
+
+#: The keys of one mode of ``ground.floor.horizontal`` / ``vertical`` (`Mode`).
+MODE_KEYS = {
+    "period": _key("time", "the mode's natural period", required=True, bounds=[(">", 0.0), ("<=", 100.0)]),
+    "damping": _key("dimensionless", "its damping ratio", default=0.05, bounds=[(">=", 0.0), ("<", 1.0)]),
+    "participation": _key("dimensionless", "participation factor times mode shape at the floor (1: the floor "
+                          "moves as the oscillator)", default=1.0, bounds=[("|<|", 100.0)]),
+}
+#: At most this many modes per direction.
+MAX_MODES = 20
+
+
+def _modes_key(direction: str) -> dict:
+    spec = _key("modes", f"the building's {direction} modes under the block: one mode {{period, damping, "
+                "participation}} or a list of them", default=())
+    spec["items"] = MODE_KEYS
+    return spec
+
 CASE_KEYS: dict[str, dict] = {
     "name": _key("name", "case name, used in output file names: letters, digits, '.', '_', '-'",
                  required=True),
@@ -525,6 +597,15 @@ CASE_KEYS: dict[str, dict] = {
                      bounds=[(">=", 0.0)]),
         "time_shift": _key("time", "seconds added to every time (record and results), e.g. to lay a "
                            "record on another's time axis", default=0.0),
+        "floor": _key("mapping", "the block stands on a floor of a linear building: its modes (the floor's "
+                      "absolute acceleration from the ground's), or z_over_h for the code's screening factor",
+                      keys={
+            "horizontal": _modes_key("horizontal"),
+            "vertical": _modes_key("vertical"),
+            "z_over_h": _key("dimensionless", "screening only, instead of modes: the floor's horizontal motion is "
+                             "the ground's times 1 + 2 z/h (ASCE 7-16 Eq. 13.3-1), z/h = floor height / roof height",
+                             bounds=[(">=", 0.0), ("<=", 1.0)]),
+        }),
     }),
     "initial": _key("mapping", "initial state", keys={
         "rotation": _key("angle", "initial rotation, signed", default=0.0,
@@ -565,7 +646,7 @@ CASE_KEYS: dict[str, dict] = {
 
 # The dataclass built from each section (by dotted path) and from each record spec.
 _SECTIONS: dict[str, type] = {
-    "block": Block, "contact": Contact, "ground.scale": Scale, "initial": Initial,
+    "block": Block, "contact": Contact, "ground.scale": Scale, "ground.floor": Floor, "initial": Initial,
     "solver": Solver, "output": Output, "uncertain": Uncertain,
 }
 
@@ -996,6 +1077,8 @@ def _read_value(value, spec: dict, path: str, ctx: _Ctx):
             ctx.fail(path, "a horizontal component is a record file; an analytic pulse has one direction "
                      "(give it as ground.horizontal)")
         return _read_mapping(value, spec["keys"], path, ctx, "a file name or a mapping with file and azimuth")
+    if kind == "modes":
+        return _read_modes(value, spec, path, ctx)
     if kind in UNITS:
         return _read_quantity(value, spec, path, ctx)
     if kind == "name":
@@ -1050,6 +1133,19 @@ def _read_value(value, spec: dict, path: str, ctx: _Ctx):
                      f"got {_show(value)}")
         return value
     raise AssertionError(f"schema error: unknown type {kind!r} at {path}")  # pragma: no cover
+
+
+def _read_modes(value, spec: dict, path: str, ctx: _Ctx) -> tuple:
+    """One mode (a mapping) or a list of at most `MAX_MODES` of them -> a tuple of `Mode`."""
+    items = [value] if isinstance(value, Mapping) else value
+    if not isinstance(items, list) or not items:
+        ctx.fail(path, f"expected a mode {{period: 0.8 s, damping: 0.05, participation: 1.3}} or a list of "
+                 f"them, got {_show(value)}")
+    if len(items) > MAX_MODES:
+        ctx.fail(path, f"expected at most {MAX_MODES} modes, got {len(items)}")
+    one = isinstance(value, Mapping)
+    return tuple(Mode(**_read_mapping(item, spec["items"], path if one else f"{path}[{i}]", ctx, "a mode"))
+                 for i, item in enumerate(items))
 
 
 #: The distributions of the ``uncertain`` section, with the names of their two parameters.
@@ -1228,6 +1324,10 @@ def _cross_checks(raw: dict, ctx: _Ctx) -> None:
     if scale["pga_horizontal"] is not None and scale["factor"] is not None:
         ctx.fail("ground.scale", f"pga_horizontal ({_with_unit(scale['pga_horizontal'], 'm/s^2')}) "
                  f"and factor ({_num(scale['factor'])}) are exclusive: give one of them")
+    floor = ground["floor"]
+    if floor["z_over_h"] is not None and (floor["horizontal"] or floor["vertical"]):
+        ctx.fail("ground.floor.z_over_h", "is the code's screening factor, instead of the building's modes: give "
+                 "z_over_h or modes (horizontal, vertical), not both")
     if scale["pga_vertical"] is not None and scale["vertical_factor"] != 1.0:
         ctx.fail("ground.scale", f"pga_vertical ({_with_unit(scale['pga_vertical'], 'm/s^2')}) and "
                  f"vertical_factor ({_num(scale['vertical_factor'])}) are exclusive: give one of "
@@ -1322,7 +1422,7 @@ def _build(data, *, source: str, base_dir: Path | None, text: str, si_numbers: b
         name=raw["name"], gravity=raw["gravity"], block=sections["block"],
         contact=sections["contact"],
         ground=Ground(scale=sections["ground.scale"], tail=ground["tail"],
-                      time_shift=ground["time_shift"], **records),
+                      time_shift=ground["time_shift"], floor=sections["ground.floor"], **records),
         initial=sections["initial"], solver=sections["solver"], output=sections["output"],
         uncertain=sections["uncertain"], source=source, base_dir=base_dir, text=text, units=ctx.units,
     )
@@ -1368,6 +1468,12 @@ def case_to_dict(case: Case, *, case_file: bool = True) -> dict:
     ground = {k: plain(v) for k, v in ground.items() if v is not None}
     ground.update(scale=plain(case.ground.scale), tail=case.ground.tail,
                   time_shift=case.ground.time_shift)
+    floor = case.ground.floor
+    if floor.given:
+        ground["floor"] = {key: [plain(mode) for mode in modes] for key, modes in
+                           (("horizontal", floor.horizontal), ("vertical", floor.vertical)) if modes}
+        if floor.z_over_h is not None:
+            ground["floor"]["z_over_h"] = floor.z_over_h
     out = {
         "name": case.name,
         "gravity": case.gravity,

@@ -474,7 +474,8 @@ def _code(name) -> int:
 
 def response_figure(result, *, title: str = "", time_shift: float = 0.0,
                     zoom: tuple | None | str = "auto", crop: tuple | None | str = "auto", size=None,
-                    caption: str | None = None, unit: str | None = None, horizontal: str | None = None) -> Figure:
+                    caption: str | None = None, unit: str | None = None, horizontal: str | None = None,
+                    base: dict | None = None) -> Figure:
     """The response of one simulation in the paper's style (module docstring).
 
     Parameters
@@ -503,6 +504,9 @@ def response_figure(result, *, title: str = "", time_shift: float = 0.0,
     horizontal : str, optional
         What the legend calls the horizontal ground motion (default ``"horizontal"``, or
         `along_the_block` for a case with two horizontal components).
+    base : dict, optional
+        For a block on a floor: the ground under the building (``time`` [s], ``horizontal`` [m/s^2],
+        as `StoredResult.base`), drawn in grey under the floor's motion; a `StoredResult` gives its own.
 
     Returns
     -------
@@ -520,6 +524,7 @@ def response_figure(result, *, title: str = "", time_shift: float = 0.0,
             unit = pga_unit(result.case_text)
         if horizontal is None:
             horizontal = along_the_block(result.case_text)
+        base = base or getattr(result, "base", None) or None
         result = result.result
     shift = float(time_shift)
     t0, t1 = _choose_range(result, crop, shift)
@@ -553,7 +558,7 @@ def response_figure(result, *, title: str = "", time_shift: float = 0.0,
             # round first: a pulse's ground starts a sample before 0 (-0.00 otherwise)
             zax.set_title(f"magnified: {round(window[0], 2) + 0.0:.2f} to {window[1]:.2f} s", loc="left",
                           fontsize=_pt(10), y=title_y)
-        _ground_panel(ground, result, shift, (t0, t1), unit=unit)
+        _ground_panel(ground, result, shift, (t0, t1), unit=unit, base=base)
         ground.set_label("ground")
         ground.set_xlim(t0 + shift, t1 + shift)
         for ax in axes:
@@ -561,7 +566,8 @@ def response_figure(result, *, title: str = "", time_shift: float = 0.0,
         _freeze_ticks(fig)
 
         suptitle = _headline(fig, _title(result, title), caption or "")
-        handles = _legend_handles(result, alpha=bool(alpha_drawn), horizontal=horizontal or "horizontal")
+        handles = _legend_handles(result, alpha=bool(alpha_drawn), horizontal=horizontal or "horizontal",
+                                  floor=base is not None)
         legend = fig.legend(handles=handles, loc="lower center", ncols=_legend_columns(handles, figsize[0]),
                             frameon=False, fontsize=_pt(9))
         _fit_column(fig, suptitle=suptitle, legend=legend, title_size=_pt(10))
@@ -1064,16 +1070,23 @@ def _mark_end(ax, result, shift, span, *, hatch):
     return text, colour
 
 
-def _ground_panel(ax, result, shift, span, *, unit=None):
-    """The ground acceleration as applied, in ``unit`` (`acceleration_unit`; default gal)."""
+def _ground_panel(ax, result, shift, span, *, unit=None, base=None):
+    """The ground acceleration as applied, in ``unit`` (`acceleration_unit`; default gal); for a
+    block on a floor, ``base`` (the ground under the building) in grey beneath the floor's motion."""
     unit, factor = acceleration_unit(unit)
+    if base is not None:
+        tb = np.asarray(base["time"])
+        inside = _within(tb, span)
+        ax.plot(*_envelope(tb[inside] + shift, np.asarray(base["horizontal"])[inside] / factor), color="0.55",
+                lw=0.8, label="ground horizontal (under the building)")
     t = np.asarray(result.ground_time)
     shown = _within(t, span)
     for key, values in (("horizontal", result.ground_horizontal), ("vertical", result.ground_vertical)):
         ax.plot(*_envelope(t[shown] + shift, np.asarray(values)[shown] / factor), color=GROUND_COLOURS[key],
                 lw=0.8, label=key, alpha=0.9 if key == "horizontal" else 0.8)
     ax.axhline(0.0, color="0.6", lw=0.5)
-    ax.set_ylabel(f"ground [{unit}]" if _brief_labels(ax.figure) else f"ground acc. [{unit}]")
+    support = "floor" if base is not None else "ground"
+    ax.set_ylabel(f"{support} [{unit}]" if _brief_labels(ax.figure) else f"{support} acc. [{unit}]")
     ax.grid(True, axis="x", color="0.88", lw=0.6)
     _mark_end(ax, result, shift, span, hatch=False)
     peak = max(float(np.max(np.abs(result.ground_horizontal), initial=0.0)),
@@ -1081,22 +1094,29 @@ def _ground_panel(ax, result, shift, span, *, unit=None):
     if peak == 0.0:
         ax.set_ylim(-1.0, 1.0)
     title_y = _title_height(ax)
-    ax.set_title("ground acceleration as applied", loc="left", fontsize=_pt(10), y=title_y)
+    ax.set_title("floor acceleration the block stands on (in colour) and the ground under the building "
+                 "(grey, horizontal)" if base is not None else "ground acceleration as applied",
+                 loc="left", fontsize=_pt(10), y=title_y)
     if peak == 0.0:
         ax.set_title("still ground (no record)", loc="right", fontsize=_pt(9), color="0.3", y=title_y)
 
 
-def _legend_handles(result, *, ground: bool = True, alpha: bool = True, horizontal: str = "horizontal") -> list:
+def _legend_handles(result, *, ground: bool = True, alpha: bool = True, horizontal: str = "horizontal",
+                    floor: bool = False) -> list:
     """The legend's entries; +-alpha only where ``alpha`` (drawn on some panel); ``horizontal``
-    names the horizontal ground motion (`along_the_block`)."""
+    names the horizontal ground motion (`along_the_block`); ``floor``: the block stands on a floor
+    (its motion in colour, the ground under the building in grey)."""
     handles = [Line2D([], [], color=ROTATION_COLOUR, lw=1.5, label="liftoff angle φ"),
                Line2D([], [], color=SLIP_COLOUR, lw=1.5, label="slip x")]
     if alpha and math.isfinite(result.summary.alpha):
         handles.append(Line2D([], [], color=ALPHA_COLOUR, ls="--", lw=0.9, label="±α (tips over past it)"))
     if ground:
+        support = "floor" if floor else "ground"
         handles += [Line2D([], [], color=GROUND_COLOURS[key], lw=1.0,
-                           label=f"ground {horizontal if key == 'horizontal' else key}")
+                           label=f"{support} {horizontal if key == 'horizontal' else key}")
                     for key in ("horizontal", "vertical")]
+    if floor:
+        handles.append(Line2D([], [], color="0.55", lw=1.0, label="ground horizontal, under the building"))
     handles += [Patch(facecolor="white", edgecolor="0.6", lw=0.5, label="REST"),
                 Patch(facecolor=STATE_COLOURS[SLIP], label="SLIP"),
                 Patch(facecolor=STATE_COLOURS[ROCK], label="ROCK (liftoff)"),

@@ -15,7 +15,10 @@ fraction of runs that reach each damage state.
 - **Intensity measures** (:data:`INTENSITY_MEASURES`, `core.intensity`): ``pga``, ``pgv``
   (baseline-corrected, see `core.intensity`), ``pga_rocking`` = PGA / (g tan alpha) with the
   case's block and gravity, and ``sa(T)``, the 5 %-damped pseudo-spectral acceleration at period
-  ``T``, all of the horizontal record as read. PGV/PGA is reported for each record but cannot be a
+  ``T``, all of the horizontal record as read; ``pfa`` and ``pfv``, the same peaks of the motion the
+  block stands on: the floor's when the case gives ``ground.floor`` (each record is the ground under
+  the building, filtered by its modes, `engine.prepare.floor_ground`), else the record's (a floor
+  record, such as a COSMOS file of a building's floor). PGV/PGA is reported for each record but cannot be a
   stripe IM: scaling a record does not change it.
 - **Damage states** (`parse_damage`): overturning always, and ``rotation>0.5alpha`` (max |rotation|
   over alpha; or ``rotation>10deg``), ``slip>50mm`` (max |slip|), ``residual>10mm`` (|residual
@@ -68,6 +71,7 @@ from ..engine.prepare import (
     check_step,
     coarse_step_warning,
     flight_warning,
+    floor_ground,
     ground_along,
     model_for,
     settings_for,
@@ -110,7 +114,7 @@ class IntensityMeasure:
     Attributes
     ----------
     name : str
-        ``pga``, ``pgv``, ``pga_rocking`` or ``sa(T)`` (as ``sa(0.5 s)``).
+        ``pga``, ``pgv``, ``pga_rocking``, ``pfa``, ``pfv`` or ``sa(T)`` (as ``sa(0.5 s)``).
     kind : str
         Unit kind of its levels (a key of `units.UNITS`).
     units : str
@@ -145,10 +149,16 @@ class IntensityMeasure:
         peaks = intensity.rotd_peaks(a1, a2, dt, measure, self.period)
         return float(np.median(peaks) if self.rotd == 50 else np.max(peaks))
 
+    @property
+    def of_support(self) -> bool:
+        """Whether it is a measure of the motion the block stands on (``pfa``, ``pfv``: the floor's
+        with ``ground.floor``), not of the record as read."""
+        return self.name in ("pfa", "pfv")
+
     def of_record(self, acceleration, dt: float, gravity: float, tan_alpha: float) -> float:
-        """The measure of a horizontal record [SI]; ``gravity`` [m/s^2] and ``tan_alpha`` (the
-        block's b/h) serve ``pga_rocking``."""
-        if self.name == "pgv":
+        """The measure of a horizontal record [SI] (for ``pfa`` and ``pfv``: of the floor's motion);
+        ``gravity`` [m/s^2] and ``tan_alpha`` (the block's b/h) serve ``pga_rocking``."""
+        if self.name in ("pgv", "pfv"):
             return intensity.peak_velocity(acceleration, dt)
         if self.period is not None:
             return intensity.spectral_acceleration(acceleration, dt, self.period)
@@ -178,9 +188,13 @@ INTENSITY_MEASURES = {m.name: m for m in (
                      "PGV", "cm/s", _CM_PER_S),
     IntensityMeasure("pga_rocking", "dimensionless", "1", "rocking-normalised PGA: PGA / (g tan alpha)",
                      "PGA / (g tan α)", "", 1.0),
+    IntensityMeasure("pfa", "acceleration", "m/s^2", "peak horizontal floor acceleration (of the motion the "
+                     "block stands on)", "PFA", "g", STANDARD_GRAVITY),
+    IntensityMeasure("pfv", "velocity", "m/s", "peak horizontal floor velocity (of the motion the block stands "
+                     "on, baseline-corrected)", "PFV", "cm/s", _CM_PER_S),
 )}
 _SA = re.compile(r"^\s*sa\s*\(\s*(?P<period>[^()]*?)\s*\)\s*$", re.IGNORECASE)
-_IM_CHOICES = ("pga, pgv, pga_rocking or sa(T) with a period, e.g. 'sa(0.5s)'; with two horizontal "
+_IM_CHOICES = ("pga, pgv, pga_rocking, pfa, pfv or sa(T) with a period, e.g. 'sa(0.5s)'; with two horizontal "
                "components also rotd50_ or rotd100_ of pga, pgv, sa(T), e.g. 'rotd50_sa(1s)'")
 _ROTD = re.compile(r"^rotd(50|100)_(.*)$")
 
@@ -600,21 +614,22 @@ def plan_fragility(case: Case, suite: Suite, im: IntensityMeasure, levels: sw.Ax
         try:
             record_case = case_with(case, changes)
             if pair:
-                ground = ground_along(record_case, records, scaled=False)[0]
+                read = ground_along(record_case, records, scaled=False)[0]
             else:
-                ground = rec.combine(records["horizontal"], records["vertical"], source=where)
-            check_step(record_case, ground)
+                read = rec.combine(records["horizontal"], records["vertical"], source=where)
+            check_step(record_case, read)
+            ground = floor_ground(record_case, read)     # what the block stands on: the floor's, if any
             check_size(record_case, ground, history=False)
         except CaseError as exc:
             raise CaseError(f"{exc.message} (with the record {where})", source=exc.source,
                             field=exc.field) from None
         record_cases.append(record_case)
-        h, dt = ground.horizontal, ground.dt
+        h, dt = read.horizontal, read.dt
         measures["pga"][r] = intensity.peak_acceleration(h)
         measures["pgv"][r] = intensity.peak_velocity(h, dt)
         measures["pgv_pga"][r] = measures["pgv"][r] / measures["pga"][r] if measures["pga"][r] else math.nan
         if im.period is not None:                      # the oscillator's memory, known before it runs
-            points = (h.size - 1) * max(1, math.ceil(intensity.POINTS_PER_PERIOD * dt / im.period - 1e-9)) + 1
+            points = (h.size - 1) * intensity.substeps_for(dt, im.period) + 1
             if points > MAX_OSCILLATOR_POINTS:
                 raise CaseError(f"{im.label} of the record {where} takes {points:.3g} points of the oscillator's "
                                 f"response; expected at most {MAX_OSCILLATOR_POINTS:.0e} (a longer period, or a "
@@ -622,9 +637,11 @@ def plan_fragility(case: Case, suite: Suite, im: IntensityMeasure, levels: sw.Ax
         if im.rotd is not None:
             value = im.of_pair(records["horizontal"].data, records["horizontal_2"].data, dt)
         else:
-            value = im.of_record(h, dt, case.gravity, tan_alpha)
+            measured = ground if im.of_support else read
+            value = im.of_record(measured.horizontal, measured.dt, case.gravity, tan_alpha)
         measures["im"][r] = value
         measures["dt"][r], measures["duration"][r] = dt, (h.size - 1) * dt
+        dt = ground.dt
         if not (math.isfinite(value) and value > 0):
             raise RecordError(f"its {im.label} is {value:g}: a record without motion cannot be scaled "
                               "to a level", source=where, field="horizontal")
@@ -748,12 +765,12 @@ def _at_level(record_case: Case, records: dict, factor: float):
     already read (`records.combine`, as ``rockslide run`` of that case scales them)."""
     level_case = case_with(record_case, {"ground.scale.factor": float(factor)})
     if level_case.ground.two_components:
-        return level_case, ground_along(level_case, records)[0]
+        return level_case, floor_ground(level_case, ground_along(level_case, records)[0])
     scale = level_case.ground.scale
     ground = rec.combine(records["horizontal"], records["vertical"], factor=scale.factor,
                          vertical_factor=scale.vertical_factor, source=record_case.source,
                          still_dt=record_case.solver.dt)
-    return level_case, ground
+    return level_case, floor_ground(level_case, ground)
 
 
 def _check_level(record_case: Case, records: dict, factor: float, where: str) -> float:

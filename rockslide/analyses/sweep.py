@@ -40,6 +40,7 @@ and computes every point with the batch kernel (`batch`), without history or eve
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import math
 import re
@@ -66,6 +67,7 @@ from ..engine.prepare import (
     check_size,
     coarse_step_warning,
     flight_warning,
+    floor_ground,
     ground_along,
     is_pulse_case,
     model_for,
@@ -148,6 +150,9 @@ AXES: dict[str, AxisKind] = {a.name: a for a in (
     AxisKind("azimuth", "--azimuth", "angle", "block.orientation",
              "azimuth of the block's width, clockwise from north (two horizontal components)", "rad",
              "block orientation [deg]", math.pi / 180.0, "deg"),
+    AxisKind("floor_period", "--floor-period", "time", "ground.floor.horizontal",
+             "period of the first horizontal mode of the floor the block stands on", "s",
+             "floor period T_1 [s]"),
 )}
 #: The axes that change the horizontal pulse of a pulse case (and only there).
 PULSE_AXES = ("amplitude", "period", "duration")
@@ -306,6 +311,10 @@ def axis_changes(axis: str, value: float, case: Case, ratio: float | None) -> di
         return changes
     if axis == "slenderness":
         return {"block.width": value * case.block.height}
+    if axis == "floor_period":              # the first mode's period; a floor of one mode if there is none
+        modes = [dataclasses.asdict(m) for m in case.ground.floor.horizontal] or [{}]
+        modes[0] = {**modes[0], "period": value}
+        return {"ground.floor.horizontal": modes}
     return {AXES[axis].key: value}
 
 
@@ -396,75 +405,74 @@ def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = N
                             "and ground.horizontal_2 (files and azimuths) instead of ground.horizontal",
                             source=axis.kind.option)
     if pulses:
+        if case.ground.floor.given or "floor_period" in names:
+            raise CaseError("a floor's motion is computed from record files; this case's ground is an analytic "
+                            "pulse: write the pulse as a record, or remove ground.floor and --floor-period",
+                            source=case.source, field="ground.floor")
         return _plan_pulses(case, axes, ratio, chunk_size, n, progress)
 
     records, entries = _read_records(case, records_dir)
     settings = settings_for(case, history=False, energy=False)
-    # one record per orientation of the block (one in all with one horizontal component)
-    pieces: dict[float | None, tuple[int, rec.GroundMotion]] = {}
-    piece_arrays = []
-
-    def unscaled_for(point: Case) -> tuple[int, rec.GroundMotion]:
-        orientation = point.block.orientation if point.ground.two_components else None
-        if orientation not in pieces:
-            if point.ground.two_components:
-                ground = ground_along(point, records, scaled=False)[0]
-            else:
-                ground = rec.combine(records["horizontal"], records["vertical"], source=case.source,
-                                     still_dt=case.solver.dt)
-            if not pieces:
-                check_size(case, ground, history=False)
-            piece = ground_array(ground.horizontal, ground.vertical, ground.dt, settings.tail)
-            pieces[orientation] = (sum(p.shape[1] for p in piece_arrays), ground)
-            piece_arrays.append(piece)
-        return pieces[orientation]
-
-    unscaled = unscaled_for(case)[1]
-    length = piece_arrays[0].shape[1]
-    start = unscaled.start + case.ground.time_shift
-    record_end = start + length * unscaled.dt
-    first = np.empty(n, dtype=np.int64)
+    # what the block stands on, unscaled: the record (with two horizontal components, the motion
+    # along the block's orientation), or each floor's motion from it; one per distinct orientation
+    # and floor of the grid (--azimuth, --floor-period), laid end to end in the kernel's input
+    read = None if case.ground.two_components else rec.combine(records["horizontal"], records["vertical"],
+                                                              source=case.source, still_dt=case.solver.dt)
+    supports: dict = {}                           # (orientation, floor) -> (ground, first column, columns)
+    pieces = []
+    first, count = np.empty(n, dtype=np.int64), np.empty(n, dtype=np.int64)
+    record_end = np.empty(n)
 
     params = np.empty((n, K.N_PARAMS))
     states = np.empty((n, K.N_STATE))
     factor_h = np.empty(n)
     factor_v = np.empty(n)
     factors: dict[tuple, tuple[float, float]] = {}     # scale section -> (kh, kv)
-    checked: dict[tuple, str | None] = {}              # (scale section, gravity) -> flight warning
+    checked: dict[tuple, str | None] = {}              # (scale section, floor, gravity) -> flight warning
     highest = (0.0, None)                               # the largest scaled peak, at this point
     flights = _Flights(axes)
-    grounds: dict[tuple, rec.GroundMotion] = {}         # a few scaled records, for the checks
+    grounds: dict[tuple, rec.GroundMotion] = {}         # a few scaled supports, for the checks
     for i, combo, point in _points(case, axes, ratio, progress):
-        s = point.ground.scale
+        floor = point.ground.floor
+        orientation = point.block.orientation if point.ground.two_components else None
         try:
-            first[i] = unscaled_for(point)[0]
+            if (orientation, floor) not in supports:
+                unscaled = ground_along(point, records, scaled=False)[0] if read is None else read
+                support = floor_ground(point, unscaled)
+                check_size(point, support, history=False)
+                piece = ground_array(support.horizontal, support.vertical, support.dt, settings.tail)
+                supports[(orientation, floor)] = (support, sum(p.shape[1] for p in pieces), piece.shape[1])
+                pieces.append(piece)
         except CaseError as exc:
             raise _point_error(exc, axes, combo) from None
-        orientation = point.block.orientation
+        support, first[i], count[i] = supports[(orientation, floor)]
+        s = point.ground.scale
         scale = (s.pga_horizontal, s.factor, s.pga_vertical, s.vertical_factor, orientation)
-        if (scale, point.gravity) not in checked:
-            if scale not in grounds:
+        if (scale, floor, point.gravity) not in checked:
+            if (scale, floor) not in grounds:
                 if len(grounds) >= 16:
                     grounds.clear()
                 if point.ground.two_components:
-                    grounds[scale] = ground_along(point, records)[0]
+                    scaled = ground_along(point, records)[0]
                 else:
-                    grounds[scale] = rec.combine(records["horizontal"], records["vertical"],
-                                                 pga_horizontal=scale[0], factor=scale[1],
-                                                 pga_vertical=scale[2], vertical_factor=scale[3],
-                                                 source=case.source, still_dt=case.solver.dt)
-            ground = grounds[scale]
+                    scaled = rec.combine(records["horizontal"], records["vertical"], pga_horizontal=scale[0],
+                                         factor=scale[1], pga_vertical=scale[2], vertical_factor=scale[3],
+                                         source=case.source, still_dt=case.solver.dt)
+                grounds[(scale, floor)] = floor_ground(point, scaled)
+            ground = grounds[(scale, floor)]
             try:
                 peak = check_against_ground(point, ground, warn=False)
             except CaseError as exc:
                 raise _point_error(exc, axes, combo) from None
             if peak > highest[0]:
                 highest = (peak, combo)
-            checked[(scale, point.gravity)] = flight_warning(point, ground)
+            checked[(scale, floor, point.gravity)] = flight_warning(point, ground)
             factors[scale] = (ground.horizontal_factor, ground.vertical_factor)
-        flights.add(checked[(scale, point.gravity)], combo)
+        flights.add(checked[(scale, floor, point.gravity)], combo)
         point_settings = settings_for(point, history=False, energy=False)
-        params[i] = parameters(model_for(point), unscaled.dt, point_settings, start)
+        start = support.start + case.ground.time_shift
+        params[i] = parameters(model_for(point), support.dt, point_settings, start)
+        record_end[i] = start + count[i] * support.dt
         states[i] = initial_state(point_settings)
         factor_h[i], factor_v[i] = factors[scale]
     _warn_coarse_step(case, axes, params)
@@ -472,10 +480,10 @@ def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = N
     if highest[0] > ABSURD_ACCELERATION_IN_G * STANDARD_GRAVITY:
         warnings.warn(f"{absurd_acceleration(case.source, highest[0])} [at {_point_text(axes, highest[1])}]",
                       RunWarning, stacklevel=2)
+    base = pieces[0] if len(pieces) == 1 else np.concatenate(pieces, axis=1)
     plan = Plan(case=case, axes=axes, mu_kinetic_ratio=ratio, params=params, states=states,
-                factor_h=factor_h, factor_v=factor_v, base=np.concatenate(piece_arrays, axis=1), first=first,
-                count=np.full(n, length, dtype=np.int64), record_end=np.full(n, record_end),
-                step=float(params[0, K.P_STEP]), records=entries, chunk_size=chunk_size)
+                factor_h=factor_h, factor_v=factor_v, base=base, first=first, count=count, record_end=record_end,
+                step=float(params[:, K.P_STEP].min()), records=entries, chunk_size=chunk_size)
     plan.key = definition_key(plan)
     return plan
 

@@ -101,13 +101,15 @@ def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, members, s
                 writer.finish(result, name=case.name, case_text=case.text, case=case_to_dict(case, case_file=False),
                               records=runner.record_entries(prepared), ground=ground,
                               extra_attrs={} if neighbourhood is None else ens.attributes(neighbourhood),
-                              extra_groups=None if group is None else {"ensemble": (dimension, group)})
+                              extra_groups={**(runner.base_motion(prepared) or {}),
+                                            **({} if group is None else {"ensemble": (dimension, group)})} or None)
             ensemble_png = folder / f"{case.name}.ensemble.png"
             if not no_plot:
                 kept = writer.written_result()
                 _draw(kept if kept is not None else results.read_result(writer.tmp).result, case.name,
                       png_path, overwrite=overwrite, dpi=dpi, staging=staging, size=size,
-                      about=(case.text, runner.record_entries(prepared), result.step, None))
+                      about=(case.text, runner.record_entries(prepared), result.step, None),
+                      base=_base_of(runner.base_motion(prepared)))
                 if neighbourhood is not None:
                     _draw_ensemble(neighbourhood, group, result.summary, case.name, ensemble_png,
                                    overwrite=overwrite, dpi=dpi, staging=staging, size=size,
@@ -122,21 +124,29 @@ def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, members, s
     else:
         with files.Staging(overwrite=False) as staging:
             _draw(stored.result, stored.name, png_path, overwrite=False, dpi=dpi, staging=staging, size=size,
-                  about=_stored_about(stored))
+                  about=_stored_about(stored), base=stored.base or None)
             staging.publish()
         result = stored.result
         neighbourhood = None if eplan is None else json.loads(stored.attrs["ensemble"])
         written = f"{png_path} (the missing figure of the complete {h5_path})"
     elapsed = time.perf_counter() - started
     summary = result.summary
+    floor_peaks = None if prepared.base is None else \
+        runner.floor_peaks(result.ground_time, result.ground_horizontal, prepared.base.horizontal)
     if as_json:
         payload = {"name": case.name, **results.summary_to_json_dict(summary, result.events),
-                   "ground": ground, "ensemble": results.json_ready(neighbourhood),
+                   "ground": ground, "floor": None if floor_peaks is None else
+                   {"description": runner.floor_text(case), **floor_peaks},
+                   "ensemble": results.json_ready(neighbourhood),
                    "files": {"hdf5": str(h5_path), "png": None if no_plot else str(png_path)},
                    "elapsed_s": round(elapsed, 3)}
         click.echo(json.dumps(payload, allow_nan=False, default=_json_default))
     else:
         click.echo(run_text(case.name, summary, neighbourhood, ground=ground, units=case.units))
+        floor = runner.floor_text(case)
+        if floor:
+            click.echo(f"  {floor}")
+            click.echo(f"  {runner.floor_peaks_text(floor_peaks)}")
         click.echo(f"  wrote {written} in {elapsed:.2f} s")
 
 
@@ -224,7 +234,7 @@ def plot(result_files, output, time_shift, window, crop, dpi, overwrite, size):
                     raise CaseError(f"{pair[0]:g} to {pair[1]:g} s is outside the result, which runs from "
                                     f"{first:g} to {last:g} s (in the figure's time)", source=option)
         _draw(stored.result, stored.name, png, overwrite=replace, time_shift=shift, zoom=zoom, crop=span, dpi=dpi,
-              size=size, about=_stored_about(stored))
+              size=size, about=_stored_about(stored), base=stored.base or None)
     click.echo(f"redrew {png}")
 
 
@@ -255,10 +265,11 @@ def _time_range(text: str, option: str, words: dict):
 
 
 def _draw(result, name, path, *, overwrite, dpi=None, time_shift=0.0, zoom="auto", crop="auto", staging=None,
-          size=None, about=None):
+          size=None, about=None, base=None):
     """Draw the figure of one run (`plots.response_figure`) and save it (`plots.save_figure`).
     ``about``: (case text, record entries, integration step [s], version or None: this one), for
-    its caption (`plots.case_caption`) and the unit of its ground motion."""
+    its caption (`plots.case_caption`) and the unit of its ground motion; ``base``: the ground under
+    the building of a case on a floor."""
     from .._version import __version__
     from ..plots import along_the_block, case_caption, pga_unit, response_figure, save_figure
 
@@ -268,7 +279,7 @@ def _draw(result, name, path, *, overwrite, dpi=None, time_shift=0.0, zoom="auto
         caption = case_caption(text, records=entries, step=step, version=version or __version__)
         unit, horizontal = pga_unit(text), along_the_block(text)
     figure = response_figure(result, title=name, time_shift=time_shift, zoom=zoom, crop=crop, size=size,
-                             caption=caption, unit=unit, horizontal=horizontal)
+                             caption=caption, unit=unit, horizontal=horizontal, base=base)
     save_figure(figure, path, overwrite=overwrite, dpi=dpi, staging=staging)
 
 
@@ -277,6 +288,14 @@ def _stored_about(stored) -> tuple:
     step = stored.attrs.get("integration_step")
     return (stored.case_text, stored.records, None if step is None else float(step),
             stored.attrs.get("rockslide_version"))
+
+
+def _base_of(group: dict | None) -> dict | None:
+    """``{time, horizontal, vertical}`` of `prepare.base_motion`'s group (None without a floor)."""
+    if group is None:
+        return None
+    (_, time, _), variables = group["base"]
+    return {"time": time, **{role: values for role, (_, values, _) in variables.items()}}
 
 
 def _same_result(case, prepared, h5_path: Path, *, eplan=None):

@@ -104,16 +104,19 @@ def where_options(what: str, unit: str):
               "(ground.horizontal.duration)", "0.05:0.5:0.01")
 @_axis_option("azimuth", "angle", "Azimuth of the block's width, clockwise from north, for a case with two "
               "horizontal components (block.orientation; degrees unless a unit is given)", "0:180:5")
+@_axis_option("floor_period", "time", "Period of the first horizontal mode of the floor the block stands on "
+              "(ground.floor.horizontal; a floor of one mode, 5 % damping and participation 1 when the case "
+              "has none): the block's response over the building's period", "0.1s:3s:0.1s")
 @click.option("--mu-kinetic-ratio", type=float, default=None, metavar="R",
               help="mu_kinetic = R * mu_static for --mu (default: the case's ratio).")
 @records_dir_option
 @where_options("sweep", "case")
 def sweep(case_file, mu_kinetic_ratio, records_dir, out_dir, overwrite, no_plot, workers, scheduler, device,
           chunk_size, no_progress, dpi, size, as_csv, shard, wait_workers, **_axes):
-    """Grid of cases over friction, intensity, vertical factor, restitution, slenderness or gravity,
-    over a pulse's amplitude and period or duration, or over the block's orientation under two
-    horizontal components (--azimuth, docs/two-components.md): CASE_FILE (YAML) -> OUT/NAME.sweep.h5 and
-    OUT/NAME.sweep.png.
+    """Grid of cases over friction, intensity, vertical factor, restitution, slenderness, gravity or
+    the period of the floor the block stands on, over a pulse's amplitude and period or duration,
+    or over the block's orientation under two horizontal components (--azimuth,
+    docs/two-components.md): CASE_FILE (YAML) -> OUT/NAME.sweep.h5 and OUT/NAME.sweep.png.
 
     Every point is the case file with the axis values replaced (and validated as a case file), run
     with the compiled kernel on all cores (or a dask cluster), without history. Dimension i of the
@@ -196,7 +199,8 @@ def sweep(case_file, mu_kinetic_ratio, records_dir, out_dir, overwrite, no_plot,
                    "folder of horizontal records, or a quoted glob of them ('records/*.csv').")
 @click.option("--im", "im_text", default="pga", show_default=True, metavar="IM",
               help="Intensity measure each record is scaled to: pga, pgv, pga_rocking (PGA / (g tan "
-                   "alpha)) or sa(T) (5 %-damped spectral acceleration, e.g. 'sa(0.5s)'); for a suite of two "
+                   "alpha)) or sa(T) (5 %-damped spectral acceleration, e.g. 'sa(0.5s)') of the records; "
+                   "pfa, pfv of the floor the block stands on (the case's ground.floor); for a suite of two "
                    "horizontal components also rotd50_ or rotd100_ of pga, pgv or sa(T) (the others: of the "
                    "motion along the block).")
 @click.option("--levels", "levels_text", required=True, metavar="SPEC",
@@ -226,11 +230,18 @@ def sweep(case_file, mu_kinetic_ratio, records_dir, out_dir, overwrite, no_plot,
                    "orientation, the fits over them all (the orientation unknown, uniform); one value states "
                    "it (default: the case's block.orientation).")
 @click.option("--json", "as_json", is_flag=True, help="Print the fits as one JSON object on stdout.")
+@click.option("--export", "export", type=(click.Choice(["pelicun"]), str), default=(None, None),
+              metavar="pelicun ID",
+              help="Also write the fragility as a row of pelicun's fragility CSV with component ID ID, and its "
+                   "JSON metadata: OUT/NAME.fragility.pelicun.csv and .json (docs/floors.md).")
+@click.option("--export-family", type=click.Choice(["lognormal", "multilinear_CDF"]), default="lognormal",
+              show_default=True, help="The exported limit states: the lognormal fits, or the stripes as "
+                                      "pelicun's multilinear_CDF.")
 @records_dir_option
 @where_options("fragility analysis", "run")
 def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, resamples, case_vertical, samples,
-              seed, azimuth, as_json, records_dir, out_dir, overwrite, no_plot, workers, scheduler, device, chunk_size,
-              no_progress, dpi, size, as_csv, shard, wait_workers):
+              seed, azimuth, as_json, export, export_family, records_dir, out_dir, overwrite, no_plot, workers,
+              scheduler, device, chunk_size, no_progress, dpi, size, as_csv, shard, wait_workers):
     """Fragility curves of a block over a record suite scaled to levels of an intensity measure:
     CASE_FILE (YAML) -> OUT/NAME.fragility.h5 and OUT/NAME.fragility.png.
 
@@ -247,6 +258,8 @@ def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, 
         rockslide fragility example/example.yaml --suite example/suite-synthetic.yaml --levels 0.1g:1.5g:0.1g
         rockslide fragility example/example.yaml --suite example/suite-synthetic.yaml --json \\
             --im 'sa(0.3s)' --levels 0.25g:3g:0.25g --damage 'rotation>0.5alpha' --damage 'slip>50mm'
+        rockslide fragility example/example.yaml --suite example/suite-synthetic.yaml --levels 0.1g:1.5g:0.1g \\
+            --export pelicun RS.example
     """
     from ..analyses import fragility as fr
     from ..case import load_case
@@ -266,6 +279,13 @@ def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, 
     fplan = fr.plan_fragility(case, suite, im, levels, records_dir=records.records_dir(records_dir),
                               chunk_size=chunk_size, case_vertical=case_vertical, samples=samples, seed=seed)
     h5_path, png_path = _outputs(case, out_dir, ".fragility")
+    export_path = None
+    if export[0] == "pelicun":
+        from ..io import pelicun
+        pelicun.check_export(im, export[1])
+        export_path = h5_path.with_suffix(".pelicun.csv")
+        for path in (export_path, export_path.with_suffix(".json")):
+            files.check_destination(path, overwrite=overwrite, example="out/case.fragility.pelicun.csv")
     if _result_set(h5_path, png_path, overwrite=overwrite, no_plot=no_plot, example="out/case.fragility"):
         files.refuse_existing(h5_path, overwrite=False)           # input errors first, then outputs
     files.remove_stale_temporaries([h5_path, png_path])
@@ -287,6 +307,10 @@ def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, 
             per_run = [name for name, _, _ in coords if name not in ("damage_state", "resample")]
             _write_csv(study_dataset(coords, variables), per_run, h5_path.with_suffix(".csv"), overwrite=overwrite,
                        staging=staging)
+        if export_path is not None:
+            from ..io.datasets import study_dataset
+            *_, left_out = pelicun.write_pelicun(study_dataset(coords, variables, attrs), export[1], export_path,
+                                                 family=export_family, overwrite=overwrite, staging=staging)
         staging.publish(remove=[png_path] if no_plot else [])
     done.store.remove()
     elapsed = time.perf_counter() - started
@@ -308,6 +332,9 @@ def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, 
         if analysis.nominal_fits:
             click.echo("    without parameter uncertainty (the case's values): "
                        + fr.describe_fit(state, analysis.nominal_fits[i], im).split(": ", 1)[1])
+    if export_path is not None:
+        click.echo(f"  pelicun: {export_path} and {export_path.with_suffix('.json').name} ({export_family}, "
+                   f"ID {export[1]})" + (f"; not exported: {'; '.join(left_out)}" if left_out else ""))
     click.echo(f"  wrote {_written(h5_path, png_path, no_plot, as_csv)} in {elapsed:.1f} s")
 
 

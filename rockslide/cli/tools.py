@@ -16,7 +16,7 @@ from .app import _json_default, dpi_option, main, records_dir_option, size_optio
 @main.command()
 @click.argument("record", type=click.Path(path_type=Path))
 @click.option("--format", "fmt", default=None,
-              help="File format (default: detected): at2, knet, column, values, or an obspy format.")
+              help="File format (default: detected): at2, knet, cosmos, column, values, or an obspy format.")
 @click.option("--units", default=None,
               help="Acceleration unit of the values (g, gal, m/s^2) where the file does not say.")
 @click.option("--time-column", default=None,
@@ -66,6 +66,9 @@ def info(record, fmt, units, time_column, column, dt, skip_lines, as_json):
     click.echo(f"  peak      {details['peak_gal']:.2f} gal = {details['peak_g']:.4f} g "
                f"({'+' if details['peak_signed'] > 0 else '-'}) at t = {details['peak_time']:g} s")
     click.echo(f"  mean      {details['mean'] / 0.01:.3f} gal")
+    for key, value in (details.get("cosmos") or {}).items():
+        if value not in (None, "") and key != "comments":
+            click.echo(f"  {key.replace('_', ' '):<9} {value}")
     click.echo(f"  sha256    {details['sha256']}")
 
 
@@ -275,4 +278,8 @@ def _stored_run_text(path: Path) -> str:
     stored = results.read_result(path)
     neighbourhood = json.loads(stored.attrs["ensemble"]) if "ensemble" in stored.attrs else None
     text = run_text(stored.name, stored.result.summary, neighbourhood, ground=stored.ground or None)
+    if stored.base:                          # a block on a floor: PFA and PFV of what it stood on
+        from ..engine.prepare import floor_peaks, floor_peaks_text
+        r = stored.result
+        text += f"\n  {floor_peaks_text(floor_peaks(r.ground_time, r.ground_horizontal, stored.base['horizontal']))}"
     return f"{text}\n  (read from {path}; rockslide {stored.attrs.get('rockslide_version', '?')})"

@@ -44,7 +44,8 @@ from scipy.linalg import expm
 from . import compiled  # noqa: F401  (before any cache=True: numba needs a cache folder)
 
 __all__ = ["DAMPING", "POINTS_PER_PERIOD", "peak_acceleration", "ground_velocity", "peak_velocity",
-           "sdof_coefficients", "sdof_response", "spectral_acceleration", "PARTS_PER_DEGREE", "ROTD_ANGLES",
+           "sdof_coefficients", "sdof_response", "substeps_for", "oscillator_history", "spectral_acceleration",
+           "spectral_absolute_acceleration", "floor_acceleration", "PARTS_PER_DEGREE", "ROTD_ANGLES",
            "direction_cosines", "along", "rotated_peaks", "rotd_peaks"]
 
 #: Damping ratio of the response spectrum [-] (the 5 % of building codes and ground-motion models).
@@ -202,12 +203,88 @@ def sdof_response(acceleration, dt: float, period: float, damping: float = DAMPI
     return u, velocity
 
 
+def substeps_for(dt: float, period: float) -> int:
+    """Equal steps per record interval so that an oscillator of ``period`` [s] is seen at least
+    `POINTS_PER_PERIOD` times per period on a record of step ``dt`` [s]."""
+    return max(1, math.ceil(POINTS_PER_PERIOD * dt / period - 1e-9))
+
+
+def oscillator_history(acceleration, dt: float, period: float, damping: float = DAMPING,
+                       substeps: int | None = None):
+    """The response history of a linear oscillator on the record, from rest: the one source of the
+    spectra (`spectral_acceleration`, `spectral_absolute_acceleration`) and of floor motions
+    (`floor_acceleration`).
+
+    The parameters are `sdof_response`'s, with ``substeps`` by default `substeps_for` (dt, period).
+
+    Returns
+    -------
+    u, velocity, absolute : numpy.ndarray
+        [m], [m/s], [m/s^2] at ``t = j dt / substeps``: `sdof_response`'s relative displacement and
+        velocity, and the absolute acceleration ``a + u'' = -(2 zeta omega u' + omega^2 u)`` (the equation of
+        motion), exact at every step for the piecewise-linear input.
+    """
+    m = substeps_for(dt, period) if substeps is None else substeps
+    u, velocity = sdof_response(acceleration, dt, period, damping, m)
+    omega = 2.0 * math.pi / period
+    return u, velocity, -(2.0 * damping * omega * velocity + omega * omega * u)
+
+
 def spectral_acceleration(acceleration, dt: float, period: float, damping: float = DAMPING) -> float:
     """Sa(T, zeta) = omega^2 max |u| [m/s^2], the pseudo-spectral acceleration (module notes)."""
-    substeps = max(1, math.ceil(POINTS_PER_PERIOD * dt / period - 1e-9))
-    u, _ = sdof_response(acceleration, dt, period, damping, substeps)
+    u, _, _ = oscillator_history(acceleration, dt, period, damping)
     omega = 2.0 * math.pi / period
     return float(omega * omega * np.max(np.abs(u)))
+
+
+def spectral_absolute_acceleration(acceleration, dt: float, period: float, damping: float = DAMPING) -> float:
+    """max |a + u''| [m/s^2], the absolute-acceleration spectrum at (T, zeta), seen at the same steps
+    as `spectral_acceleration` (equal to it for zeta = 0): the PFA of a one-mode floor of unit
+    participation (`floor_acceleration`)."""
+    _, _, absolute = oscillator_history(acceleration, dt, period, damping)
+    return float(np.max(np.abs(absolute)))
+
+
+def floor_acceleration(acceleration, dt: float, modes, substeps: int | None = None) -> tuple[np.ndarray, float]:
+    """Absolute acceleration of a floor of a linear building on the ground record (modal superposition).
+
+    Parameters
+    ----------
+    acceleration : array_like
+        [m/s^2] ground acceleration ``a_g`` at step ``dt``, linear in between.
+    dt : float
+        [s] sampling step.
+    modes : sequence of (period, damping, participation)
+        Each mode ``i``: period ``T_i`` [s] (> 0), damping ratio ``zeta_i`` [-] in [0, 1) and
+        participation ``p_i = Gamma_i phi_i`` [-] at the floor (the mode's participation factor
+        times its shape at the floor; 1 for one mode that carries the floor alone).
+    substeps : int, optional
+        Equal steps per record interval ``m``; default `substeps_for` (dt, shortest period), 1
+        without modes (a common ``m`` puts two components on one grid).
+
+    Returns
+    -------
+    floor : numpy.ndarray
+        [m/s^2] ``a_f = a_g + sum_i p_i u_i''`` with ``u_i'' + 2 zeta_i omega_i u_i' + omega_i^2 u_i =
+        -a_g`` from rest, at the steps ``dt / m``; for one mode with ``p = 1`` this is the
+        oscillator's absolute acceleration ``-(2 zeta omega u' + omega^2 u)``. Exact at every step
+        (Nigam-Jennings, module notes); ``a_g`` at the steps is the record's linear interpolation.
+    step : float
+        [s] ``dt / m``; by default the floor motion is seen `POINTS_PER_PERIOD` times per period of
+        its fastest mode, as the spectra see it.
+    """
+    a = _samples(acceleration)
+    modes = [tuple(float(x) for x in mode) for mode in modes]
+    m = substeps if substeps is not None else max((substeps_for(dt, p) for p, _, _ in modes), default=1)
+    if m == 1 and not modes:
+        return a.copy(), float(dt)
+    fine = np.linspace(0.0, 1.0, m + 1)[:-1]
+    ground = np.append((a[:-1, None] * (1.0 - fine) + a[1:, None] * fine).ravel(), a[-1]) if a.size > 1 else a.copy()
+    floor = ground.copy()
+    for period, damping, participation in modes:
+        _, _, absolute = oscillator_history(a, dt, period, damping, m)
+        floor += participation * (absolute - ground)      # u'' = absolute - a_g
+    return floor, dt / m
 
 
 # --------------------------------------------------------------------------------------------------

@@ -18,7 +18,6 @@ import numpy as np
 
 from .. import pulses
 from ..case import Case, Scale
-from ..core import intensity
 from ..core.layout import P_G, P_R, P_STEP
 from ..core.simulate import Model, Result, Settings, interval_count, parameters, simulate, substeps, tail_samples
 from ..errors import CaseError, RecordError
@@ -29,13 +28,16 @@ from ..units import STANDARD_GRAVITY
 
 @dataclass(frozen=True)
 class Prepared:
-    """A case with its ground motion loaded: everything needed to simulate it."""
+    """A case with its ground motion loaded: everything needed to simulate it. ``ground`` is the
+    motion the block stands on (the floor's, with ``ground.floor``); ``base`` the ground motion under
+    the building when there is a floor (else None)."""
 
     case: Case
     ground: rec.GroundMotion
     model: Model
     settings: Settings
     components: Components | None = None
+    base: rec.GroundMotion | None = None
 
 
 @dataclass(frozen=True)
@@ -137,6 +139,8 @@ def component_azimuths(case: Case, records: dict) -> tuple[float, float]:
                             f"names none; give it, e.g. 'ground: {{{key}: {{file: ..., azimuth: 90 deg}}}}'",
                             source=case.source, field=f"ground.{key}.azimuth")
         azimuths.append(azimuth)
+    from ..core import intensity  # numba and scipy: only for two components (`rockslide run` stays light)
+
     difference = abs(intensity.direction_cosines(azimuths[1] - azimuths[0])[0])
     if difference > math.sin(ORTHOGONALITY_TOLERANCE):
         raise CaseError(f"the components' azimuths {math.degrees(azimuths[0]):g} deg and "
@@ -156,6 +160,8 @@ def ground_along(case: Case, records: dict, *, scaled: bool = True) -> tuple[rec
     result is that of the first component alone, bit for bit. ``scaled=False``: the records as
     they are (factors 1).
     """
+    from ..core import intensity  # numba and scipy: only for two components (`rockslide run` stays light)
+
     first, second = records["horizontal"], records["horizontal_2"]
     rec.check_same_grid(first, second, case.source, roles=("horizontal_1", "horizontal_2"))
     azimuth_1, azimuth_2 = component_azimuths(case, records)
@@ -190,6 +196,94 @@ def ground_along(case: Case, records: dict, *, scaled: bool = True) -> tuple[rec
     files = ground.files + ({"role": "horizontal_2", "path": second.path, "sha256": second.sha256,
                              "format": second.format, "units": second.units},)
     return dataclasses.replace(ground, files=files), components
+
+
+def floor_ground(case: Case, ground: rec.GroundMotion) -> rec.GroundMotion:
+    """The motion of the floor the block stands on (``ground.floor``), from the ground motion under the
+    building: each component through its modes (`core.intensity.floor_acceleration`, exact for the
+    piecewise-linear record) on one grid of ``dt / m``, ``m`` the steps the fastest mode needs (at
+    most as many as keep the grid's step >= ``solver.dt``, `simulate.substeps`' condition); or the
+    horizontal ground times the screening factor ``1 + 2 z/h`` (the code's factor is horizontal: the
+    vertical is left as it is). Without a floor, ``ground`` itself.
+
+    Raises
+    ------
+    CaseError
+        A floor under analytic pulses (sampled with jumps, not as a piecewise-linear record).
+    """
+    floor = case.ground.floor
+    if not floor.given:
+        return ground
+    from ..core import intensity  # numba and scipy: only for a floor (`rockslide run` stays light)
+
+    if np.ndim(ground.horizontal) != 1:
+        raise CaseError("a floor's motion is computed from record files; this case's ground is an analytic "
+                        "pulse: write the pulse as a record, or remove ground.floor", source=case.source,
+                        field="ground.floor")
+    if floor.z_over_h is not None:
+        return dataclasses.replace(ground, horizontal=rec._frozen(floor.amplification() * ground.horizontal))
+    modes = {role: [(m.period, m.damping, m.participation) for m in getattr(floor, role)]
+             for role in ("horizontal", "vertical")}
+    needed = max(intensity.substeps_for(ground.dt, period) for role in modes for period, _, _ in modes[role])
+    m = max(1, min(needed, int(ground.dt / case.solver.dt * (1.0 + 1e-9))))
+    components = {}
+    for role, role_modes in modes.items():
+        components[role], step = intensity.floor_acceleration(getattr(ground, role), ground.dt, role_modes, m)
+    return dataclasses.replace(ground, dt=step, horizontal=rec._frozen(components["horizontal"]),
+                               vertical=rec._frozen(components["vertical"]))
+
+
+def floor_text(case: Case) -> str | None:
+    """One line on the floor the block stands on, for printouts (None without a floor); the screening
+    factor is said to be one."""
+    floor = case.ground.floor
+    if not floor.given:
+        return None
+    if floor.z_over_h is not None:
+        return (f"floor: screening only, the horizontal ground times 1 + 2 z/h = {floor.amplification():g} "
+                f"(z/h = {floor.z_over_h:g}, ASCE 7-16 Eq. 13.3-1), not a building's response")
+    parts = []
+    for role in ("horizontal", "vertical"):
+        modes = getattr(floor, role)
+        if modes:
+            parts.append(f"{role} " + ", ".join(f"T = {m.period:g} s, zeta = {m.damping:g}, participation "
+                                                f"{m.participation:g}" for m in modes))
+    return "floor of a linear building: " + "; ".join(parts)
+
+
+def floor_peaks(time, floor_horizontal, base_horizontal) -> dict:
+    """``pfa`` [m/s^2] and ``pfv`` [m/s] of the floor's horizontal motion as the block felt it
+    (samples at ``time`` [s], the run's tail included; PFV baseline-corrected as PGV is) and
+    ``pga_base`` [m/s^2], the peak of the ground under the building."""
+    from ..core import intensity
+
+    time = np.asarray(time)
+    dt = float(time[1] - time[0]) if time.size > 1 else 1.0
+    return {"pfa": intensity.peak_acceleration(floor_horizontal), "pfv": intensity.peak_velocity(floor_horizontal, dt),
+            "pga_base": intensity.peak_acceleration(base_horizontal)}
+
+
+def floor_peaks_text(peaks: dict) -> str:
+    """`floor_peaks` in one line [g, cm/s]."""
+    return (f"on a floor: PFA {peaks['pfa'] / STANDARD_GRAVITY:.3g} g, PFV {peaks['pfv'] * 100:.3g} cm/s; the "
+            f"ground under the building: PGA {peaks['pga_base'] / STANDARD_GRAVITY:.3g} g")
+
+
+def base_motion(prepared: Prepared) -> dict | None:
+    """The ground motion under the building of a case on a floor, as the result file's ``/base`` group
+    holds it (`results.ResultWriter.finish`'s ``extra_groups``): ``{"base": (time, variables)}`` with
+    the times [s] (``ground.time_shift`` added, as the run's) and the scaled horizontal and vertical
+    ground accelerations [m/s^2]; None without a floor."""
+    base = prepared.base
+    if base is None:
+        return None
+    time = start_time(prepared) + base.dt * np.arange(base.horizontal.size)
+    words = {"horizontal": "horizontal", "vertical": "vertical (up positive)"}
+    return {"base": (("time", time, {"units": "s", "long_name": "time"}),
+                     {role: (("time",), getattr(base, role), {
+                         "units": "m/s^2", "long_name": f"{words[role]} ground acceleration under the building "
+                         "(scaled), the input of the floor the block stands on (/ground)"})
+                      for role in ("horizontal", "vertical")})}
 
 
 def is_pulse_case(case: Case) -> bool:
@@ -479,9 +573,11 @@ def prepare(case: Case, records_dir: Path | None = None, *, history: bool = True
     check_parameters(case)
     components = None
     if case.ground.two_components:
-        ground, components = ground_along(case, read_records(case, records_dir))
+        base, components = ground_along(case, read_records(case, records_dir))
     else:
-        ground = load_ground(case, records_dir)
+        base = load_ground(case, records_dir)
+    check_step(case, base)
+    ground = floor_ground(case, base)
     check_against_ground(case, ground)
     check_size(case, ground, history=history)
     model = model_for(case)
@@ -489,7 +585,7 @@ def prepare(case: Case, records_dir: Path | None = None, *, history: bool = True
     warning = coarse_step_warning(case.source, parameters(model, ground.dt, settings))
     if warning:
         warnings.warn(warning, RunWarning, stacklevel=2)
-    return Prepared(case, ground, model, settings, components)
+    return Prepared(case, ground, model, settings, components, base=base if ground is not base else None)
 
 
 def start_time(prepared: Prepared) -> float:
@@ -536,11 +632,11 @@ def record_entries(prepared: Prepared) -> list[dict]:
 
 
 __all__ = ["Prepared", "Components", "component_azimuths", "ground_along",
-           "load_ground", "is_pulse_case", "unit_pulses", "pulse_ground", "model_for",
-           "settings_for", "check_parameters", "check_against_ground", "check_step", "check_size", "prepare",
-           "simulate_prepared", "run_case", "applied_ground",
-           "record_entries", "start_time", "verdict_robustness", "work", "Work",
-           "step_warning", "RunWarning"]
+           "load_ground", "floor_ground", "floor_text", "floor_peaks", "floor_peaks_text", "base_motion",
+           "is_pulse_case", "unit_pulses", "pulse_ground", "model_for", "settings_for", "check_parameters",
+           "check_against_ground", "check_step", "check_size", "prepare", "simulate_prepared", "run_case",
+           "applied_ground", "record_entries", "start_time", "verdict_robustness", "work", "Work", "step_warning",
+           "RunWarning"]
 
 
 ROBUSTNESS_VARIANTS = (("dt/2", 0.5, 1.0), ("mu-1%", 1.0, 0.99), ("mu+1%", 1.0, 1.01))

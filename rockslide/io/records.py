@@ -12,6 +12,10 @@ Supported formats (``format=None`` sniffs them in this order):
     PEER NGA ``.AT2``: 4 header lines (units on line 3, ``NPTS``/``DT`` on line 4), then values.
 ``knet``
     K-NET / KiK-net ASCII (NIED), read by obspy; counts times the scale factor, mean removed.
+``cosmos``
+    COSMOS v1.20 (CESMD's ``.V2``/``.V2c`` building and free-field records): the first channel's
+    acceleration, its station, structure type, orientation and location in ``Record.header``
+    (`rockslide.io.cosmos`).
 ``column``
     Numbers separated by commas and/or whitespace, ``#`` comments, an optional header row of
     column names: a time column and an acceleration column. One column is ``values``.
@@ -43,6 +47,7 @@ import numpy as np
 
 from ..errors import CaseError, RecordError
 from ..units import STANDARD_GRAVITY, unit_factor
+from . import cosmos
 from .files import atomic_write, expand_user
 
 if TYPE_CHECKING:
@@ -51,7 +56,7 @@ if TYPE_CHECKING:
 RECORDS_ENV = "ROCKSLIDE_RECORDS"
 
 #: Formats rockslide reads itself (the obspy ones are added by name).
-OWN_FORMATS = ("at2", "knet", "column", "values")
+OWN_FORMATS = ("at2", "knet", "cosmos", "column", "values")
 #: obspy formats never used: reading (or even detecting) a PICKLE file unpickles it, which runs any
 #: code the file holds. A record file is data, like a case file.
 UNSAFE_OBSPY_FORMATS = frozenset({"PICKLE"})
@@ -70,7 +75,7 @@ MAX_SAMPLING_STEP = 1.0
 #: A peak above this [m/s^2] is almost certainly a unit mistake: warn.
 ABSURD_PEAK = 10.0 * STANDARD_GRAVITY
 
-_SUPPORTED = ("PEER NGA .AT2, K-NET/KiK-net ASCII, column text (time and acceleration), "
+_SUPPORTED = ("PEER NGA .AT2, K-NET/KiK-net ASCII, COSMOS v1.20 (.V2c), column text (time and acceleration), "
               "values text (format: values, with dt), or a waveform format obspy reads "
               "(SAC, MSEED, ...)")
 _UNITS_HINT = "g, gal, m/s^2"
@@ -340,6 +345,10 @@ def _parse(ctx: _Context, raw: bytes, kind: str, options: _Options) -> tuple[_Pa
         parsed = _read_at2(ctx, _decode(raw), options)
     elif kind == "knet":
         parsed = _read_knet(ctx, raw)
+    elif kind == "cosmos":
+        series = cosmos.parse(_decode(raw), ctx.error)
+        parsed = _Parsed(series.values * _unit_to_si(ctx, series.units, "COSMOS"), series.dt, series.units,
+                         lines=series.lines, stats=series.header)
     elif kind in ("column", "values"):
         parsed, kind = _read_text(ctx, _decode(raw), options, values_only=(kind == "values"))
     elif kind == "obspy":
@@ -365,7 +374,8 @@ def record_info(path, **options) -> dict:
         ``format``, ``path``, ``npts``, ``dt`` [s], ``duration`` [s] (``npts * dt``, as PEER
         counts it), ``units`` (of the file), ``start`` [s], ``peak`` [m/s^2] (max ``|a|``),
         ``peak_gal``, ``peak_g``, ``peak_signed`` [m/s^2] (the sample at the peak, with its sign),
-        ``peak_time`` [s] (its time, first one if tied), ``mean`` [m/s^2], ``sha256``.
+        ``peak_time`` [s] (its time, first one if tied), ``mean`` [m/s^2], ``sha256``; ``cosmos``:
+        a COSMOS file's station, structure type, orientation and location (`io.cosmos`), else None.
     """
     record = load_record(path, **options)
     data = record.data
@@ -387,6 +397,7 @@ def record_info(path, **options) -> dict:
         "peak_time": record.start + index * dt,
         "mean": float(np.mean(data)),
         "sha256": record.sha256,
+        "cosmos": dict(record.header["cosmos"]) if record.format == "cosmos" else None,
     }
 
 
@@ -441,6 +452,8 @@ def _choose_format(ctx: _Context, raw: bytes, format: str | None, options: _Opti
         return "at2"
     if raw.startswith(b"Origin Time"):
         return "knet"
+    if cosmos.looks_like_cosmos(first_line):
+        return "cosmos"
     if b"\0" not in raw[:4096] and _looks_like_text_table(_decode(raw), options.skip_lines):
         return "column"
     return "obspy"

@@ -32,6 +32,9 @@ Layout (format ``rockslide-result``, version 1):
 | `/records/horizontal` | group (attrs) | | the horizontal record file (attributes below) |
 | `/records/vertical` | group (attrs) | | the same for the vertical record |
 
+- A block on a floor (``ground.floor``): ``/ground`` is the floor's motion, the block's support, and
+  a group ``/base`` holds the ground under the building (``time`` [s], ``horizontal`` and
+  ``vertical`` [m/s^2], scaled, without the tail), labelled as ``/ground`` is.
 - ``/time_history/state`` attribute ``codes`` = "0 REST, 1 SLIP, 2 ROCK, 3 ROCKSLIP, 4 OVERTURNED".
 - ``/events`` fields: ``time`` (f8) [s]; ``from``, ``to`` (UTF-8 text, state names); ``cause``
   (UTF-8 text: slip-start, liftoff, slip-stop, slip-reversal, impact, liftoff-end, overturn, flight,
@@ -170,6 +173,9 @@ class StoredResult:
     ground : dict
         The ground motion as applied (keys ``GROUND_KEYS``, SI; None where not stored), ``{}`` if
         the file has none.
+    base : dict
+        For a block on a floor, the ground motion under the building (``/base``): ``time`` [s],
+        ``horizontal`` and ``vertical`` [m/s^2]; ``{}`` otherwise.
     """
 
     name: str
@@ -179,6 +185,7 @@ class StoredResult:
     records: list[dict]
     attrs: dict
     ground: dict = dataclasses.field(default_factory=dict)
+    base: dict = dataclasses.field(default_factory=dict)
 
 
 # --------------------------------------------------------------------------------------------------
@@ -869,8 +876,10 @@ def _read_body(f: h5py.File) -> StoredResult:
               for key in GROUND_KEYS if f"ground_{key}" in attrs}
     if "ground_orientation" in attrs:
         ground["components"] = {key: float(attrs[f"ground_{key}"]) for key in COMPONENT_KEYS}
+    base = {key: f["base"][key][()].astype(np.float64) for key in ("time", "horizontal", "vertical")} \
+        if "base" in f else {}
     return StoredResult(name=str(attrs.get("name", "")), result=result, case_text=case_text,
-                        case=case, records=records, attrs=attrs, ground=ground)
+                        case=case, records=records, attrs=attrs, ground=ground, base=base)
 
 
 def _summary_from_attrs(attrs: dict) -> Summary:
