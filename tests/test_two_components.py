@@ -420,3 +420,33 @@ def test_sweep_command_prints_the_worst_azimuth(pair, monkeypatch):
     result = invoke("sweep", name, "--azimuth", "0:90:45", "--no-plot")
     assert result.exit_code == 0, result.output
     assert "worst azimuth" in result.output
+
+
+# --------------------------------------------------------------------------------------------------
+# Two components on a floor: the floor filters the motion along the block
+# --------------------------------------------------------------------------------------------------
+
+def test_a_floor_filters_the_motion_along_the_block(pair):
+    """With ``ground.floor`` and two components, the block stands on the floor's response to the
+    motion along its direction: the floor is linear, so that is the floor's response to component
+    1 times cos(30 deg) plus component 2's times sin(30 deg) (to round-off), and the base kept in
+    the result is the motion along the block."""
+    from rockslide.engine import prepare as runner
+
+    floor = {"horizontal": {"period": "0.4 s", "damping": 0.05}}
+    case = _case(pair, orientation="30 deg").with_({"ground.floor": floor})
+    prepared = runner.prepare(case, records_dir=pair, history=False)
+    a1, a2 = _components()
+    dt = prepared.base.dt
+    f1, step = intensity.floor_acceleration(a1, dt, [(0.4, 0.05, 1.0)], round(dt / prepared.ground.dt))
+    f2, _ = intensity.floor_acceleration(a2, dt, [(0.4, 0.05, 1.0)], round(dt / prepared.ground.dt))
+    expected = math.cos(math.radians(30)) * f1 + math.sin(math.radians(30)) * f2
+    assert prepared.ground.dt == step
+    # the AT2 files hold the components to 7 significant digits (write_at2): compare at that scale
+    assert np.max(np.abs(prepared.ground.horizontal - expected)) <= 1e-6 * np.max(np.abs(expected))
+    along = math.cos(math.radians(30)) * a1 + math.sin(math.radians(30)) * a2
+    assert np.max(np.abs(prepared.base.horizontal - along)) <= 1e-6 * np.max(np.abs(along))
+    # and a sweep over azimuths runs each orientation on its own floor motion
+    swept = sweep(case, azimuth="0,30", records_dir=pair)
+    alone = run(case, history=False).result.summary
+    assert float(swept.isel(azimuth=1)["max_rotation"]) == pytest.approx(alone.max_rotation, rel=1e-9)
