@@ -714,7 +714,7 @@ def _read_text(ctx: _Context, text: str, options: _Options, *, values_only: bool
             table.append(_numbers(ctx, number, tokens, first_data=rows[0][0]))
         table = np.array(table, dtype=np.float64)
     lines = np.array([number for number, _ in rows], dtype=np.int64)
-    time_index, value_index = _time_and_value_columns(ctx, options, names, columns)
+    time_index, value_index = _time_and_value_columns(ctx, options, names, units, columns)
     _require_samples(ctx, len(table))
     unit = _column_unit(ctx, options.units, units[value_index], names, value_index)
     values = table[:, value_index] * _unit_to_si(ctx, unit, "column text")
@@ -736,7 +736,7 @@ def _fix(key: str, value: str = "") -> str:
     """How to give a reading option, in a case file and on the command line: ``skip_lines: 3
     (--skip-lines 3)``."""
     option = "--" + key.replace("_", "-")
-    return f"{key}: {value} ({option} {value})" if value else f"{key}: ({option})"
+    return f"{key}: {value} ({option} {value})" if value else f"{key} ({option})"
 
 
 def _values_record(ctx: _Context, rows, options: _Options, stated) -> _Parsed:
@@ -861,10 +861,18 @@ def _column_unit(ctx: _Context, given: str | None, stated, names, index: int) ->
     return given
 
 
-def _time_and_value_columns(ctx: _Context, options: _Options, header,
+def _time_and_value_columns(ctx: _Context, options: _Options, header, units,
                             columns: int) -> tuple[int | None, int]:
-    """0-based indices of the time column (None with ``dt``: not read) and of the acceleration."""
+    """0-based indices of the time column (None with ``dt``: not read) and of the acceleration.
+
+    Without ``time_column``, the one column whose header states a time unit or is named ``time``
+    or ``t`` is the time column.
+    """
     time_spec, value_spec = options.time_column, options.column
+    timed = [i for i, unit in enumerate(units) if unit is not None and unit[0] == "time"] or \
+        [i for i, name in enumerate(header or ()) if name.strip().casefold() in ("time", "t")]
+    if time_spec is None and options.dt is None and len(timed) == 1:
+        time_spec = timed[0] + 1
     listed = f" ({', '.join(header)})" if header else ""
     numbers = f"numbers 1 to {columns}" + (" or header names" if header else "")
     if options.dt is not None:
@@ -879,6 +887,9 @@ def _time_and_value_columns(ctx: _Context, options: _Options, header,
         time_spec = 1 if time_spec is None else time_spec
         if value_spec is None:
             value_spec = 2 if _column_index(ctx, time_spec, "time_column", header, columns) == 0 else 1
+    elif time_spec is not None and value_spec is None:
+        raise ctx.error(f"the file has {columns} columns{listed}; give the acceleration column with "
+                        f"{_fix('column')} ({numbers})", "column")
     elif time_spec is None or value_spec is None:
         raise ctx.error(f"the file has {columns} columns{listed}; give time_column and column "
                         f"(--time-column, --column: {numbers}), or column and dt (--column, --dt: "
@@ -989,12 +1000,11 @@ def _uniform_time(ctx: _Context, time: np.ndarray, tokens: list[str], factor: fl
         off = np.flatnonzero(~(np.abs(time - grid) <= tolerance))
     if off.size:
         i = max(int(off[0]), 1)
-        raise ctx.error(f"time {time[i]:.9g} s is {abs(time[i] - grid[i]):.3g} s from the uniform grid "
-                        f"(start {time[0]:.9g} s, step {dt:.9g} s = span / intervals), more than its "
-                        f"printed digits allow ({tolerance[i]:.3g} s); the time step before it is "
-                        f"{steps[i - 1]:.9g} s: the time column is not uniform. If the samples are evenly "
-                        f"spaced, give {_fix('dt')} not to read the time column; else resample the "
-                        "record", f"line {int(lines[i])}")
+        raise ctx.error(f"time {time[i]:.9g} s is {abs(time[i] - grid[i]):.3g} s off the uniform "
+                        f"step {dt:.9g} s (the step before it is {steps[i - 1]:.9g} s), beyond its printed "
+                        f"digits (±{tolerance[i]:.2g} s): the time column must be uniform; if the samples "
+                        f"are evenly spaced give {_fix('dt')} not to read it, else resample the record",
+                        f"line {int(lines[i])}")
     return float(time[0]), dt
 
 
