@@ -736,7 +736,7 @@ def _fix(key: str, value: str = "") -> str:
     """How to give a reading option, in a case file and on the command line: ``skip_lines: 3
     (--skip-lines 3)``."""
     option = "--" + key.replace("_", "-")
-    return f"{key}: {value} ({option} {value})" if value else f"{key} ({option})"
+    return f"`{key}: {value}` ({option} {value})" if value else f"`{key}:` ({option})"
 
 
 def _values_record(ctx: _Context, rows, options: _Options, stated) -> _Parsed:
@@ -880,16 +880,16 @@ def _time_and_value_columns(ctx: _Context, options: _Options, header, units,
             raise ctx.error("time_column and dt were both given; dt takes the samples as evenly spaced "
                             "and does not read the time column: remove one of them", "dt")
         if value_spec is None and columns > 2:
-            raise ctx.error(f"the file has {columns} columns{listed}; give the acceleration column "
-                            f"with {_fix('column')} ({numbers})", "column")
+            raise ctx.error(f"the file has {columns} columns{listed}; give the acceleration column, "
+                            f"{_fix('column')}: {numbers}", "column")
         return None, _column_index(ctx, 2 if value_spec is None else value_spec, "column", header, columns)
     if columns == 2:
         time_spec = 1 if time_spec is None else time_spec
         if value_spec is None:
             value_spec = 2 if _column_index(ctx, time_spec, "time_column", header, columns) == 0 else 1
     elif time_spec is not None and value_spec is None:
-        raise ctx.error(f"the file has {columns} columns{listed}; give the acceleration column with "
-                        f"{_fix('column')} ({numbers})", "column")
+        raise ctx.error(f"the file has {columns} columns{listed}; give the acceleration column, "
+                        f"{_fix('column')}: {numbers}", "column")
     elif time_spec is None or value_spec is None:
         raise ctx.error(f"the file has {columns} columns{listed}; give time_column and column "
                         f"(--time-column, --column: {numbers}), or column and dt (--column, --dt: "
