@@ -974,30 +974,37 @@ def _uniform_time(ctx: _Context, time: np.ndarray, tokens: list[str], factor: fl
     each is within half a unit of its last printed digit (`_printed_units`), plus the uncertainty
     of the line through the first and the last time (half their units), plus ``1e-6 dt + 1e-9`` s
     of floating point, but less than ``0.45 dt`` (a missing or repeated sample moves a time by
-    ``dt``): a time column of a record sampled at 800 Hz printed to 4 decimals (0.0012, 0.0013
+    ``dt``); each step likewise within half the units of its two times of ``dt`` (a step off is
+    named where it is, not where the drift it causes leaves the grid): a time column of a record sampled at 800 Hz printed to 4 decimals (0.0012, 0.0013
     alternately) is uniform, the SCT 1985 file's 64.43999 among its 0.02 s steps too.
     """
     bad = np.flatnonzero(~np.isfinite(time))
     if bad.size:
         raise ctx.error(f"time {time[bad[0]]} is not a finite number", f"line {int(lines[bad[0]])}")
+    n = time.size
     with np.errstate(over="ignore", invalid="ignore"):
         steps = np.diff(time)
-        median = float(np.median(steps))
-        if not (math.isfinite(median) and median > 0):
+        dt = float((time[-1] - time[0]) / (n - 1))
+        unit = _printed_units(tokens) * factor
+        printed = float(np.median(unit))
+        if math.isfinite(dt) and dt > 0 and printed > dt:
+            raise ctx.error(f"the time column is printed to {printed:.3g} s, coarser than its step {dt:.6g} s: "
+                            f"it cannot show the sampling; give {_fix('dt', f'{dt:.6g}')} not to read it",
+                            "time_column")
+        if not (math.isfinite(dt) and dt > 0 and np.median(steps) > 0):
             raise ctx.error("the time column does not increase; expected times in seconds, evenly spaced "
                             f"(if the samples are evenly spaced, give {_fix('dt')} not to read the time "
                             "column)", "time_column")
-        n = time.size
-        dt = float((time[-1] - time[0]) / (n - 1))
-        unit = _printed_units(tokens) * factor
-        if float(np.median(unit)) > dt:
-            raise ctx.error(f"the time column is printed to {float(np.median(unit)):.3g} s, not finer than "
-                            f"its step {dt:.6g} s: it cannot show the sampling; give "
-                            f"{_fix('dt', f'{dt:.6g}')} not to read it", "time_column")
-        grid = time[0] + np.arange(n) * dt
         # below half a step, so that a missing or repeated sample is never within the tolerance
-        tolerance = np.minimum(0.5 * unit + 0.5 * max(unit[0], unit[-1]), 0.45 * dt) + 1e-6 * dt + 1e-9
-        off = np.flatnonzero(~(np.abs(time - grid) <= tolerance))
+        slack = 1e-6 * dt + 1e-9
+        step_tolerance = np.minimum(0.5 * (unit[1:] + unit[:-1]) + 0.5 * (unit[0] + unit[-1]) / (n - 1),
+                                    0.45 * dt) + slack
+        grid = time[0] + np.arange(n) * dt
+        tolerance = np.minimum(0.5 * unit + 0.5 * max(unit[0], unit[-1]), 0.45 * dt) + slack
+        # a step off (a missing sample) is named where it is; a slow drift where it leaves the grid
+        off = np.flatnonzero(~(np.abs(steps - dt) <= step_tolerance)) + 1
+        if not off.size:
+            off = np.flatnonzero(~(np.abs(time - grid) <= tolerance))
     if off.size:
         i = max(int(off[0]), 1)
         raise ctx.error(f"time {time[i]:.9g} s is {abs(time[i] - grid[i]):.3g} s off the uniform "
