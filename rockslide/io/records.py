@@ -975,8 +975,9 @@ def _uniform_time(ctx: _Context, time: np.ndarray, tokens: list[str], factor: fl
     of the line through the first and the last time (half their units), plus ``1e-6 dt + 1e-9`` s
     of floating point, but less than ``0.45 dt`` (a missing or repeated sample moves a time by
     ``dt``); each step likewise within half the units of its two times of ``dt`` (a step off is
-    named where it is, not where the drift it causes leaves the grid): a time column of a record sampled at 800 Hz printed to 4 decimals (0.0012, 0.0013
-    alternately) is uniform, the SCT 1985 file's 64.43999 among its 0.02 s steps too.
+    named where it is, not where the drift it causes leaves the grid). A time column of a record
+    sampled at 800 Hz printed to 4 decimals (0.0012, 0.0013 alternately) is uniform, the SCT 1985
+    file's 64.43999 among its 0.02 s steps too.
     """
     bad = np.flatnonzero(~np.isfinite(time))
     if bad.size:
