@@ -135,11 +135,13 @@ class RecordSpec:
     format : str, optional
         File format; None lets the reader detect it.
     units : str, optional
-        Acceleration unit of the values (``"g"``, ``"gal"``, ``"m/s^2"``...); None = from the file.
+        Acceleration unit of the values (``"g"``, ``"gal"``, ``"m/s^2"``...); None = from the file
+        (AT2 and K-NET headers, a column text header such as ``Acceleration (g)``).
     time_column, column : int or str, optional
         1-based column number or header name of the time and of the acceleration values.
     dt : float, optional
-        Sample interval [s] for files without time column or header.
+        Sample interval [s] for files without a time column; with column text, the time column is
+        then not read (one ``column`` of many, evenly spaced).
     skip_lines : int
         Lines to skip before the data, >= 0.
     """

@@ -13,8 +13,12 @@ Supported formats (``format=None`` sniffs them in this order):
 ``knet``
     K-NET / KiK-net ASCII (NIED), read by obspy; counts times the scale factor, mean removed.
 ``column``
-    Numbers separated by commas and/or whitespace, ``#`` comments, an optional header row of
-    column names: a time column and an acceleration column. One column is ``values``.
+    Numbers separated by tabs, commas, semicolons and/or spaces, ``#`` comments, header lines
+    before the numbers (column names with spaces and units, ``Time (s)<TAB>Acceleration (g)``; a
+    line of units): a time column and an acceleration column, chosen by number or name. The unit
+    of the acceleration is the header's where it states one (``g``, ``g's``, ``[gal]``,
+    ``cm/s/s``...); a time column is uniform to the digits it is printed with; with ``dt`` only
+    the acceleration column is read. One column is ``values``.
 ``values``
     All numbers in reading order, several per line allowed, after ``skip_lines`` lines; needs ``dt``.
 any obspy waveform format
