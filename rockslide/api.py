@@ -135,7 +135,7 @@ def sweep(case: Case | Mapping | str | Path, *, mu_kinetic_ratio: float | None =
     case : Case, mapping or path
     **axes : str or sequence
         The axes, in dimension order: ``mu``, ``pga``, ``vertical_factor``, ``restitution``,
-        ``slenderness`` (width / height, the height kept), ``gravity``, and for a pulse case
+        ``height_to_width`` (h/b, the field's slenderness ratio; the height kept), ``gravity``, and for a pulse case
         ``amplitude``, ``period``, ``duration``. Each is ``"start:stop:step"`` or a comma list as
         on the command line (``pga="100gal:1000gal:25gal"``), or a sequence of values: SI numbers
         or strings with units (``pga=[1.0, 2.0]`` in m/s^2, ``pga=["0.1g", "0.2g"]``).
@@ -165,6 +165,9 @@ def sweep(case: Case | Mapping | str | Path, *, mu_kinetic_ratio: float | None =
     from .io import datasets, records
 
     case = _case(case)
+    retired = [name for name in axes if name in sw.RETIRED_AXES]
+    if retired:
+        raise CaseError(sw.RETIRED_AXES[retired[0]], source=retired[0])
     unknown = [name for name in axes if name not in sw.AXES]
     if unknown:
         raise CaseError(f"unknown axis {unknown[0]!r}; expected one of {', '.join(sw.AXES)}",

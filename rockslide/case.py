@@ -308,9 +308,11 @@ class Uncertain:
     friction : Distribution or None
         A factor on ``mu_static`` and ``mu_kinetic`` together.
     size : Distribution or None
-        A factor on the block's height and width together (its slenderness kept).
+        A factor on the block's height and width together (its shape kept).
     slenderness : Distribution or None
-        A factor on the block's width, its height kept.
+        A factor ``f`` on the block's width b, its height h kept: the width becomes ``f b``, so
+        b/h (= tan alpha) is multiplied by ``f`` and the field's slenderness ratio h/b divided by
+        it (``f`` > 1: a stockier block). The name says which quantity varies, not which ratio.
     """
 
     intensity: Distribution | None = None
@@ -517,7 +519,8 @@ CASE_KEYS: dict[str, dict] = {
         "friction": _key("distribution", "factor on mu_static and mu_kinetic together", bounds=[(">", 0.0)]),
         "size": _key("distribution", "factor on height and width together, e.g. {lognormal: {median: 1, "
                      "beta: 0.3}}", bounds=[(">", 0.0)]),
-        "slenderness": _key("distribution", "factor on the width, the height kept", bounds=[(">", 0.0)]),
+        "slenderness": _key("distribution", "factor on the width b, the height kept (b/h times it, h/b "
+                            "divided by it)", bounds=[(">", 0.0)]),
     }),
 }
 

@@ -1,7 +1,7 @@
 """Parameter sweeps: one case file, a grid of values, one compiled batch (``rockslide sweep``).
 
 A sweep replaces a few values of a case file by every combination of its axes (:data:`AXES`:
-``--mu``, ``--pga``, ``--vertical-factor``, ``--restitution``, ``--slenderness``, ``--gravity``,
+``--mu``, ``--pga``, ``--vertical-factor``, ``--restitution``, ``--height-to-width``, ``--gravity``,
 and for a case whose ground motion is analytic pulses ``--amplitude``, ``--period`` and
 ``--duration`` of the horizontal pulse) and computes every point with the batch kernel (`batch`),
 without history or event log.
@@ -20,7 +20,9 @@ without history or event log.
   ``mu_kinetic / mu_static`` (rounded to 12 significant digits, so that 0.494 / 0.52 is 0.95)
   unless ``--mu-kinetic-ratio`` gives it; ``--pga`` sets ``ground.scale.pga_horizontal`` (removing
   a ``factor``), and the vertical keeps the record's V/H ratio unless the case gives
-  ``pga_vertical``; ``--slenderness`` sets the width to ``slenderness * height``.
+  ``pga_vertical``; ``--height-to-width`` (h/b, the field's slenderness ratio) sets the width to
+  ``height / (h/b)``, the height kept. (``--slenderness``, width / height, the inverse of the
+  field's ratio, is retired: `RETIRED_AXES`.)
 - **Same arithmetic as ``rockslide run``.** The records are read once; each point's scale factors
   come from `records.combine`, its parameters and initial state from `simulate.parameters` and
   `simulate.initial_state`, and the batch kernel multiplies the unscaled samples by the factors as
@@ -130,8 +132,8 @@ AXES: dict[str, AxisKind] = {a.name: a for a in (
              "factor on the vertical record", "1", "vertical factor"),
     AxisKind("restitution", "--restitution", "dimensionless", "contact.restitution",
              "coefficient of restitution", "1", "coefficient of restitution e"),
-    AxisKind("slenderness", "--slenderness", "dimensionless", "block.width",
-             "slenderness: width / height (the height kept)", "1", "width / height (b/h)"),
+    AxisKind("height_to_width", "--height-to-width", "dimensionless", "block.width",
+             "height / width h/b, the slenderness ratio (the height kept)", "1", "height / width h/b"),
     AxisKind("gravity", "--gravity", "acceleration", "gravity", "gravitational acceleration",
              "m/s^2", "gravity g [m/s²]"),
     AxisKind("amplitude", "--amplitude", "acceleration", "ground.horizontal.amplitude",
@@ -141,6 +143,14 @@ AXES: dict[str, AxisKind] = {a.name: a for a in (
     AxisKind("duration", "--duration", "time", "ground.horizontal.duration",
              "duration of the horizontal pulse", "s", "pulse duration t_d [s]"),
 )}
+#: Axes no longer offered, with what replaces them (one line, exit 2 where they are asked for).
+RETIRED_AXES = {
+    "slenderness": "--slenderness was width / height b/h, the inverse of the field's slenderness ratio "
+                   "h/b (--slenderness 4 built a block 4 times wider than high); give --height-to-width "
+                   "h/b instead (the height kept): --slenderness 0.25 is --height-to-width 4",
+}
+#: Figure labels of retired axes, for files written before they were retired.
+_RETIRED_LABELS = {"slenderness": "width / height b/h"}
 #: The axes that change the horizontal pulse of a pulse case (and only there).
 PULSE_AXES = ("amplitude", "period", "duration")
 #: The axes that scale record files (a pulse is scaled by its amplitude).
@@ -294,8 +304,8 @@ def axis_changes(axis: str, value: float, case: Case, ratio: float | None) -> di
         if case.ground.scale.factor is not None:
             changes["ground.scale.factor"] = None
         return changes
-    if axis == "slenderness":
-        return {"block.width": value * case.block.height}
+    if axis == "height_to_width":       # h/b = 0 is an infinitely wide block: refused as a width
+        return {"block.width": case.block.height / value if value != 0 else math.inf}
     return {AXES[axis].key: value}
 
 
@@ -595,7 +605,7 @@ def _point_error(exc: CaseError, axes, combo) -> CaseError:
 
 def _key_root(axis: str) -> str:
     return {"mu": "contact.mu", "pga": "ground.scale", "vertical_factor": "ground.scale",
-            "slenderness": "block", "amplitude": "ground.horizontal", "period": "ground.horizontal",
+            "height_to_width": "block", "amplitude": "ground.horizontal", "period": "ground.horizontal",
             "duration": "ground.horizontal"}.get(axis, AXES[axis].key)
 
 
@@ -705,7 +715,7 @@ def coordinates(plan: Plan) -> list:
         kind = axis.kind
         attrs = {"units": kind.units, "long_name": kind.long_name, "option": kind.option,
                  "given_as": axis.spec}
-        if axis.name == "slenderness":
+        if axis.name == "height_to_width":
             attrs["height"] = float(plan.case.block.height)
         out.append((axis.name, np.asarray(axis.values, dtype=np.float64), attrs))
     return out
@@ -845,7 +855,8 @@ def _maps(axes, variables: dict, title: str):
     from ..plots import sweep_figure
 
     over = int(np.asarray(variables["overturned"][0]).sum())
-    shown = [(AXES[name].label, np.asarray(values) / AXES[name].display_scale) for name, values in axes]
+    shown = [(AXES[name].label, np.asarray(values) / AXES[name].display_scale) if name in AXES else
+             (_RETIRED_LABELS.get(name, name), np.asarray(values)) for name, values in axes]
     return sweep_figure(shown, categories(variables), variables["max_rotation"][0],
                         variables["residual_slip"][0], title=f"{title}, {over} overturned")
 

@@ -13,7 +13,7 @@ from pathlib import Path
 import click
 
 from .. import interrupts
-from ..errors import OutputError
+from ..errors import CaseError, OutputError
 from .app import _json_default, _result_set, dpi_option, main, records_dir_option, show_warnings
 
 
@@ -36,6 +36,19 @@ def _axis_option(name: str, kind: str, what: str, example: str):
     return click.option(f"--{name.replace('_', '-')}", name, multiple=True, metavar="SPEC", callback=remember,
                         help=f"{what}: START:STOP:STEP or a comma list, e.g. {example}.{units}")
 
+
+
+def _retired_axis(name: str):
+    """A hidden option for an axis no longer offered: asking for it is one line naming what
+    replaces it (`sweep.RETIRED_AXES`), exit 2."""
+    def refuse(ctx, param, values):
+        if values:
+            from ..analyses.sweep import RETIRED_AXES
+            raise CaseError(RETIRED_AXES[name], source=f"--{name}")
+        return None
+
+    return click.option(f"--{name}", f"retired_{name}", multiple=True, hidden=True, expose_value=False,
+                        callback=refuse)
 
 
 def where_options(what: str, unit: str):
@@ -85,8 +98,9 @@ def where_options(what: str, unit: str):
               "(ground.scale.vertical_factor)", "0,0.5,1")
 @_axis_option("restitution", "dimensionless", "Coefficient of restitution (contact.restitution)",
               "0.6:0.9:0.1")
-@_axis_option("slenderness", "dimensionless", "Width / height of the block (the height kept)",
-              "0.3:0.6:0.05")
+@_axis_option("height_to_width", "dimensionless", "Height / width h/b of the block, the slenderness ratio "
+              "of the field (the height kept; the width is height / (h/b))", "2:6:0.5")
+@_retired_axis("slenderness")
 @_axis_option("gravity", "acceleration", "Gravitational acceleration (gravity)", "9.8m/s^2,9.80665m/s^2")
 @_axis_option("amplitude", "acceleration", "Amplitude of the horizontal pulse of a pulse case "
               "(ground.horizontal.amplitude)", "0.2g:3g:0.1g")
@@ -100,7 +114,7 @@ def where_options(what: str, unit: str):
 @where_options("sweep", "case")
 def sweep(case_file, mu_kinetic_ratio, records_dir, out_dir, overwrite, no_plot, workers, scheduler, device,
           chunk_size, no_progress, dpi, as_csv, **_axes):
-    """Grid of cases over friction, intensity, vertical factor, restitution, slenderness or gravity,
+    """Grid of cases over friction, intensity, vertical factor, restitution, height/width or gravity,
     or over a pulse's amplitude and period or duration: CASE_FILE (YAML) -> OUT/NAME.sweep.h5 and
     OUT/NAME.sweep.png.
 
