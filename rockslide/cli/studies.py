@@ -174,7 +174,8 @@ def sweep(case_file, mu_kinetic_ratio, records_dir, out_dir, overwrite, no_plot,
             from ..io.datasets import sweep_dataset
             _write_csv(sweep_dataset(sw.coordinates(plan), variables), [a.name for a in plan.axes],
                        h5_path.with_suffix(".csv"), overwrite=overwrite, staging=staging)
-        staging.publish(remove=[png_path] if no_plot else [])
+        staging.publish(remove=_stale_figure(h5_path, png_path, staging, no_plot=no_plot,
+                                             format=results.SWEEP_FORMAT))
     done.store.remove()
     over = int(variables["overturned"][0].sum())
     outside = int((variables["status"][0] != 0).sum())
@@ -276,7 +277,8 @@ def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, 
             from ..io.datasets import study_dataset
             _write_csv(study_dataset(coords, variables), [name for name, _, _ in coords if name != "damage_state"],
                        h5_path.with_suffix(".csv"), overwrite=overwrite, staging=staging)
-        staging.publish(remove=[png_path] if no_plot else [])
+        staging.publish(remove=_stale_figure(h5_path, png_path, staging, no_plot=no_plot,
+                                             format=results.FRAGILITY_FORMAT))
     done.store.remove()
     elapsed = time.perf_counter() - started
     if as_json:
@@ -300,6 +302,24 @@ def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, 
             click.echo("    without parameter uncertainty (the case's values): "
                        + fr.describe_fit(state, analysis.nominal_fits[i], im).split(": ", 1)[1])
     click.echo(f"  wrote {_written(h5_path, png_path, no_plot, as_csv)} in {elapsed:.1f} s")
+
+
+def _stale_figure(h5_path: Path, png_path: Path, staging, *, no_plot: bool, format: str) -> list[Path]:
+    """The figure to remove when a study's result is published: with ``--no-plot``, ``NAME.png``
+    unless the result it was published with (the ``NAME.h5`` being replaced) holds the same
+    results as the new one (`results.same_results`): a figure must not stand beside results it
+    does not show, but rerunning the same study for its ``--json`` keeps its figure."""
+    from ..io import results
+
+    if not no_plot or not (png_path.exists() or png_path.is_symlink()):
+        return [png_path] if no_plot else []
+    new = next(tmp for tmp, path in staging.items if Path(path) == Path(h5_path))
+    try:
+        same = results.same_results(results.read_dataset(h5_path, format=format),
+                                    results.read_dataset(new, format=format))
+    except OutputError:                 # no result beside it, or another kind: the figure is not its
+        same = False
+    return [] if same else [png_path]
 
 
 def _write_csv(dataset, dims, path: Path, *, overwrite: bool, staging) -> None:
