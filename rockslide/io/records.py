@@ -1007,17 +1007,23 @@ def _uniform_time(ctx: _Context, time: np.ndarray, tokens: list[str], factor: fl
         grid = time[0] + np.arange(n) * dt
         tolerance = np.minimum(0.5 * unit + 0.5 * max(unit[0], unit[-1]), 0.45 * dt) + slack
         # a step off (a missing sample) is named where it is; a slow drift where it leaves the grid
-        off = np.flatnonzero(~(np.abs(steps - dt) <= step_tolerance)) + 1
-        if not off.size:
-            off = np.flatnonzero(~(np.abs(time - grid) <= tolerance))
-    if off.size:
-        i = max(int(off[0]), 1)
-        raise ctx.error(f"time {time[i]:.9g} s is {abs(time[i] - grid[i]):.3g} s off the uniform "
-                        f"step {dt:.9g} s (the step before it is {steps[i - 1]:.9g} s), beyond its printed "
-                        f"digits (±{tolerance[i]:.2g} s): the time column must be uniform; if the samples "
-                        f"are evenly spaced give {_fix('dt')} not to read it, else resample the record",
-                        f"line {int(lines[i])}")
-    return float(time[0]), dt
+        off_step = np.flatnonzero(~(np.abs(steps - dt) <= step_tolerance))
+        off_grid = np.flatnonzero(~(np.abs(time - grid) <= tolerance))
+    if off_step.size:
+        i = int(off_step[0])
+        problem = (f"the time step to {time[i + 1]:.9g} s is {steps[i]:.9g} s, {abs(steps[i] - dt):.3g} s off "
+                   f"the uniform step {dt:.9g} s (span / intervals), beyond its printed digits "
+                   f"(±{step_tolerance[i]:.2g} s)")
+        line = int(lines[i + 1])
+    elif off_grid.size:
+        i = int(off_grid[0])
+        problem = (f"time {time[i]:.9g} s is {abs(time[i] - grid[i]):.3g} s off the uniform grid (start "
+                   f"{time[0]:.9g} s, step {dt:.9g} s), beyond its printed digits (±{tolerance[i]:.2g} s)")
+        line = int(lines[i])
+    else:
+        return float(time[0]), dt
+    raise ctx.error(f"{problem}: the time column must be uniform; if the samples are evenly spaced give "
+                    f"{_fix('dt')} not to read it, else resample the record", f"line {line}")
 
 
 # --------------------------------------------------------------------------------------------------
