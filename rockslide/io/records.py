@@ -815,7 +815,9 @@ def _header_fields(line: str, columns: int) -> list[str]:
         if len(fields) != columns:
             fields = []
             for word in line.split():
-                if fields and (word[0] in "([{" or fields[-1][-1:] in "([{") and "(" not in word[1:]:
+                open_bracket = fields and sum(fields[-1].count(c) for c in "([{") > \
+                    sum(fields[-1].count(c) for c in ")]}")
+                if fields and (word[0] in "([{" or open_bracket):
                     fields[-1] += " " + word
                 else:
                     fields.append(word)
