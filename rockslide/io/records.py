@@ -524,8 +524,10 @@ def _require_samples(ctx: _Context, count: int) -> None:
 def _unit_to_si(ctx: _Context, units: str | None, kind: str = "record") -> float:
     """Factor [m/s^2 per file unit]; RecordError when missing or unknown."""
     if units is None:
+        stated = " (or name it in the column's header: 'Acceleration (g)')" if kind in ("column text", "values") \
+            else ""
         raise ctx.error(f"give `units:` ({_UNITS_HINT}) for a {kind} record; the file does not "
-                        "say in which unit its numbers are (rockslide info: --units)", "units")
+                        f"say in which unit its numbers are (rockslide info: --units){stated}", "units")
     try:
         return unit_factor(str(units), "acceleration")
     except CaseError as exc:
@@ -904,7 +906,7 @@ def _time_and_value_columns(ctx: _Context, options: _Options, header, units,
     value_index = _column_index(ctx, value_spec, "column", header, columns)
     if time_index == value_index:
         raise ctx.error(f"time_column and column are both column {time_index + 1}; "
-                        "expected two different columns", "column")
+                        "expected two different columns (--time-column, --column)", "column")
     return time_index, value_index
 
 
@@ -987,7 +989,8 @@ def _uniform_time(ctx: _Context, time: np.ndarray, tokens: list[str], factor: fl
     """
     bad = np.flatnonzero(~np.isfinite(time))
     if bad.size:
-        raise ctx.error(f"time {time[bad[0]]} is not a finite number", f"line {int(lines[bad[0]])}")
+        raise ctx.error(f"time {time[bad[0]]} is not a finite number; fix or remove the line, or give "
+                        f"{_fix('dt')} not to read the time column", f"line {int(lines[bad[0]])}")
     n = time.size
     with np.errstate(over="ignore", invalid="ignore"):
         steps = np.diff(time)
