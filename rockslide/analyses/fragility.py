@@ -92,6 +92,9 @@ CONFIDENCE = 0.95
 #: says so: R records give at most C(2R-1, R) distinct resamples (35 for 4 records, 10 for 3), so
 #: the 2.5 and 97.5 percentiles are a handful of values and the intervals cover far less than 95 %.
 MIN_BOOTSTRAP_RECORDS = 5
+#: A median or bound further than this (relative) beyond the levels run is flagged as extrapolated:
+#: within it, it rests on the runs of the nearest level (and prints as that level).
+EXTRAPOLATION_MARGIN = 0.01
 #: Newton iterations of the maximum-likelihood fit at most; it stops when a step moves the
 #: parameters by less than `FIT_TOLERANCE` (relative).
 FIT_ITERATIONS = 100
@@ -1376,19 +1379,23 @@ def caveats(fit: StateFit, im: IntensityMeasure) -> list[str]:
     if not fit.tested:
         return out
     low, high = fit.tested
-    for what, value in (("median", fit.median), ("lower bound of the median", (fit.median_ci or (None,))[0]),
-                        ("upper bound of the median", (fit.median_ci or (None, None))[1]),
-                        ("moments median", fit.moments_median),
-                        ("lower bound of the moments median", (fit.moments_median_ci or (None,))[0]),
-                        ("upper bound of the moments median", (fit.moments_median_ci or (None, None))[1])):
-        if value is None:
+    for what, median, interval in (("median", fit.median, fit.median_ci),
+                                   ("moments median", fit.moments_median, fit.moments_median_ci)):
+        if median is None:
             continue
-        if value > high * (1 + 1e-9):
-            out.append(f"{what} {im.show(value)} lies beyond the highest level tested, {im.show(high)}: "
-                       "extrapolated")
-        elif value < low * (1 - 1e-9):
-            out.append(f"{what} {im.show(value)} lies below the lowest level tested, {im.show(low)}: "
-                       "extrapolated")
+        bounds = interval if interval is not None else (None, None)
+        named = [(f"{what} {im.show(median)}", median)] + [
+            (f"its interval's {side} bound {im.show(value)}", value)
+            for side, value in zip(("lower", "upper"), bounds, strict=True) if value is not None]
+        # within EXTRAPOLATION_MARGIN of a level run, an estimate rests on that level's runs
+        above = [text for text, value in named if value > high * (1 + EXTRAPOLATION_MARGIN)]
+        below = [text for text, value in named if value < low * (1 - EXTRAPOLATION_MARGIN)]
+        for texts, where in ((above, f"beyond the highest level tested, {im.show(high)}"),
+                             (below, f"below the lowest level tested, {im.show(low)}")):
+            if texts:
+                verb = "lies" if len(texts) == 1 else "lie"
+                listed = " and ".join([", ".join(texts[:-1]), texts[-1]] if len(texts) > 1 else texts)
+                out.append(f"{listed} {verb} {where}: extrapolated")
     return out
 
 
