@@ -780,6 +780,8 @@ def _header(ctx: _Context, text: str, header_rows, columns: int,
         Per column, ``(kind, unit)`` (`_unit_word`) from a line of units or the column's name;
         None where none is stated.
     """
+    if not header_rows:
+        return None, [None] * columns
     lines = text.splitlines()
     names, unit_row = None, None
     for number, _ in reversed(header_rows):
@@ -966,8 +968,11 @@ def _printed_units(tokens: list[str]) -> np.ndarray:
     finest printed digit of the column (``E``); a zero has the unit of ``E``.
     """
     exponents = np.array([_printed_exponent(t) for t in tokens], dtype=np.int64)
+    finest = int(exponents.min())
+    if finest == int(exponents.max()):       # fixed decimals (zeros included): that unit everywhere
+        return np.full(exponents.size, 10.0 ** max(-300, min(300, finest)))
     significant = np.array([_significant_digits(t) for t in tokens], dtype=np.int64)
-    finest, most = int(exponents.min()), int(significant.max())
+    most = int(significant.max())
     by_digits = np.maximum(finest, exponents + significant - most)
     unit = np.where(significant == 0, finest, np.minimum(exponents, by_digits))
     return 10.0 ** np.clip(unit, -300, 300)
