@@ -145,9 +145,9 @@ AXES: dict[str, AxisKind] = {a.name: a for a in (
 )}
 #: Axes no longer offered, with what replaces them (one line, exit 2 where they are asked for).
 RETIRED_AXES = {
-    "slenderness": "--slenderness was width / height b/h, the inverse of the field's slenderness ratio "
-                   "h/b (--slenderness 4 built a block 4 times wider than high); give --height-to-width "
-                   "h/b instead (the height kept): --slenderness 0.25 is --height-to-width 4",
+    "slenderness": "was width / height b/h, the inverse of the field's slenderness ratio h/b "
+                   "(--slenderness 4 built a block 4 times wider than high); give --height-to-width h/b "
+                   "instead (the height kept): --slenderness 0.25 is --height-to-width 4",
 }
 #: Figure labels of retired axes, for files written before they were retired.
 _RETIRED_LABELS = {"slenderness": "width / height b/h"}

@@ -38,17 +38,21 @@ def _axis_option(name: str, kind: str, what: str, example: str):
 
 
 
-def _retired_axis(name: str):
-    """A hidden option for an axis no longer offered: asking for it is one line naming what
-    replaces it (`sweep.RETIRED_AXES`), exit 2."""
-    def refuse(ctx, param, values):
-        if values:
-            from ..analyses.sweep import RETIRED_AXES
-            raise CaseError(RETIRED_AXES[name], source=f"--{name}")
-        return None
+class _SweepCommand(click.Command):
+    """``rockslide sweep``, which answers an axis no longer offered (`sweep.RETIRED_AXES`) with one
+    line naming what replaces it, exit 2, before anything else is read. Not an option of its own:
+    the help and the command reference list only the axes offered."""
 
-    return click.option(f"--{name}", f"retired_{name}", multiple=True, hidden=True, expose_value=False,
-                        callback=refuse)
+    def parse_args(self, ctx, args):
+        from ..analyses.sweep import RETIRED_AXES
+
+        for arg in args:
+            if arg == "--":
+                break
+            name = arg.split("=", 1)[0]
+            if name.startswith("--") and name[2:].replace("-", "_") in RETIRED_AXES:
+                raise CaseError(RETIRED_AXES[name[2:].replace("-", "_")], source=name)
+        return super().parse_args(ctx, args)
 
 
 def where_options(what: str, unit: str):
@@ -87,7 +91,7 @@ def where_options(what: str, unit: str):
     return decorate
 
 
-@main.command()
+@main.command(cls=_SweepCommand)
 @click.argument("case_file", type=click.Path(path_type=Path))
 @_axis_option("mu", "dimensionless", "Static friction coefficient mu_static (mu_kinetic follows by the "
               "case's ratio mu_kinetic/mu_static, or --mu-kinetic-ratio)", "0.30:0.70:0.01")
@@ -100,7 +104,6 @@ def where_options(what: str, unit: str):
               "0.6:0.9:0.1")
 @_axis_option("height_to_width", "dimensionless", "Height / width h/b of the block, the slenderness ratio "
               "of the field (the height kept; the width is height / (h/b))", "2:6:0.5")
-@_retired_axis("slenderness")
 @_axis_option("gravity", "acceleration", "Gravitational acceleration (gravity)", "9.8m/s^2,9.80665m/s^2")
 @_axis_option("amplitude", "acceleration", "Amplitude of the horizontal pulse of a pulse case "
               "(ground.horizontal.amplitude)", "0.2g:3g:0.1g")
