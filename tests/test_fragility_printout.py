@@ -63,7 +63,7 @@ def test_a_median_beyond_the_highest_level_is_extrapolated():
     fit, text = describe(rows)
     assert fit.median > LEVELS[-1]                   # the premise, from the fit itself
     assert fit.median_ci[1] > fit.median                # and its interval reaches further still
-    assert (f"warning: median {PGA.show(fit.median)} and its interval's upper bound "
+    assert (f"warning: median {PGA.show(fit.median)} and its upper 95% bound "
             f"{PGA.show(fit.median_ci[1])} lie beyond the highest level tested, 0.8 g: extrapolated") in text
 
 
@@ -72,6 +72,15 @@ def test_a_median_below_the_lowest_level_is_extrapolated():
     fit, text = describe(rows)
     assert fit.median < LEVELS[0]
     assert f"median {PGA.show(fit.median)}" in text and "below the lowest level tested, 0.2 g: extrapolated" in text
+
+
+def test_a_bound_alone_beyond_the_levels_is_flagged_as_the_medians():
+    """The README's first session: the median inside the levels, its upper bound beyond them."""
+    rows = [[0, 0, 1, 1], [0, 0, 0, 1], [0, 0, 0, 0], [0, 1, 1, 1], [0, 0, 0, 0], [0, 0, 1, 1]]
+    fit, text = describe(rows)
+    assert LEVELS[0] < fit.median < LEVELS[-1] * (1 + fr.EXTRAPOLATION_MARGIN) < fit.median_ci[1]
+    assert (f"warning: the median's upper 95% bound {PGA.show(fit.median_ci[1])} lies beyond the highest "
+            "level tested, 0.8 g: extrapolated") in text
 
 
 def test_a_median_inside_the_levels_is_not_flagged():

@@ -1384,18 +1384,21 @@ def caveats(fit: StateFit, im: IntensityMeasure) -> list[str]:
         if median is None:
             continue
         bounds = interval if interval is not None else (None, None)
-        named = [(f"{what} {im.show(median)}", median)] + [
-            (f"its interval's {side} bound {im.show(value)}", value)
-            for side, value in zip(("lower", "upper"), bounds, strict=True) if value is not None]
+        named = [("", median)] + [(side, value) for side, value in zip(("lower", "upper"), bounds, strict=True)
+                                  if value is not None]
         # within EXTRAPOLATION_MARGIN of a level run, an estimate rests on that level's runs
-        above = [text for text, value in named if value > high * (1 + EXTRAPOLATION_MARGIN)]
-        below = [text for text, value in named if value < low * (1 - EXTRAPOLATION_MARGIN)]
-        for texts, where in ((above, f"beyond the highest level tested, {im.show(high)}"),
-                             (below, f"below the lowest level tested, {im.show(low)}")):
-            if texts:
-                verb = "lies" if len(texts) == 1 else "lie"
-                listed = " and ".join([", ".join(texts[:-1]), texts[-1]] if len(texts) > 1 else texts)
-                out.append(f"{listed} {verb} {where}: extrapolated")
+        above = [(side, value) for side, value in named if value > high * (1 + EXTRAPOLATION_MARGIN)]
+        below = [(side, value) for side, value in named if value < low * (1 - EXTRAPOLATION_MARGIN)]
+        for flagged, where in ((above, f"beyond the highest level tested, {im.show(high)}"),
+                               (below, f"below the lowest level tested, {im.show(low)}")):
+            if not flagged:
+                continue
+            # "median 2.3 g and its upper 95% bound 4.9 g lie", "the median's upper 95% bound 1.7 g lies"
+            owner = "its" if flagged[0][0] == "" else f"the {what}'s"
+            texts = [f"{what} {im.show(value)}" if not side else f"{owner} {side} {CONFIDENCE:.0%} bound "
+                     f"{im.show(value)}" for side, value in flagged]
+            verb = "lies" if len(texts) == 1 else "lie"
+            out.append(f"{' and '.join(texts)} {verb} {where}: extrapolated")
     return out
 
 
