@@ -143,8 +143,9 @@ def sweep(case: Case | Mapping | str | Path, *, mu_kinetic_ratio: float | None =
     case : Case, mapping or path
     **axes : str or sequence
         The axes, in dimension order: ``mu``, ``pga``, ``vertical_factor``, ``restitution``,
-        ``slenderness`` (width / height, the height kept), ``gravity``, ``floor_period`` (the period
-        of the floor's first horizontal mode, docs/floors.md), and for a pulse case
+        ``height_to_width`` (h/b, the field's slenderness ratio; the height kept), ``gravity``,
+        ``floor_period`` (the period of the floor's first horizontal mode, docs/floors.md), and for
+        a pulse case
         ``amplitude``, ``period``, ``duration``, and for a case with two horizontal components
         ``azimuth`` (``block.orientation``). Each is ``"start:stop:step"`` or a comma list as
         on the command line (``pga="100gal:1000gal:25gal"``, ``azimuth="0:180:5"`` in degrees), or a
@@ -176,6 +177,9 @@ def sweep(case: Case | Mapping | str | Path, *, mu_kinetic_ratio: float | None =
     from .io import datasets, records
 
     case = _case(case)
+    retired = [name for name in axes if name in sw.RETIRED_AXES]
+    if retired:
+        raise CaseError(sw.RETIRED_AXES[retired[0]], source=retired[0])
     unknown = [name for name in axes if name not in sw.AXES]
     if unknown:
         raise CaseError(f"unknown axis {unknown[0]!r}; expected one of {', '.join(sw.AXES)}",

@@ -143,11 +143,13 @@ class RecordSpec:
     format : str, optional
         File format; None lets the reader detect it.
     units : str, optional
-        Acceleration unit of the values (``"g"``, ``"gal"``, ``"m/s^2"``...); None = from the file.
+        Acceleration unit of the values (``"g"``, ``"gal"``, ``"m/s^2"``...); None = from the file
+        (AT2 and K-NET headers, a column text header such as ``Acceleration (g)``).
     time_column, column : int or str, optional
         1-based column number or header name of the time and of the acceleration values.
     dt : float, optional
-        Sample interval [s] for files without time column or header.
+        Sample interval [s] for files without a time column; with column text, the time column is
+        then not read (one ``column`` of many, evenly spaced).
     skip_lines : int
         Lines to skip before the data, >= 0.
     azimuth : float, optional
@@ -380,9 +382,11 @@ class Uncertain:
     friction : Distribution or None
         A factor on ``mu_static`` and ``mu_kinetic`` together.
     size : Distribution or None
-        A factor on the block's height and width together (its slenderness kept).
+        A factor on the block's height and width together (its shape kept).
     slenderness : Distribution or None
-        A factor on the block's width, its height kept.
+        A factor ``f`` on the block's width b, its height h kept: the width becomes ``f b``, so
+        b/h (= tan alpha) is multiplied by ``f`` and the field's slenderness ratio h/b divided by
+        it (``f`` > 1: a stockier block). The name says which quantity varies, not which ratio.
     orientation : Distribution or None
         The block's orientation itself [rad] (``block.orientation``), for a case with two horizontal
         components, e.g. uniform over 0 to 180 degrees: the orientation unknown.
@@ -636,7 +640,8 @@ CASE_KEYS: dict[str, dict] = {
         "friction": _key("distribution", "factor on mu_static and mu_kinetic together", bounds=[(">", 0.0)]),
         "size": _key("distribution", "factor on height and width together, e.g. {lognormal: {median: 1, "
                      "beta: 0.3}}", bounds=[(">", 0.0)]),
-        "slenderness": _key("distribution", "factor on the width, the height kept", bounds=[(">", 0.0)]),
+        "slenderness": _key("distribution", "factor on the width b, the height kept (b/h times it, h/b "
+                            "divided by it)", bounds=[(">", 0.0)]),
         "orientation": {**_key("distribution", "the block's orientation (block.orientation) with two horizontal "
                                "components, angles with their unit, e.g. {uniform: [0 deg, 180 deg]}",
                                bounds=[(">=", -2.0 * math.pi), ("<=", 2.0 * math.pi)]),

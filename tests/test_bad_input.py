@@ -366,7 +366,7 @@ BAD_INPUTS = [
                spec={"file": "one.csv", "units": "g"}),
     bad_record("record-three-columns", "three.csv", "t,ns,ew\n0,1,2\n0.01,1,2\n",
                ["three.csv", "column", "the file has 3 columns (t, ns, ew)",
-                "give `time_column:` and `column:`"],
+                "give the acceleration column, `column:` (--column)"],
                spec={"file": "three.csv", "units": "g"}),
     bad_record("record-column-out-of-range", "rec.csv", column_text(T, A),
                ["rec.csv", "column = 5 is out of range: the file has 2 columns"],

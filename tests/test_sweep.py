@@ -123,7 +123,8 @@ def test_bad_axis_specs_are_one_line_errors_naming_the_option(option, spec, expe
 @pytest.mark.parametrize("axes, parts", [
     (["--mu", "-0.1,0.5"], ["--mu", "contact.mu_static", "--mu -0.1"]),
     (["--restitution", "0.8,1.2"], ["--restitution", "contact.restitution", "1.2"]),
-    (["--slenderness", "0,0.5"], ["--slenderness", "block.width"]),
+    (["--height-to-width", "0,2"], ["--height-to-width", "block.width"]),
+    (["--slenderness", "0.25"], ["--slenderness", "was width / height", "--height-to-width 4"]),
     (["--gravity", "-9.8m/s^2"], ["--gravity", "gravity"]),
     ([], ["give at least one axis"]),
     (["--mu", "0.5", "--mu-kinetic-ratio", "1.5"], ["--mu-kinetic-ratio", "[0, 1]"]),
@@ -163,9 +164,9 @@ def _points_validated_in_full(case, axes, ratio):
 
 @pytest.mark.parametrize("specs, bad_field", [
     ([("mu", "0.3,0.52,0.7"), ("restitution", "0,0.8,1"), ("pga", "300gal,700gal"),
-      ("vertical_factor", "0,0.5"), ("slenderness", "0.25,0.5"), ("gravity", "9.8m/s^2,1.62m/s^2")], None),
+      ("vertical_factor", "0,0.5"), ("height_to_width", "2,4"), ("gravity", "9.8m/s^2,1.62m/s^2")], None),
     ([("restitution", "0.5,1"), ("mu", "0.4,-0.1")], "contact.mu_static"),   # the second point
-    ([("pga", "500gal"), ("slenderness", "0.5,1e-12")], "block.width"),       # below the length range
+    ([("pga", "500gal"), ("height_to_width", "2,1e12")], "block.width"),      # below the length range
 ])
 def test_points_validated_per_section_equal_points_validated_in_full(example, specs, bad_field):
     """`_points` validates each section's changes once: the points, and the first bad point with
@@ -245,9 +246,9 @@ def assert_point_equals_run(plan, variables, index, summary):
 
 @pytest.fixture(scope="module")
 def mixed(example):
-    """A 4-D grid over friction, intensity, restitution and slenderness, computed."""
+    """A 4-D grid over friction, intensity, restitution and height / width, computed."""
     axes = [sw.parse_axis("mu", "0.45,0.6"), sw.parse_axis("pga", "500gal,750gal,900gal"),
-            sw.parse_axis("restitution", "0.7,0.9"), sw.parse_axis("slenderness", "0.45,0.5")]
+            sw.parse_axis("restitution", "0.7,0.9"), sw.parse_axis("height_to_width", "2,2.2")]
     plan = sw.plan_sweep(example, axes, records_dir=RECORDS, chunk_size=5)
     states = batch.compute(plan.params, plan.states, plan.base, 0, plan.base.shape[1], plan.factor_h,
                            plan.factor_v)

@@ -175,8 +175,9 @@ def plan_ensemble(case: Case, n: int = DEFAULT_MEMBERS, *, seed: int = SEED, rec
 
 def member_parameters(case: Case, params: np.ndarray, values: dict) -> tuple[np.ndarray, np.ndarray]:
     """Kernel parameter rows of members: ``params`` (the nominal case's row for each member) with
-    each member's block and contact, from its sampled ``values`` (`sample`: factors on the size, the
-    slenderness and the friction, the restitution itself; a quantity not sampled keeps the case's
+    each member's block and contact, from its sampled ``values`` (`sample`: factors on the size (h
+    and b), on the width b alone (``slenderness``: b/h times it, the field's h/b divided by it) and
+    on the friction, the restitution itself; a quantity not sampled keeps the case's
     value). The block's constants come from `core.simulate.Model`, as for a run, so a member at the
     nominal values has the nominal row exactly. Returns ``(params, restitution per member)``."""
     params = params.copy()

@@ -84,7 +84,7 @@ from . import sweep as sw
 __all__ = ["IntensityMeasure", "INTENSITY_MEASURES", "parse_im", "parse_levels", "DamageState",
            "parse_damage", "damage_states", "suite_from", "suite_at_azimuths", "FragilityPlan", "plan_fragility",
            "point_case", "StateFit", "fit_state", "probit_mle", "stripe_counts", "exceedances",
-           "analyse", "Analysis", "dataset", "json_summary", "figure", "stored_figure",
+           "analyse", "Analysis", "dataset", "json_summary", "caveats", "figure", "stored_figure",
            "BOOTSTRAP_RESAMPLES", "BOOTSTRAP_SEED", "CONFIDENCE"]
 
 #: Bootstrap resamples of the records for the confidence intervals (the default of ``--bootstrap``).
@@ -93,6 +93,13 @@ BOOTSTRAP_RESAMPLES = 1000
 BOOTSTRAP_SEED = 2015
 #: Confidence level of the intervals (percentiles 2.5 and 97.5 of the resamples).
 CONFIDENCE = 0.95
+#: Fewer records than this make the percentile bootstrap's intervals untrustworthy, and the printout
+#: says so: R records give at most C(2R-1, R) distinct resamples (35 for 4 records, 10 for 3), so
+#: the 2.5 and 97.5 percentiles are a handful of values and the intervals cover far less than 95 %.
+MIN_BOOTSTRAP_RECORDS = 5
+#: A median or bound further than this (relative) beyond the levels run is flagged as extrapolated:
+#: within it, it rests on the runs of the nearest level (and prints as that level).
+EXTRAPOLATION_MARGIN = 0.01
 #: Newton iterations of the maximum-likelihood fit at most; it stops when a step moves the
 #: parameters by less than `FIT_TOLERANCE` (relative).
 FIT_ITERATIONS = 100
@@ -883,6 +890,10 @@ class StateFit:
     n_runs, n_outside_model, n_exceeded : int
     n_censored : int
         Records that never exceed the state up to the highest level.
+    n_records : int
+        Records the bootstrap resamples.
+    tested : tuple of float
+        The lowest and the highest intensity level run [SI of the IM] (`caveats`).
     samples : numpy.ndarray
         ``float64[k, 2]``: the (median, beta) of the fitted resamples (for the figure's band).
     """
@@ -903,6 +914,8 @@ class StateFit:
     n_outside_model: int = 0
     n_exceeded: int = 0
     n_censored: int = 0
+    n_records: int = 0
+    tested: tuple = ()
     samples: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
 
 
@@ -1060,7 +1073,8 @@ def fit_state(levels, exceeded: np.ndarray, *, resamples: int = BOOTSTRAP_RESAMP
     s = np.log(levels)
     n, z = stripe_counts(exceeded)
     out = StateFit(n_runs=int(exceeded.size), n_outside_model=int((exceeded < 0).sum()),
-                   n_exceeded=int((exceeded == 1).sum()), resamples=int(resamples))
+                   n_exceeded=int((exceeded == 1).sum()), resamples=int(resamples),
+                   n_records=int(exceeded.shape[0] // per_record), tested=(float(levels[0]), float(levels[-1])))
     out.note = _support_note(levels, n, z, show)
     if not out.note:
         a, b, converged = probit_mle(s, n[None, :], z[None, :])
@@ -1361,6 +1375,7 @@ def json_summary(fplan: FragilityPlan, analysis: Analysis) -> dict:
                         "median_ci": _pair(fit.moments_median_ci), "beta_ci": _pair(fit.moments_beta_ci),
                         "n_censored": fit.n_censored, "note": fit.moments_note or None},
             "fraction_exceeded": [None if k == 0 else float(x / k) for x, k in zip(zs, ns, strict=True)],
+            "caveats": caveats(fit, im),
         }
         if own is not None:
             out[state.name]["without_parameter_uncertainty"] = {"median": own.median, "beta": own.beta,
@@ -1441,7 +1456,8 @@ def _curves(levels, exceeded, states, fits, im: IntensityMeasure, nominal_fits=(
 
 
 def describe_fit(state: DamageState, fit: StateFit, im: IntensityMeasure) -> str:
-    """One line on a state's fits (``rockslide fragility``'s summary)."""
+    """One line on a state's fits (``rockslide fragility``'s summary): the maximum-likelihood fit,
+    the method of moments or why it is left out, the counts (`caveats` follow it)."""
     counts = f"{fit.n_exceeded} of {fit.n_runs - fit.n_outside_model} runs reach it"
     if fit.median is None:
         line = f"{state.name}: {fit.note}"
@@ -1451,7 +1467,44 @@ def describe_fit(state: DamageState, fit: StateFit, im: IntensityMeasure) -> str
             line += f" ({fit.resamples_fitted} of {fit.resamples} resamples fitted)"
     if fit.moments_median is not None:
         line += f"; moments: median {im.show(fit.moments_median)}, β {fit.moments_beta:.2f}"
+    elif fit.moments_note:
+        line += f"; no method-of-moments estimate: {fit.moments_note.replace(': no moments', '')}"
     return f"{line}; {counts}"
+
+
+def caveats(fit: StateFit, im: IntensityMeasure) -> list[str]:
+    """What a reader of a state's fits must know: intervals from fewer than
+    `MIN_BOOTSTRAP_RECORDS` records, and medians or confidence bounds outside the levels tested
+    (extrapolated: no run supports them). One sentence each; [] when there is nothing to say."""
+    out = []
+    has_interval = fit.median_ci is not None or fit.moments_median_ci is not None
+    if fit.resamples and has_interval and fit.n_records < MIN_BOOTSTRAP_RECORDS:
+        out.append(f"the {CONFIDENCE:.0%} intervals resample only {fit.n_records} records (at least "
+                   f"{MIN_BOOTSTRAP_RECORDS} are needed for the bootstrap to mean much): take them as rough")
+    if not fit.tested:
+        return out
+    low, high = fit.tested
+    for what, median, interval in (("median", fit.median, fit.median_ci),
+                                   ("moments median", fit.moments_median, fit.moments_median_ci)):
+        if median is None:
+            continue
+        bounds = interval if interval is not None else (None, None)
+        named = [("", median)] + [(side, value) for side, value in zip(("lower", "upper"), bounds, strict=True)
+                                  if value is not None]
+        # within EXTRAPOLATION_MARGIN of a level run, an estimate rests on that level's runs
+        above = [(side, value) for side, value in named if value > high * (1 + EXTRAPOLATION_MARGIN)]
+        below = [(side, value) for side, value in named if value < low * (1 - EXTRAPOLATION_MARGIN)]
+        for flagged, where in ((above, f"beyond the highest level tested, {im.show(high)}"),
+                               (below, f"below the lowest level tested, {im.show(low)}")):
+            if not flagged:
+                continue
+            # "median 2.3 g and its upper 95% bound 4.9 g lie", "the median's upper 95% bound 1.7 g lies"
+            owner = "its" if flagged[0][0] == "" else f"the {what}'s"
+            texts = [f"{what} {im.show(value)}" if not side else f"{owner} {side} {CONFIDENCE:.0%} bound "
+                     f"{im.show(value)}" for side, value in flagged]
+            verb = "lies" if len(texts) == 1 else "lie"
+            out.append(f"{' and '.join(texts)} {verb} {where}: extrapolated")
+    return out
 
 
 def _legend(state: DamageState, fit: StateFit, im: IntensityMeasure) -> str:

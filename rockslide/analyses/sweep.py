@@ -1,7 +1,7 @@
 """Parameter sweeps: one case file, a grid of values, one compiled batch (``rockslide sweep``).
 
 A sweep replaces a few values of a case file by every combination of its axes (:data:`AXES`:
-``--mu``, ``--pga``, ``--vertical-factor``, ``--restitution``, ``--slenderness``, ``--gravity``,
+``--mu``, ``--pga``, ``--vertical-factor``, ``--restitution``, ``--height-to-width``, ``--gravity``,
 for a case whose ground motion is analytic pulses ``--amplitude``, ``--period`` and
 ``--duration`` of the horizontal pulse, and for a case of two horizontal components ``--azimuth``,
 the block's orientation: one record per orientation, the motion along it, `prepare.ground_along`)
@@ -21,7 +21,9 @@ and computes every point with the batch kernel (`batch`), without history or eve
   ``mu_kinetic / mu_static`` (rounded to 12 significant digits, so that 0.494 / 0.52 is 0.95)
   unless ``--mu-kinetic-ratio`` gives it; ``--pga`` sets ``ground.scale.pga_horizontal`` (removing
   a ``factor``), and the vertical keeps the record's V/H ratio unless the case gives
-  ``pga_vertical``; ``--slenderness`` sets the width to ``slenderness * height``.
+  ``pga_vertical``; ``--height-to-width`` (h/b, the field's slenderness ratio) sets the width to
+  ``height / (h/b)``, the height kept. (``--slenderness``, width / height, the inverse of the
+  field's ratio, is retired: `RETIRED_AXES`.)
 - **Same arithmetic as ``rockslide run``.** The records are read once; each point's scale factors
   come from `records.combine`, its parameters and initial state from `simulate.parameters` and
   `simulate.initial_state`, and the batch kernel multiplies the unscaled samples by the factors as
@@ -137,8 +139,8 @@ AXES: dict[str, AxisKind] = {a.name: a for a in (
              "factor on the vertical record", "1", "vertical factor"),
     AxisKind("restitution", "--restitution", "dimensionless", "contact.restitution",
              "coefficient of restitution", "1", "coefficient of restitution e"),
-    AxisKind("slenderness", "--slenderness", "dimensionless", "block.width",
-             "slenderness: width / height (the height kept)", "1", "width / height (b/h)"),
+    AxisKind("height_to_width", "--height-to-width", "dimensionless", "block.width",
+             "height / width h/b, the slenderness ratio (the height kept)", "1", "height / width h/b"),
     AxisKind("gravity", "--gravity", "acceleration", "gravity", "gravitational acceleration",
              "m/s^2", "gravity g [m/s²]"),
     AxisKind("amplitude", "--amplitude", "acceleration", "ground.horizontal.amplitude",
@@ -154,6 +156,14 @@ AXES: dict[str, AxisKind] = {a.name: a for a in (
              "period of the first horizontal mode of the floor the block stands on", "s",
              "floor period T_1 [s]"),
 )}
+#: Axes no longer offered, with what replaces them (one line, exit 2 where they are asked for).
+RETIRED_AXES = {
+    "slenderness": "was width / height b/h, the inverse of the field's slenderness ratio h/b "
+                   "(--slenderness 4 built a block 4 times wider than high); give --height-to-width h/b "
+                   "instead (the height kept): --slenderness 0.25 is --height-to-width 4",
+}
+#: Figure labels of retired axes, for files written before they were retired.
+_RETIRED_LABELS = {"slenderness": "width / height b/h"}
 #: The axes that change the horizontal pulse of a pulse case (and only there).
 PULSE_AXES = ("amplitude", "period", "duration")
 #: The axes that scale record files (a pulse is scaled by its amplitude).
@@ -309,8 +319,8 @@ def axis_changes(axis: str, value: float, case: Case, ratio: float | None) -> di
         if case.ground.scale.factor is not None:
             changes["ground.scale.factor"] = None
         return changes
-    if axis == "slenderness":
-        return {"block.width": value * case.block.height}
+    if axis == "height_to_width":       # h/b = 0 is an infinitely wide block: refused as a width
+        return {"block.width": case.block.height / value if value != 0 else math.inf}
     if axis == "floor_period":              # the first mode's period; a floor of one mode if there is none
         modes = [dataclasses.asdict(m) for m in case.ground.floor.horizontal] or [{}]
         modes[0] = {**modes[0], "period": value}
@@ -642,7 +652,7 @@ def _point_error(exc: CaseError, axes, combo) -> CaseError:
 
 def _key_root(axis: str) -> str:
     return {"mu": "contact.mu", "pga": "ground.scale", "vertical_factor": "ground.scale",
-            "slenderness": "block", "amplitude": "ground.horizontal", "period": "ground.horizontal",
+            "height_to_width": "block", "amplitude": "ground.horizontal", "period": "ground.horizontal",
             "duration": "ground.horizontal"}.get(axis, AXES[axis].key)
 
 
@@ -752,7 +762,7 @@ def coordinates(plan: Plan) -> list:
         kind = axis.kind
         attrs = {"units": kind.units, "long_name": kind.long_name, "option": kind.option,
                  "given_as": axis.spec}
-        if axis.name == "slenderness":
+        if axis.name == "height_to_width":
             attrs["height"] = float(plan.case.block.height)
         out.append((axis.name, np.asarray(axis.values, dtype=np.float64), attrs))
     return out
@@ -974,7 +984,8 @@ def shown_axes(axes, case_text: str = "") -> list:
     unit = pga_unit(case_text) if any(name == "pga" for name, _ in axes) else None
     shown = []
     for name, values in axes:
-        label, scale = AXES[name].label, AXES[name].display_scale
+        label, scale = ((AXES[name].label, AXES[name].display_scale) if name in AXES
+                        else (_RETIRED_LABELS.get(name, name), 1.0))   # a file of a retired axis
         if name == "pga" and unit:
             label, scale = f"peak horizontal acceleration [{unit}]", unit_factor(unit, "acceleration")
         shown.append((label, np.asarray(values) / scale))

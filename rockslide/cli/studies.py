@@ -13,7 +13,7 @@ from pathlib import Path
 import click
 
 from .. import interrupts
-from ..errors import OutputError
+from ..errors import CaseError, OutputError
 from .app import _json_default, _result_set, dpi_option, main, records_dir_option, show_warnings, size_option
 
 
@@ -36,6 +36,23 @@ def _axis_option(name: str, kind: str, what: str, example: str):
     return click.option(f"--{name.replace('_', '-')}", name, multiple=True, metavar="SPEC", callback=remember,
                         help=f"{what}: START:STOP:STEP or a comma list, e.g. {example}.{units}")
 
+
+
+class _SweepCommand(click.Command):
+    """``rockslide sweep``, which answers an axis no longer offered (`sweep.RETIRED_AXES`) with one
+    line naming what replaces it, exit 2, before anything else is read. Not an option of its own:
+    the help and the command reference list only the axes offered."""
+
+    def parse_args(self, ctx, args):
+        from ..analyses.sweep import RETIRED_AXES
+
+        for arg in args:
+            if arg == "--":
+                break
+            name = arg.split("=", 1)[0]
+            if name.startswith("--") and name[2:].replace("-", "_") in RETIRED_AXES:
+                raise CaseError(RETIRED_AXES[name[2:].replace("-", "_")], source=name)
+        return super().parse_args(ctx, args)
 
 
 def where_options(what: str, unit: str):
@@ -82,7 +99,7 @@ def where_options(what: str, unit: str):
     return decorate
 
 
-@main.command()
+@main.command(cls=_SweepCommand)
 @click.argument("case_file", type=click.Path(path_type=Path))
 @_axis_option("mu", "dimensionless", "Static friction coefficient mu_static (mu_kinetic follows by the "
               "case's ratio mu_kinetic/mu_static, or --mu-kinetic-ratio)", "0.30:0.70:0.01")
@@ -93,8 +110,8 @@ def where_options(what: str, unit: str):
               "(ground.scale.vertical_factor)", "0,0.5,1")
 @_axis_option("restitution", "dimensionless", "Coefficient of restitution (contact.restitution)",
               "0.6:0.9:0.1")
-@_axis_option("slenderness", "dimensionless", "Width / height of the block (the height kept)",
-              "0.3:0.6:0.05")
+@_axis_option("height_to_width", "dimensionless", "Height / width h/b of the block, the slenderness ratio "
+              "of the field (the height kept; the width is height / (h/b))", "2:6:0.5")
 @_axis_option("gravity", "acceleration", "Gravitational acceleration (gravity)", "9.8m/s^2,9.80665m/s^2")
 @_axis_option("amplitude", "acceleration", "Amplitude of the horizontal pulse of a pulse case "
               "(ground.horizontal.amplitude)", "0.2g:3g:0.1g")
@@ -113,7 +130,7 @@ def where_options(what: str, unit: str):
 @where_options("sweep", "case")
 def sweep(case_file, mu_kinetic_ratio, records_dir, out_dir, overwrite, no_plot, workers, scheduler, device,
           chunk_size, no_progress, dpi, size, as_csv, shard, wait_workers, **_axes):
-    """Grid of cases over friction, intensity, vertical factor, restitution, slenderness, gravity or
+    """Grid of cases over friction, intensity, vertical factor, restitution, height/width (h/b), gravity or
     the period of the floor the block stands on, over a pulse's amplitude and period or duration,
     or over the block's orientation under two horizontal components (--azimuth,
     docs/two-components.md): CASE_FILE (YAML) -> OUT/NAME.sweep.h5 and OUT/NAME.sweep.png.
@@ -176,7 +193,8 @@ def sweep(case_file, mu_kinetic_ratio, records_dir, out_dir, overwrite, no_plot,
             from ..io.datasets import sweep_dataset
             _write_csv(sweep_dataset(sw.coordinates(plan), variables), [a.name for a in plan.axes],
                        h5_path.with_suffix(".csv"), overwrite=overwrite, staging=staging)
-        staging.publish(remove=[png_path] if no_plot else [])
+        staging.publish(remove=_stale_figure(h5_path, png_path, staging, no_plot=no_plot,
+                                             format=results.SWEEP_FORMAT))
     done.store.remove()
     over = int(variables["overturned"][0].sum())
     outside = int((variables["status"][0] != 0).sum())
@@ -311,7 +329,8 @@ def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, 
             from ..io.datasets import study_dataset
             *_, left_out = pelicun.write_pelicun(study_dataset(coords, variables, attrs), export[1], export_path,
                                                  family=export_family, overwrite=overwrite, staging=staging)
-        staging.publish(remove=[png_path] if no_plot else [])
+        staging.publish(remove=_stale_figure(h5_path, png_path, staging, no_plot=no_plot,
+                                             format=results.FRAGILITY_FORMAT))
     done.store.remove()
     elapsed = time.perf_counter() - started
     if as_json:
@@ -329,6 +348,8 @@ def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, 
                    "not overturned (give the case a ground.tail for their free motion)")
     for i, (state, fit) in enumerate(zip(analysis.states, analysis.fits, strict=True)):
         click.echo("  " + fr.describe_fit(state, fit, im))
+        for caveat in fr.caveats(fit, im):
+            click.echo(f"    warning: {caveat}")
         if analysis.nominal_fits:
             click.echo("    without parameter uncertainty (the case's values): "
                        + fr.describe_fit(state, analysis.nominal_fits[i], im).split(": ", 1)[1])
@@ -336,6 +357,24 @@ def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, 
         click.echo(f"  pelicun: {export_path} and {export_path.with_suffix('.json').name} ({export_family}, "
                    f"ID {export[1]})" + (f"; not exported: {'; '.join(left_out)}" if left_out else ""))
     click.echo(f"  wrote {_written(h5_path, png_path, no_plot, as_csv)} in {elapsed:.1f} s")
+
+
+def _stale_figure(h5_path: Path, png_path: Path, staging, *, no_plot: bool, format: str) -> list[Path]:
+    """The figure to remove when a study's result is published: with ``--no-plot``, ``NAME.png``
+    unless the result it was published with (the ``NAME.h5`` being replaced) holds the same
+    results as the new one (`results.same_results`): a figure must not stand beside results it
+    does not show, but rerunning the same study for its ``--json`` keeps its figure."""
+    from ..io import results
+
+    if not no_plot or not (png_path.exists() or png_path.is_symlink()):
+        return [png_path] if no_plot else []
+    new = next(tmp for tmp, path in staging.items if Path(path) == Path(h5_path))
+    try:
+        same = results.same_results(results.read_dataset(h5_path, format=format),
+                                    results.read_dataset(new, format=format))
+    except OutputError:                 # no result beside it, or another kind: the figure is not its
+        same = False
+    return [] if same else [png_path]
 
 
 def _write_csv(dataset, dims, path: Path, *, overwrite: bool, staging) -> None:

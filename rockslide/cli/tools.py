@@ -18,13 +18,16 @@ from .app import _json_default, dpi_option, main, records_dir_option, size_optio
 @click.option("--format", "fmt", default=None,
               help="File format (default: detected): at2, knet, cosmos, column, values, or an obspy format.")
 @click.option("--units", default=None,
-              help="Acceleration unit of the values (g, gal, m/s^2) where the file does not say.")
+              help="Acceleration unit of the values (g, gal, m/s^2); default: what the file states (AT2, K-NET, "
+                   "a column header such as 'Acceleration (g)').")
 @click.option("--time-column", default=None,
               help="Column text: 1-based number or header name of the time column.")
 @click.option("--column", default=None,
               help="Column text: 1-based number or header name of the acceleration column.")
-@click.option("--dt", type=float, default=None, help="Sampling step [s] for the values format.")
-@click.option("--skip-lines", type=int, default=0, help="Header lines to skip (values format).")
+@click.option("--dt", type=float, default=None,
+              help="Sampling step [s]: for values, or to read one column without its time column.")
+@click.option("--skip-lines", type=int, default=0,
+              help="Lines to skip before the data (header lines of names are recognised without it).")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object.")
 def info(record, fmt, units, time_column, column, dt, skip_lines, as_json):
     """Describe an accelerogram (format, dt, duration, units and peaks), or what a result, sweep,

@@ -17,8 +17,12 @@ Supported formats (``format=None`` sniffs them in this order):
     acceleration, its station, structure type, orientation and location in ``Record.header``
     (`rockslide.io.cosmos`).
 ``column``
-    Numbers separated by commas and/or whitespace, ``#`` comments, an optional header row of
-    column names: a time column and an acceleration column. One column is ``values``.
+    Numbers separated by tabs, commas, semicolons and/or spaces, ``#`` comments, header lines
+    before the numbers (column names with spaces and units, ``Time (s)<TAB>Acceleration (g)``; a
+    line of units): a time column and an acceleration column, chosen by number or name. The unit
+    of the acceleration is the header's where it states one (``g``, ``g's``, ``[gal]``,
+    ``cm/s/s``...); a time column is uniform to the digits it is printed with; with ``dt`` only
+    the acceleration column is read. One column is ``values``.
 ``values``
     All numbers in reading order, several per line allowed, after ``skip_lines`` lines; needs ``dt``.
 any obspy waveform format
@@ -84,7 +88,7 @@ _UNITS_HINT = "g, gal, m/s^2"
 # read too, so that they can be reported as such.
 _NUMBER_TEXT = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eEdD][-+]?\d+)?"
 _NUMBER = re.compile(rf"{_NUMBER_TEXT}|[-+]?(?:nan|inf|infinity)", re.IGNORECASE)
-_FIELD_SEPARATOR = re.compile(r"\s*,\s*|\s+")
+_FIELD_SEPARATOR = re.compile(r"\s*[,;]\s*|\s+")
 _AT2_NPTS = re.compile(r"\bNPTS\s*=\s*(\d{1,12})\b", re.IGNORECASE)
 _AT2_DT = re.compile(rf"\bDT\s*=\s*({_NUMBER_TEXT})", re.IGNORECASE)
 _AT2_OLD_STYLE = re.compile(rf"^\s*(\d{{1,12}})\s+({_NUMBER_TEXT})\s+NPTS\s*,?\s*DT\b", re.IGNORECASE)
@@ -460,17 +464,21 @@ def _choose_format(ctx: _Context, raw: bytes, format: str | None, options: _Opti
 
 
 def _looks_like_text_table(text: str, skip_lines: int) -> bool:
-    """Whether the first lines are numbers (after at most one header row of names)."""
-    rows = list(itertools.islice(_content_lines(text, skip_lines), 6))
+    """Whether the first lines are numbers, after header lines (`_read_text`) whose last one has
+    a field per column when there are header lines (column names)."""
+    rows = list(itertools.islice(_content_lines(text, skip_lines), MAX_HEADER_LINES + 6))
     if not rows:
         return True  # only comments: the text reader says there are no samples
-    numeric = [all(_number(t) is not None for t in tokens) for _, tokens in rows]
-    return all(numeric) or (len(rows) > 1 and _is_header(rows[0][1]) and all(numeric[1:]))
-
-
-def _is_header(tokens: list[str]) -> bool:
-    """A row of column names: no field empty, none a number."""
-    return all(token and _number(token) is None for token in tokens)
+    header = list(itertools.takewhile(lambda row: _number(row[1][0]) is None, rows))
+    data = rows[len(header):len(header) + 6]
+    if not data or not all(_number(t) is not None for _, tokens in data for t in tokens):
+        return False
+    if not header:
+        return True
+    columns = len(data[0][1])
+    lines = text.splitlines()
+    return all(len(tokens) == columns for _, tokens in data) and any(
+        len(_header_fields(lines[number - 1].split("#", 1)[0], columns)) == columns for number, _ in header)
 
 
 def _reject_unused_options(ctx: _Context, kind: str, options: _Options) -> None:
@@ -529,8 +537,10 @@ def _require_samples(ctx: _Context, count: int) -> None:
 def _unit_to_si(ctx: _Context, units: str | None, kind: str = "record") -> float:
     """Factor [m/s^2 per file unit]; RecordError when missing or unknown."""
     if units is None:
+        stated = " (or name it in the column's header: 'Acceleration (g)')" if kind in ("column text", "values") \
+            else ""
         raise ctx.error(f"give `units:` ({_UNITS_HINT}) for a {kind} record; the file does not "
-                        "say in which unit its numbers are (rockslide info: --units)", "units")
+                        f"say in which unit its numbers are (rockslide info: --units){stated}", "units")
     try:
         return unit_factor(str(units), "acceleration")
     except CaseError as exc:
@@ -552,8 +562,8 @@ def _content_lines(text: str, skip_lines: int = 0, first: int = 0):
     """Yield ``(line_number, tokens)`` of the lines holding data.
 
     Lines before ``max(skip_lines, first)`` are skipped; so are blank lines and comment lines
-    (starting with ``#`` or ``;``). A ``#`` ends a line; fields are separated by commas and/or
-    whitespace (a trailing comma is ignored).
+    (starting with ``#`` or ``;``). A ``#`` ends a line; fields are separated by commas,
+    semicolons and/or whitespace (a trailing comma is ignored).
     """
     start = max(skip_lines, first)
     for number, line in enumerate(text.splitlines()[start:], start=start + 1):
@@ -562,17 +572,21 @@ def _content_lines(text: str, skip_lines: int = 0, first: int = 0):
             continue
         content = content.rstrip(",").strip()
         if content:
-            yield number, _FIELD_SEPARATOR.split(content) if "," in content else content.split()
+            yield number, _FIELD_SEPARATOR.split(content) if "," in content or ";" in content \
+                else content.split()
 
 
-def _numbers(ctx: _Context, number: int, tokens: list[str]) -> list[float]:
-    """The numbers of one line; RecordError naming the line and the offending field."""
+def _numbers(ctx: _Context, number: int, tokens: list[str], *, first_data: int | None = None) -> list[float]:
+    """The numbers of one line; RecordError naming the line and the offending field (and, on the
+    first line of numbers ``first_data``, how to skip it)."""
     values = []
     for position, token in enumerate(tokens, start=1):
         value = _number(token)
         if value is None:
             shown = repr(token) if token else "an empty field"
-            raise ctx.error(f"cannot read {shown} (field {position}) as a number", f"line {number}")
+            hint = (f"; if the lines up to it are a header, skip them ({_fix('skip_lines', str(number))})"
+                    if number == first_data else "; fix or remove the line")
+            raise ctx.error(f"cannot read {shown} (field {position}) as a number{hint}", f"line {number}")
         values.append(value)
     return values
 
@@ -651,15 +665,12 @@ def _at2_units(ctx: _Context, line: str) -> str | None:
     match = _AT2_UNITS.search(line)
     if match is None:
         return None
-    unit = match.group(1).lower().replace("sec", "s")
-    unit = re.sub(r"/s/s$", "/s^2", unit)
-    try:
-        unit_factor(unit, "acceleration")
-    except CaseError:
+    unit = _unit_word(match.group(1))
+    if unit is None or unit[0] != "acceleration":
         raise ctx.error(f"units {match.group(1)!r} are not an acceleration unit "
                         f"({_UNITS_HINT}, cm/s/s); is this an acceleration (.AT2) record?",
-                        "line 3") from None
-    return unit
+                        "line 3")
+    return unit[1]
 
 
 _AT2_COMPONENT = re.compile(r"^[A-Za-z_-]*(\d{1,3}(?:\.\d*)?)$")
@@ -703,24 +714,32 @@ def _at2_npts_dt(ctx: _Context, line: str) -> tuple[int, float]:
 # --------------------------------------------------------------------------------------------------
 
 def _read_text(ctx: _Context, text: str, options: _Options, *, values_only: bool) -> tuple[_Parsed, str]:
-    """Column text (time and acceleration columns) or values text; returns the format found."""
+    """Column text (time and acceleration columns) or values text; returns the format found.
+
+    Leading lines whose first field is not a number are header lines (`_header`): the last one
+    with a name per column names the columns, a line of units alone (``s g g``, ``[s] [g]``) gives
+    their units. With ``dt`` the time column is not read: one column, evenly spaced.
+    """
     rows = list(_content_lines(text, options.skip_lines))
     if not rows:
         raise ctx.error("the record is empty: no data lines (only blank or comment lines"
                         + (f" after skipping {options.skip_lines}" if options.skip_lines else "") + ")")
     if values_only:
-        return _values_record(ctx, rows, options), "values"
-    header = None
-    if _is_header(rows[0][1]):
-        (header_line, header), rows = rows[0], rows[1:]
-        if not rows:
-            raise ctx.error("the record is empty: a header row and no data lines")
+        return _values_record(ctx, rows, options, None), "values"
+    header_rows = list(itertools.takewhile(lambda row: _number(row[1][0]) is None,
+                                           rows[:MAX_HEADER_LINES]))
+    rows = rows[len(header_rows):]
+    if not rows:
+        raise ctx.error("the record is empty: a header row and no data lines" if header_rows else
+                        "the record is empty: no data lines")
+    if len(header_rows) == MAX_HEADER_LINES:
+        raise ctx.error(f"no number in the first field of the first {MAX_HEADER_LINES} lines; expected "
+                        f"a few header lines, then numbers (skip the header with {_fix('skip_lines', 'N')})",
+                        f"line {header_rows[0][0]}")
     columns = len(rows[0][1])
-    if header is not None and len(header) != columns:
-        raise ctx.error(f"the header row has {len(header)} names but the first data line has "
-                        f"{columns} values", f"line {header_line}")
+    names, units = _header(ctx, text, header_rows, columns, rows[0][0])
     if columns == 1:
-        return _values_record(ctx, rows, options), "values"
+        return _values_record(ctx, rows, options, units[0]), "values"
     quick = _quick_values(rows) if all(len(tokens) == columns for _, tokens in rows) else None
     if quick is not None:
         table = quick.reshape(len(rows), columns)
@@ -730,80 +749,232 @@ def _read_text(ctx: _Context, text: str, options: _Options, *, values_only: bool
             if len(tokens) != columns:
                 raise ctx.error(f"{len(tokens)} values where line {rows[0][0]} has {columns}; column text "
                                 "needs the same number of columns on every line (for several values per "
-                                "line in reading order use format: values, with dt and skip_lines)",
+                                f"line in reading order use format: values, with dt and skip_lines)",
                                 f"line {number}")
-            table.append(_numbers(ctx, number, tokens))
+            table.append(_numbers(ctx, number, tokens, first_data=rows[0][0]))
         table = np.array(table, dtype=np.float64)
     lines = np.array([number for number, _ in rows], dtype=np.int64)
-    time_index, value_index = _time_and_value_columns(ctx, options, header, columns)
+    time_index, value_index = _time_and_value_columns(ctx, options, names, units, columns)
     _require_samples(ctx, len(table))
-    resolution = _printed_resolution(tokens[time_index] for _, tokens in rows)
-    start, dt = _uniform_time(ctx, table[:, time_index], lines, resolution)
-    values = table[:, value_index] * _unit_to_si(ctx, options.units, "column text")
-    return _Parsed(values, dt, options.units, start=start, lines=lines), "column"
+    unit = _column_unit(ctx, options.units, units[value_index], names, value_index)
+    values = table[:, value_index] * _unit_to_si(ctx, unit, "column text")
+    if time_index is None:
+        return _Parsed(values, options.dt, unit, lines=lines), "column"
+    time_factor = 1.0
+    if units[time_index] is not None and units[time_index][0] == "time":
+        time_factor = unit_factor(units[time_index][1], "time")
+    start, dt = _uniform_time(ctx, table[:, time_index] * time_factor,
+                              [tokens[time_index] for _, tokens in rows], time_factor, lines)
+    return _Parsed(values, dt, unit, start=start, lines=lines), "column"
 
 
-def _values_record(ctx: _Context, rows, options: _Options) -> _Parsed:
-    if options.time_column is not None or options.column is not None:
-        raise ctx.error("time_column and column were given but the file has one value per line "
-                        "(values text, which needs dt)", "column")
+#: Header lines read before the first line of numbers (more is not a column text file).
+MAX_HEADER_LINES = 100
+
+
+def _fix(key: str, value: str = "") -> str:
+    """How to give a reading option, in a case file and on the command line: ``skip_lines: 3
+    (--skip-lines 3)``."""
+    option = "--" + key.replace("_", "-")
+    return f"`{key}: {value}` ({option} {value})" if value else f"`{key}:` ({option})"
+
+
+def _values_record(ctx: _Context, rows, options: _Options, stated) -> _Parsed:
+    """One value per sample in reading order, at the step ``dt`` given; ``stated`` is the unit a
+    header states (`_stated_unit`), or None."""
+    if options.time_column is not None or options.column not in (None, 1, "1"):
+        raise ctx.error("time_column or column was given but the file has one value per line "
+                        f"(values text: give only {_fix('dt')} and units)", "column")
     if options.dt is None:
         raise ctx.error("give `dt:` (the sampling step in s) for a values record: the file has no "
                         "time column (rockslide info: --dt)", "dt")
     values, lines = _values_in_order(ctx, rows)
-    return _Parsed(values * _unit_to_si(ctx, options.units, "values"), options.dt, options.units,
-                   lines=lines)
+    unit = _column_unit(ctx, options.units, stated, None, 0)
+    return _Parsed(values * _unit_to_si(ctx, unit, "values"), options.dt, unit, lines=lines)
 
 
-def _time_and_value_columns(ctx: _Context, options: _Options, header, columns: int) -> tuple[int, int]:
-    """0-based indices of the time and acceleration columns."""
+# --------------------------------------------------------------------------------------------------
+# Column text: header lines, names and units
+# --------------------------------------------------------------------------------------------------
+
+#: A unit written last in a column name, in brackets: ``Acceleration (g)``, ``acc [cm/s/s]``.
+_BRACKETED_UNIT = re.compile(r"[(\[{]\s*([^()\[\]{}]+?)\s*[)\]}]\s*$")
+_UNIT_TOKEN = re.compile(r"^[(\[{]?[^()\[\]{}\s]+[)\]}]?$")
+
+
+def _header(ctx: _Context, text: str, header_rows, columns: int,
+            first_data: int) -> tuple[list[str] | None, list]:
+    """Column names and stated units from the header lines.
+
+    Returns
+    -------
+    names : list of str or None
+        From the last header line with one field per column that is not a line of units.
+    units : list
+        Per column, ``(kind, unit)`` (`_unit_word`) from a line of units or the column's name;
+        None where none is stated.
+    """
+    if not header_rows:
+        return None, [None] * columns
+    lines = text.splitlines()
+    names, unit_row = None, None
+    for number, _ in reversed(header_rows):
+        fields = _header_fields(lines[number - 1].split("#", 1)[0], columns)
+        if len(fields) != columns:
+            continue
+        words = [_unit_word(_BRACKETED_UNIT.sub(r"\1", field)) for field in fields]
+        if unit_row is None and all(words) and all(_UNIT_TOKEN.match(f) for f in fields):
+            unit_row = words
+        elif names is None:
+            names = fields
+    if names is None and unit_row is None and len(header_rows) == 1:
+        number, _ = header_rows[0]
+        count = len(_header_fields(lines[number - 1].split("#", 1)[0], columns))
+        if count > 1:
+            raise ctx.error(f"the header row has {count} names but the first data line has {columns} "
+                            f"values; fix the names or skip the row ({_fix('skip_lines', str(number))})",
+                            f"line {number}")
+    if unit_row is not None:
+        return names, unit_row
+    return names, [_stated_unit(name) for name in names] if names else [None] * columns
+
+
+def _header_fields(line: str, columns: int) -> list[str]:
+    """The fields of a header line: split at tabs, else semicolons, else commas, else runs of two
+    spaces or more, else single spaces with a bracketed unit kept with its name
+    (``Time (s) Acc (g)``); quotes around a field removed."""
+    line = line.strip().rstrip(",;").strip()
+    for separator in ("\t", ";", ","):
+        if separator in line:
+            fields = line.split(separator)
+            break
+    else:
+        fields = re.split(r"\s{2,}", line)
+        if len(fields) != columns:
+            fields = []
+            for word in line.split():
+                open_bracket = fields and sum(fields[-1].count(c) for c in "([{") > \
+                    sum(fields[-1].count(c) for c in ")]}")
+                if fields and (word[0] in "([{" or open_bracket):
+                    fields[-1] += " " + word
+                else:
+                    fields.append(word)
+    return [field.strip().strip("\"'").strip() for field in fields]
+
+
+def _unit_word(word: str) -> tuple[str, str] | None:
+    """``(kind, unit)`` for a unit as headers write it (``g``, ``g's``, ``gal``, ``cm/s/s``,
+    ``cm/sec^2``, ``m/s²``, ``mm/s2``, ``s``, ``sec``, ``ms``): ``kind`` ``"acceleration"`` or
+    ``"time"``, ``unit`` a name `rockslide.units.unit_factor` knows. None for anything else."""
+    unit = word.strip().strip("\"'").lower().replace("²", "^2").replace(" ", "").replace("’", "'")
+    unit = re.sub(r"sec(?:s|onds?)?\b", "s", unit)
+    unit = re.sub(r"/s/s$", "/s^2", unit)
+    if unit in ("g's", "gs"):
+        unit = "g"
+    for kind in ("acceleration", "time"):
+        try:
+            unit_factor(unit, kind)
+        except CaseError:
+            continue
+        return kind, unit
+    return None
+
+
+def _stated_unit(name: str) -> tuple[str, str] | None:
+    """The unit a column name states: in brackets at its end, else its last word
+    (``Acceleration g's``, ``acc_gal``); None when it states none."""
+    bracketed = _BRACKETED_UNIT.search(name)
+    if bracketed:
+        return _unit_word(bracketed.group(1))
+    words = re.split(r"[\s_]+", name.strip())
+    return _unit_word(words[-1]) if len(words) > 1 else None
+
+
+def _column_unit(ctx: _Context, given: str | None, stated, names, index: int) -> str | None:
+    """The unit of the acceleration column: ``units`` when given (a RecordWarning when the header
+    states another), else the one the header states; None when neither says."""
+    if stated is not None and stated[0] != "acceleration":
+        stated = None
+    if given is None:
+        return None if stated is None else stated[1]
+    if stated is not None and _unit_to_si(ctx, given) != unit_factor(stated[1], "acceleration"):
+        column = f"column {names[index]!r}" if names else "the header"
+        warnings.warn(f"{ctx.path}: {column} states {stated[1]!r} but units {given!r} were given; "
+                      f"reading the numbers in {given!r} as given (remove units to use the header's)",
+                      RecordWarning, stacklevel=5)
+    return given
+
+
+def _time_and_value_columns(ctx: _Context, options: _Options, header, units,
+                            columns: int) -> tuple[int | None, int]:
+    """0-based indices of the time column (None with ``dt``: not read) and of the acceleration.
+
+    Without ``time_column``, the one column whose header states a time unit or is named ``time``
+    or ``t`` is the time column.
+    """
     time_spec, value_spec = options.time_column, options.column
+    timed = [i for i, unit in enumerate(units) if unit is not None and unit[0] == "time"] or \
+        [i for i, name in enumerate(header or ()) if name.strip().casefold() in ("time", "t")]
+    if time_spec is None and options.dt is None and len(timed) == 1:
+        time_spec = timed[0] + 1
+    listed = f" ({', '.join(header)})" if header else ""
+    numbers = f"numbers 1 to {columns}" + (" or header names" if header else "")
+    if options.dt is not None:
+        if time_spec is not None:
+            raise ctx.error("time_column and dt were both given; dt takes the samples as evenly spaced "
+                            "and does not read the time column: remove one of them", "dt")
+        if value_spec is None and columns > 2:
+            raise ctx.error(f"the file has {columns} columns{listed}; give the acceleration column, "
+                            f"{_fix('column')}: {numbers}", "column")
+        return None, _column_index(ctx, 2 if value_spec is None else value_spec, "column", header, columns)
     if columns == 2:
         time_spec = 1 if time_spec is None else time_spec
         if value_spec is None:
             value_spec = 2 if _column_index(ctx, time_spec, "time_column", header, columns) == 0 else 1
+    elif time_spec is not None and value_spec is None:
+        raise ctx.error(f"the file has {columns} columns{listed}; give the acceleration column, "
+                        f"{_fix('column')}: {numbers}", "column")
     elif time_spec is None or value_spec is None:
-        names = f" ({', '.join(header)})" if header else ""
-        raise ctx.error(f"the file has {columns} columns{names}; give `time_column:` and `column:` "
-                        f"(numbers 1 to {columns}" + (" or header names" if header else "") + ")",
-                        "column")
+        raise ctx.error(f"the file has {columns} columns{listed}; give time_column and column "
+                        f"(--time-column, --column: {numbers}), or column and dt (--column, --dt: "
+                        "the time column is then not read)", "column")
     time_index = _column_index(ctx, time_spec, "time_column", header, columns)
     value_index = _column_index(ctx, value_spec, "column", header, columns)
     if time_index == value_index:
         raise ctx.error(f"time_column and column are both column {time_index + 1}; "
-                        "expected two different columns", "column")
+                        "expected two different columns (--time-column, --column)", "column")
     return time_index, value_index
 
 
 def _column_index(ctx: _Context, spec, what: str, header, columns: int) -> int:
-    """0-based index of a column given by 1-based number or header name."""
+    """0-based index of a column given by 1-based number or header name (the name with or without
+    its bracketed unit, any case)."""
+    option = "--" + what.replace("_", "-")
     if isinstance(spec, str) and not spec.strip().isdigit():
         if header is None:
             raise ctx.error(f"{what} {spec!r} is a name but the file has no header row; give a "
-                            f"column number from 1 to {columns}", what)
+                            f"column number from 1 to {columns} ({option})", what)
         wanted = spec.strip()
-        exact = [i for i, name in enumerate(header) if name == wanted]
-        folded = [i for i, name in enumerate(header) if name.casefold() == wanted.casefold()]
-        if exact or folded:
-            return (exact or folded)[0]
+        bare = [_BRACKETED_UNIT.sub("", name).strip() for name in header]
+        for candidates, fold in ((header, False), (bare, False), (header, True), (bare, True)):
+            found = [i for i, name in enumerate(candidates)
+                     if (name.casefold() == wanted.casefold() if fold else name == wanted)]
+            if found:
+                return found[0]
         raise ctx.error(f"{what} {spec!r} is not a column name; the {columns} columns are "
-                        f"{', '.join(header)}", what)
+                        f"{', '.join(header)} ({option} takes a name or a number)", what)
     if isinstance(spec, bool) or not isinstance(spec, (int, np.integer, str)):
         raise ctx.error(f"{what} = {spec!r}; expected a column number (1 to {columns}) or name", what)
     number = int(spec)
     if not 1 <= number <= columns:
         raise ctx.error(f"{what} = {spec!r} is out of range: the file has {columns} columns "
-                        f"(numbers 1 to {columns})", what)
+                        f"(numbers 1 to {columns}, {option})", what)
     return number - 1
 
 
-def _printed_resolution(tokens) -> float:
-    """[s] One unit in the last printed digit of the coarsest time value (``64.43999`` -> 1e-5):
-    the largest exponent of the tokens as decimals (`_printed_exponent`), nan and inf left out."""
-    exponents = [_printed_exponent(token) for token in tokens]
-    exponent = max((e for e in exponents if e is not None), default=0)
-    return 10.0 ** max(-300, min(300, exponent))
-
+# --------------------------------------------------------------------------------------------------
+# Column text: the time column
+# --------------------------------------------------------------------------------------------------
 
 def _printed_exponent(token: str) -> int | None:
     """The exponent of the last printed digit of a number `_number` reads (``Decimal(token)``'s:
@@ -814,32 +985,89 @@ def _printed_exponent(token: str) -> int | None:
     return (int(power) if power else 0) - len(mantissa.partition(".")[2])
 
 
-def _uniform_time(ctx: _Context, time: np.ndarray, lines: np.ndarray,
-                  resolution: float) -> tuple[float, float]:
-    """Start [s] and step [s] of a time column; RecordError unless finite, increasing and uniform.
+def _significant_digits(token: str) -> int:
+    """Digits printed from the first non-zero one to the last (``0.00125`` -> 3, ``0.0`` -> 0)."""
+    mantissa = token.lower().replace("d", "e").partition("e")[0]
+    return len("".join(c for c in mantissa if c.isdigit()).lstrip("0"))
 
-    Uniform means every step is within ``1e-6 * dt + 1e-9`` s of the median step, plus one unit
-    of the last printed digit of the times (``resolution`` [s], at most ``1e-3 * dt``): rounding
-    each printed time moves a step by up to that much (the SCT 1985 file has 0.01999 and 0.02001
-    among its 0.02 s steps). The step returned is the mean one, ``(t[-1] - t[0]) / (n - 1)``.
+
+def _printed_units(tokens: list[str]) -> np.ndarray:
+    """[file unit] How far each printed time may be from the time it stands for, times 2: one unit
+    of its last printed digit, or less where the column shows that the writer printed more.
+
+    A column printed with a fixed number of decimals (``%.4f``) has that unit everywhere. A
+    column printed with a fixed number of significant digits (``%g``, ``repr``) drops trailing
+    zeros: ``1`` stands for 1.00000 there. So the unit of a token is at most the unit of its
+    leading digit at the most significant digits the column prints (``S``), but not below the
+    finest printed digit of the column (``E``); a zero has the unit of ``E``.
+    """
+    exponents = np.array([_printed_exponent(t) for t in tokens], dtype=np.int64)
+    finest = int(exponents.min())
+    if finest == int(exponents.max()):       # fixed decimals (zeros included): that unit everywhere
+        return np.full(exponents.size, 10.0 ** max(-300, min(300, finest)))
+    significant = np.array([_significant_digits(t) for t in tokens], dtype=np.int64)
+    most = int(significant.max())
+    by_digits = np.maximum(finest, exponents + significant - most)
+    unit = np.where(significant == 0, finest, np.minimum(exponents, by_digits))
+    return 10.0 ** np.clip(unit, -300, 300)
+
+
+def _uniform_time(ctx: _Context, time: np.ndarray, tokens: list[str], factor: float,
+                  lines: np.ndarray) -> tuple[float, float]:
+    """Start [s] and step [s] of a time column; RecordError unless finite, increasing and uniform
+    to the digits it is printed with.
+
+    The step is ``(t[-1] - t[0]) / (n - 1)``, the span over the count. The times are uniform when
+    each is within half a unit of its last printed digit (`_printed_units`), plus the uncertainty
+    of the line through the first and the last time (half their units), plus ``1e-6 dt + 1e-9`` s
+    of floating point, but less than ``0.45 dt`` (a missing or repeated sample moves a time by
+    ``dt``); each step likewise within half the units of its two times of ``dt`` (a step off is
+    named where it is, not where the drift it causes leaves the grid). A time column of a record
+    sampled at 800 Hz printed to 4 decimals (0.0012, 0.0013 alternately) is uniform, the SCT 1985
+    file's 64.43999 among its 0.02 s steps too.
     """
     bad = np.flatnonzero(~np.isfinite(time))
     if bad.size:
-        raise ctx.error(f"time {time[bad[0]]} is not a finite number", f"line {int(lines[bad[0]])}")
+        raise ctx.error(f"time {time[bad[0]]} is not a finite number; fix or remove the line, or give "
+                        f"{_fix('dt')} not to read the time column", f"line {int(lines[bad[0]])}")
+    n = time.size
     with np.errstate(over="ignore", invalid="ignore"):
         steps = np.diff(time)
-        median = float(np.median(steps))
-        if not (math.isfinite(median) and median > 0):
-            raise ctx.error("the time column does not increase; expected times in seconds, "
-                            "evenly spaced", "time_column")
-        tolerance = 1e-6 * median + 1e-9 + min(resolution, 1e-3 * median)
-        off = np.flatnonzero(~(np.abs(steps - median) <= tolerance))
-    if off.size:
-        i = int(off[0])
-        raise ctx.error(f"time step {steps[i]:.9g} s (from {time[i]:.9g} to {time[i + 1]:.9g} s) differs "
-                        f"from the usual step {median:.9g} s by more than {tolerance:.3g} s; the time "
-                        "column must be uniform (resample the record)", f"line {int(lines[i + 1])}")
-    return float(time[0]), float((time[-1] - time[0]) / (time.size - 1))
+        dt = float((time[-1] - time[0]) / (n - 1))
+        unit = _printed_units(tokens) * factor
+        printed = float(np.median(unit))
+        if math.isfinite(dt) and dt > 0 and printed > dt:
+            raise ctx.error(f"the time column is printed to {printed:.3g} s, coarser than its step {dt:.6g} s: "
+                            f"it cannot show the sampling; give {_fix('dt', f'{dt:.6g}')} not to read it",
+                            "time_column")
+        if not (math.isfinite(dt) and dt > 0 and np.median(steps) > 0):
+            raise ctx.error("the time column does not increase; expected times in seconds, evenly spaced "
+                            f"(if the samples are evenly spaced, give {_fix('dt')} not to read the time "
+                            "column)", "time_column")
+        # below half a step, so that a missing or repeated sample is never within the tolerance
+        slack = 1e-6 * dt + 1e-9
+        step_tolerance = np.minimum(0.5 * (unit[1:] + unit[:-1]) + 0.5 * (unit[0] + unit[-1]) / (n - 1),
+                                    0.45 * dt) + slack
+        grid = time[0] + np.arange(n) * dt
+        tolerance = np.minimum(0.5 * unit + 0.5 * max(unit[0], unit[-1]), 0.45 * dt) + slack
+        # a step off (a missing sample) is named where it is; a slow drift where it leaves the grid
+        off_step = np.flatnonzero(~(np.abs(steps - dt) <= step_tolerance))
+        off_grid = np.flatnonzero(~(np.abs(time - grid) <= tolerance))
+    if off_step.size:
+        i = int(off_step[0])
+        problem = (f"the time step to {time[i + 1]:.9g} s is {steps[i]:.9g} s, {abs(steps[i] - dt):.3g} s off "
+                   f"the uniform step {dt:.9g} s (span / intervals), beyond its printed digits "
+                   f"(±{step_tolerance[i]:.2g} s)")
+        line = int(lines[i + 1])
+    elif off_grid.size:
+        i = int(off_grid[0])
+        problem = (f"time {time[i]:.9g} s is {abs(time[i] - grid[i]):.3g} s off the uniform grid (start "
+                   f"{time[0]:.9g} s, step {dt:.9g} s), beyond its printed digits (±{tolerance[i]:.2g} s)")
+        line = int(lines[i])
+    else:
+        return float(time[0]), dt
+    raise ctx.error(f"{problem}: the time column must be uniform; if the samples are evenly spaced give "
+                    f"{_fix('dt')} not to read it, else resample the record", f"line {line}")
 
 
 # --------------------------------------------------------------------------------------------------

@@ -1190,6 +1190,39 @@ def read_dataset(path, *, format: str) -> StoredDataset:
     return StoredDataset(coords=coords, variables=variables, attrs=attrs)
 
 
+#: Root attributes that say when and how a file was written, not what it holds (`same_results`).
+_PROVENANCE_ATTRS = frozenset({"created", "command_line"})
+
+
+def same_results(a: StoredDataset, b: StoredDataset) -> bool:
+    """Whether two files of `read_dataset` hold the same results: the same dimensions, variables
+    (values, NaN where NaN, and attributes) and root attributes, less those of their writing (the
+    time, the command line, the versions of the packages). A figure drawn from one shows the other.
+    """
+    def content(attrs):
+        return {k: v for k, v in attrs.items() if k not in _PROVENANCE_ATTRS and not k.endswith("_version")}
+
+    def equal(x, y) -> bool:
+        x, y = np.asarray(x), np.asarray(y)
+        if x.shape != y.shape or x.dtype.kind != y.dtype.kind:
+            return False
+        return bool(np.array_equal(x, y, equal_nan=x.dtype.kind in "fc"))
+
+    if [name for name, _, _ in a.coords] != [name for name, _, _ in b.coords] \
+            or a.variables.keys() != b.variables.keys():
+        return False
+    if not all(equal(x, y) and ax == ay for (_, x, ax), (_, y, ay) in zip(a.coords, b.coords, strict=True)):
+        return False
+    if not all(a.variables[n][0] == b.variables[n][0] and equal(a.variables[n][1], b.variables[n][1])
+               and a.variables[n][2] == b.variables[n][2] for n in a.variables):
+        return False
+    return _attrs_equal(content(a.attrs), content(b.attrs))
+
+
+def _attrs_equal(a: dict, b: dict) -> bool:
+    return a.keys() == b.keys() and all(np.array_equal(np.asarray(a[k]), np.asarray(b[k])) for k in a)
+
+
 def _values(ds) -> np.ndarray:
     """A dataset's values; strings as ``str``."""
     if h5py.check_string_dtype(ds.dtype) is not None:
