@@ -251,3 +251,32 @@ def test_the_last_worker_killed_is_one_line_and_the_resume_is_identical(schedule
 
 def test_records_path_is_the_shipped_one():
     assert Path(RECORDS).is_dir() and Path(EXAMPLE).is_file()
+
+
+# --------------------------------------------------------------------------------------------------
+# the compiled core where numba is told to cache elsewhere (containers, HPC modules, read-only installs)
+# --------------------------------------------------------------------------------------------------
+
+
+@posix
+def test_a_numba_cache_dir_elsewhere_reads_the_shipped_core(tmp_path):
+    """With NUMBA_CACHE_DIR set to an empty folder (as containers and HPC modules do), a first sweep
+    compiles nothing: the shipped compiled core is copied there and loads (a compile would say
+    'compiling the batch kernel' and take a minute)."""
+    from rockslide.core import batch, compiled
+
+    if compiled.cache_folder(batch.run_batch) != compiled.shipped_folder():
+        pytest.skip("numba caches outside the package here (NUMBA_CACHE_DIR is set): nothing shipped to copy")
+    batch.warm_up()                          # the package's own cache holds the batch kernel
+    assert compiled.is_warm(batch.run_batch)
+    env = {**os.environ, "PYTHONPATH": str(REPO), "NUMBA_CACHE_DIR": str(tmp_path / "numba")}
+    probe = subprocess.run([sys.executable, "-c", "from rockslide.core import batch, compiled; "
+                            "print(compiled.is_warm(batch.run_batch), compiled.cache_folder(batch.run_batch))"],
+                           env=env, capture_output=True, text=True, timeout=300)
+    warm, folder = probe.stdout.split()
+    assert warm == "True" and Path(folder).is_relative_to(tmp_path / "numba"), probe
+    done = subprocess.run([sys.executable, "-m", "rockslide",
+                           *map(str, sweep_args(tmp_path / "out", *AXES, extra=["--no-plot", *CHUNKS]))],
+                          env=env, capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr
+    assert "compiling" not in done.stdout + done.stderr

@@ -11,7 +11,9 @@ called by ``setup.py``), so that the first command after ``pip install`` loads m
 spending a minute compiling it. Where no folder numba would cache in can be written (a read-only
 installation and a read-only home), the core caches in a temporary folder that the process
 removes at exit: it compiles in memory, once per process (`CACHE_IS_TEMPORARY`), instead of
-failing at import.
+failing at import. Where numba is told to cache elsewhere (``NUMBA_CACHE_DIR``, or the user's
+cache under a read-only installation), `freshen` first copies the shipped compiled core there
+(`shipped_folder`), so that those installations do not compile either.
 
 The stamp also identifies the compiled code elsewhere: a sweep's chunks are reused only under the
 same stamp (`sweep.definition_key`).
@@ -72,12 +74,39 @@ def freshen(dispatcher) -> bool:
         for path in folder.iterdir():
             if path.suffix in (".nbi", ".nbc") and path.name.split(".", 1)[0] in COMPILED_MODULES:
                 path.unlink(missing_ok=True)
+        _copy_shipped(folder, stamp)
         temporary = folder / f".{STAMP_FILE}.{os.getpid()}.tmp"
         temporary.write_text(stamp)
         os.replace(temporary, recorded)
     except OSError:
         return False
     return True
+
+
+def shipped_folder() -> Path:
+    """The folder the package build compiled the core into (`build.precompile`): numba's in-tree
+    cache beside these modules."""
+    return Path(__file__).resolve().parent / "__pycache__"
+
+
+def _copy_shipped(folder: Path, stamp: str) -> bool:
+    """Copy the compiled core the package ships (`shipped_folder`, when its stamp is ``stamp``) into
+    ``folder``, the cache numba was told to use instead: ``NUMBA_CACHE_DIR`` (containers, HPC
+    modules) or the user's cache under a read-only installation. numba checks each cached function
+    against its source file's time and size, the same file's here, so the copies load as they
+    are and the first run compiles nothing. Returns whether files were copied."""
+    shipped = shipped_folder()
+    try:
+        if folder.resolve() == shipped or (shipped / STAMP_FILE).read_text() != stamp:
+            return False
+        files = [path for path in shipped.iterdir() if path.suffix in (".nbi", ".nbc")]
+        for path in files:
+            temporary = folder / f".{path.name}.{os.getpid()}.tmp"
+            shutil.copyfile(path, temporary)
+            os.replace(temporary, folder / path.name)
+    except OSError:
+        return False
+    return bool(files)
 
 
 def discard(dispatcher) -> bool:
@@ -112,4 +141,4 @@ def is_warm(dispatcher) -> bool:
 CACHE_IS_TEMPORARY = _cache_is_temporary()
 
 __all__ = ["COMPILED_MODULES", "CACHE_IS_TEMPORARY", "source_stamp", "cache_folder", "freshen", "discard",
-           "is_warm"]
+           "is_warm", "shipped_folder"]
