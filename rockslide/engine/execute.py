@@ -210,9 +210,18 @@ def local_threads() -> int:
 
 
 def _chunk_inputs(plan: Plan, indices: np.ndarray):
-    """`batch.compute`'s arguments for the cases ``indices``."""
+    """`batch.compute`'s arguments for the cases ``indices`` (an index array, or a slice)."""
     return (plan.params[indices], plan.states[indices], plan.base, plan.first[indices],
             plan.count[indices], plan.factor_h[indices], plan.factor_v[indices])
+
+
+def compute_chunk(inputs, chunk: int, n_chunks: int) -> np.ndarray:
+    """`batch.compute` of chunk ``chunk`` (cases ``chunk, chunk + n_chunks, ...``,
+    `Plan.chunk_indices`) from the whole plan's ``inputs`` (`_chunk_inputs` of every case): a dask
+    task, run where the inputs were sent once."""
+    params, states, base, first, count, kh, kv = inputs
+    rows = slice(chunk, None, n_chunks)
+    return batch.compute(params[rows], states[rows], base, first[rows], count[rows], kh[rows], kv[rows])
 
 
 #: [s] for the connection to a dask scheduler, and for a lost one to come back.
@@ -249,12 +258,12 @@ def _compute_dask(plan, store, chunks, address, progress, wait_workers, say):
         try:
             _wait_for_workers(client, address, wait_workers, say)
             check_workers_match(client.run(worker_identity), local_identity(), address)
-            base = client.scatter(plan.base, broadcast=True)
+            # the plan's arrays are sent once to every worker; a task names its chunk only, so that
+            # neither the scheduler's memory nor the client's traffic grows with the tasks
+            shared = client.scatter(list(_chunk_inputs(plan, slice(None))), broadcast=True)
             for chunk in chunks:
-                indices = plan.chunk_indices(chunk)
-                p, s, _, first, count, kh, kv = _chunk_inputs(plan, indices)
-                future = client.submit(batch.compute, p, s, base, first, count, kh, kv, pure=False)
-                futures[future] = (chunk, indices)
+                future = client.submit(compute_chunk, shared, chunk, plan.n_chunks, pure=False)
+                futures[future] = (chunk, plan.chunk_indices(chunk))
             _collect_futures(client, futures, store, address, progress)
         finally:
             with contextlib.suppress(Exception):
