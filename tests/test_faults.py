@@ -564,18 +564,39 @@ def test_concurrent_publications_have_one_winner_and_no_mixed_pair(tmp_path):
 # --------------------------------------------------------------------------------------------------
 
 
+#: A process that holds ``flock`` on the file argv[1] until its stdin closes, as the owner of a
+#: temporary file does (`files.open_new`); it says "locked" once it holds it.
+LOCK_HOLDER = ("import fcntl, os, sys; fd = os.open(sys.argv[1], os.O_RDONLY); fcntl.flock(fd, fcntl.LOCK_EX); "
+               "print('locked', flush=True); sys.stdin.read()")
+
+
+def hold_lock(path: Path) -> subprocess.Popen:
+    """Start `LOCK_HOLDER` on ``path`` and return once it holds the lock (synchronised on its
+    output, no sleep)."""
+    holder = subprocess.Popen([sys.executable, "-c", LOCK_HOLDER, str(path)], stdin=subprocess.PIPE,
+                              stdout=subprocess.PIPE, text=True)
+    assert holder.stdout.readline().strip() == "locked"
+    return holder
+
+
+def release_lock(holder: subprocess.Popen) -> None:
+    holder.stdin.close()
+    holder.wait(timeout=60)
+
+
 @posix
 def test_temporary_files_of_dead_processes_go_with_the_next_run(ws):
     dead = subprocess.Popen([sys.executable, "-c", "pass"])
     dead.wait()
-    alive = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+    out = ws / "out"
+    out.mkdir()
+    owned = out / f".example.h5.{dead.pid}.7.tmp"      # its owner lives elsewhere: a recycled pid
+    owned.write_bytes(b"x" * 1000)
+    alive = hold_lock(owned)
     try:
-        out = ws / "out"
-        out.mkdir()
         stale = [out / f".example.h5.{dead.pid}.tmp", out / f".example.png.{dead.pid}.tmp"]
-        kept = [out / f".example.h5.{alive.pid}.tmp", out / f".other.h5.{dead.pid}.tmp",
-                out / f".example.h5.{dead.pid}.notes"]
-        for path in stale + kept:
+        kept = [owned, out / f".other.h5.{dead.pid}.tmp", out / f".example.h5.{dead.pid}.notes"]
+        for path in stale + kept[1:]:
             path.write_bytes(b"x" * 1000)
         (ws / "case.yaml").write_text(case_text(QUICK))
         assert invoke("run", "case.yaml").exit_code == 0
@@ -589,8 +610,44 @@ def test_temporary_files_of_dead_processes_go_with_the_next_run(ws):
         assert [p.name for p in store.remove_stale_temporaries()] == [
             f".chunk-000000.npz.{dead.pid}.140000000000.tmp"]
     finally:
-        alive.kill()
-        alive.wait()
+        release_lock(alive)
+
+
+@posix
+def test_a_temporary_of_another_pid_namespace_is_kept_while_its_owner_holds_its_lock(tmp_path):
+    """Issue 28.4. A run in another container (another pid namespace) or on another host writes
+    ``.x.h5.<pid>.<place>.tmp``: its pid may name a process here that is alive and unrelated, or
+    none at all. The file is kept exactly as long as its owner holds the file's lock, whatever the
+    pid says; once the lock is free it is removed. And a run's own temporaries are locked while it
+    writes them: another process's cleaner leaves them alone."""
+    foreign_place = (files.place_token() + 1) % 2**32
+    unrelated_alive = os.getppid()                       # a live process that owns nothing here
+    gone = subprocess.Popen([sys.executable, "-c", "pass"])
+    gone.wait()
+    target = tmp_path / "x.h5"
+    temporaries_ = [tmp_path / f".x.h5.{unrelated_alive}.{foreign_place}.tmp",
+                    tmp_path / f".x.h5.{gone.pid}.{foreign_place}.tmp"]
+    for path in temporaries_:
+        path.write_bytes(b"half a result")
+    holders = [hold_lock(path) for path in temporaries_]
+    try:
+        assert files.remove_stale_temporaries([target]) == []
+        assert all(path.exists() for path in temporaries_)
+    finally:
+        for holder in holders:
+            release_lock(holder)
+    assert sorted(files.remove_stale_temporaries([target])) == sorted(temporaries_)
+    # this process's own temporary, open and locked: a cleaner in another process keeps it
+    with files.open_new(files.temporary_path(target)) as handle:
+        handle.write(b"being written")
+        script = ("import sys; from pathlib import Path; from rockslide.io import files; "
+                  "print(len(files.remove_stale_temporaries([Path(sys.argv[1])])))")
+        other = subprocess.run([sys.executable, "-c", script, str(target)], capture_output=True, text=True,
+                               env={**os.environ, "PYTHONPATH": str(REPO)}, timeout=120)
+        assert other.stdout.strip() == "0", other.stderr
+        assert files.temporary_path(target).exists()
+    files.remove_quietly(files.temporary_path(target))
+    assert not list(tmp_path.glob(".*.tmp"))
 
 
 # --------------------------------------------------------------------------------------------------

@@ -31,7 +31,7 @@ def _case(folder):
 @posix
 def test_planted_links_at_the_temporary_names_redirect_nothing(tmp_path):
     """Someone who can write in the output folder plants links at the names of this process's next
-    temporaries (``.NAME.h5.<pid>.tmp``, ``.NAME.png.<pid>.tmp``) pointing at a file of the user's:
+    temporaries (``.NAME.h5.<pid>.<place>.tmp``, ``.NAME.png.<pid>.<place>.tmp``) pointing at a file of the user's:
     the run succeeds, the victim is untouched, and the published files are regular files."""
     _case(tmp_path)
     out = tmp_path / "out"
@@ -39,7 +39,7 @@ def test_planted_links_at_the_temporary_names_redirect_nothing(tmp_path):
     victim = tmp_path / "precious.txt"
     victim.write_text("the user's thesis\n")
     for name in ("example.h5", "example.png"):
-        os.symlink(victim, out / f".{name}.{os.getpid()}.tmp")
+        os.symlink(victim, files.temporary_path(out / name))
     done = invoke("run", tmp_path / "case.yaml", "--records-dir", tmp_path)
     assert done.exit_code == 0, done.output
     assert victim.read_text() == "the user's thesis\n"

@@ -69,9 +69,9 @@ def obspy_formats() -> tuple[str, ...]:
 #: record needs a step of at most 0.025 s; a step above 1 s is a mistake of unit (ms written as s).
 MAX_SAMPLING_STEP = 1.0
 #: Largest record file read [bytes]: its size is checked before a byte is read (a 20 GB file is
-#: refused at once). 512 MiB of plain numbers is about 5e7 samples, read in about 10 bytes of memory
+#: refused at once). 1 GiB of plain numbers is 5e7 to 5e8 samples, read in about 10 bytes of memory
 #: per character of the file (`_plain_values`).
-MAX_RECORD_BYTES = 512 * 2**20
+MAX_RECORD_BYTES = 2**30
 #: Most numbers read from text that is not plain numbers (comments, commas, a header row, several
 #: columns): that reader keeps each number as a Python string first, about 400 bytes each, so this
 #: bound keeps it within about 4 GB. Checked by counting before parsing.
@@ -415,7 +415,7 @@ def _read_bytes(ctx: _Context) -> bytes:
         raise ctx.error(f"cannot read the file: {exc.strerror or exc}") from exc
     if len(raw) > MAX_RECORD_BYTES:
         raise ctx.error(f"the record file has more than {MAX_RECORD_BYTES} bytes; rockslide reads at most "
-                        f"{MAX_RECORD_BYTES} (about 5e7 samples)")
+                        f"{MAX_RECORD_BYTES} (1 GiB)")
     if not raw.strip():
         raise ctx.error("the file is empty (no samples)")
     return raw
