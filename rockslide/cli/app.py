@@ -103,6 +103,11 @@ class RockslideGroup(click.Group):
                     raise
                 if isinstance(exc, BrokenPipeError) and _stdout_gone():   # `rockslide info r.at2 | head -1`
                     ctx.exit(EXIT_BROKEN_PIPE)
+                failed = _stdout_failed(exc) if isinstance(exc, OSError) else None
+                if failed is not None:                # stdout on a full disk or /dev/full
+                    click.echo(one_line(f"rockslide: error: cannot write to standard output: {failed}; "
+                                        "the files the command wrote are complete"), err=True)
+                    ctx.exit(EXIT_USER_ERROR)
                 if isinstance(exc, ValueError) and "embedded null" in str(exc):   # only from the API
                     click.echo("rockslide: error: a file or folder name holds a NUL character (\\x00)", err=True)
                     ctx.exit(EXIT_USER_ERROR)
@@ -128,6 +133,23 @@ def _stdout_gone() -> bool:
     if gone:
         os.dup2(os.open(os.devnull, os.O_WRONLY), fd)
     return gone
+
+
+def _stdout_failed(exc: OSError) -> str | None:
+    """Why standard output could not be written (a full disk, ``/dev/full``), if ``exc`` came from
+    writing it (raised inside `click.echo`); else None. Standard output is then pointed at the null
+    device, so that the interpreter's last flush does not fail too."""
+    frames, tb = [], exc.__traceback__
+    while tb is not None:
+        frames.append(tb.tb_frame)
+        tb = tb.tb_next
+    if exc.filename is not None or not any(frame.f_code is click.echo.__code__ for frame in frames):
+        return None
+    try:
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+    except (OSError, ValueError, AttributeError):  # pragma: no cover - no real stream
+        pass
+    return exc.strerror or str(exc)
 
 
 def one_line(text: str, limit: int = MESSAGE_LIMIT) -> str:

@@ -19,6 +19,9 @@ from .app import _json_default, _result_set, dpi_option, main, records_dir_optio
 LONG_RUN = 10.0
 
 
+#: Largest ``plot --time-shift`` [s]: the bound of a case's start time (``ground.start``).
+MAX_TIME_SHIFT = 1e6
+
 #: A run's figure is drawn from its history kept in memory while it has at most this many rows (96
 #: MB; reading the file back would take as much); a longer history is read back from the file.
 KEEP_HISTORY_ROWS = 2_000_000
@@ -167,6 +170,9 @@ def plot(result_file, output, time_shift, window, crop, dpi, overwrite):
     from ..units import parse_quantity
 
     shift = parse_quantity(time_shift, "time", source="--time-shift")
+    if not abs(shift) <= MAX_TIME_SHIFT:
+        raise CaseError(f"{time_shift!r} is beyond +-{MAX_TIME_SHIFT:g} s, where float64 still resolves "
+                        "a record's samples on the time axis", source="--time-shift")
     zoom = _time_range(window, "--window", {"auto": "auto", "none": None})
     span = _time_range(crop, "--crop", {"auto": "auto", "all": None})
     own = Path(result_file).with_suffix(".png")
