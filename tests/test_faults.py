@@ -844,3 +844,92 @@ def test_a_damaged_numba_cache_is_removed_and_compiled_again(ws, tmp_path):
     assert "numba's cache of the core could not be read" in repaired.stderr and "Traceback" not in repaired.stderr
     again = sweep()
     assert again.returncode == 0 and "could not be read" not in again.stderr and "compiling" not in again.stderr
+
+
+# --------------------------------------------------------------------------------------------------
+# Issue 28.3: no wait that a signal cannot end
+# --------------------------------------------------------------------------------------------------
+
+
+@posix
+@pytest.mark.parametrize("signum, code", [(signal.SIGINT, 130), (signal.SIGTERM, 143)], ids=["SIGINT", "SIGTERM"])
+def test_a_run_waiting_for_the_folders_lock_says_so_and_stops_on_a_signal(ws, signum, code):
+    """Another process holds ``flock`` on the output folder (as a rockslide publishing there does):
+    the run computes, says once that it waits and for which process, and a signal ends it with
+    130/143, nothing published, no temporary left (it used to wait in ``flock`` until SIGKILL). The
+    test waits for the note on stderr, not for time to pass."""
+    (ws / "case.yaml").write_text(case_text(QUICK))
+    out = ws / "out"
+    out.mkdir()
+    holder = hold_lock(out)
+    try:
+        proc = cli_subprocess(["run", "case.yaml"], ws, preexec_fn=_default_sigint)
+        try:
+            note = proc.stderr.readline()
+            while note and "waiting for" not in note:
+                note = proc.stderr.readline()
+            assert "waiting for another process publishing in out" in note, note
+            assert f"process {holder.pid}" in note
+            proc.send_signal(signum)
+            _, rest = proc.communicate(timeout=120)
+        finally:
+            if proc.poll() is None:
+                proc.kill()
+                proc.communicate()
+        assert proc.returncode == code, rest
+        assert listing(out) == []
+    finally:
+        release_lock(holder)
+
+
+@posix
+def test_a_run_publishes_once_the_folders_lock_is_free(ws):
+    (ws / "case.yaml").write_text(case_text(QUICK))
+    out = ws / "out"
+    out.mkdir()
+    holder = hold_lock(out)
+    proc = cli_subprocess(["run", "case.yaml", "--no-plot"], ws)
+    try:
+        assert "waiting for" in proc.stderr.readline()
+        release_lock(holder)
+        _, rest = proc.communicate(timeout=120)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 0, rest
+    assert listing(out) == ["example.h5"]
+
+
+def _fifo(path: Path) -> Path:
+    os.mkfifo(path)
+    return path
+
+
+@posix
+@pytest.mark.parametrize("args, made, expected", [
+    (["run", "case.fifo"], lambda ws: _fifo(ws / "case.fifo"), "case.fifo: is a FIFO (named pipe), not a regular "
+                                                               "file; expected a case file"),
+    (["run", "case.yaml"], lambda ws: (ws / "case.yaml").write_text(horizontal_only("rec.at2", **QUICK))
+     and _fifo(ws / "rec.at2"), "is a FIFO (named pipe), not a regular file; expected a record file"),
+    (["info", "rec.txt", "--dt", "0.01", "--units", "g"], lambda ws: _fifo(ws / "rec.txt"),
+     "rec.txt: is a FIFO (named pipe), not a regular file; expected a record file"),
+    (["plot", "fifo.h5"], lambda ws: _fifo(ws / "fifo.h5"),
+     "fifo.h5: is a FIFO (named pipe), not a regular file; expected a result file"),
+    (["info", "fifo.h5"], lambda ws: _fifo(ws / "fifo.h5"), "fifo.h5: is a FIFO (named pipe)"),
+    (["run", "/dev/zero"], lambda ws: None, "/dev/zero: is a character device, not a regular file"),
+], ids=["case", "record-of-a-case", "record", "plot-result", "info-result", "device-as-case"])
+def test_a_fifo_or_device_given_as_input_is_refused_without_opening_it(ws, args, made, expected):
+    """Reading a FIFO without a writer blocked in ``open``, deaf to SIGINT and SIGTERM; a device
+    never ends. Now: one line, exit 2, at once (a subprocess with a time limit, so that a
+    regression fails instead of hanging the suite)."""
+    made(ws)
+    proc = cli_subprocess(args, ws)
+    try:
+        _, stderr = proc.communicate(timeout=120)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
+    lines = stderr.splitlines()
+    assert proc.returncode == 2 and len(lines) == 1, stderr
+    assert expected in lines[0]

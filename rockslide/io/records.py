@@ -158,7 +158,7 @@ def resolve_record_path(name: str, *, case_dir: Path | None, records_dir: Path,
     else:
         tried = [folder / path for folder in (case_dir, records_dir) if folder is not None]
     for candidate in tried:
-        if candidate.is_file():
+        if candidate.exists() and not candidate.is_dir():      # a FIFO too: its reader refuses it
             return candidate
     places = ", ".join(str(p) for p in tried)
     raise RecordError(f"record file {str(name)!r} not found; tried: {places} "
