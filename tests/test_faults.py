@@ -933,3 +933,58 @@ def test_a_fifo_or_device_given_as_input_is_refused_without_opening_it(ws, args,
     lines = stderr.splitlines()
     assert proc.returncode == 2 and len(lines) == 1, stderr
     assert expected in lines[0]
+
+
+# --------------------------------------------------------------------------------------------------
+# Issue 28.5: inputs bounded before they are read, in one line naming the bound
+# --------------------------------------------------------------------------------------------------
+
+
+def test_a_20_gb_sparse_record_is_refused_before_a_byte_is_read(ws):
+    """The size on the file system (st_size) is checked first: a sparse 20 GB file costs nothing
+    to make and was read whole."""
+    from rockslide.io import records
+
+    with open(ws / "huge.txt", "wb") as handle:
+        handle.truncate(20 * 2**30)
+    line = one_error_line(invoke("info", "huge.txt", "--dt", "0.01", "--units", "g"))
+    assert f"huge.txt: the record file has {20 * 2**30} bytes; rockslide reads at most {records.MAX_RECORD_BYTES}" in line
+
+
+def test_text_that_is_not_plain_numbers_is_counted_before_it_is_parsed(ws, monkeypatch):
+    """Column text (two numbers and a comma on a line) goes through the general reader, which
+    keeps each number as a string: its numbers are counted on the bytes first and refused above
+    the bound (lowered here to 1000: the file has 2 x 2000 numbers). Plain values of the same count
+    are read by the linear reader, whatever that bound."""
+    from rockslide.io import records
+
+    monkeypatch.setattr(records, "MAX_TEXT_NUMBERS", 1000)
+    (ws / "columns.csv").write_text("".join(f"{0.01 * i:.2f},{0.001 * (i % 7):.3f}\n" for i in range(2000)))
+    line = one_error_line(invoke("info", "columns.csv", "--units", "g"))
+    assert "about 4e+03 numbers in text with comments, commas" in line and "at most 1e+03 such numbers" in line
+    (ws / "values.txt").write_text("".join(f"{0.001 * (i % 7):.3f}\n" for i in range(2000)))
+    done = invoke("info", "values.txt", "--dt", "0.01", "--units", "g")
+    assert done.exit_code == 0 and "samples   2000, dt = 0.01 s" in done.stdout, done.output
+
+
+def test_a_suite_listing_one_record_many_times_is_bounded_before_any_run(ws, monkeypatch):
+    """An 18 KB suite listing one long record 400 times ran for minutes, then failed: the suite's
+    samples together are bounded as its records are read (the bound lowered here to 3.5 times
+    the record's samples: the fourth entry passes it), and a record listed many times is read
+    once."""
+    from rockslide.analyses import fragility
+    from rockslide.io import records
+
+    (ws / "case.yaml").write_text(case_text(QUICK))
+    samples = records.load_record(ws / "synthetic_kt_h.at2").data.size
+    monkeypatch.setattr(fragility, "MAX_SUITE_SAMPLES", int(3.5 * samples))
+    (ws / "suite.yaml").write_text("records:\n" + "".join(
+        f"  - {{name: r{i}, horizontal: synthetic_kt_h.at2}}\n" for i in range(400)))
+    reads = []
+    real = records.load_record
+    monkeypatch.setattr(records, "load_record", lambda *a, **k: reads.append(a) or real(*a, **k))
+    line = one_error_line(invoke("fragility", "case.yaml", "--suite", "suite.yaml", "--levels", "0.5g",
+                                 "--no-plot", "--records-dir", "."))
+    assert "suite.yaml: the suite's records hold more than" in line and "reached at records[3], r3, of 400" in line
+    assert len(reads) == 1
+    assert not (ws / "out").exists() or listing(ws / "out") == []
