@@ -22,6 +22,7 @@ The hostile inputs that end in one line (YAML bombs, absurd values, bad options)
 
 from __future__ import annotations
 
+import contextlib
 import errno
 import math
 import multiprocessing
@@ -988,3 +989,79 @@ def test_a_suite_listing_one_record_many_times_is_bounded_before_any_run(ws, mon
     assert "suite.yaml: the suite's records hold more than" in line and "reached at records[3], r3, of 400" in line
     assert len(reads) == 1
     assert not (ws / "out").exists() or listing(ws / "out") == []
+
+
+# --------------------------------------------------------------------------------------------------
+# Issue 28.6: never a mixed set, never a false "damaged"
+# --------------------------------------------------------------------------------------------------
+
+
+def test_plot_publishes_nothing_when_a_run_replaced_the_result_while_it_drew(ws, monkeypatch):
+    """``plot`` racing ``run --overwrite`` left the new ``.h5`` beside a figure of the old one.
+    The race made deterministic: the moment ``plot`` has drawn, a run publishes a new result and
+    figure. ``plot`` then publishes nothing (one line, exit 2) and the run's pair stays as it
+    published it."""
+    from rockslide.cli import run as run_command
+
+    (ws / "case.yaml").write_text(case_text(QUICK))
+    assert invoke("run", "case.yaml").exit_code == 0
+    (ws / "other.yaml").write_text(case_text({**QUICK, "contact.mu_static": 0.8}))
+    real_draw = run_command._draw
+
+    def draw_then_a_run_publishes(*args, **kwargs):
+        real_draw(*args, **kwargs)
+        monkeypatch.setattr(run_command, "_draw", real_draw)
+        other = cli_subprocess(["run", "other.yaml", "--overwrite"], ws)   # the same names: example.h5, .png
+        _, stderr = other.communicate(timeout=300)
+        assert other.returncode == 0, stderr
+
+    monkeypatch.setattr(run_command, "_draw", draw_then_a_run_publishes)
+    out = ws / "out"
+    line = one_error_line(invoke("plot", out / "example.h5"), "example.h5: was replaced while its figure was drawn")
+    assert "nothing was written" in line
+    assert results.read_result(out / "example.h5").case["contact"]["mu_static"] == 0.8
+    run_figure = sha256(out / "example.png")
+    assert invoke("plot", out / "example.h5").exit_code == 0   # the figure of the new result: the run's
+    assert sha256(out / "example.png") == run_figure
+    assert temporaries(out) == []
+
+
+@posix
+@pytest.mark.parametrize("overwrite", [False, True], ids=["second-refused", "second-overwrites"])
+def test_two_identical_sweeps_into_one_folder_run_one_after_the_other(ws, monkeypatch, overwrite):
+    """Two identical sweeps 0.7 s apart: the second said "chunk 0 is missing or damaged" (false)
+    and left chunk files. Made deterministic: the first holds the study's lock (as a running sweep
+    does) while the second starts and says it waits; the first then computes and publishes (here,
+    in this process, with the lock already held), and lets go. The second then refuses the result
+    that now exists (or, with --overwrite, replaces it), never a false "damaged", and no chunk file
+    is left."""
+    (ws / "case.yaml").write_text(case_text(QUICK))
+    out = ws / "out"
+    out.mkdir()
+    lock = out / ".example.sweep.h5.lock"
+    lock.touch()
+    first = hold_lock(lock)
+    try:
+        second = cli_subprocess(["sweep", "case.yaml", *GRID, "--no-progress"] + (["--overwrite"] if overwrite else []),
+                                ws)
+        note = second.stderr.readline()
+        while note and "waiting for" not in note:
+            note = second.stderr.readline()
+        assert "waiting for another sweep writing out/example.sweep.h5" in note, note
+        monkeypatch.setattr(files, "exclusive", lambda *a, **k: contextlib.nullcontext())   # the first holds it
+        done = invoke("sweep", "case.yaml", *GRID, "--no-progress")
+        assert done.exit_code == 0, done.output
+        published = sha256(out / "example.sweep.h5")
+    finally:
+        lock.unlink()                          # as the first sweep does when it ends
+        release_lock(first)
+    stdout, stderr = second.communicate(timeout=300)
+    assert "missing or damaged" not in stdout + stderr
+    if overwrite:
+        assert second.returncode == 0, stderr
+        assert results.read_sweep(out / "example.sweep.h5").attrs["sweep_key"]
+    else:
+        assert second.returncode == 2, stderr
+        assert "example.sweep.h5 exists (use --overwrite to replace it)" in stderr
+        assert sha256(out / "example.sweep.h5") == published
+    assert listing(out) == ["example.sweep.h5", "example.sweep.png"]

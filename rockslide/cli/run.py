@@ -166,7 +166,7 @@ def plot(result_file, output, time_shift, window, crop, dpi, overwrite):
         rockslide plot out/example.sweep.h5
         rockslide plot out/example.fragility.h5
     """
-    from ..io import results
+    from ..io import files
     from ..units import parse_quantity
 
     shift = parse_quantity(time_shift, "time", source="--time-shift")
@@ -179,6 +179,18 @@ def plot(result_file, output, time_shift, window, crop, dpi, overwrite):
     png = output if output is not None else own
     # the result's own figure is the one redrawn; another file is replaced only when asked to
     replace = overwrite or png.resolve() == own.resolve()
+    read = files.Unchanged(result_file)        # a figure of what was read, or nothing (issue 28.6)
+    with files.Staging(overwrite=replace) as staging:
+        _draw_stored(result_file, png, shift=shift, zoom=zoom, span=span, dpi=dpi, replace=replace,
+                     staging=staging)
+        staging.publish(verify=read)
+    click.echo(f"redrew {png}")
+
+
+def _draw_stored(result_file, png, *, shift, zoom, span, dpi, replace, staging):
+    """The figure of a result, sweep or fragility file (`plot`), staged in ``staging``."""
+    from ..io import results
+
     kind = results.file_format(result_file)
     if kind == results.SWEEP_FORMAT:
         from ..analyses.sweep import stored_figure
@@ -187,7 +199,7 @@ def plot(result_file, output, time_shift, window, crop, dpi, overwrite):
                                                        ("--crop", span, "auto")) if value != default]
         if given:
             raise CaseError("applies to result files, not to sweep files", source=given[0])
-        save_figure(stored_figure(results.read_sweep(result_file)), png, overwrite=replace, dpi=dpi)
+        save_figure(stored_figure(results.read_sweep(result_file)), png, overwrite=replace, dpi=dpi, staging=staging)
     elif kind == results.FRAGILITY_FORMAT:
         from ..analyses.fragility import stored_figure as stored_fragility_figure
         from ..plots import save_figure
@@ -196,7 +208,7 @@ def plot(result_file, output, time_shift, window, crop, dpi, overwrite):
         if given:
             raise CaseError("applies to result files, not to fragility files", source=given[0])
         stored = results.read_dataset(result_file, format=results.FRAGILITY_FORMAT)
-        save_figure(stored_fragility_figure(stored), png, overwrite=replace, dpi=dpi)
+        save_figure(stored_fragility_figure(stored), png, overwrite=replace, dpi=dpi, staging=staging)
     else:
         stored = results.read_result(result_file)
         times = stored.result.ground_time
@@ -206,8 +218,8 @@ def plot(result_file, output, time_shift, window, crop, dpi, overwrite):
                 if isinstance(pair, tuple) and (pair[1] <= first or pair[0] >= last):
                     raise CaseError(f"{pair[0]:g} to {pair[1]:g} s is outside the result, which runs from "
                                     f"{first:g} to {last:g} s (in the figure's time)", source=option)
-        _draw(stored.result, stored.name, png, overwrite=replace, time_shift=shift, zoom=zoom, crop=span, dpi=dpi)
-    click.echo(f"redrew {png}")
+        _draw(stored.result, stored.name, png, overwrite=replace, time_shift=shift, zoom=zoom, crop=span, dpi=dpi,
+              staging=staging)
 
 
 def _time_range(text: str, option: str, words: dict):

@@ -289,10 +289,11 @@ class Staging:
         for tmp, _ in self.items:
             remove_quietly(tmp)
 
-    def publish(self, *, remove=(), interruptible: bool = True, sync: bool = True) -> list[Path]:
+    def publish(self, *, remove=(), interruptible: bool = True, sync: bool = True, verify=None) -> list[Path]:
         """Sync every temporary file (unless not ``sync``), then rename them all onto their names
         and delete the files in ``remove`` (stale companions of an earlier result), in one section
-        (module docstring).
+        (module docstring). ``verify``, if given, is called first in that section and may raise to
+        publish nothing (`Unchanged`: the file a figure was drawn from is still the one read).
 
         Raises
         ------
@@ -311,6 +312,8 @@ class Staging:
                     fsync_file(tmp)
             folders = sorted({path.parent for _, path in self.items} | {Path(p).parent for p in remove})
             with folder_locks(folders), interrupts.critical():
+                if verify is not None:
+                    verify()                    # under the lock: no set is published meanwhile
                 if self.overwrite:
                     for tmp, path in self.items:
                         os.replace(tmp, path)
@@ -373,12 +376,13 @@ def _say_waiting(what: str) -> None:
         pass
 
 
-def lock_interruptibly(fd: int, *, shared: bool = False, waiting_for: str) -> None:
+def lock_interruptibly(fd: int, *, shared: bool = False, waiting_for: str) -> bool:
     """Take ``flock`` on ``fd`` (exclusive, or ``shared``), waiting as long as another process holds
     it, but never in a call that signals cannot cut short: a non-blocking attempt every
     `LOCK_RETRY` s, with Ctrl-C and SIGTERM acted on in between (`interrupts.check`; a
     KeyboardInterrupt where no handler is installed), and one note on stderr naming
-    ``waiting_for`` the first time it has to wait. An OSError where locks are not supported."""
+    ``waiting_for`` the first time it has to wait. Returns whether it waited. An OSError where
+    locks are not supported."""
     import fcntl
     import time
 
@@ -387,7 +391,7 @@ def lock_interruptibly(fd: int, *, shared: bool = False, waiting_for: str) -> No
     while True:
         try:
             fcntl.flock(fd, mode)
-            return
+            return said
         except BlockingIOError:
             pass
         if not said:
@@ -447,6 +451,76 @@ def folder_locks(folders, *, shared: bool = False):
     finally:
         for fd in fds:
             os.close(fd)                        # closing releases the lock
+
+
+@contextlib.contextmanager
+def exclusive(lock_path, *, waiting_for: str, waited=None):
+    """Hold an exclusive ``flock`` on the file ``lock_path`` (created if missing, never through a
+    link) for the ``with`` block, waiting interruptibly for another process that holds it
+    (`lock_interruptibly`, saying once that it waits for ``waiting_for``); the file is deleted when
+    the block ends. Two sweeps (or fragility analyses) of one result file run one after the other
+    this way: they share its chunk folder. A waiter that gets the lock of a file deleted meanwhile
+    takes the new one (the inode at the name is checked). ``waited`` is called (with no argument)
+    if another process held it. Nothing where locks are unavailable."""
+    try:
+        import fcntl  # noqa: F401
+    except ImportError:  # pragma: no cover - Windows
+        yield
+        return
+    flags = os.O_RDWR | os.O_CREAT | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_CLOEXEC", 0)
+    while True:
+        try:
+            fd = os.open(lock_path, flags, 0o666)
+        except OSError:                          # cannot be made here: nothing to hold
+            yield
+            return
+        try:
+            if lock_interruptibly(fd, waiting_for=waiting_for) and waited is not None:
+                waited()
+            same = os.stat(lock_path, follow_symlinks=False).st_ino == os.fstat(fd).st_ino
+        except FileNotFoundError:
+            same = False
+        except OSError:                          # no locks on this file system
+            os.close(fd)
+            yield
+            return
+        except BaseException:
+            os.close(fd)
+            raise
+        if same:
+            break
+        os.close(fd)                             # deleted by its holder meanwhile: the next one
+    try:
+        yield
+    finally:
+        try:
+            os.unlink(lock_path)                 # while it is held: a waiter then takes a new one
+        except OSError:
+            pass
+        os.close(fd)
+
+
+class Unchanged:
+    """The identity of a file read (device, inode, size, modification time), to check before a
+    file derived from it is published: ``rockslide plot`` must not publish a figure of a result
+    that a run replaced while it was drawn (`Staging.publish`'s ``verify``)."""
+
+    def __init__(self, path):
+        self.path = Path(path)
+        self.stamp = self._stamp()
+
+    def _stamp(self):
+        try:
+            info = os.stat(self.path)
+        except OSError:
+            return None
+        return info.st_dev, info.st_ino, info.st_size, info.st_mtime_ns
+
+    def __call__(self) -> None:
+        """Raise an `OutputError` if the file is no longer the one read."""
+        if self._stamp() != self.stamp:
+            raise OutputError("was replaced while its figure was drawn (another run published a new result); "
+                              "nothing was written: run the command again", source=str(self.path))
 
 
 @contextlib.contextmanager
