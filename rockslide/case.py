@@ -31,8 +31,8 @@ from pathlib import Path
 
 import yaml
 
-from .inputs import open_regular, regular_size
 from .errors import CaseError
+from .inputs import open_regular, regular_size
 from .pulses import SHAPES, Pulse, common_intervals
 from .units import SI_UNITS, STANDARD_GRAVITY, UNIT_REQUIRED, UNITS, parse_quantity, unit_factor, written_unit
 

@@ -949,7 +949,8 @@ def test_a_20_gb_sparse_record_is_refused_before_a_byte_is_read(ws):
     with open(ws / "huge.txt", "wb") as handle:
         handle.truncate(20 * 2**30)
     line = one_error_line(invoke("info", "huge.txt", "--dt", "0.01", "--units", "g"))
-    assert f"huge.txt: the record file has {20 * 2**30} bytes; rockslide reads at most {records.MAX_RECORD_BYTES}" in line
+    bound = records.MAX_RECORD_BYTES
+    assert f"huge.txt: the record file has {20 * 2**30} bytes; rockslide reads at most {bound}" in line
 
 
 def test_text_that_is_not_plain_numbers_is_counted_before_it_is_parsed(ws, monkeypatch):

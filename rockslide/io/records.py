@@ -42,8 +42,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..errors import CaseError, RecordError
-from ..units import STANDARD_GRAVITY, unit_factor
 from ..inputs import open_regular
+from ..units import STANDARD_GRAVITY, unit_factor
 from .files import atomic_write, expand_user
 
 if TYPE_CHECKING:
@@ -609,7 +609,8 @@ def _token_starts(data: np.ndarray) -> np.ndarray:
     return np.flatnonzero(start)
 
 
-def _plain_values(text: str, skip_lines: int, *, per_line: bool = False) -> tuple[np.ndarray, np.ndarray] | None:
+def _plain_values(text: str, skip_lines: int, *,
+                  per_line: bool = False) -> tuple[np.ndarray, np.ndarray] | None:
     """The numbers of a text of one plain number per line (several with ``per_line``; digits, signs, points, exponents and
     white space only, after ``skip_lines``), with the line number of each; None for any other text
     (the general reader then reads it and names what it cannot read). Linear in memory (about

@@ -100,9 +100,9 @@ import numpy as np
 
 from .. import interrupts
 from .._version import __version__
+from ..case import MAX_NAME_LENGTH
 from ..core.layout import HISTORY_COLUMNS, STATE_NAMES
 from ..core.simulate import EVENT_DTYPE, Result, Summary
-from ..case import MAX_NAME_LENGTH
 from ..errors import OutputError
 from ..inputs import regular_size
 from .files import Staging, check_destination, open_new, publish, remove_quietly, temporary_path
