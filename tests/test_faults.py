@@ -797,6 +797,26 @@ def test_the_readme_quotes_the_bounds_in_force():
         assert text in readme, text
 
 
+def test_docs_promises_quote_the_bounds_in_force():
+    """docs/promises.md states the bounds of issue 28 the code enforces (a change of one shows here)."""
+    from rockslide.analyses import fragility
+    from rockslide.cli import run as run_command
+    from rockslide.cli import tools
+    from rockslide.io import records
+
+    page = " ".join((REPO / "docs" / "promises.md").read_text().split())
+    quoted = [f"1 GiB ({records.MAX_RECORD_BYTES} bytes, `records.MAX_RECORD_BYTES`)",
+              f"{records.MAX_TEXT_NUMBERS:.0e} numbers (`records.MAX_TEXT_NUMBERS`)".replace("e+0", "e"),
+              f"{fragility.MAX_SUITE_SAMPLES:.0e} ground samples".replace("e+0", "e"),
+              f"{tools.MAX_CRITERIA_PANELS} values (one panel each)",
+              f"+-{run_command.MAX_TIME_SHIFT:.0e} s".replace("e+0", "e"),
+              f"1 MiB ({results.MAX_ATTRIBUTE_BYTES} bytes, `results.MAX_ATTRIBUTE_BYTES`)",
+              f"{results.MAX_RESULT_ROWS:.0e} rows or values".replace("e+0", "e"),
+              f"every {files.LOCK_RETRY * 1000:.0f} ms (`files.LOCK_RETRY`)"]
+    for text in quoted:
+        assert text in page, text
+
+
 @pytest.mark.parametrize("command", ["info", "run"])
 def test_a_reader_that_goes_away_ends_the_command_quietly(ws, command):
     """``rockslide info r.at2 | head -1``: when standard output's reader has gone, the command stops
