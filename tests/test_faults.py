@@ -872,6 +872,26 @@ def test_a_damaged_numba_cache_is_removed_and_compiled_again(ws, tmp_path):
 # --------------------------------------------------------------------------------------------------
 
 
+def stderr_line_with(proc: subprocess.Popen, text: str) -> str:
+    """The first line of ``proc``'s stderr that holds ``text`` (read as it comes: the test waits
+    for what the process says, not for time to pass), or the last line read if it ended first."""
+    line = proc.stderr.readline()
+    while line and text not in line:
+        line = proc.stderr.readline()
+    return line
+
+
+def communicate_or_kill(proc: subprocess.Popen, timeout: float = 300) -> tuple[str, str]:
+    """``proc.communicate``; a process still running after ``timeout`` s is killed (the test then
+    fails on its exit code, instead of hanging)."""
+    try:
+        return proc.communicate(timeout=timeout)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
+
+
 @posix
 @pytest.mark.parametrize("signum, code", [(signal.SIGINT, 130), (signal.SIGTERM, 143)], ids=["SIGINT", "SIGTERM"])
 def test_a_run_waiting_for_the_folders_lock_says_so_and_stops_on_a_signal(ws, signum, code):
@@ -885,18 +905,11 @@ def test_a_run_waiting_for_the_folders_lock_says_so_and_stops_on_a_signal(ws, si
     holder = hold_lock(out)
     try:
         proc = cli_subprocess(["run", "case.yaml"], ws, preexec_fn=_default_sigint)
-        try:
-            note = proc.stderr.readline()
-            while note and "waiting for" not in note:
-                note = proc.stderr.readline()
-            assert "waiting for another process publishing in out" in note, note
-            assert f"process {holder.pid}" in note
-            proc.send_signal(signum)
-            _, rest = proc.communicate(timeout=120)
-        finally:
-            if proc.poll() is None:
-                proc.kill()
-                proc.communicate()
+        note = stderr_line_with(proc, "waiting for")
+        assert "waiting for another process publishing in out" in note, note
+        assert f"process {holder.pid}" in note
+        proc.send_signal(signum)
+        _, rest = communicate_or_kill(proc, 120)
         assert proc.returncode == code, rest
         assert listing(out) == []
     finally:
@@ -911,12 +924,10 @@ def test_a_run_publishes_once_the_folders_lock_is_free(ws):
     holder = hold_lock(out)
     proc = cli_subprocess(["run", "case.yaml", "--no-plot"], ws)
     try:
-        assert "waiting for" in proc.stderr.readline()
-        release_lock(holder)
-        _, rest = proc.communicate(timeout=120)
+        assert "waiting for" in stderr_line_with(proc, "waiting for")
     finally:
-        if proc.poll() is None:
-            proc.kill()
+        release_lock(holder)
+    _, rest = communicate_or_kill(proc, 120)
     assert proc.returncode == 0, rest
     assert listing(out) == ["example.h5"]
 
@@ -945,12 +956,7 @@ def test_a_fifo_or_device_given_as_input_is_refused_without_opening_it(ws, args,
     regression fails instead of hanging the suite)."""
     made(ws)
     proc = cli_subprocess(args, ws)
-    try:
-        _, stderr = proc.communicate(timeout=120)
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.communicate()
+    _, stderr = communicate_or_kill(proc, 120)
     lines = stderr.splitlines()
     assert proc.returncode == 2 and len(lines) == 1, stderr
     assert expected in lines[0]
@@ -1065,9 +1071,7 @@ def test_two_identical_sweeps_into_one_folder_run_one_after_the_other(ws, monkey
     try:
         second = cli_subprocess(["sweep", "case.yaml", *GRID, "--no-progress"] + (["--overwrite"] if overwrite else []),
                                 ws)
-        note = second.stderr.readline()
-        while note and "waiting for" not in note:
-            note = second.stderr.readline()
+        note = stderr_line_with(second, "waiting for")
         assert "waiting for another sweep writing out/example.sweep.h5" in note, note
         monkeypatch.setattr(files, "exclusive", lambda *a, **k: contextlib.nullcontext())   # the first holds it
         done = invoke("sweep", "case.yaml", *GRID, "--no-progress")
@@ -1076,7 +1080,7 @@ def test_two_identical_sweeps_into_one_folder_run_one_after_the_other(ws, monkey
     finally:
         lock.unlink()                          # as the first sweep does when it ends
         release_lock(first)
-    stdout, stderr = second.communicate(timeout=300)
+    stdout, stderr = communicate_or_kill(second)
     assert "missing or damaged" not in stdout + stderr
     if overwrite:
         assert second.returncode == 0, stderr
