@@ -36,6 +36,8 @@ from ..errors import OutputError
 
 #: Longest file name most file systems take [bytes].
 NAME_MAX = 255
+#: Longest path the system takes [bytes] (Linux's PATH_MAX).
+PATH_MAX = 4096
 #: Room a temporary name needs beyond its file's name: ``.`` + ``.<pid>.<place>.<thread id>.tmp``.
 TEMPORARY_EXTRA = 1 + 1 + 7 + 1 + 10 + 1 + 20 + 4
 
@@ -80,6 +82,11 @@ def check_name(path: Path) -> None:
         if len(os.fsencode(part)) > NAME_MAX:
             raise OutputError(f"a folder name of {len(os.fsencode(part))} bytes; file systems take at "
                               f"most {NAME_MAX}", source=_short(text))
+    whole = len(os.fsencode(os.path.abspath(text))) + TEMPORARY_EXTRA
+    if whole > PATH_MAX:
+        raise OutputError(f"a path of {whole - TEMPORARY_EXTRA} bytes (once absolute); expected at most "
+                          f"{PATH_MAX - TEMPORARY_EXTRA} (the system's {PATH_MAX} less room for the temporary "
+                          "name): choose a shorter output folder", source=_short(text))
     longest = NAME_MAX - TEMPORARY_EXTRA
     if len(os.fsencode(path.name)) > longest:
         raise OutputError(f"a file name of {len(os.fsencode(path.name))} bytes; expected at most {longest} "

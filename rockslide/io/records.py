@@ -158,8 +158,13 @@ def resolve_record_path(name: str, *, case_dir: Path | None, records_dir: Path,
     else:
         tried = [folder / path for folder in (case_dir, records_dir) if folder is not None]
     for candidate in tried:
-        if candidate.exists() and not candidate.is_dir():      # a FIFO too: its reader refuses it
-            return candidate
+        try:
+            if candidate.exists() and not candidate.is_dir():  # a FIFO too: its reader refuses it
+                return candidate
+        except OSError as exc:                                 # a name too long, a folder not searchable
+            shown = str(name) if len(str(name)) <= 60 else f"{str(name)[:57]}..."
+            raise RecordError(f"cannot look for the record file {shown!r} in {candidate.parent}: "
+                              f"{exc.strerror or exc}", source=source, field=field) from None
     places = ", ".join(str(p) for p in tried)
     raise RecordError(f"record file {str(name)!r} not found; tried: {places} "
                       f"(set --records-dir or ${RECORDS_ENV}, or give a path)", source=source, field=field)
