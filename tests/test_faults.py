@@ -1090,3 +1090,38 @@ def test_two_identical_sweeps_into_one_folder_run_one_after_the_other(ws, monkey
         assert "example.sweep.h5 exists (use --overwrite to replace it)" in stderr
         assert sha256(out / "example.sweep.h5") == published
     assert listing(out) == ["example.sweep.h5", "example.sweep.png"]
+
+
+@posix
+@pytest.mark.skipif(os.name == "posix" and os.geteuid() == 0, reason="root reads and writes any folder")
+@pytest.mark.parametrize("where", ["records", "output"])
+def test_a_folder_without_permission_is_one_line(ws, where):
+    """Permission denied on the record's folder or on the output folder: one line, exit 2."""
+    locked = ws / "locked"
+    locked.mkdir()
+    shutil.copy(ws / "synthetic_kt_h.at2", locked / "rec.at2")
+    record = "locked/rec.at2" if where == "records" else "synthetic_kt_h.at2"
+    (ws / "case.yaml").write_text(horizontal_only(record, **QUICK))
+    locked.chmod(0o000 if where == "records" else 0o500)
+    try:
+        args = ["run", "case.yaml"] + (["--out-dir", locked / "out"] if where == "output" else [])
+        one_error_line(invoke(*args), "ermission denied")
+    finally:
+        locked.chmod(0o700)
+
+
+@posix
+def test_permission_denied_while_looking_for_a_record_names_the_case_field(ws, monkeypatch):
+    """As root (where folders cannot be locked), the refusal of the system is injected where a
+    record is looked for: one line naming the case's key, exit 2."""
+    real_exists = Path.exists
+
+    def exists(self, *args, **kwargs):
+        if "locked" in str(self):
+            raise PermissionError(errno.EACCES, "Permission denied", str(self))
+        return real_exists(self, *args, **kwargs)
+
+    monkeypatch.setattr(Path, "exists", exists)
+    (ws / "case.yaml").write_text(horizontal_only("locked/rec.at2", **QUICK))
+    one_error_line(invoke("run", "case.yaml"), "case.yaml: ground.horizontal.file: cannot look for the record file",
+                   "Permission denied")
