@@ -454,7 +454,7 @@ def _choose_zoom(result, zoom, shift, shown):
         return window[0] + shift, window[1] + shift
     a, b = _time_pair(zoom, "zoom window")
     a, b = max(a, shown[0] + shift), min(b, shown[1] + shift)     # within the panels above it
-    return (a, b) if b > a else None
+    return (a, b) if b > a and b - a < shown[1] - shown[0] else None   # not a copy of them
 
 
 def _time_pair(pair, what: str) -> tuple[float, float]:
