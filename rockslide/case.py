@@ -32,6 +32,7 @@ from pathlib import Path
 import yaml
 
 from .errors import CaseError
+from .inputs import open_regular, regular_size
 from .pulses import SHAPES, Pulse, common_intervals
 from .units import SI_UNITS, STANDARD_GRAVITY, UNIT_REQUIRED, UNITS, parse_quantity, unit_factor, written_unit
 
@@ -712,13 +713,15 @@ def _read_text(path: Path, what: str) -> str:
     """The UTF-8 text of a YAML file (a ``what``: "case file", "suite file"), or a CaseError."""
     source = str(path)
     try:
-        with open(path, "rb") as handle:          # at most one byte too many, even from a device
-            raw = handle.read(MAX_CASE_BYTES + 1)
-        if len(raw) > MAX_CASE_BYTES:
-            size = path.stat().st_size if path.is_file() else 0
-            given = f"{size} bytes" if size > MAX_CASE_BYTES else f"more than {MAX_CASE_BYTES} bytes"
-            raise CaseError(f"the {what} has {given}; expected at most {MAX_CASE_BYTES} (a {what} is "
+        size = regular_size(path, what=what, error=CaseError)       # a FIFO or device: refused
+        if size > MAX_CASE_BYTES:
+            raise CaseError(f"the {what} has {size} bytes; expected at most {MAX_CASE_BYTES} (a {what} is "
                             "a page or two of YAML)", source=source)
+        with open_regular(path, what=what, error=CaseError) as handle:
+            raw = handle.read(MAX_CASE_BYTES + 1)
+        if len(raw) > MAX_CASE_BYTES:             # grew since
+            raise CaseError(f"the {what} has more than {MAX_CASE_BYTES} bytes; expected at most "
+                            f"{MAX_CASE_BYTES} (a {what} is a page or two of YAML)", source=source)
         return raw.decode("utf-8").replace("\r\n", "\n").replace("\r", "\n")   # as read_text() reads
     except FileNotFoundError:
         raise CaseError(f"{what} not found", source=source) from None

@@ -831,7 +831,9 @@ def _choose_range(result, crop, shift) -> tuple[float, float]:
             raise ValueError(f"crop must be 'auto', a (start, end) pair or None, got {crop!r}")
         return motion_range(result)
     a, b = _time_pair(crop, "crop range")
-    return a - shift, b - shift
+    first, last = _record_range(result)          # a range beyond the record shows the record
+    a, b = max(a - shift, first), min(b - shift, last)
+    return (a, b) if b > a else (first, last)
 
 
 def _choose_zoom(result, zoom, shift, shown):
@@ -847,7 +849,9 @@ def _choose_zoom(result, zoom, shift, shown):
         if window[1] - window[0] >= ZOOM_USELESS_FRACTION * (shown[1] - shown[0]):
             return None
         return window[0] + shift, window[1] + shift
-    return _time_pair(zoom, "zoom window")
+    a, b = _time_pair(zoom, "zoom window")
+    a, b = max(a, shown[0] + shift), min(b, shown[1] + shift)     # within the panels above it
+    return (a, b) if b > a and b - a < shown[1] - shown[0] else None   # not a copy of them
 
 
 def _time_pair(pair, what: str) -> tuple[float, float]:

@@ -523,6 +523,16 @@ BAD_INPUTS = [
              ["name: a name ending in '.fragility' would write the files of the fragility of case 'x'"]),
     pytest.param({"case.yaml": case_text(QUICK)}, ("run", "case.yaml", "--out-dir", "o" * 300),
                  ["a folder name of 300 bytes"], id="out-dir-name-too-long"),
+    # -- issue 28.8: paths the system cannot take ---------------------------------------------------------
+    pytest.param({"case.yaml": case_text(QUICK)}, ("run", "case.yaml", "--out-dir", "/".join(["d" * 200] * 25)),
+                 ["once absolute); expected at most 4051", "choose a shorter output folder"],
+                 id="out-dir-longer-than-path-max"),
+    bad_case("record-name-of-300-characters", horizontal_only("r" * 300 + ".at2", **QUICK),
+             ["case.yaml: ground.horizontal.file: cannot look for the record file", "File name too long"]),
+    pytest.param({}, ("info", "r" * 300 + ".at2"), ["File name too long", "give a shorter one"],
+                 id="info-name-of-300-characters"),
+    pytest.param({}, ("plot", "p" * 300 + ".h5"), ["File name too long", "give a shorter one"],
+                 id="plot-name-of-300-characters"),
     # -- the dask scheduler (issue 16.5, 16.6) ------------------------------------------------------------
     pytest.param({"case.yaml": case_text()}, ("sweep", "case.yaml", "--mu", "0.5", "--scheduler", "tcp://[::1"),
                  ["--scheduler: expected an address like tcp://HOST:PORT, got 'tcp://[::1'"], id="scheduler-ipv6-open"),

@@ -22,6 +22,7 @@ The hostile inputs that end in one line (YAML bombs, absurd values, bad options)
 
 from __future__ import annotations
 
+import contextlib
 import errno
 import math
 import multiprocessing
@@ -564,18 +565,39 @@ def test_concurrent_publications_have_one_winner_and_no_mixed_pair(tmp_path):
 # --------------------------------------------------------------------------------------------------
 
 
+#: A process that holds ``flock`` on the file argv[1] until its stdin closes, as the owner of a
+#: temporary file does (`files.open_new`); it says "locked" once it holds it.
+LOCK_HOLDER = ("import fcntl, os, sys; fd = os.open(sys.argv[1], os.O_RDONLY); fcntl.flock(fd, fcntl.LOCK_EX); "
+               "print('locked', flush=True); sys.stdin.read()")
+
+
+def hold_lock(path: Path) -> subprocess.Popen:
+    """Start `LOCK_HOLDER` on ``path`` and return once it holds the lock (synchronised on its
+    output, no sleep)."""
+    holder = subprocess.Popen([sys.executable, "-c", LOCK_HOLDER, str(path)], stdin=subprocess.PIPE,
+                              stdout=subprocess.PIPE, text=True)
+    assert holder.stdout.readline().strip() == "locked"
+    return holder
+
+
+def release_lock(holder: subprocess.Popen) -> None:
+    holder.stdin.close()
+    holder.wait(timeout=60)
+
+
 @posix
 def test_temporary_files_of_dead_processes_go_with_the_next_run(ws):
     dead = subprocess.Popen([sys.executable, "-c", "pass"])
     dead.wait()
-    alive = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+    out = ws / "out"
+    out.mkdir()
+    owned = out / f".example.h5.{dead.pid}.7.tmp"      # its owner lives elsewhere: a recycled pid
+    owned.write_bytes(b"x" * 1000)
+    alive = hold_lock(owned)
     try:
-        out = ws / "out"
-        out.mkdir()
         stale = [out / f".example.h5.{dead.pid}.tmp", out / f".example.png.{dead.pid}.tmp"]
-        kept = [out / f".example.h5.{alive.pid}.tmp", out / f".other.h5.{dead.pid}.tmp",
-                out / f".example.h5.{dead.pid}.notes"]
-        for path in stale + kept:
+        kept = [owned, out / f".other.h5.{dead.pid}.tmp", out / f".example.h5.{dead.pid}.notes"]
+        for path in stale + kept[1:]:
             path.write_bytes(b"x" * 1000)
         (ws / "case.yaml").write_text(case_text(QUICK))
         assert invoke("run", "case.yaml").exit_code == 0
@@ -589,8 +611,44 @@ def test_temporary_files_of_dead_processes_go_with_the_next_run(ws):
         assert [p.name for p in store.remove_stale_temporaries()] == [
             f".chunk-000000.npz.{dead.pid}.140000000000.tmp"]
     finally:
-        alive.kill()
-        alive.wait()
+        release_lock(alive)
+
+
+@posix
+def test_a_temporary_of_another_pid_namespace_is_kept_while_its_owner_holds_its_lock(tmp_path):
+    """Issue 28.4. A run in another container (another pid namespace) or on another host writes
+    ``.x.h5.<pid>.<place>.tmp``: its pid may name a process here that is alive and unrelated, or
+    none at all. The file is kept exactly as long as its owner holds the file's lock, whatever the
+    pid says; once the lock is free it is removed. And a run's own temporaries are locked while it
+    writes them: another process's cleaner leaves them alone."""
+    foreign_place = (files.place_token() + 1) % 2**32
+    unrelated_alive = os.getppid()                       # a live process that owns nothing here
+    gone = subprocess.Popen([sys.executable, "-c", "pass"])
+    gone.wait()
+    target = tmp_path / "x.h5"
+    temporaries_ = [tmp_path / f".x.h5.{unrelated_alive}.{foreign_place}.tmp",
+                    tmp_path / f".x.h5.{gone.pid}.{foreign_place}.tmp"]
+    for path in temporaries_:
+        path.write_bytes(b"half a result")
+    holders = [hold_lock(path) for path in temporaries_]
+    try:
+        assert files.remove_stale_temporaries([target]) == []
+        assert all(path.exists() for path in temporaries_)
+    finally:
+        for holder in holders:
+            release_lock(holder)
+    assert sorted(files.remove_stale_temporaries([target])) == sorted(temporaries_)
+    # this process's own temporary, open and locked: a cleaner in another process keeps it
+    with files.open_new(files.temporary_path(target)) as handle:
+        handle.write(b"being written")
+        script = ("import sys; from pathlib import Path; from rockslide.io import files; "
+                  "print(len(files.remove_stale_temporaries([Path(sys.argv[1])])))")
+        other = subprocess.run([sys.executable, "-c", script, str(target)], capture_output=True, text=True,
+                               env={**os.environ, "PYTHONPATH": str(REPO)}, timeout=120)
+        assert other.stdout.strip() == "0", other.stderr
+        assert files.temporary_path(target).exists()
+    files.remove_quietly(files.temporary_path(target))
+    assert not list(tmp_path.glob(".*.tmp"))
 
 
 # --------------------------------------------------------------------------------------------------
@@ -739,6 +797,26 @@ def test_the_promises_quote_the_bounds_in_force():
         assert text in readme, text
 
 
+def test_docs_promises_quote_the_bounds_in_force():
+    """docs/guide/promises.md states the bounds of issue 28 the code enforces (a change of one shows here)."""
+    from rockslide.analyses import fragility
+    from rockslide.cli import run as run_command
+    from rockslide.cli import tools
+    from rockslide.io import records
+
+    page = " ".join((REPO / "docs" / "guide" / "promises.md").read_text().split())
+    quoted = [f"1 GiB ({records.MAX_RECORD_BYTES} bytes, `records.MAX_RECORD_BYTES`)",
+              f"{records.MAX_TEXT_NUMBERS:.0e} numbers (`records.MAX_TEXT_NUMBERS`)".replace("e+0", "e"),
+              f"{fragility.MAX_SUITE_SAMPLES:.0e} ground samples".replace("e+0", "e"),
+              f"{tools.MAX_CRITERIA_PANELS} values (one panel each)",
+              f"+-{run_command.MAX_TIME_SHIFT:.0e} s".replace("e+0", "e"),
+              f"1 MiB ({results.MAX_ATTRIBUTE_BYTES} bytes, `results.MAX_ATTRIBUTE_BYTES`)",
+              f"{results.MAX_RESULT_ROWS:.0e} rows or values".replace("e+0", "e"),
+              f"every {files.LOCK_RETRY * 1000:.0f} ms (`files.LOCK_RETRY`)"]
+    for text in quoted:
+        assert text in page, text
+
+
 @pytest.mark.parametrize("command", ["info", "run"])
 def test_a_reader_that_goes_away_ends_the_command_quietly(ws, command):
     """``rockslide info r.at2 | head -1``: when standard output's reader has gone, the command stops
@@ -787,3 +865,263 @@ def test_a_damaged_numba_cache_is_removed_and_compiled_again(ws, tmp_path):
     assert "numba's cache of the core could not be read" in repaired.stderr and "Traceback" not in repaired.stderr
     again = sweep()
     assert again.returncode == 0 and "could not be read" not in again.stderr and "compiling" not in again.stderr
+
+
+# --------------------------------------------------------------------------------------------------
+# Issue 28.3: no wait that a signal cannot end
+# --------------------------------------------------------------------------------------------------
+
+
+def stderr_line_with(proc: subprocess.Popen, text: str) -> str:
+    """The first line of ``proc``'s stderr that holds ``text`` (read as it comes: the test waits
+    for what the process says, not for time to pass), or the last line read if it ended first."""
+    line = proc.stderr.readline()
+    while line and text not in line:
+        line = proc.stderr.readline()
+    return line
+
+
+def communicate_or_kill(proc: subprocess.Popen, timeout: float = 300) -> tuple[str, str]:
+    """``proc.communicate``; a process still running after ``timeout`` s is killed (the test then
+    fails on its exit code, instead of hanging)."""
+    try:
+        return proc.communicate(timeout=timeout)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
+
+
+@posix
+@pytest.mark.parametrize("signum, code", [(signal.SIGINT, 130), (signal.SIGTERM, 143)], ids=["SIGINT", "SIGTERM"])
+def test_a_run_waiting_for_the_folders_lock_says_so_and_stops_on_a_signal(ws, signum, code):
+    """Another process holds ``flock`` on the output folder (as a rockslide publishing there does):
+    the run computes, says once that it waits and for which process, and a signal ends it with
+    130/143, nothing published, no temporary left (it used to wait in ``flock`` until SIGKILL). The
+    test waits for the note on stderr, not for time to pass."""
+    (ws / "case.yaml").write_text(case_text(QUICK))
+    out = ws / "out"
+    out.mkdir()
+    holder = hold_lock(out)
+    try:
+        proc = cli_subprocess(["run", "case.yaml"], ws, preexec_fn=_default_sigint)
+        note = stderr_line_with(proc, "waiting for")
+        assert "waiting for another process publishing in out" in note, note
+        assert f"process {holder.pid}" in note
+        proc.send_signal(signum)
+        _, rest = communicate_or_kill(proc, 120)
+        assert proc.returncode == code, rest
+        assert listing(out) == []
+    finally:
+        release_lock(holder)
+
+
+@posix
+def test_a_run_publishes_once_the_folders_lock_is_free(ws):
+    (ws / "case.yaml").write_text(case_text(QUICK))
+    out = ws / "out"
+    out.mkdir()
+    holder = hold_lock(out)
+    proc = cli_subprocess(["run", "case.yaml", "--no-plot"], ws)
+    try:
+        assert "waiting for" in stderr_line_with(proc, "waiting for")
+    finally:
+        release_lock(holder)
+    _, rest = communicate_or_kill(proc, 120)
+    assert proc.returncode == 0, rest
+    assert listing(out) == ["example.h5"]
+
+
+def _fifo(path: Path) -> Path:
+    os.mkfifo(path)
+    return path
+
+
+@posix
+@pytest.mark.parametrize("args, made, expected", [
+    (["run", "case.fifo"], lambda ws: _fifo(ws / "case.fifo"), "case.fifo: is a FIFO (named pipe), not a regular "
+                                                               "file; expected a case file"),
+    (["run", "case.yaml"], lambda ws: (ws / "case.yaml").write_text(horizontal_only("rec.at2", **QUICK))
+     and _fifo(ws / "rec.at2"), "is a FIFO (named pipe), not a regular file; expected a record file"),
+    (["info", "rec.txt", "--dt", "0.01", "--units", "g"], lambda ws: _fifo(ws / "rec.txt"),
+     "rec.txt: is a FIFO (named pipe), not a regular file; expected a record file"),
+    (["plot", "fifo.h5"], lambda ws: _fifo(ws / "fifo.h5"),
+     "fifo.h5: is a FIFO (named pipe), not a regular file; expected a result file"),
+    (["info", "fifo.h5"], lambda ws: _fifo(ws / "fifo.h5"), "fifo.h5: is a FIFO (named pipe)"),
+    (["run", "/dev/zero"], lambda ws: None, "/dev/zero: is a character device, not a regular file"),
+], ids=["case", "record-of-a-case", "record", "plot-result", "info-result", "device-as-case"])
+def test_a_fifo_or_device_given_as_input_is_refused_without_opening_it(ws, args, made, expected):
+    """Reading a FIFO without a writer blocked in ``open``, deaf to SIGINT and SIGTERM; a device
+    never ends. Now: one line, exit 2, at once (a subprocess with a time limit, so that a
+    regression fails instead of hanging the suite)."""
+    made(ws)
+    proc = cli_subprocess(args, ws)
+    _, stderr = communicate_or_kill(proc, 120)
+    lines = stderr.splitlines()
+    assert proc.returncode == 2 and len(lines) == 1, stderr
+    assert expected in lines[0]
+
+
+# --------------------------------------------------------------------------------------------------
+# Issue 28.5: inputs bounded before they are read, in one line naming the bound
+# --------------------------------------------------------------------------------------------------
+
+
+def test_a_20_gb_sparse_record_is_refused_before_a_byte_is_read(ws):
+    """The size on the file system (st_size) is checked first: a sparse 20 GB file costs nothing
+    to make and was read whole."""
+    from rockslide.io import records
+
+    with open(ws / "huge.txt", "wb") as handle:
+        handle.truncate(20 * 2**30)
+    line = one_error_line(invoke("info", "huge.txt", "--dt", "0.01", "--units", "g"))
+    bound = records.MAX_RECORD_BYTES
+    assert f"huge.txt: the record file has {20 * 2**30} bytes; rockslide reads at most {bound}" in line
+
+
+def test_text_that_is_not_plain_numbers_is_counted_before_it_is_parsed(ws, monkeypatch):
+    """Column text (two numbers and a comma on a line) goes through the general reader, which
+    keeps each number as a string: its numbers are counted on the bytes first and refused above
+    the bound (lowered here to 1000: the file has 2 x 2000 numbers). Plain values of the same count
+    are read by the linear reader, whatever that bound."""
+    from rockslide.io import records
+
+    monkeypatch.setattr(records, "MAX_TEXT_NUMBERS", 1000)
+    (ws / "columns.csv").write_text("".join(f"{0.01 * i:.2f},{0.001 * (i % 7):.3f}\n" for i in range(2000)))
+    line = one_error_line(invoke("info", "columns.csv", "--units", "g"))
+    assert "about 4e+03 numbers in text with comments, commas" in line and "at most 1e+03 such numbers" in line
+    (ws / "values.txt").write_text("".join(f"{0.001 * (i % 7):.3f}\n" for i in range(2000)))
+    done = invoke("info", "values.txt", "--dt", "0.01", "--units", "g")
+    assert done.exit_code == 0 and "samples   2000, dt = 0.01 s" in done.stdout, done.output
+
+
+def test_a_suite_listing_one_record_many_times_is_bounded_before_any_run(ws, monkeypatch):
+    """An 18 KB suite listing one long record 400 times ran for minutes, then failed: the suite's
+    samples together are bounded as its records are read (the bound lowered here to 3.5 times
+    the record's samples: the fourth entry passes it), and a record listed many times is read
+    once."""
+    from rockslide.analyses import fragility
+    from rockslide.io import records
+
+    (ws / "case.yaml").write_text(case_text(QUICK))
+    samples = records.load_record(ws / "synthetic_kt_h.at2").data.size
+    monkeypatch.setattr(fragility, "MAX_SUITE_SAMPLES", int(3.5 * samples))
+    (ws / "suite.yaml").write_text("records:\n" + "".join(
+        f"  - {{name: r{i}, horizontal: synthetic_kt_h.at2}}\n" for i in range(400)))
+    reads = []
+    real = records.load_record
+    monkeypatch.setattr(records, "load_record", lambda *a, **k: reads.append(a) or real(*a, **k))
+    line = one_error_line(invoke("fragility", "case.yaml", "--suite", "suite.yaml", "--levels", "0.5g",
+                                 "--no-plot", "--records-dir", "."))
+    assert "suite.yaml: the suite's records hold more than" in line and "reached at records[3], r3, of 400" in line
+    assert len(reads) == 1
+    assert not (ws / "out").exists() or listing(ws / "out") == []
+
+
+# --------------------------------------------------------------------------------------------------
+# Issue 28.6: never a mixed set, never a false "damaged"
+# --------------------------------------------------------------------------------------------------
+
+
+def test_plot_publishes_nothing_when_a_run_replaced_the_result_while_it_drew(ws, monkeypatch):
+    """``plot`` racing ``run --overwrite`` left the new ``.h5`` beside a figure of the old one.
+    The race made deterministic: the moment ``plot`` has drawn, a run publishes a new result and
+    figure. ``plot`` then publishes nothing (one line, exit 2) and the run's pair stays as it
+    published it."""
+    from rockslide.cli import run as run_command
+
+    (ws / "case.yaml").write_text(case_text(QUICK))
+    assert invoke("run", "case.yaml").exit_code == 0
+    (ws / "other.yaml").write_text(case_text({**QUICK, "contact.mu_static": 0.8}))
+    real_draw = run_command._draw
+
+    def draw_then_a_run_publishes(*args, **kwargs):
+        real_draw(*args, **kwargs)
+        monkeypatch.setattr(run_command, "_draw", real_draw)
+        other = cli_subprocess(["run", "other.yaml", "--overwrite"], ws)   # the same names: example.h5, .png
+        _, stderr = other.communicate(timeout=300)
+        assert other.returncode == 0, stderr
+
+    monkeypatch.setattr(run_command, "_draw", draw_then_a_run_publishes)
+    out = ws / "out"
+    line = one_error_line(invoke("plot", out / "example.h5"), "example.h5: was replaced while its figure was drawn")
+    assert "nothing was written" in line
+    assert results.read_result(out / "example.h5").case["contact"]["mu_static"] == 0.8
+    run_figure = sha256(out / "example.png")
+    assert invoke("plot", out / "example.h5").exit_code == 0   # the figure of the new result: the run's
+    assert sha256(out / "example.png") == run_figure
+    assert temporaries(out) == []
+
+
+@posix
+@pytest.mark.parametrize("overwrite", [False, True], ids=["second-refused", "second-overwrites"])
+def test_two_identical_sweeps_into_one_folder_run_one_after_the_other(ws, monkeypatch, overwrite):
+    """Two identical sweeps 0.7 s apart: the second said "chunk 0 is missing or damaged" (false)
+    and left chunk files. Made deterministic: the first holds the study's lock (as a running sweep
+    does) while the second starts and says it waits; the first then computes and publishes (here,
+    in this process, with the lock already held), and lets go. The second then refuses the result
+    that now exists (or, with --overwrite, replaces it), never a false "damaged", and no chunk file
+    is left."""
+    (ws / "case.yaml").write_text(case_text(QUICK))
+    out = ws / "out"
+    out.mkdir()
+    lock = out / ".example.sweep.h5.lock"
+    lock.touch()
+    first = hold_lock(lock)
+    try:
+        second = cli_subprocess(["sweep", "case.yaml", *GRID, "--no-progress"] + (["--overwrite"] if overwrite else []),
+                                ws)
+        note = stderr_line_with(second, "waiting for")
+        assert "waiting for another sweep writing out/example.sweep.h5" in note, note
+        monkeypatch.setattr(files, "exclusive", lambda *a, **k: contextlib.nullcontext())   # the first holds it
+        done = invoke("sweep", "case.yaml", *GRID, "--no-progress")
+        assert done.exit_code == 0, done.output
+        published = sha256(out / "example.sweep.h5")
+    finally:
+        lock.unlink()                          # as the first sweep does when it ends
+        release_lock(first)
+    stdout, stderr = communicate_or_kill(second)
+    assert "missing or damaged" not in stdout + stderr
+    if overwrite:
+        assert second.returncode == 0, stderr
+        assert results.read_sweep(out / "example.sweep.h5").attrs["sweep_key"]
+    else:
+        assert second.returncode == 2, stderr
+        assert "example.sweep.h5 exists (use --overwrite to replace it)" in stderr
+        assert sha256(out / "example.sweep.h5") == published
+    assert listing(out) == ["example.sweep.h5", "example.sweep.png"]
+
+
+@posix
+@pytest.mark.skipif(os.name == "posix" and os.geteuid() == 0, reason="root reads and writes any folder")
+@pytest.mark.parametrize("where", ["records", "output"])
+def test_a_folder_without_permission_is_one_line(ws, where):
+    """Permission denied on the record's folder or on the output folder: one line, exit 2."""
+    locked = ws / "locked"
+    locked.mkdir()
+    shutil.copy(ws / "synthetic_kt_h.at2", locked / "rec.at2")
+    record = "locked/rec.at2" if where == "records" else "synthetic_kt_h.at2"
+    (ws / "case.yaml").write_text(horizontal_only(record, **QUICK))
+    locked.chmod(0o000 if where == "records" else 0o500)
+    try:
+        args = ["run", "case.yaml"] + (["--out-dir", locked / "out"] if where == "output" else [])
+        one_error_line(invoke(*args), "ermission denied")
+    finally:
+        locked.chmod(0o700)
+
+
+@posix
+def test_permission_denied_while_looking_for_a_record_names_the_case_field(ws, monkeypatch):
+    """As root (where folders cannot be locked), the refusal of the system is injected where a
+    record is looked for: one line naming the case's key, exit 2."""
+    real_exists = Path.exists
+
+    def exists(self, *args, **kwargs):
+        if "locked" in str(self):
+            raise PermissionError(errno.EACCES, "Permission denied", str(self))
+        return real_exists(self, *args, **kwargs)
+
+    monkeypatch.setattr(Path, "exists", exists)
+    (ws / "case.yaml").write_text(horizontal_only("locked/rec.at2", **QUICK))
+    one_error_line(invoke("run", "case.yaml"), "case.yaml: ground.horizontal.file: cannot look for the record file",
+                   "Permission denied")

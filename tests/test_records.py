@@ -831,18 +831,19 @@ def test_the_quick_reading_of_numbers_reads_what_the_careful_one_reads(text):
 @given(st.one_of(NUMBERY_TEXT, st.text(max_size=200), st.lists(
     st.sampled_from(["1_0", "\u0661", "1.5", "-2e3", "1.0D-02", "nan", "inf", "+.5", "5.", "\x0b", "\x1c", "\n"]),
     max_size=12).map(" ".join)))
-def test_an_at2_body_read_at_once_gives_the_numbers_read_line_by_line(text):
-    """`records._quick_body` (an AT2 file's values in one pass) gives, where it gives anything,
-    the values `records._values_in_order` reads line by line, bit for bit, and gives nothing
-    where a line could hold a comment."""
+def test_plain_numbers_read_at_once_give_the_numbers_read_line_by_line(text):
+    """`records._plain_values` (plain numbers in one pass, linear in memory: AT2 bodies and values
+    records) gives, where it gives anything, the values and line numbers `records._values_in_order`
+    reads line by line, bit for bit, and gives nothing where a line could hold a comment."""
     from rockslide.io import records
 
-    quick = records._quick_body(text.splitlines())
+    quick = records._plain_values(text, 0, per_line=True)
     if quick is None:
         return
     context = records._Context(Path("r.at2"), None, None)
-    careful, _ = records._values_in_order(context, records._content_lines(text))
-    assert quick.view(np.int64).tolist() == careful.view(np.int64).tolist()
+    careful, lines = records._values_in_order(context, records._content_lines(text))
+    assert quick[0].view(np.int64).tolist() == careful.view(np.int64).tolist()
+    assert quick[1].tolist() == lines.tolist()
 
 
 @pytest.fixture(scope="module")

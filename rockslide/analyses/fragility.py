@@ -63,6 +63,7 @@ from ..core.simulate import ground_array, initial_state, parameters
 from ..engine.plan import MAX_POINTS, Plan, default_chunk_size, definition_key
 from ..engine.prepare import (
     ABSURD_ACCELERATION_IN_G,
+    MAX_GROUND_SAMPLES,
     RunWarning,
     absurd_acceleration,
     check_against_ground,
@@ -210,6 +211,10 @@ _ROTD = re.compile(r"^rotd(50|100)_(.*)$")
 SA_PERIODS = (1e-3, 100.0)
 #: Points of the oscillator's response on one record, at most (16 bytes each: 0.8 GB).
 MAX_OSCILLATOR_POINTS = 5 * 10**7
+#: Most ground samples (records and tails) of a suite together, as of one run's ground
+#: (`MAX_GROUND_SAMPLES`): every record's samples are held at once (1.6 GB at the bound). Checked
+#: as the records are read, before any run; a record listed twice is read once.
+MAX_SUITE_SAMPLES = MAX_GROUND_SAMPLES
 
 
 def parse_im(text: str) -> IntensityMeasure:
@@ -601,8 +606,9 @@ def plan_fragility(case: Case, suite: Suite, im: IntensityMeasure, levels: sw.Ax
     offset = 0
     highest = (0.0, "")                   # the largest scaled peak, and which run
     flights = []                          # (warning of the first flying run of a record, its runs that fly)
+    read: dict = {}                       # records already read, by file and options
     for r, entry in enumerate(suite.entries):
-        records, specs, found = _read_entry(suite, r, entry, folder)
+        records, specs, found = _read_entry(suite, r, entry, folder, read)
         if case_record is not None:
             records["vertical"], specs["vertical"] = case_record
             found["vertical"], found["vertical_sha256"] = Path(case_record[0].path).name, case_record[0].sha256
@@ -678,6 +684,11 @@ def plan_fragility(case: Case, suite: Suite, im: IntensityMeasure, levels: sw.Ax
             if flying.size:
                 text = flight_warning(*_at_level(record_case, records, factors[flying[0]]))
                 flights.append((f"{text} [at record {entry.name}, level {levels.texts[flying[0]]}]", flying.size))
+        if offset + base.shape[1] > MAX_SUITE_SAMPLES:
+            raise CaseError(f"the suite's records hold more than {MAX_SUITE_SAMPLES:.0e} ground samples together "
+                            f"(records and tails; reached at records[{r}], {entry.name}, of {n_records}); a "
+                            "suite of fewer or shorter records, or a shorter ground.tail",
+                            source=suite.source)
         first[rows], count[rows] = offset, base.shape[1]
         record_end[rows] = start + base.shape[1] * dt
         bases.append(base)
@@ -823,9 +834,11 @@ def _entry_source(suite: Suite, r: int) -> str:
     return f"{suite.source}: records[{r}] ({entry.name})"
 
 
-def _read_entry(suite: Suite, r: int, entry: SuiteEntry, folder: Path):
+def _read_entry(suite: Suite, r: int, entry: SuiteEntry, folder: Path, read: dict | None = None):
     """A suite entry's records: records by role, their specs for `case.case_with` (files as found)
-    and their file names and checksums."""
+    and their file names and checksums. ``read`` keeps the records read, by file and options: a
+    file listed many times is read once."""
+    read = {} if read is None else read
     records, specs, found = {}, {}, {}
     for role in ("horizontal", "vertical", "horizontal_2"):
         spec = getattr(entry, role)
@@ -837,10 +850,14 @@ def _read_entry(suite: Suite, r: int, entry: SuiteEntry, folder: Path):
         source = suite.source if suite.base_dir is not None else None
         path = rec.resolve_record_path(spec.file, case_dir=suite.base_dir, records_dir=folder,
                                        source=source, field=f"{field}.file" if field else None)
+        key = (str(path.absolute()), spec.format, spec.units, spec.time_column, spec.column, spec.dt,
+               spec.skip_lines)
         try:
-            record = rec.load_record(path, format=spec.format, units=spec.units,
-                                     time_column=spec.time_column, column=spec.column, dt=spec.dt,
-                                     skip_lines=spec.skip_lines, source=source, field=field)
+            if key not in read:
+                read[key] = rec.load_record(path, format=spec.format, units=spec.units,
+                                            time_column=spec.time_column, column=spec.column, dt=spec.dt,
+                                            skip_lines=spec.skip_lines, source=source, field=field)
+            record = read[key]
         except RecordError as exc:
             if suite.base_dir is None and spec.units is None and "units" in str(exc):
                 raise RecordError(f"{exc.message} (for a folder or a glob of records: --units)",

@@ -13,6 +13,7 @@ result intact, since results are published only once complete (`files`).
 
 from __future__ import annotations
 
+import errno
 import gc
 import os
 import signal
@@ -103,6 +104,16 @@ class RockslideGroup(click.Group):
                     raise
                 if isinstance(exc, BrokenPipeError) and _stdout_gone():   # `rockslide info r.at2 | head -1`
                     ctx.exit(EXIT_BROKEN_PIPE)
+                failed = _stdout_failed(exc) if isinstance(exc, OSError) else None
+                if failed is not None:                # stdout on a full disk or /dev/full
+                    click.echo(one_line(f"rockslide: error: cannot write to standard output: {failed}; "
+                                        "the files the command wrote are complete"), err=True)
+                    ctx.exit(EXIT_USER_ERROR)
+                if isinstance(exc, OSError) and exc.errno in _ENVIRONMENT_ERRORS:   # the user's paths
+                    where = f"{_short_path(exc.filename)}: " if exc.filename else ""
+                    click.echo(one_line(f"rockslide: error: {where}{exc.strerror or exc}"
+                                        f"{_ENVIRONMENT_ERRORS[exc.errno]}"), err=True)
+                    ctx.exit(EXIT_USER_ERROR)
                 if isinstance(exc, ValueError) and "embedded null" in str(exc):   # only from the API
                     click.echo("rockslide: error: a file or folder name holds a NUL character (\\x00)", err=True)
                     ctx.exit(EXIT_USER_ERROR)
@@ -128,6 +139,40 @@ def _stdout_gone() -> bool:
     if gone:
         os.dup2(os.open(os.devnull, os.O_WRONLY), fd)
     return gone
+
+
+#: System errors about the paths the user gave (not bugs): one line and exit 2, with what to do.
+_ENVIRONMENT_ERRORS = {
+    errno.ENAMETOOLONG: " (a file or folder name takes at most 255 bytes, a path at most 4096): give a shorter one",
+    errno.EACCES: ": check the permissions of the file and of its folders, or choose another folder",
+    errno.EPERM: ": check the permissions of the file and of its folders, or choose another folder",
+    errno.EROFS: ": choose an output folder on a writable file system",
+    errno.ELOOP: ": a chain of symbolic links that does not end; give the file itself",
+    errno.ENOTDIR: ": a part of the path is a file, not a folder",
+}
+
+
+def _short_path(name) -> str:
+    """A path for a message: its start and end when it is long."""
+    text = os.fsdecode(name) if isinstance(name, bytes) else str(name)
+    return text if len(text) <= 120 else f"{text[:58]}...{text[-59:]}"
+
+
+def _stdout_failed(exc: OSError) -> str | None:
+    """Why standard output could not be written (a full disk, ``/dev/full``), if ``exc`` came from
+    writing it (raised inside `click.echo`); else None. Standard output is then pointed at the null
+    device, so that the interpreter's last flush does not fail too."""
+    frames, tb = [], exc.__traceback__
+    while tb is not None:
+        frames.append(tb.tb_frame)
+        tb = tb.tb_next
+    if exc.filename is not None or not any(frame.f_code is click.echo.__code__ for frame in frames):
+        return None
+    try:
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+    except (OSError, ValueError, AttributeError):  # pragma: no cover - no real stream
+        pass
+    return exc.strerror or str(exc)
 
 
 def one_line(text: str, limit: int = MESSAGE_LIMIT) -> str:

@@ -19,6 +19,9 @@ from .app import _json_default, _result_set, dpi_option, main, records_dir_optio
 LONG_RUN = 10.0
 
 
+#: Largest ``plot --time-shift`` [s]: the bound of a case's start time (``ground.start``).
+MAX_TIME_SHIFT = 1e6
+
 #: A run's figure is drawn from its history kept in memory while it has at most this many rows (96
 #: MB; reading the file back would take as much); a longer history is read back from the file.
 KEEP_HISTORY_ROWS = 2_000_000
@@ -184,10 +187,13 @@ def plot(result_files, output, time_shift, window, crop, dpi, overwrite, size):
         rockslide plot out/example.fragility.h5
         rockslide plot out/example.h5 out/spectrum-one-sine.h5 --size page -o out/two-runs.pdf
     """
-    from ..io import results
+    from ..io import files
     from ..units import parse_quantity
 
     shift = parse_quantity(time_shift, "time", source="--time-shift")
+    if not abs(shift) <= MAX_TIME_SHIFT:
+        raise CaseError(f"{time_shift!r} is beyond +-{MAX_TIME_SHIFT:g} s, where float64 still resolves "
+                        "a record's samples on the time axis", source="--time-shift")
     zoom = _time_range(window, "--window", {"auto": "auto", "none": None})
     span = _time_range(crop, "--crop", {"auto": "auto", "all": None})
     if len(result_files) > 1:
@@ -207,6 +213,18 @@ def plot(result_files, output, time_shift, window, crop, dpi, overwrite, size):
     png = output if output is not None else own
     # the result's own figure is the one redrawn; another file is replaced only when asked to
     replace = overwrite or png.resolve() == own.resolve()
+    read = files.Unchanged(result_file)        # a figure of what was read, or nothing (issue 28.6)
+    with files.Staging(overwrite=replace) as staging:
+        _draw_stored(result_file, png, shift=shift, zoom=zoom, span=span, dpi=dpi, replace=replace,
+                     staging=staging, size=size)
+        staging.publish(verify=read)
+    click.echo(f"redrew {png}")
+
+
+def _draw_stored(result_file, png, *, shift, zoom, span, dpi, replace, staging, size=None):
+    """The figure of a result, sweep, fragility or risk file (`plot`) at ``size``, staged in ``staging``."""
+    from ..io import results
+
     kind = results.file_format(result_file)
     if kind in (results.SWEEP_FORMAT, results.FRAGILITY_FORMAT, results.RISK_FORMAT):
         from ..plots import save_figure
@@ -223,7 +241,7 @@ def plot(result_files, output, time_shift, window, crop, dpi, overwrite, size):
             from ..analyses.risk import stored_figure as stored_risk_figure
             stored = results.read_dataset(result_file, format=results.RISK_FORMAT)
             figure = stored_risk_figure(stored.coords, stored.variables, stored.attrs, size=size)
-        save_figure(figure, png, overwrite=replace, dpi=dpi)
+        save_figure(figure, png, overwrite=replace, dpi=dpi, staging=staging)
     else:
         stored = results.read_result(result_file)
         times = stored.result.ground_time
@@ -234,8 +252,7 @@ def plot(result_files, output, time_shift, window, crop, dpi, overwrite, size):
                     raise CaseError(f"{pair[0]:g} to {pair[1]:g} s is outside the result, which runs from "
                                     f"{first:g} to {last:g} s (in the figure's time)", source=option)
         _draw(stored.result, stored.name, png, overwrite=replace, time_shift=shift, zoom=zoom, crop=span, dpi=dpi,
-              size=size, about=_stored_about(stored), base=stored.base or None)
-    click.echo(f"redrew {png}")
+              size=size, about=_stored_about(stored), base=stored.base or None, staging=staging)
 
 
 def _only_for_results(shift, zoom, span, what: str) -> None:

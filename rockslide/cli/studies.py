@@ -166,6 +166,9 @@ def sweep(case_file, mu_kinetic_ratio, records_dir, out_dir, overwrite, no_plot,
     h5_path, png_path = _outputs(case, out_dir, ".sweep")
     finishing = _result_set(h5_path, png_path, overwrite=overwrite, no_plot=no_plot, example="out/case.sweep",
                             leftovers=ChunkStore.beside(h5_path, "").root.exists())
+    if _one_at_a_time(ctx, h5_path, "sweep"):         # another sweep of this file ran meanwhile
+        finishing = _result_set(h5_path, png_path, overwrite=overwrite, no_plot=no_plot, example="out/case.sweep",
+                                leftovers=ChunkStore.beside(h5_path, "").root.exists())
     n_points = math.prod(len(a) for a in axes) if axes else 0
     if n_points * sw.PLAN_SECONDS_PER_POINT > 10:
         click.echo(f"sweep {case.name}: checking the {n_points} points of the grid first (about "
@@ -306,6 +309,9 @@ def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, 
             files.check_destination(path, overwrite=overwrite, example="out/case.fragility.pelicun.csv")
     if _result_set(h5_path, png_path, overwrite=overwrite, no_plot=no_plot, example="out/case.fragility"):
         files.refuse_existing(h5_path, overwrite=False)           # input errors first, then outputs
+    if _one_at_a_time(ctx, h5_path, "fragility analysis") and _result_set(
+            h5_path, png_path, overwrite=overwrite, no_plot=no_plot, example="out/case.fragility"):
+        files.refuse_existing(h5_path, overwrite=False)           # published by the one waited for
     files.remove_stale_temporaries([h5_path, png_path])
     plan = fplan.plan
     if fplan.vertical_note:
@@ -384,6 +390,21 @@ def _write_csv(dataset, dims, path: Path, *, overwrite: bool, staging) -> None:
 
     with atomic_write(path, overwrite=overwrite, mode="w", what="table", staging=staging) as handle:
         handle.write(tidy_table(dataset, dims))
+
+
+def _one_at_a_time(ctx, h5_path: Path, what: str) -> bool:
+    """Hold the lock of ``h5_path``'s study (`files.exclusive` on ``.NAME.h5.lock`` beside it)
+    until the command ends, so that two identical sweeps (or fragility analyses) into one folder
+    run one after the other instead of sharing, and removing, one chunk folder (issue 28.6: the
+    second one said "chunk 0 is missing or damaged" and left chunk files). Returns whether it had
+    to wait (the outputs are then checked again)."""
+    from ..io import files
+
+    waited = []
+    lock = h5_path.with_name(f".{h5_path.name}.lock")
+    ctx.with_resource(files.exclusive(lock, waiting_for=f"another {what} writing {h5_path}",
+                                      waited=lambda: waited.append(True)))
+    return bool(waited)
 
 
 def _outputs(case, out_dir, suffix: str) -> tuple[Path, Path]:

@@ -214,10 +214,13 @@ def _column(value):
 
 def _is_hdf5(path: Path) -> bool:
     """Whether ``path`` starts with HDF5's signature (a result file; a record never does)."""
+    from ..errors import RockslideError
+    from ..inputs import open_regular
+
     try:
-        with open(path, "rb") as handle:
+        with open_regular(path, what="file", error=RockslideError) as handle:   # a FIFO: not opened
             return handle.read(8) == b"\x89HDF\r\n\x1a\n"
-    except OSError:
+    except (OSError, RockslideError):
         return False
 
 

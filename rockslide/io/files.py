@@ -2,10 +2,11 @@
 
 - **Atomic.** A file is written to a temporary file beside it, synced, and renamed onto its name,
   so a crash, a kill or Ctrl-C leaves the previous file or none. Temporary files are named
-  ``.NAME.<pid>.tmp`` (with a thread id when threads write at once): they start with ``.`` and end
-  in ``.tmp``; a process killed outright may leave one behind, never a half-written ``NAME``, and
-  the next run of the same output removes those of processes that are gone
-  (`remove_stale_temporaries`).
+  ``.NAME.<pid>.<place>.tmp`` (``place``: a number for this host, boot and pid namespace; a thread
+  id is added when threads write at once): they start with ``.`` and end in ``.tmp``. Their owner
+  holds a ``flock`` on each for its whole life. A process killed outright may leave one behind,
+  never a half-written ``NAME``, and the next run of the same output removes those whose lock is
+  free (`remove_stale_temporaries`: a pid alone means nothing in another container).
 - **Exclusive.** Without ``overwrite``, a file is published with a hard link that fails if the name
   exists (not a check followed by a rename), so that of two runs writing the same name at once one
   wins and the other is refused, whatever the timing. Where the file system has no hard links the
@@ -22,9 +23,12 @@ from __future__ import annotations
 
 import contextlib
 import errno
+import functools
 import os
+import platform
 import re
 import threading
+import zlib
 from pathlib import Path
 
 from .. import interrupts
@@ -32,8 +36,10 @@ from ..errors import OutputError
 
 #: Longest file name most file systems take [bytes].
 NAME_MAX = 255
-#: Room a temporary name needs beyond its file's name: ``.`` + ``.<pid>.<thread id>.tmp``.
-TEMPORARY_EXTRA = 1 + 1 + 7 + 1 + 20 + 4
+#: Longest path the system takes [bytes] (Linux's PATH_MAX).
+PATH_MAX = 4096
+#: Room a temporary name needs beyond its file's name: ``.`` + ``.<pid>.<place>.<thread id>.tmp``.
+TEMPORARY_EXTRA = 1 + 1 + 7 + 1 + 10 + 1 + 20 + 4
 
 
 def check_destination(path, *, overwrite: bool = False, example: str = "out/case.h5") -> Path:
@@ -76,6 +82,11 @@ def check_name(path: Path) -> None:
         if len(os.fsencode(part)) > NAME_MAX:
             raise OutputError(f"a folder name of {len(os.fsencode(part))} bytes; file systems take at "
                               f"most {NAME_MAX}", source=_short(text))
+    whole = len(os.fsencode(os.path.abspath(text))) + TEMPORARY_EXTRA
+    if whole > PATH_MAX:
+        raise OutputError(f"a path of {whole - TEMPORARY_EXTRA} bytes (once absolute); expected at most "
+                          f"{PATH_MAX - TEMPORARY_EXTRA} (the system's {PATH_MAX} less room for the temporary "
+                          "name): choose a shorter output folder", source=_short(text))
     longest = NAME_MAX - TEMPORARY_EXTRA
     if len(os.fsencode(path.name)) > longest:
         raise OutputError(f"a file name of {len(os.fsencode(path.name))} bytes; expected at most {longest} "
@@ -145,19 +156,82 @@ def open_new(path, mode: str = "wb", *, buffering: int = -1):
     for attempt in range(3):
         try:
             fd = os.open(path, flags, 0o666)
-            break
         except FileExistsError:
             if attempt == 2:
                 raise
             os.unlink(path)
+            continue
+        if _own(path, fd):
+            break
+        os.close(fd)                            # a cleaner removed it before it was locked: again
+    else:  # pragma: no cover - three cleaners in a row
+        raise FileExistsError(errno.EEXIST, "cannot keep a temporary file", str(path))
     return os.fdopen(fd, mode, buffering=buffering)
+
+
+_owned: dict[str, int] = {}     # temporary file -> a descriptor holding its flock, for its life
+_owned_guard = threading.Lock()
+
+
+def _own(path, fd: int) -> bool:
+    """Hold an exclusive ``flock`` on the new file ``path`` (open as ``fd``) until `release`: the
+    mark of a live owner that `remove_stale_temporaries` respects, whatever the pid namespace or
+    host. False if a cleaner removed the file before the lock was taken (the caller makes it
+    again); True, with nothing held, where locks are unavailable."""
+    try:
+        import fcntl
+    except ImportError:  # pragma: no cover - Windows
+        return True
+    held = os.dup(fd)                           # the lock lives while this descriptor is open
+    try:
+        fcntl.flock(held, fcntl.LOCK_EX)        # a cleaner holds it only to unlink, at once
+    except OSError:                             # no locks on this file system: pids only
+        os.close(held)
+        return True
+    try:
+        same = os.stat(path, follow_symlinks=False).st_ino == os.fstat(fd).st_ino
+    except OSError:
+        same = False
+    if not same:
+        os.close(held)
+        return False
+    with _owned_guard:
+        previous = _owned.pop(str(path), None)
+        _owned[str(path)] = held
+    if previous is not None:
+        os.close(previous)
+    return True
+
+
+def release(path) -> None:
+    """Give up the lock that marks the temporary file ``path`` as this process's (after it was
+    renamed into place or deleted)."""
+    with _owned_guard:
+        held = _owned.pop(str(path), None)
+    if held is not None:
+        os.close(held)
 
 
 def temporary_path(path, *, per_thread: bool = False) -> Path:
     """The temporary file ``path`` is written to before it is renamed onto it."""
     path = Path(path)
     thread = f".{threading.get_ident()}" if per_thread else ""
-    return path.with_name(f".{path.name}.{os.getpid()}{thread}.tmp")
+    return path.with_name(f".{path.name}.{os.getpid()}.{place_token()}{thread}.tmp")
+
+
+@functools.cache
+def place_token() -> int:
+    """A number for this host, boot and pid namespace (CRC-32 of the host name, the kernel's boot
+    id and the pid namespace's inode), written in temporary names beside the pid: a pid means
+    nothing in another container or on another host sharing the folder."""
+    parts = [platform.node()]
+    for read in (lambda: Path("/proc/sys/kernel/random/boot_id").read_text().strip(),
+                 lambda: str(os.stat("/proc/self/ns/pid").st_ino)):
+        try:
+            parts.append(read())
+        except OSError:
+            parts.append("")
+    return zlib.crc32("/".join(parts).encode())
 
 
 def publish(tmp: Path, path: Path, *, overwrite: bool, interruptible: bool = True, sync: bool = True) -> None:
@@ -222,10 +296,11 @@ class Staging:
         for tmp, _ in self.items:
             remove_quietly(tmp)
 
-    def publish(self, *, remove=(), interruptible: bool = True, sync: bool = True) -> list[Path]:
+    def publish(self, *, remove=(), interruptible: bool = True, sync: bool = True, verify=None) -> list[Path]:
         """Sync every temporary file (unless not ``sync``), then rename them all onto their names
         and delete the files in ``remove`` (stale companions of an earlier result), in one section
-        (module docstring).
+        (module docstring). ``verify``, if given, is called first in that section and may raise to
+        publish nothing (`Unchanged`: the file a figure was drawn from is still the one read).
 
         Raises
         ------
@@ -243,7 +318,9 @@ class Staging:
                 for tmp, _ in self.items:
                     fsync_file(tmp)
             folders = sorted({path.parent for _, path in self.items} | {Path(p).parent for p in remove})
-            with interrupts.critical(), _folder_locks(folders):
+            with folder_locks(folders), interrupts.critical():
+                if verify is not None:
+                    verify()                    # under the lock: no set is published meanwhile
                 if self.overwrite:
                     for tmp, path in self.items:
                         os.replace(tmp, path)
@@ -292,12 +369,70 @@ def _create_exclusively(tmp: Path, path: Path) -> None:
     os.replace(tmp, path)
 
 
-@contextlib.contextmanager
-def _folder_locks(folders):
-    """An advisory exclusive lock on each folder (POSIX ``flock``) while a set is renamed, so that
-    the sets of two rockslide processes are not interleaved; nothing where locks are unavailable."""
+#: Pause between two attempts to take a lock held by another process [s]: Ctrl-C and SIGTERM are
+#: acted on between attempts (`interrupts.check`).
+LOCK_RETRY = 0.05
+
+
+def _say_waiting(what: str) -> None:
+    import sys
+
     try:
-        import fcntl
+        print(f"rockslide: note: waiting for {what} (Ctrl-C stops)", file=sys.stderr, flush=True)
+    except (OSError, ValueError):  # pragma: no cover - stderr gone
+        pass
+
+
+def lock_interruptibly(fd: int, *, shared: bool = False, waiting_for: str) -> bool:
+    """Take ``flock`` on ``fd`` (exclusive, or ``shared``), waiting as long as another process holds
+    it, but never in a call that signals cannot cut short: a non-blocking attempt every
+    `LOCK_RETRY` s, with Ctrl-C and SIGTERM acted on in between (`interrupts.check`; a
+    KeyboardInterrupt where no handler is installed), and one note on stderr naming
+    ``waiting_for`` the first time it has to wait. Returns whether it waited. An OSError where
+    locks are not supported."""
+    import fcntl
+    import time
+
+    mode = (fcntl.LOCK_SH if shared else fcntl.LOCK_EX) | fcntl.LOCK_NB
+    said = False
+    while True:
+        try:
+            fcntl.flock(fd, mode)
+            return said
+        except BlockingIOError:
+            pass
+        if not said:
+            holder = _lock_holder(fd)
+            _say_waiting(waiting_for if holder is None else f"{waiting_for}, process {holder}")
+            said = True
+        interrupts.check()
+        time.sleep(LOCK_RETRY)
+        interrupts.check()
+
+
+def _lock_holder(fd: int) -> int | None:
+    """The pid that ``/proc/locks`` gives for a FLOCK on ``fd``'s file (Linux), or None."""
+    info = os.fstat(fd)
+    wanted = f"{os.major(info.st_dev):02x}:{os.minor(info.st_dev):02x}:{info.st_ino}"
+    try:
+        with open("/proc/locks", encoding="ascii", errors="replace") as table:
+            for line in table:
+                fields = line.split()
+                if len(fields) > 5 and fields[1] == "FLOCK" and fields[5] == wanted and fields[4].isdigit():
+                    return int(fields[4]) or None
+    except OSError:
+        pass
+    return None
+
+
+@contextlib.contextmanager
+def folder_locks(folders, *, shared: bool = False):
+    """An advisory lock on each folder (POSIX ``flock``; exclusive, or ``shared`` for readers) while
+    a set is renamed (or read and drawn by ``rockslide plot``), so that the sets of two rockslide
+    processes are not interleaved; nothing where locks are unavailable. Waiting for another
+    process is interruptible (`lock_interruptibly`)."""
+    try:
+        import fcntl  # noqa: F401
     except ImportError:  # pragma: no cover - Windows
         yield
         return
@@ -305,19 +440,94 @@ def _folder_locks(folders):
     try:
         for folder in folders:
             try:
-                fd = os.open(folder, os.O_RDONLY)
+                fd = os.open(folder, os.O_RDONLY | getattr(os, "O_CLOEXEC", 0))
             except OSError:
                 continue
             try:
-                fcntl.flock(fd, fcntl.LOCK_EX)
+                lock_interruptibly(fd, shared=shared,
+                                   waiting_for=f"another process publishing in {folder} (it holds the "
+                                               "folder's lock)")
             except OSError:
                 os.close(fd)
                 continue
+            except BaseException:
+                os.close(fd)
+                raise
             fds.append(fd)
         yield
     finally:
         for fd in fds:
             os.close(fd)                        # closing releases the lock
+
+
+@contextlib.contextmanager
+def exclusive(lock_path, *, waiting_for: str, waited=None):
+    """Hold an exclusive ``flock`` on the file ``lock_path`` (created if missing, never through a
+    link) for the ``with`` block, waiting interruptibly for another process that holds it
+    (`lock_interruptibly`, saying once that it waits for ``waiting_for``); the file is deleted when
+    the block ends. Two sweeps (or fragility analyses) of one result file run one after the other
+    this way: they share its chunk folder. A waiter that gets the lock of a file deleted meanwhile
+    takes the new one (the inode at the name is checked). ``waited`` is called (with no argument)
+    if another process held it. Nothing where locks are unavailable."""
+    try:
+        import fcntl  # noqa: F401
+    except ImportError:  # pragma: no cover - Windows
+        yield
+        return
+    flags = os.O_RDWR | os.O_CREAT | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_CLOEXEC", 0)
+    while True:
+        try:
+            fd = os.open(lock_path, flags, 0o666)
+        except OSError:                          # cannot be made here: nothing to hold
+            yield
+            return
+        try:
+            if lock_interruptibly(fd, waiting_for=waiting_for) and waited is not None:
+                waited()
+            same = os.stat(lock_path, follow_symlinks=False).st_ino == os.fstat(fd).st_ino
+        except FileNotFoundError:
+            same = False
+        except OSError:                          # no locks on this file system
+            os.close(fd)
+            yield
+            return
+        except BaseException:
+            os.close(fd)
+            raise
+        if same:
+            break
+        os.close(fd)                             # deleted by its holder meanwhile: the next one
+    try:
+        yield
+    finally:
+        try:
+            os.unlink(lock_path)                 # while it is held: a waiter then takes a new one
+        except OSError:
+            pass
+        os.close(fd)
+
+
+class Unchanged:
+    """The identity of a file read (device, inode, size, modification time), to check before a
+    file derived from it is published: ``rockslide plot`` must not publish a figure of a result
+    that a run replaced while it was drawn (`Staging.publish`'s ``verify``)."""
+
+    def __init__(self, path):
+        self.path = Path(path)
+        self.stamp = self._stamp()
+
+    def _stamp(self):
+        try:
+            info = os.stat(self.path)
+        except OSError:
+            return None
+        return info.st_dev, info.st_ino, info.st_size, info.st_mtime_ns
+
+    def __call__(self) -> None:
+        """Raise an `OutputError` if the file is no longer the one read."""
+        if self._stamp() != self.stamp:
+            raise OutputError("was replaced while its figure was drawn (another run published a new result); "
+                              "nothing was written: run the command again", source=str(self.path))
 
 
 @contextlib.contextmanager
@@ -347,17 +557,22 @@ def atomic_write(path, *, overwrite: bool, mode: str = "wb", per_thread: bool = 
         raise
 
 
-_TEMPORARY = re.compile(r"\.(?P<pid>\d+)(?:\.\d+)?\.tmp")     # after ``.NAME``
+_TEMPORARY = re.compile(r"\.(?P<pid>\d+)(?:\.(?P<place>\d+))?(?:\.\d+)?\.tmp")     # after ``.NAME``
 
 
 def remove_stale_temporaries(paths) -> list[Path]:
-    """Delete the temporary files of ``paths`` (``.NAME.<pid>[.<thread>].tmp`` beside each) that
-    processes which no longer run have left (a SIGKILL, a power cut), and return them.
+    """Delete the temporary files of ``paths`` (``.NAME.<pid>[.<place>][.<thread>].tmp`` beside
+    each) that no live process owns (a SIGKILL, a power cut left them), and return them.
 
-    Only files of these names, only of processes that are gone (POSIX; nothing is removed where a
-    process cannot be looked up).
+    A temporary file's owner holds an exclusive ``flock`` on it for its whole life (`open_new`), so
+    a file is removed only when that lock can be taken: the test works across pid namespaces
+    (containers) on one host and, where the file system passes locks on (NFS with its lock
+    manager), across hosts; a pid, which means nothing in another namespace, decides nothing. Where
+    the file system has no locks, a file is removed only if it names this host, boot and pid
+    namespace (`place_token`) and a pid that no longer runs. Only files of these names, only
+    regular files, never through a link.
     """
-    if os.name != "posix":  # pragma: no cover - no harmless way to look a process up
+    if os.name != "posix":  # pragma: no cover - no harmless way to tell an owner
         return []
     removed = []
     for path in paths:
@@ -368,18 +583,41 @@ def remove_stale_temporaries(paths) -> list[Path]:
             continue
         for candidate in candidates:
             match = _TEMPORARY.fullmatch(candidate.name[len(path.name) + 1:])
-            if not match:
-                continue
-            pid = int(match["pid"])
-            if pid != os.getpid() and not _running(pid):
-                try:
-                    if candidate.is_dir():
-                        continue
-                    os.unlink(candidate)
-                    removed.append(candidate)
-                except OSError:
-                    pass
+            if match and _remove_if_unowned(candidate, match):
+                removed.append(candidate)
     return removed
+
+
+def _remove_if_unowned(candidate: Path, match) -> bool:
+    """Delete ``candidate`` if no live process holds its lock (see `remove_stale_temporaries`)."""
+    import fcntl
+    import stat
+
+    flags = os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_CLOEXEC", 0)
+    try:
+        fd = os.open(candidate, flags)
+    except OSError:
+        return False                            # gone, a link, or not ours to read
+    try:
+        info = os.fstat(fd)
+        if not stat.S_ISREG(info.st_mode):
+            return False
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            return False                        # its owner runs (here or in another namespace)
+        except OSError:                         # no locks here: only a pid of this namespace
+            pid, place = int(match["pid"]), match["place"]
+            if place is None or int(place) != place_token() or pid == os.getpid() or _running(pid):
+                return False
+        if os.stat(candidate, follow_symlinks=False).st_ino != info.st_ino:
+            return False                        # replaced meanwhile
+        os.unlink(candidate)                    # with its lock held: no owner can take it now
+        return True
+    except OSError:
+        return False
+    finally:
+        os.close(fd)
 
 
 def glob_escape(name: str) -> str:
@@ -398,11 +636,13 @@ def _running(pid: int) -> bool:
 
 
 def remove_quietly(path: Path) -> None:
-    """Delete ``path`` if it exists (best effort: a leftover is named as one)."""
+    """Delete ``path`` if it exists (best effort: a leftover is named as one), and give up the lock
+    that marked it as this process's temporary file (`release`)."""
     try:
         os.unlink(path)
     except OSError:
         pass
+    release(path)
 
 
 def fsync_file(path: Path) -> None:

@@ -50,6 +50,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..errors import CaseError, RecordError
+from ..inputs import open_regular
 from ..units import STANDARD_GRAVITY, unit_factor
 from . import cosmos
 from .files import atomic_write, expand_user
@@ -76,6 +77,14 @@ def obspy_formats() -> tuple[str, ...]:
 #: [s] Largest sampling step read: an earthquake's acceleration has its energy at 0.1 to 20 Hz, so a
 #: record needs a step of at most 0.025 s; a step above 1 s is a mistake of unit (ms written as s).
 MAX_SAMPLING_STEP = 1.0
+#: Largest record file read [bytes]: its size is checked before a byte is read (a 20 GB file is
+#: refused at once). 1 GiB of plain numbers is 5e7 to 5e8 samples, read in about 10 bytes of memory
+#: per character of the file (`_plain_values`).
+MAX_RECORD_BYTES = 2**30
+#: Most numbers read from text that is not plain numbers (comments, commas, a header row, several
+#: columns): that reader keeps each number as a Python string first, about 400 bytes each, so this
+#: bound keeps it within about 4 GB. Checked by counting before parsing.
+MAX_TEXT_NUMBERS = 10**7
 #: A peak above this [m/s^2] is almost certainly a unit mistake: warn.
 ABSURD_PEAK = 10.0 * STANDARD_GRAVITY
 
@@ -158,8 +167,13 @@ def resolve_record_path(name: str, *, case_dir: Path | None, records_dir: Path,
     else:
         tried = [folder / path for folder in (case_dir, records_dir) if folder is not None]
     for candidate in tried:
-        if candidate.is_file():
-            return candidate
+        try:
+            if candidate.exists() and not candidate.is_dir():  # a FIFO too: its reader refuses it
+                return candidate
+        except OSError as exc:                                 # a name too long, a folder not searchable
+            shown = str(name) if len(str(name)) <= 60 else f"{str(name)[:57]}..."
+            raise RecordError(f"cannot look for the record file {shown!r} in {candidate.parent}: "
+                              f"{exc.strerror or exc}", source=source, field=field) from None
     places = ", ".join(str(p) for p in tried)
     raise RecordError(f"record file {str(name)!r} not found; tried: {places} "
                       f"(set --records-dir or ${RECORDS_ENV}, or give a path)", source=source, field=field)
@@ -408,12 +422,20 @@ def record_info(path, **options) -> dict:
 def _read_bytes(ctx: _Context) -> bytes:
     if not ctx.path.exists():
         raise ctx.error("record file not found")
-    if not ctx.path.is_file():
+    if ctx.path.is_dir():
         raise ctx.error("is not a file (expected an accelerogram file)")
+
+    def error(message, source):
+        return ctx.error(message)
+
     try:
-        raw = ctx.path.read_bytes()
+        with open_regular(ctx.path, what="record file", error=error, limit=MAX_RECORD_BYTES) as handle:
+            raw = handle.read(MAX_RECORD_BYTES + 1)
     except OSError as exc:
         raise ctx.error(f"cannot read the file: {exc.strerror or exc}") from exc
+    if len(raw) > MAX_RECORD_BYTES:
+        raise ctx.error(f"the record file has more than {MAX_RECORD_BYTES} bytes; rockslide reads at most "
+                        f"{MAX_RECORD_BYTES} (1 GiB)")
     if not raw.strip():
         raise ctx.error("the file is empty (no samples)")
     return raw
@@ -607,19 +629,66 @@ def _quick_values(rows) -> np.ndarray | None:
         return None
 
 
-def _quick_body(lines: list[str]) -> np.ndarray | None:
-    """The numbers of data ``lines`` that hold nothing but numbers and white space, in reading
-    order; None otherwise (comments, commas, a Fortran ``D`` exponent): the caller then reads them
-    line by line, as it does to name the line of a value that is not finite. The same numbers as
-    `_values_in_order` (the same tokens, through `_quick_values`'s ``float``) in two thirds of
-    the time: that one looks at each line for comments."""
-    body = "\n".join(lines)
-    if not body.isascii() or any(mark in body for mark in "#;,_"):
+_PLAIN_CHARACTERS = b"0123456789+-.eE \t\r\n"
+_WHITE_SPACE = np.array([ord(c) for c in " \t\r\n"], dtype=np.uint8)
+
+
+def _token_starts(data: np.ndarray) -> np.ndarray:
+    """The offsets where a white-space separated token starts in the bytes ``data``."""
+    space = np.isin(data, _WHITE_SPACE)
+    start = ~space
+    start[1:] &= space[:-1]
+    return np.flatnonzero(start)
+
+
+def _plain_values(text: str, skip_lines: int, *,
+                  per_line: bool = False) -> tuple[np.ndarray, np.ndarray] | None:
+    """The numbers of a text of one plain number per line (several with ``per_line``; digits,
+    signs, points, exponents and white space only, after ``skip_lines``), with the line number of
+    each; None for any other text (the general reader then reads it and names what it cannot
+    read). Linear in memory (about ten bytes per character of the file), where the general reader
+    keeps each number as a Python string (about 400 bytes): a values record of 5e7 samples is read
+    within about 5 GB."""
+    start = 0
+    for _ in range(skip_lines):
+        start = text.find("\n", start) + 1
+        if start == 0:
+            return None
+    try:
+        body = text[start:].encode("ascii")
+    except UnicodeEncodeError:
+        return None
+    if body.translate(None, _PLAIN_CHARACTERS):
+        return None
+    data = np.frombuffer(body, dtype=np.uint8)
+    starts = _token_starts(data)
+    newlines = np.flatnonzero(data == ord("\n"))
+    line_of = np.searchsorted(newlines, starts)          # 0-based line of each number, after the skip
+    if not per_line and np.any(np.diff(line_of) == 0):   # two numbers on a line: not this reader's
         return None
     try:
-        return np.array([float(token) for token in body.split()], dtype=np.float64)
-    except ValueError:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")              # older numpy: a warning, and fewer values
+            values = np.fromstring(body, dtype=np.float64, sep=" ") if starts.size else np.empty(0)
+    except ValueError:                                   # "could not be read to its end"
         return None
+    if values.size != starts.size:                       # a token that is not one number ("1-2", "e")
+        return None
+    return values, line_of + 1 + skip_lines
+
+
+def _bound_text_numbers(ctx: _Context, text: str) -> None:
+    """Refuse text with more than `MAX_TEXT_NUMBERS` fields before the general reader builds
+    its strings (counted on the bytes, without building them)."""
+    if len(text) <= MAX_TEXT_NUMBERS:                     # a field takes at least one character
+        return
+    count = _token_starts(np.frombuffer(text.encode("utf-8", "replace").replace(b",", b" "),
+                                        dtype=np.uint8)).size
+    if count > MAX_TEXT_NUMBERS:
+        raise ctx.error(f"about {count:.3g} numbers in text with comments, commas, a header or several "
+                        f"columns; rockslide reads at most {MAX_TEXT_NUMBERS:.0e} such numbers (write one "
+                        "plain number per line, format: values with dt, to read up to "
+                        f"{MAX_RECORD_BYTES} bytes)")
 
 
 def _values_in_order(ctx: _Context, rows) -> tuple[np.ndarray, np.ndarray]:
@@ -651,8 +720,10 @@ def _read_at2(ctx: _Context, text: str, options: _Options) -> _Parsed:
     units = _at2_units(ctx, header[2]) or options.units
     factor = _unit_to_si(ctx, units, "PEER AT2")
     npts, dt = _at2_npts_dt(ctx, header[3])
-    values, lines = _quick_body(text.splitlines()[4:]), None
+    plain = _plain_values(text, 4, per_line=True)
+    values, lines = (plain[0], None) if plain is not None else (None, None)
     if values is None or not np.isfinite(values * factor).all():     # a line to be named
+        _bound_text_numbers(ctx, text)
         values, lines = _values_in_order(ctx, _content_lines(text, first=4))
     if values.size != npts:
         raise ctx.error(f"header says NPTS = {npts} but the file has {values.size} values; "
@@ -720,6 +791,12 @@ def _read_text(ctx: _Context, text: str, options: _Options, *, values_only: bool
     with a name per column names the columns, a line of units alone (``s g g``, ``[s] [g]``) gives
     their units. With ``dt`` the time column is not read: one column, evenly spaced.
     """
+    plain = _plain_values(text, options.skip_lines)
+    if plain is not None:
+        values, lines = plain
+        if values.size:
+            return _values_record(ctx, None, options, None, values=values, lines=lines), "values"
+    _bound_text_numbers(ctx, text)
     rows = list(_content_lines(text, options.skip_lines))
     if not rows:
         raise ctx.error("the record is empty: no data lines (only blank or comment lines"
@@ -779,16 +856,18 @@ def _fix(key: str, value: str = "") -> str:
     return f"`{key}: {value}` ({option} {value})" if value else f"`{key}:` ({option})"
 
 
-def _values_record(ctx: _Context, rows, options: _Options, stated) -> _Parsed:
-    """One value per sample in reading order, at the step ``dt`` given; ``stated`` is the unit a
-    header states (`_stated_unit`), or None."""
+def _values_record(ctx: _Context, rows, options: _Options, stated, *, values=None, lines=None) -> _Parsed:
+    """One value per sample in reading order, at the step ``dt`` given, from its ``rows`` or from
+    ``values`` and ``lines`` already read; ``stated`` is the unit a header states (`_stated_unit`),
+    or None."""
     if options.time_column is not None or options.column not in (None, 1, "1"):
         raise ctx.error("time_column or column was given but the file has one value per line "
                         f"(values text: give only {_fix('dt')} and units)", "column")
     if options.dt is None:
         raise ctx.error("give `dt:` (the sampling step in s) for a values record: the file has no "
                         "time column (rockslide info: --dt)", "dt")
-    values, lines = _values_in_order(ctx, rows)
+    if values is None:
+        values, lines = _values_in_order(ctx, rows)
     unit = _column_unit(ctx, options.units, stated, None, 0)
     return _Parsed(values * _unit_to_si(ctx, unit, "values"), options.dt, unit, lines=lines)
 

@@ -106,9 +106,11 @@ import numpy as np
 
 from .. import interrupts
 from .._version import __version__
+from ..case import MAX_NAME_LENGTH
 from ..core.layout import HISTORY_COLUMNS, STATE_NAMES
 from ..core.simulate import EVENT_DTYPE, Result, Summary
 from ..errors import OutputError
+from ..inputs import regular_size
 from .files import Staging, check_destination, open_new, publish, remove_quietly, temporary_path
 
 FORMAT = "rockslide-result"
@@ -802,12 +804,14 @@ def read_result(path) -> StoredResult:
         raise OutputError("result file not found", source=source)
     if path.is_dir():
         raise OutputError("is a folder, expected a result file (.h5)", source=source)
+    regular_size(path, what="result file (.h5)", error=OutputError)      # a FIFO would block
     try:
         f = h5py.File(path, "r")
     except OSError as exc:
         reason = "not an HDF5 file" if "signature" in str(exc) or "file format" in str(exc) else _reason(exc)
         raise OutputError(f"cannot read as a rockslide result ({reason})", source=source) from None
     with f:
+        _check_attributes(f, source)
         if _plain(f.attrs.get("format")) != FORMAT:
             raise OutputError(f"not a rockslide result (an HDF5 file without format = {FORMAT!r})",
                               source=source)
@@ -817,9 +821,66 @@ def read_result(path) -> StoredResult:
             raise OutputError(f"result format version {version!r} is not supported "
                               f"(this rockslide reads version {FORMAT_VERSION})", source=source)
         try:
-            return _read_body(f)
-        except (KeyError, ValueError, TypeError, OSError) as exc:
+            _check_result_layout(f)
+            stored = _read_body(f)
+            _check_result_values(stored)
+            return stored
+        except (KeyError, ValueError, TypeError, OverflowError, IndexError, OSError) as exc:
             raise OutputError(f"damaged rockslide result ({_reason(exc)})", source=source) from None
+
+
+#: Largest attribute read from a file rockslide is given [bytes], checked before it is read (the
+#: case text, at most 64 KiB, is the largest rockslide writes).
+MAX_ATTRIBUTE_BYTES = 1 << 20
+#: Most rows of a result's time history or ground motion read back (the bound of a run's history).
+MAX_RESULT_ROWS = 10**8
+
+
+def _check_attributes(f: h5py.File, source: str) -> None:
+    """Refuse an attribute of the root, ``/case`` or ``/records/*`` larger than
+    `MAX_ATTRIBUTE_BYTES` before reading it (its stored size, from the dataspace and type)."""
+    groups = [f] + [f[name] for name in ("case", "records") if isinstance(f.get(name, getlink=True), h5py.HardLink)]
+    for group in groups:
+        for name in group.attrs:
+            size = group.attrs.get_id(name).get_storage_size()
+            if size > MAX_ATTRIBUTE_BYTES:
+                raise OutputError(f"not read: attribute {name!r} of {group.name} holds {size} bytes; "
+                                  f"rockslide reads attributes of at most {MAX_ATTRIBUTE_BYTES} bytes",
+                                  source=source)
+
+
+def _check_result_layout(f: h5py.File) -> None:
+    """Every column a result needs, one-dimensional, numeric, of one length per group and at most
+    `MAX_RESULT_ROWS` rows, with stored data: checked on the shapes, before anything is read
+    (a small file declaring 1e12 rows is refused at once). ValueError says what is wrong."""
+    for group, names in (("time_history", HISTORY_COLUMNS), ("ground", tuple(GROUND_UNITS))):
+        lengths = set()
+        for name in names:
+            ds = f[group][name]
+            if not isinstance(ds, h5py.Dataset) or ds.ndim != 1 or ds.dtype.kind not in "iuf":
+                raise ValueError(f"/{group}/{name} is not a column of numbers")
+            if ds.shape[0] > MAX_RESULT_ROWS:
+                raise ValueError(f"/{group}/{name} declares {ds.shape[0]} rows; rockslide reads at most "
+                                 f"{MAX_RESULT_ROWS:.0e}")
+            if ds.shape[0] and ds.id.get_storage_size() == 0:
+                raise ValueError(f"/{group}/{name} declares {ds.shape[0]} rows but stores none")
+            lengths.add(ds.shape[0])
+        if len(lengths) > 1:
+            raise ValueError(f"the columns of /{group} have different lengths ({', '.join(map(str, sorted(lengths)))})")
+
+
+def _check_result_values(stored: StoredResult) -> None:
+    """The values a figure and a summary are made of: finite times and samples, a positive step, a
+    direction of -1, 0 or 1, a name that fits a case's. ValueError says what is wrong."""
+    result = stored.result
+    for label, values in (("/time_history", list(result.history.values())),
+                          ("/ground", [result.ground_time, result.ground_horizontal, result.ground_vertical])):
+        if not all(np.isfinite(column).all() for column in values):
+            raise ValueError(f"{label} holds values that are not finite numbers")
+    if not (math.isfinite(result.step) and result.step > 0):
+        raise ValueError(f"integration_step = {result.step!r}; expected a positive step [s]")
+    if len(stored.name) > MAX_NAME_LENGTH:
+        raise ValueError(f"a name of {len(stored.name)} characters; a case's name has at most {MAX_NAME_LENGTH}")
 
 
 def _data_only(f: h5py.File, source: str) -> None:
@@ -888,6 +949,8 @@ def _summary_from_attrs(attrs: dict) -> Summary:
         return None if math.isnan(value) else float(value)
 
     overturned = bool(attrs["overturned"])
+    if attrs["direction"] not in (-1, 0, 1):
+        raise ValueError(f"direction = {attrs['direction']!r}; expected -1, 0 or 1")
     direction = int(attrs["direction"])
     seen = attrs["states_seen"]
     return Summary(
@@ -1133,8 +1196,13 @@ def file_format(path) -> str | None:
     """The ``format`` attribute of a rockslide HDF5 file (a key of :data:`FORMATS`: result, sweep or
     fragility file), or None if the file cannot be read as one."""
     try:
+        regular_size(path, what="file", error=OutputError)
+    except OutputError:
+        return None                             # the reader of the kind asked says why
+    try:
         with h5py.File(path, "r") as f:
-            value = _plain(f.attrs.get("format"))
+            size = f.attrs.get_id("format").get_storage_size() if "format" in f.attrs else 0
+            value = _plain(f.attrs.get("format")) if size <= MAX_ATTRIBUTE_BYTES else None
     except OSError:
         return None
     return value if value in FORMATS else None
@@ -1165,14 +1233,17 @@ def read_dataset(path, *, format: str) -> StoredDataset:
     what, short, suffix = _FORMAT_WHAT.get(format, ("file", "file", ""))
     source = str(path)
     path = Path(path)
-    if not path.is_file():
-        raise OutputError(f"{what} not found" if not path.exists() else f"is a folder, expected a "
-                          f"{what} ({suffix})", source=source)
+    if not path.exists():
+        raise OutputError(f"{what} not found", source=source)
+    if path.is_dir():
+        raise OutputError(f"is a folder, expected a {what} ({suffix})", source=source)
+    regular_size(path, what=f"{what} ({suffix})", error=OutputError)
     try:
         f = h5py.File(path, "r")
     except OSError as exc:
         raise OutputError(f"cannot read as a rockslide {short} ({_reason(exc)})", source=source) from None
     with f:
+        _check_attributes(f, source)
         if _plain(f.attrs.get("format")) != format:
             raise OutputError(f"not a rockslide {short} (format is not {format!r})", source=source)
         if _plain(f.attrs.get("format_version")) != FORMATS[format]:
@@ -1184,8 +1255,12 @@ def read_dataset(path, *, format: str) -> StoredDataset:
                   if isinstance(ds, h5py.Dataset) and ds.is_scale}
         order = sorted(scales, key=lambda n: int(scales[n].attrs.get("_Netcdf4Dimid", 0)))
         coords = [(name, _values(scales[name]), _dataset_attrs(scales[name])) for name in order]
-        variables = {name: (tuple(_dim_name(dim) for dim in ds.dims), _values(ds), _dataset_attrs(ds))
-                     for name, ds in f.items() if isinstance(ds, h5py.Dataset) and name not in scales}
+        try:
+            _check_dataset_layout(f, scales, format)
+            variables = {name: (tuple(_dim_name(dim) for dim in ds.dims), _values(ds), _dataset_attrs(ds))
+                         for name, ds in f.items() if isinstance(ds, h5py.Dataset) and name not in scales}
+        except (KeyError, ValueError, TypeError, IndexError, OSError) as exc:
+            raise OutputError(f"damaged rockslide {short} ({_reason(exc)})", source=source) from None
         attrs = {key: _plain(value) for key, value in f.attrs.items()}
     return StoredDataset(coords=coords, variables=variables, attrs=attrs)
 
@@ -1221,6 +1296,41 @@ def same_results(a: StoredDataset, b: StoredDataset) -> bool:
 
 def _attrs_equal(a: dict, b: dict) -> bool:
     return a.keys() == b.keys() and all(np.array_equal(np.asarray(a[k]), np.asarray(b[k])) for k in a)
+
+
+#: What each kind of file must hold to be drawn and read: (dimensions, variables).
+REQUIRED = {SWEEP_FORMAT: ((), ("overturned", "status", "modes", "max_rotation", "residual_slip")),
+            FRAGILITY_FORMAT: (("level", "damage_state"), ("exceeded", "definition"))}
+
+
+def _check_dataset_layout(f: h5py.File, scales: dict, format: str) -> None:
+    """The dimensions and variables a file of ``format`` needs (`REQUIRED`), every coordinate
+    one-dimensional and every variable shaped by its dimensions, at most `MAX_RESULT_ROWS` values
+    each: checked on the shapes before anything is read. ValueError says what is wrong."""
+    dims, names = REQUIRED.get(format, ((), ()))
+    if not scales:
+        raise ValueError("no dimensions")
+    for name in dims:
+        if name not in scales:
+            raise ValueError(f"no dimension {name!r}")
+    for name in names:
+        if not isinstance(f.get(name, getlink=True), h5py.HardLink) or not isinstance(f[name], h5py.Dataset):
+            raise ValueError(f"no variable {name!r}")
+    lengths = {}
+    for name, ds in scales.items():
+        if ds.ndim != 1:
+            raise ValueError(f"the dimension {name!r} is not one-dimensional")
+        lengths[name] = ds.shape[0]
+    for name, ds in f.items():
+        if not isinstance(ds, h5py.Dataset) or name in scales:
+            continue
+        if ds.size > MAX_RESULT_ROWS:
+            raise ValueError(f"{name} declares {ds.size} values; rockslide reads at most {MAX_RESULT_ROWS:.0e}")
+        dims_of = [_dim_name(dim) for dim in ds.dims]
+        expected = tuple(lengths.get(dim, -1) for dim in dims_of)
+        if ds.shape != expected:
+            raise ValueError(f"{name} has shape {ds.shape} where its dimensions "
+                             f"({', '.join(dims_of) or 'none'}) give {expected}")
 
 
 def _values(ds) -> np.ndarray:
