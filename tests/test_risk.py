@@ -246,14 +246,17 @@ def fragility_file(path, *, median=0.5 * G, beta=0.4, interval=True, im="pga", b
     fraction = np.array([[0.0, 0.3, 0.7, 0.9, 1.0], [0.2, 0.6, 0.9, 1.0, 1.0]])
     per_state = ("damage_state",)
     bounds = (0.8, 1.25) if interval else (math.nan, math.nan)
-    variables = {"fraction_exceeded": (("damage_state", "level"), fraction, {"units": "1"}),
+    exceeded = (np.random.default_rng(1).random((3, levels.size, 2)) < fraction.T).astype(np.int8)   # 3 records
+    variables = {"exceeded": (("record", "level", "damage_state"), exceeded, {}),
+                 "definition": (per_state, np.array(["overturn", "rotation>0.5alpha"], dtype=object), {}),
+                 "fraction_exceeded": (("damage_state", "level"), fraction, {"units": "1"}),
                  "median": (per_state, np.array([median, median / 2]), {"units": "m/s^2"}),
                  "beta": (per_state, np.array([beta, beta]), {"units": "1"}),
                  "fit_note": (per_state, np.array(["", ""], dtype=object), {})}
     for name, value in (("median", median), ("beta", beta)):
         for side, factor in zip(("lower", "upper"), bounds, strict=True):
             variables[f"{name}_{side}"] = (per_state, np.array([value * factor] * 2), {})
-    coords = [("level", levels, {"units": "m/s^2"}),
+    coords = [("record", np.array(["r1", "r2", "r3"], dtype=object), {}), ("level", levels, {"units": "m/s^2"}),
               ("damage_state", np.array(["overturn", "rotation>0.5alpha"], dtype=object), {})]
     if bootstrap is not None:
         n = len(bootstrap[0])

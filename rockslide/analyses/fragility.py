@@ -606,9 +606,9 @@ def plan_fragility(case: Case, suite: Suite, im: IntensityMeasure, levels: sw.Ax
     offset = 0
     highest = (0.0, "")                   # the largest scaled peak, and which run
     flights = []                          # (warning of the first flying run of a record, its runs that fly)
-    read: dict = {}                       # records already read, by file and options
+    already_read: dict = {}               # records already read, by file and options
     for r, entry in enumerate(suite.entries):
-        records, specs, found = _read_entry(suite, r, entry, folder, read)
+        records, specs, found = _read_entry(suite, r, entry, folder, already_read)
         if case_record is not None:
             records["vertical"], specs["vertical"] = case_record
             found["vertical"], found["vertical_sha256"] = Path(case_record[0].path).name, case_record[0].sha256
