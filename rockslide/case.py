@@ -1649,12 +1649,16 @@ class Suite:
         The folder record files resolve against first.
     text : str
         The suite file's text.
+    orientations : int
+        Consecutive entries that are one record at several block orientations (`with_orientations`;
+        1 otherwise): the bootstrap of a fit resamples records, each with all its orientations.
     """
 
     entries: tuple
     source: str = "<suite>"
     base_dir: Path | None = None
     text: str = ""
+    orientations: int = 1
 
 
 #: The keys of one entry of a suite file's ``records`` list (the README's suite reference).
@@ -1683,7 +1687,7 @@ def with_orientations(suite: Suite, orientations) -> Suite:
                             "two (horizontal_1 and horizontal_2 in the suite file)", source="--azimuth")
         entries.extend(dataclasses.replace(entry, name=f"{entry.name}@{math.degrees(o):g}deg", orientation=o)
                        for o in orientations)
-    return dataclasses.replace(suite, entries=tuple(entries))
+    return dataclasses.replace(suite, entries=tuple(entries), orientations=suite.orientations * len(orientations))
 
 
 def load_suite(path) -> Suite:

@@ -450,3 +450,29 @@ def test_a_floor_filters_the_motion_along_the_block(pair):
     swept = sweep(case, azimuth="0,30", records_dir=pair)
     alone = run(case, history=False).result.summary
     assert float(swept.isel(azimuth=1)["max_rotation"]) == pytest.approx(alone.max_rotation, rel=1e-9)
+
+
+def test_the_bootstrap_over_orientations_resamples_records_not_orientations(pair):
+    """Turning the block (--azimuth) repeats each record at every orientation; the bootstrap must
+    resample records, each with all its orientations. At -340 and 20 deg the two orientations are
+    one, so every record's two rows are the same: resampling whole records gives exactly the fit
+    and intervals of the records at one orientation (the likelihood is that of one row, squared),
+    while resampling rows one by one (as if 8 records) would narrow the intervals."""
+    from rockslide.api import fragility
+
+    t = np.arange(1500) * DT
+    envelope = np.exp(-((t - 5.0) / 2.0) ** 2)
+    for k, hz in enumerate((1.5, 2.5, 4.0, 6.0), start=1):     # records of different frequencies
+        rec.write_at2(pair / f"p{k}_1.at2", envelope * np.sin(2 * math.pi * hz * t), DT, title="S", component="0")
+        rec.write_at2(pair / f"p{k}_2.at2", 0.6 * envelope * np.cos(2 * math.pi * 0.7 * hz * t), DT, title="S",
+                      component="90")
+    suite = _suite(pair, "records:\n" + "".join(
+        f"  - {{name: r{k}, horizontal_1: p{k}_1.at2, horizontal_2: p{k}_2.at2}}\n" for k in (1, 2, 3, 4)))
+    case = _case(pair, orientation="20 deg")
+    levels = "0.2g:3g:0.1g"
+    once = fragility(case, suite, im="pga", levels=levels, azimuth="20", resamples=300)
+    twice = fragility(case, suite, im="pga", levels=levels, azimuth="-340,20", resamples=300)
+    assert twice.sizes["record"] == 8 and once.sizes["record"] == 4
+    assert np.isfinite(once["median_lower"].values).all()           # a fit, with an interval
+    for name in ("median", "beta", "median_lower", "median_upper", "beta_lower", "beta_upper"):
+        assert np.allclose(twice[name].values, once[name].values, rtol=1e-9, equal_nan=True), name

@@ -1075,8 +1075,9 @@ def fit_state(levels, exceeded: np.ndarray, *, resamples: int = BOOTSTRAP_RESAMP
     show : callable, optional
         Formats a level for the notes (default ``{:g}``).
     per_record : int
-        Rows of ``exceeded`` per record, consecutive (parameter samples of one record: R is then
-        records x per_record): the bootstrap resamples records, each with all its rows.
+        Rows of ``exceeded`` per record, consecutive (its parameter samples, its block orientations
+        or both: R is then records x per_record): the bootstrap resamples records, each with all
+        its rows, and ``n_records`` counts records.
 
     Returns
     -------
@@ -1231,17 +1232,18 @@ def analyse(fplan: FragilityPlan, final_states: np.ndarray, states, *, resamples
                                   f"vertical's is this times {fplan.vertical_factor:g})"})
     exceeded = exceedances(variables, alpha, states)
     levels = np.asarray(fplan.levels.values)
+    turns = fplan.suite.orientations               # rows of one record at several orientations
     if not fplan.samples:
-        fits = [fit_state(levels, exceeded[..., i], resamples=resamples, seed=seed, show=fplan.im.show)
-                for i in range(len(states))]
+        fits = [fit_state(levels, exceeded[..., i], resamples=resamples, seed=seed, show=fplan.im.show,
+                          per_record=turns) for i in range(len(states))]
         return Analysis(variables=variables, exceeded=exceeded, states=list(states), fits=fits)
     records, n_levels = fplan.shape
     rows = np.ascontiguousarray(np.moveaxis(exceeded[:, :, 1:, :], 2, 1).reshape(records * fplan.samples,
                                                                                    n_levels, len(states)))
     fits = [fit_state(levels, rows[..., i], resamples=resamples, seed=seed, show=fplan.im.show,
-                      per_record=fplan.samples) for i in range(len(states))]
-    nominal = [fit_state(levels, exceeded[:, :, 0, i], resamples=resamples, seed=seed, show=fplan.im.show)
-               for i in range(len(states))]
+                      per_record=fplan.samples * turns) for i in range(len(states))]
+    nominal = [fit_state(levels, exceeded[:, :, 0, i], resamples=resamples, seed=seed, show=fplan.im.show,
+                         per_record=turns) for i in range(len(states))]
     return Analysis(variables=variables, exceeded=exceeded, states=list(states), fits=fits, rows=rows,
                     nominal_fits=nominal)
 
@@ -1363,6 +1365,7 @@ def dataset(fplan: FragilityPlan, analysis: Analysis, command_line: str = "") ->
         "vertical_factor": fplan.vertical_factor,
         "vertical_motion": fplan.vertical,
         "vertical_note": fplan.vertical_note,
+        "orientations_per_record": fplan.suite.orientations,
     })
     if fplan.samples:
         attrs.update({"parameter_samples": fplan.samples, "parameter_seed": fplan.seed,
@@ -1602,16 +1605,17 @@ def stored_curves(stored) -> dict:
                    im=im, levels=levels, step=None if step is None else float(step),
                    version=str(attrs.get("rockslide_version", "?")))
     nominal = ()
+    turns = int(attrs.get("orientations_per_record", 1))
     if "sample" not in coords:
-        fits = [fit_state(levels, exceeded[..., i], resamples=resamples, seed=seed, show=im.show)
-                for i in range(len(states))]
+        fits = [fit_state(levels, exceeded[..., i], resamples=resamples, seed=seed, show=im.show,
+                          per_record=turns) for i in range(len(states))]
     else:
         records, n_levels, width = exceeded.shape[:3]
         title += f" x {width} parameter sets"
-        nominal = [fit_state(levels, exceeded[:, :, 0, i], resamples=resamples, seed=seed, show=im.show)
-                   for i in range(len(states))]
+        nominal = [fit_state(levels, exceeded[:, :, 0, i], resamples=resamples, seed=seed, show=im.show,
+                             per_record=turns) for i in range(len(states))]
         exceeded = np.moveaxis(exceeded[:, :, 1:, :], 2, 1).reshape(records * (width - 1), n_levels, len(states))
         fits = [fit_state(levels, exceeded[..., i], resamples=resamples, seed=seed, show=im.show,
-                          per_record=width - 1) for i in range(len(states))]
+                          per_record=(width - 1) * turns) for i in range(len(states))]
     grid, curves = _curves(levels, exceeded, states, fits, im, nominal)
     return {"levels": levels, "grid": grid, "curves": curves, "im": im, "title": title, "caption": text}

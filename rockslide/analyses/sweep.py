@@ -255,6 +255,11 @@ def parse_axis(name: str, spec: str, kind: AxisKind | None = None) -> Axis:
     if kind.bare_unit:
         texts = [t if _PIECE.match(t).group(2) else f"{t}{kind.bare_unit}" for t in texts]
     values = [parse_quantity(t, kind.kind, source=option) for t in texts]
+    if name == "azimuth":
+        for t, v in zip(texts, values, strict=True):
+            if not abs(v) <= 2.0 * math.pi * (1.0 + 1e-12):
+                raise CaseError(f"{t} is beyond +-360 deg (the azimuth of the block's width, clockwise from "
+                                "north; bare numbers are degrees)", source=option)
     seen = {}
     for t, v in zip(texts, values, strict=True):
         if v in seen:
