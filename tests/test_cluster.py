@@ -15,6 +15,7 @@ import threading
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 from conftest import REPO, invoke, one_line_error
 from test_sweep import EXAMPLE, RECORDS, sweep_args, variables_equal
@@ -280,3 +281,15 @@ def test_a_numba_cache_dir_elsewhere_reads_the_shipped_core(tmp_path):
                           env=env, capture_output=True, text=True, timeout=600)
     assert done.returncode == 0, done.stderr
     assert "compiling" not in done.stdout + done.stderr
+
+
+def test_a_worker_that_joins_later_with_another_rockslide_refuses_its_tasks():
+    """Workers are checked before any task (`check_workers_match`); one that joins later (SLURM
+    jobs start when they start) checks each task against the client's identity sent with it."""
+    from rockslide.engine import execute
+
+    mine = local_identity()
+    inputs = [np.zeros((0, 1)), np.zeros((0, 1)), np.zeros((4, 1)), np.zeros(0, np.int64), np.zeros(0, np.int64),
+              np.zeros(0), np.zeros(0)]
+    with pytest.raises(RuntimeError, match="this worker runs rockslide .* the client 9.9.9 .* would differ"):
+        execute.compute_chunk(inputs, 0, 1, {**mine, "rockslide": "9.9.9"})

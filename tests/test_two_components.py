@@ -208,6 +208,10 @@ def test_azimuths_from_at2_headers(pair):
     assert rec.at2_azimuth(pair / "h1.at2") == 0.0
     assert rec.at2_azimuth(pair / "h2.at2") == math.radians(90.0)
     assert rec.at2_azimuth(pair / "up.at2") is None
+    # PEER titles name north 360 as often as 0 ("Sylmar - Olive View Med FF, 360")
+    rec.write_at2(pair / "north.at2", np.zeros(4), DT, title="Northridge-01 1/17/1994, Sylmar - Olive View Med FF",
+                  component="360")
+    assert rec.at2_azimuth(pair / "north.at2") == 0.0
 
 
 def test_azimuths_of_the_peer_kobe_records():

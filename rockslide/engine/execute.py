@@ -16,6 +16,7 @@ callback called, and the final states of every case returned.
 from __future__ import annotations
 
 import contextlib
+import functools
 import time
 import warnings
 from collections.abc import Callable, Sequence
@@ -215,10 +216,16 @@ def _chunk_inputs(plan: Plan, indices: np.ndarray):
             plan.count[indices], plan.factor_h[indices], plan.factor_v[indices])
 
 
-def compute_chunk(inputs, chunk: int, n_chunks: int) -> np.ndarray:
+def compute_chunk(inputs, chunk: int, n_chunks: int, identity: dict | None = None) -> np.ndarray:
     """`batch.compute` of chunk ``chunk`` (cases ``chunk, chunk + n_chunks, ...``,
     `Plan.chunk_indices`) from the whole plan's ``inputs`` (`_chunk_inputs` of every case): a dask
-    task, run where the inputs were sent once."""
+    task, run where the inputs were sent once. ``identity``: the client's `local_identity`; a
+    worker whose own differs (one that joined after `check_workers_match`) refuses the task."""
+    if identity is not None and _own_identity() != identity:
+        mine = _own_identity()
+        raise RuntimeError(f"this worker runs rockslide {mine['rockslide']} (core {mine['core'][:12]}, numba "
+                           f"{mine['numba']}), the client {identity['rockslide']} (core {identity['core'][:12]}, "
+                           f"numba {identity['numba']}): its results would differ; install the same version")
     params, states, base, first, count, kh, kv = inputs
     rows = slice(chunk, None, n_chunks)
     return batch.compute(params[rows], states[rows], base, first[rows], count[rows], kh[rows], kv[rows])
@@ -257,12 +264,13 @@ def _compute_dask(plan, store, chunks, address, progress, wait_workers, say):
         futures = {}
         try:
             _wait_for_workers(client, address, wait_workers, say)
-            check_workers_match(client.run(worker_identity), local_identity(), address)
+            identity = local_identity()
+            check_workers_match(client.run(worker_identity), identity, address)
             # the plan's arrays are sent once to every worker; a task names its chunk only, so that
             # neither the scheduler's memory nor the client's traffic grows with the tasks
             shared = client.scatter(list(_chunk_inputs(plan, slice(None))), broadcast=True)
             for chunk in chunks:
-                future = client.submit(compute_chunk, shared, chunk, plan.n_chunks, pure=False)
+                future = client.submit(compute_chunk, shared, chunk, plan.n_chunks, identity, pure=False)
                 futures[future] = (chunk, plan.chunk_indices(chunk))
             _collect_futures(client, futures, store, address, progress)
         finally:
@@ -288,8 +296,10 @@ def _collect_futures(client, futures: dict, store: ChunkStore, address: str, pro
             if future.status != "finished":
                 if future.status == "error":
                     exc = future.exception()
-                    raise CaseError(f"a task failed on the cluster: {type(exc).__name__}: {exception_text(exc)} "
-                                    "(are rockslide and its dependencies installed on the workers?)",
+                    text = exception_text(exc)
+                    hint = ("" if "would differ" in text else
+                            " (are rockslide and its dependencies installed on the workers?)")
+                    raise CaseError(f"a task failed on the cluster: {type(exc).__name__}: {text}{hint}",
                                     source="--scheduler")
                 raise _workers_lost(address, store) if _no_workers(client) else _lost(address, store)
             try:
@@ -382,6 +392,12 @@ def worker_identity() -> dict:
 
 
 worker_identity.__module__ = "__main__"     # cloudpickle sends functions of __main__ by value
+
+
+@functools.cache
+def _own_identity() -> dict:
+    """`local_identity`, once per process (a worker checks it for every task)."""
+    return local_identity()
 
 
 def local_identity() -> dict:

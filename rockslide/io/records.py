@@ -760,9 +760,9 @@ def at2_azimuth(path) -> float | None:
     if len(lines) < 2:
         return None
     match = _AT2_COMPONENT.match(lines[1].rsplit(",", 1)[-1].strip())
-    if match is None or not float(match.group(1)) < 360.0:
+    if match is None or not float(match.group(1)) <= 360.0:
         return None
-    return math.radians(float(match.group(1)))
+    return math.radians(float(match.group(1)) % 360.0)         # 360: north, as 0 (PEER writes both)
 
 
 def _at2_npts_dt(ctx: _Context, line: str) -> tuple[int, float]:
