@@ -44,14 +44,16 @@ class _SweepCommand(click.Command):
     the help and the command reference list only the axes offered."""
 
     def parse_args(self, ctx, args):
-        from ..analyses.sweep import RETIRED_AXES
-
+        known = {option for param in self.get_params(ctx) for option in getattr(param, "opts", ())}
         for arg in args:
             if arg == "--":
                 break
             name = arg.split("=", 1)[0]
-            if name.startswith("--") and name[2:].replace("-", "_") in RETIRED_AXES:
-                raise CaseError(RETIRED_AXES[name[2:].replace("-", "_")], source=name)
+            if name.startswith("--") and name not in known:      # (the sweep module only then: --help stays light)
+                from ..analyses.sweep import RETIRED_AXES
+
+                if name[2:].replace("-", "_") in RETIRED_AXES:
+                    raise CaseError(RETIRED_AXES[name[2:].replace("-", "_")], source=name)
         return super().parse_args(ctx, args)
 
 

@@ -806,7 +806,7 @@ def read_result(path) -> StoredResult:
         raise OutputError("is a folder, expected a result file (.h5)", source=source)
     regular_size(path, what="result file (.h5)", error=OutputError)      # a FIFO would block
     try:
-        f = h5py.File(path, "r")
+        f = h5py.File(path, "r", locking=False)    # our own lock guards the files (io.files)
     except OSError as exc:
         reason = "not an HDF5 file" if "signature" in str(exc) or "file format" in str(exc) else _reason(exc)
         raise OutputError(f"cannot read as a rockslide result ({reason})", source=source) from None
@@ -1200,7 +1200,7 @@ def file_format(path) -> str | None:
     except OutputError:
         return None                             # the reader of the kind asked says why
     try:
-        with h5py.File(path, "r") as f:
+        with h5py.File(path, "r", locking=False) as f:
             size = f.attrs.get_id("format").get_storage_size() if "format" in f.attrs else 0
             value = _plain(f.attrs.get("format")) if size <= MAX_ATTRIBUTE_BYTES else None
     except OSError:
@@ -1239,7 +1239,7 @@ def read_dataset(path, *, format: str) -> StoredDataset:
         raise OutputError(f"is a folder, expected a {what} ({suffix})", source=source)
     regular_size(path, what=f"{what} ({suffix})", error=OutputError)
     try:
-        f = h5py.File(path, "r")
+        f = h5py.File(path, "r", locking=False)    # our own lock guards the files (io.files)
     except OSError as exc:
         raise OutputError(f"cannot read as a rockslide {short} ({_reason(exc)})", source=source) from None
     with f:
