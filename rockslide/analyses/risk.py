@@ -65,6 +65,9 @@ from ..errors import CaseError
 NEGLIGIBLE = 1e-3
 #: Intervals of the hazard curve the printout names, those that contribute most first.
 TOP_INTERVALS = 3
+#: Relative distance [-] within which a tabulated fragility's level is a hazard level (`Tabulated.snapped`):
+#: far above the rounding of levels computed in floating point (~1e-15), far below any spacing of them.
+SNAP = 1e-9
 #: Levels the disaggregation's density is given at (geometric over the hazard curves' levels).
 DENSITY_POINTS = 400
 
@@ -125,6 +128,10 @@ class Lognormal:
     def __call__(self, x) -> np.ndarray:
         return ndtr(np.log(np.asarray(x, dtype=np.float64) / self.median) / self.beta)
 
+    def snapped(self, levels) -> Lognormal:
+        """Itself: a lognormal has no levels to move (`Tabulated.snapped`)."""
+        return self
+
     def piece_integrals(self, curve: HazardCurve) -> np.ndarray:
         """``integral lambda dP`` over each interval ``(x_i, x_{i+1}]`` of ``curve`` [1/yr]: the closed
         form of the module docstring, in logarithms (no overflow of ``exp(k^2 beta^2 / 2)``)."""
@@ -160,6 +167,20 @@ class Tabulated:
         """``P(F | x) = 1`` for ``x >= threshold``, else 0: a capacity known exactly."""
         return cls(np.array([threshold, threshold]), np.array([0.0, 1.0]))
 
+    def snapped(self, levels) -> Tabulated:
+        """The fragility with each of its levels within `SNAP` (relative) of one of ``levels`` (a
+        hazard curve's) moved onto it: a jump that close to a hazard level is at that level, not
+        in a piece of width ~0 beside it (where its ``Delta P`` would be lost or spread over the
+        next interval). The order of the levels is kept (moving onto the nearest is monotonic)."""
+        levels = np.asarray(levels, dtype=np.float64)
+        nearest = np.clip(np.searchsorted(levels, self.levels), 1, levels.size - 1)
+        below, above = levels[nearest - 1], levels[nearest]
+        target = np.where(np.abs(np.log(self.levels / below)) <= np.abs(np.log(above / self.levels)), below, above)
+        close = np.abs(np.log(self.levels / target)) <= SNAP
+        if not close.any():
+            return self
+        return Tabulated(np.where(close, target, self.levels), self.probabilities)
+
     def _sides(self, x):
         """``P`` just below and at ``x`` (they differ at a jump)."""
         u = np.log(np.asarray(x, dtype=np.float64))
@@ -185,12 +206,9 @@ class Tabulated:
         the intervals cut at the fragility's levels, where ``P`` is linear in ``ln x`` and
         ``lambda`` a power law."""
         x = curve.levels
-        inner = self.levels[(self.levels > x[0]) & (self.levels < x[-1])]
-        # a fragility level within rounding of a hazard level is that level (no piece of width ~0)
-        near = np.searchsorted(x, inner)
-        apart = np.minimum(np.abs(np.log(inner / x[near - 1])), np.abs(np.log(x[near] / inner))) > 1e-9
-        grid = np.unique(np.r_[x, inner[apart]])
-        below, at = self._sides(grid)
+        own = self.snapped(x)
+        grid = np.unique(np.r_[x, own.levels[(own.levels > x[0]) & (own.levels < x[-1])]])
+        below, at = own._sides(grid)
         rate = curve.rate(grid)
         u = np.log(grid)
         du = np.diff(u)
@@ -242,6 +260,7 @@ def rate(fragility, curve: HazardCurve) -> Rate:
     fragility : Lognormal or Tabulated
     curve : HazardCurve
     """
+    fragility = fragility.snapped(curve.levels)     # the same fragility for both terms of eq. (2)
     p = fragility(curve.levels)
     lam = curve.rates
     integrals = fragility.piece_integrals(curve)
