@@ -398,13 +398,11 @@ def _risk_fragility(path, *, damage, stripes, median, beta, im):
                             "(e.g. --median 0.5g --beta 0.4)", source="FRAGILITY")
         measure = fr.parse_im(im)
         theta = parse_quantity(median, measure.kind, source="--median")
-        try:
-            b = float(beta)
-        except (TypeError, ValueError):
-            b = math.nan
-        if not (theta > 0 and math.isfinite(b) and b > 0):
-            raise CaseError(f"the lognormal needs a positive median and beta, got {median!r} and {beta!r}",
-                            source="--median/--beta")
+        if not theta > 0:
+            raise CaseError(f"the lognormal needs a positive median, got {median!r}", source="--median")
+        if rk.beta_problem(beta):
+            raise CaseError(rk.beta_problem(beta), source="--beta")
+        b = float(beta)
         return rk.FragilityUsed(rk.Lognormal(theta, b), damage, "--median/--beta", "lognormal given", theta, b,
                                 [], ""), measure
     if median is not None or beta is not None:
@@ -429,17 +427,26 @@ def _risk_fragility(path, *, damage, stripes, median, beta, im):
                                 "empirical stripes (linear in ln x between them, constant outside)",
                                 variants=[]), measure
     theta, b = float(at["median"]), float(at["beta"])
-    if not (math.isfinite(theta) and math.isfinite(b)):
-        raise CaseError(f"no lognormal fit for {damage!r} ({str(at['fit_note'].values)}); use --stripes for its "
+    note = str(at["fit_note"].values)
+    if not math.isfinite(theta) or (not math.isfinite(b) and note):
+        raise CaseError(f"no lognormal fit for {damage!r} ({note}); use --stripes for its "
                         "empirical fractions", source=str(path))
     bounds = [float(at[f"{name}_{side}"]) for name in ("median", "beta") for side in ("lower", "upper")]
+    for what, value in (("beta", b), ("beta_lower", bounds[2]), ("beta_upper", bounds[3])):
+        if (what == "beta" or math.isfinite(value)) and rk.beta_problem(value):
+            raise CaseError(f"{what} of {damage!r}: {rk.beta_problem(value)}", source=str(path))
     variants, uncertainty, level = [], "", float(ds.attrs.get("confidence_level", 0.95))
     if "bootstrap_median" in at:
         pairs = np.column_stack([at["bootstrap_median"].values, at["bootstrap_beta"].values]).astype(np.float64)
-        pairs = pairs[np.isfinite(pairs).all(axis=1)]
+        pairs = pairs[np.isfinite(pairs).all(axis=1)]             # NaN: a resample without a fit
+        low, high = rk.BETA_RANGE
+        inside = (pairs[:, 1] >= low) & (pairs[:, 1] <= high)
+        left_out = (f"; {np.count_nonzero(~inside)} with beta outside {low:g} ... {high:g} left out"
+                    if not inside.all() else "")
+        pairs = pairs[inside]
         if len(pairs) >= 2:
             uncertainty = (f"the {level:.0%} percentile interval of the rate over the fits of the {len(pairs)} "
-                           "bootstrap resamples of the records")
+                           f"bootstrap resamples of the records{left_out}")
             return rk.FragilityUsed(rk.Lognormal(theta, b), damage, path, "lognormal fit", theta, b,
                                     [rk.Lognormal(m, s) for m, s in pairs], uncertainty, level), measure
     if all(math.isfinite(v) for v in bounds):

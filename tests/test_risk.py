@@ -419,3 +419,32 @@ def test_a_file_the_openquake_engine_wrote():
         assert table.rates == pytest.approx([-math.log(1.0 - float(p)) / 50.0 for p in site[3:]], rel=1e-12)
     ds = rockslide.risk(hazard=path, median="0.3g", beta=0.4)
     assert ds.rate.values[0] > 0 and ds.contribution.values[0].sum() == pytest.approx(ds.rate.values[0])
+
+
+@pytest.mark.parametrize("beta", ["1e-300", "1e300", "nan", "0", "-0.4", "6"])
+def test_a_beta_out_of_bounds_is_one_line(tmp_path, beta):
+    # 1e-300 printed 'nan /yr' with exit 0 and 1e300 warned of an overflow: both are refused
+    good = openquake_csv(tmp_path / "good.csv", [0.1, 0.2], [[0.3, 0.1]])
+    result = invoke("risk", "--median", "0.5g", "--beta", beta, "--hazard", good, "--out-dir", tmp_path)
+    one_line_error(result, "--beta", "0.001 ... 5")
+    assert not list(tmp_path.glob("*.risk.*"))
+
+
+@pytest.mark.parametrize("beta", [1e-300, 1e300, math.nan])
+def test_a_fragility_files_beta_out_of_bounds_names_file_and_state(tmp_path, beta):
+    good = openquake_csv(tmp_path / "good.csv", [0.1, 0.2], [[0.3, 0.1]])
+    frag = fragility_file(tmp_path / "odd.fragility.h5", beta=beta, interval=False)
+    one_line_error(invoke("risk", frag, "--hazard", good), "odd.fragility.h5", "beta", "'overturn'", "0.001 ... 5")
+
+
+def test_bootstrap_resamples_with_a_beta_out_of_bounds_are_left_out(tmp_path):
+    # the percentile interval over the resamples that remain, as computed by hand from the closed form
+    medians, betas = np.array([0.45, 0.5, 0.55, 0.5]), np.array([0.35, 1e-300, 0.45, 0.4])
+    frag = fragility_file(tmp_path / "boot.fragility.h5", bootstrap=(medians * G, betas))
+    x = np.geomspace(1e-3, 1e2, 200)
+    ds = rockslide.risk(frag, {"power law": (x * G, K0 * x ** -K)})
+    kept = [closed_form(theta=m, beta=b) for m, b in zip(medians, betas, strict=True) if b > 1e-3]
+    low, high = np.percentile(kept, [2.5, 97.5])
+    assert [float(ds.rate_lower[0]), float(ds.rate_upper[0])] == pytest.approx([low, high], rel=1e-6)
+    assert "3 bootstrap resamples" in ds.attrs["fragility_uncertainty"]
+    assert "1 with beta outside 0.001 ... 5 left out" in ds.attrs["fragility_uncertainty"]

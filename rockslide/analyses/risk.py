@@ -68,6 +68,13 @@ TOP_INTERVALS = 3
 #: Relative distance [-] within which a tabulated fragility's level is a hazard level (`Tabulated.snapped`):
 #: far above the rounding of levels computed in floating point (~1e-15), far below any spacing of them.
 SNAP = 1e-9
+#: The logarithmic standard deviations [-] of a lognormal fragility that `rate` takes (`beta_problem`).
+#: Below 1e-3 the capacity would be known to 0.1 %, finer than any hazard curve's levels are, and
+#: the closed form's terms underflow (beta 1e-300 gave NaN); above 5 one standard deviation spans a
+#: factor e^10 (2e4) about the median, wider than a hazard curve's levels (0.005 ... 5 g is 1e3):
+#: the rate would say only what the curve's ends do, and (k beta)^2 overflows for beta ~1e154.
+#: Fitted fragilities have 0.1 ... 1.5 (FEMA P-58's 0.2 ... 0.8; rocking blocks' 0.3 ... 0.8).
+BETA_RANGE = (1e-3, 5.0)
 #: Levels the disaggregation's density is given at (geometric over the hazard curves' levels).
 DENSITY_POINTS = 400
 
@@ -116,6 +123,22 @@ class HazardCurve:
 # --------------------------------------------------------------------------------------------------
 # Fragilities
 # --------------------------------------------------------------------------------------------------
+
+
+def beta_problem(beta) -> str:
+    """Why ``beta`` [-] is not a lognormal fragility's logarithmic standard deviation that `rate`
+    takes (not a number, or outside `BETA_RANGE`), or "" when it is."""
+    low, high = BETA_RANGE
+    try:
+        value = float(beta)
+    except (TypeError, ValueError):
+        value = math.nan
+    if low <= value <= high:
+        return ""
+    shown = f"{value:g}" if not math.isnan(value) else repr(beta) if not isinstance(beta, float) else "NaN"
+    return (f"beta {shown} is not within {low:g} ... {high:g}: below, the capacity would be known more finely "
+            "than a hazard curve's levels; above, its spread would be wider than their range (fitted fragilities "
+            "have 0.1 ... 1.5)")
 
 
 @dataclass(frozen=True)
