@@ -254,6 +254,31 @@ def test_plain_table_with_and_without_header(tmp_path):
     assert plain_g.hazard_level.values[0] == pytest.approx(np.array([0.05, 0.1, 0.2]) * G)
 
 
+@pytest.mark.parametrize("header", ["PGA [gal] rate", "PGA [gal], rate", "PGA [gal];rate", "PGA [gal]\trate",
+                                    "PGA (gal) rate", "PGA (gal), rate [1/yr]", "PGA(gal)\trate (1/yr)",
+                                    "pga  [gal]   rate", "PGA [gal] ; rate"])
+def test_a_header_with_units_in_any_separator(tmp_path, header):
+    # 'PGA [g] rate' gave "line 1: 1 values"; the unit is read (gal: levels / 100 in m/s^2)
+    plain = tmp_path / "site.txt"
+    data = "\n".join(f"{x}{';' if ';' in header else ' '}{r}" for x, r in ((50, 1e-2), (100, 2e-3), (200, 3e-4)))
+    plain.write_text(f"{header}\n{data}\n")
+    ds = rockslide.risk(hazard=plain, median="0.15g", beta=0.4)
+    assert ds.hazard_level.values[0] == pytest.approx([0.5, 1.0, 2.0])
+
+
+def test_a_header_naming_the_period_and_the_unit(tmp_path):
+    plain = tmp_path / "sa.txt"
+    plain.write_text("sa(0.3s) (gal) rate\n50 1e-2\n100 2e-3\n")
+    assert rockslide.risk(hazard=plain, median="0.1g", beta=0.4, im="sa(0.3s)").hazard_level.values[0] == \
+        pytest.approx([0.5, 1.0])
+    plain.write_text("SA (0.3 s) rate\n0.05 1e-2\n0.1 2e-3\n")            # no unit: OpenQuake's, g
+    assert rockslide.risk(hazard=plain, median="0.1g", beta=0.4, im="sa(0.3s)").hazard_level.values[0] == \
+        pytest.approx([0.05 * G, 0.1 * G])
+    with pytest.raises(CaseError, match="SA\\(1\\)"):
+        plain.write_text("sa(1s) [g] rate\n0.05 1e-2\n0.1 2e-3\n")
+        rockslide.risk(hazard=plain, median="0.1g", beta=0.4, im="sa(0.3s)")
+
+
 def fragility_file(path, *, median=0.5 * G, beta=0.4, interval=True, im="pga", bootstrap=None):
     """A fragility file with the variables `rockslide fragility` writes that `risk` reads
     (``bootstrap``: ``(medians, betas)`` of resamples, for the first state)."""

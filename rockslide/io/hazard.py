@@ -44,7 +44,11 @@ MAX_BYTES = 200 * 2**20
 
 _IMT = re.compile(r"^\s*(?P<name>pga|pgv|sa)\s*(?:\(\s*(?P<period>[^()]*?)\s*\))?\s*$", re.IGNORECASE)
 _FIELD = re.compile(r"(\w+)\s*=\s*('[^']*'|\"[^\"]*\"|[^,\s\"]+)")
-_HEADER_CELL = re.compile(r"^\s*(?P<name>[^\[\]]*?)\s*(?:\[\s*(?P<unit>[^\[\]]*?)\s*\])?\s*$")
+#: A header cell's trailing unit, in brackets or parentheses: ``PGA [g]``, ``pgv (cm/s)``.
+_HEADER_UNIT = re.compile(r"^\s*(?P<name>.*?)\s*(?:\[\s*(?P<bracket>[^\[\]]*?)\s*\]|\(\s*(?P<paren>[^()]*?)\s*\))\s*$")
+#: A header cell in a white-space separated line: a word and the groups in brackets or parentheses
+#: that follow it (``sa (0.3 s) [g]`` is one cell).
+_SPACED_CELL = re.compile(r"[^\s,;\[\]()]+(?:\s*(?:\[[^\[\]]*\]|\([^()]*\)))*")
 
 
 @dataclass(frozen=True)
@@ -280,8 +284,7 @@ def _read_plain(lines: list[str], source: str, units: str | None, drop_zeros: bo
         text = line.split("#", 1)[0].strip()
         if not text:
             continue
-        cells = [c for c in re.split(r"[,;\s]+", text) if c] if "[" not in text else \
-            [c.strip() for c in re.split(r"[,;\t]", text) if c.strip()]
+        cells = _cells(text)
         if len(cells) != 2:
             raise CaseError(f"{len(cells)} values; a plain hazard curve has two columns: the IM level and its "
                             "annual rate of exceedance [1/yr] (or give OpenQuake's export as written)",
@@ -294,8 +297,7 @@ def _read_plain(lines: list[str], source: str, units: str | None, drop_zeros: bo
             header, header_line = cells, line_number
     measure, unit = None, units
     if header is not None:
-        match = _HEADER_CELL.match(header[0])
-        name, header_unit = (match.group("name"), match.group("unit")) if match else (header[0], None)
+        name, header_unit = _header_cell(header[0])
         if _IMT.match(name):
             measure = parse_measure(name, source=source, field=f"line {header_line}")
         if header_unit:
@@ -307,6 +309,31 @@ def _read_plain(lines: list[str], source: str, units: str | None, drop_zeros: bo
     kept = _without_top_zeros(table[:, 1]) if drop_zeros else len(table)
     levels, rates = table[:kept, 0], table[:kept, 1]
     return [_plain_table(source, measure, levels, rates, unit)]
+
+
+def _cells(text: str) -> list[str]:
+    """The cells of a plain table's line: separated by commas, semicolons or tabs, else by white
+    space; a header's units in brackets or parentheses (``PGA [g] rate``, ``sa(0.3s) (g); rate``)
+    stay with their cell."""
+    if not re.search(r"[\[(]", text):
+        return [c for c in re.split(r"[,;\s]+", text) if c]
+    if re.search(r"[,;\t]", text):
+        return [c.strip() for c in re.split(r"[,;\t]", text) if c.strip()]
+    return _SPACED_CELL.findall(text)
+
+
+def _is_measure(text: str) -> bool:
+    match = _IMT.match(text)
+    return match is not None and (match.group("name").lower() == "sa") == (match.group("period") is not None)
+
+
+def _header_cell(cell: str) -> tuple[str, str | None]:
+    """A header cell's name and unit (None: not given): ``PGA [g]``, ``PGA (g)``, ``sa(0.3s) [g]``,
+    ``sa(0.3s)`` (its parentheses are the period, not a unit), ``level (cm/s)``."""
+    match = _HEADER_UNIT.match(cell)
+    if match is None or (_is_measure(cell) and not _is_measure(match.group("name"))):
+        return cell.strip(), None
+    return match.group("name"), match.group("bracket") if match.group("bracket") is not None else match.group("paren")
 
 
 def _plain_table(source: str, measure: Measure | None, levels, rates, unit: str | None) -> HazardTable:
