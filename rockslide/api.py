@@ -313,7 +313,7 @@ def ensemble(case: Case | Mapping | str | Path, n: int = 200, *, seed: int = 1,
 def risk(fragility: str | Path | None = None, hazard=None, *, damage: str = "overturn", stripes: bool = False,
          median: str | float | None = None, beta: float | None = None, im: str = "pga",
          life: str | float = 50.0, age: str | float | None = None, confidence: float = 0.95,
-         hazard_units: str | None = None, drop_zero_poe: bool = False):
+         hazard_units: str | None = None, trim_poe: bool = False, drop_zero_poe: bool = False):
     """The annual rate of a damage state at a site: a fragility integrated over hazard curves, as
     ``rockslide risk`` (`analyses.risk`; docs/risk.md).
 
@@ -345,10 +345,15 @@ def risk(fragility: str | Path | None = None, hazard=None, *, damage: str = "ove
         have toppled with more than 95 % probability).
     hazard_units : str, optional
         The unit of a plain table's levels when its header does not say (default g, cm/s for PGV).
+    trim_poe : bool
+        Leave out the levels at the ends of each hazard curve where OpenQuake's PoE has no rate to
+        interpolate: those with PoE 1 at its lowest levels (an infinite rate; OpenQuake writes 1
+        there for long investigation times) and those with PoE 0 at its highest (below its
+        precision); a plain table's rates ``inf`` and 0 likewise. The rate is then a lower bound
+        (``rate_missing_max`` says by how much at most). Without it a PoE of 1 or 0 is refused, as
+        is one between other values with it.
     drop_zero_poe : bool
-        End each hazard curve at its last positive PoE (rate): OpenQuake writes 0 where the PoE is
-        below its precision. The rate is then a lower bound (``rate_missing_max`` says by how much
-        at most). Without it a PoE of 0 is refused.
+        The same as ``trim_poe`` (its former name).
 
     Returns
     -------
@@ -365,18 +370,18 @@ def risk(fragility: str | Path | None = None, hazard=None, *, damage: str = "ove
 
     analysis = risk_analysis(fragility, hazard, damage=damage, stripes=stripes, median=median, beta=beta, im=im,
                              life=life, age=age, confidence=confidence, hazard_units=hazard_units,
-                             drop_zero_poe=drop_zero_poe)
+                             trim_poe=trim_poe or drop_zero_poe)
     return datasets.study_dataset(*rk.dataset(analysis))
 
 
 def risk_analysis(fragility=None, hazard=None, *, damage: str = "overturn", stripes: bool = False, median=None,
                   beta=None, im: str = "pga", life=50.0, age=None, confidence: float = 0.95, hazard_units=None,
-                  drop_zero_poe: bool = False):
+                  trim_poe: bool = False):
     """`risk`'s `analyses.risk.Analysis` (for the command's printout and figure); same arguments."""
     from .analyses import risk as rk
 
     used, measure = _risk_fragility(fragility, damage=damage, stripes=stripes, median=median, beta=beta, im=im)
-    curves, about = _hazard_curves(hazard, measure, hazard_units, drop_zero_poe)
+    curves, about = _hazard_curves(hazard, measure, hazard_units, trim_poe)
     if not 0.0 < float(confidence) < 1.0:
         raise CaseError(f"must be within 0 and 1 (e.g. 0.95), got {confidence!r}", source="--confidence")
     years = rk.parse_years(life, source="--life")
@@ -458,7 +463,7 @@ def _risk_fragility(path, *, damage, stripes, median, beta, im):
                             uncertainty), measure
 
 
-def _hazard_curves(hazard, measure, units, drop_zeros: bool):
+def _hazard_curves(hazard, measure, units, trim: bool):
     """`analyses.risk.HazardCurve` s from `risk`'s ``hazard`` (files or arrays), checked against the
     fragility's ``measure``; and what is known of each (file, kind, site)."""
     from .analyses import risk as rk
@@ -478,14 +483,15 @@ def _hazard_curves(hazard, measure, units, drop_zeros: bool):
     else:
         for path in [hazard] if isinstance(hazard, (str, Path)) else hazard:
             tables += [hz.matching(t, measure.name, measure.period, measure.kind, measure.label)
-                       for t in hz.read_hazard(path, units=units, drop_zeros=drop_zeros)]
+                       for t in hz.read_hazard(path, units=units, trim=trim)]
     names = [t.name for t in tables]
     curves, about = [], []
     for t in tables:
         name = t.name if names.count(t.name) == 1 else f"{Path(t.source).name}: {t.name}"
         curves.append(rk.HazardCurve(name, t.levels, t.rates))
         about.append({"source": t.source, "kind": t.kind, "lon": t.site[0], "lat": t.site[1],
-                      "investigation_time": t.investigation_time})
+                      "investigation_time": t.investigation_time, "dropped_low": t.dropped_low,
+                      "dropped_high": t.dropped_high})
     return curves, about
 
 

@@ -232,7 +232,7 @@ def test_spectral_acceleration_and_pgv_units(tmp_path):
 def test_zeros_at_the_top_of_a_curve_only_with_drop_zero_poe(tmp_path):
     # OpenQuake writes 0.000000E+00 where the PoE is below its precision (the manual's example)
     path = openquake_csv(tmp_path / "z.csv", [0.1, 0.2, 0.4, 0.8, 1.6], [[0.3, 0.1, 0.01, 0.0, 0.0]])
-    with pytest.raises(CaseError, match="--drop-zero-poe"):
+    with pytest.raises(CaseError, match="--trim-poe"):
         rockslide.risk(hazard=path, median="0.5g", beta=0.4)
     ds = rockslide.risk(hazard=path, median="0.5g", beta=0.4, drop_zero_poe=True)
     assert np.isfinite(ds.hazard_level.values[0]).sum() == 3
@@ -241,6 +241,36 @@ def test_zeros_at_the_top_of_a_curve_only_with_drop_zero_poe(tmp_path):
     inside = openquake_csv(tmp_path / "in.csv", [0.1, 0.2, 0.4], [[0.3, 0.0, 0.01]])
     with pytest.raises(CaseError, match="poe-0.2000000"):
         rockslide.risk(hazard=inside, median="0.5g", beta=0.4, drop_zero_poe=True)
+
+
+def test_poe_of_1_at_the_low_levels_and_0_at_the_high_trimmed(tmp_path):
+    # OpenQuake writes 1.000000E+00 at the lowest levels for long investigation times (an infinite
+    # rate): --trim-poe (and its former name --drop-zero-poe) leaves out both ends and says so
+    poes = [[1.0, 1.0, 0.999, 0.9, 0.3, 0.05, 0.0, 0.0], [1.0, 0.9999, 0.999, 0.9, 0.3, 0.05, 1e-3, 0.0]]
+    levels = [0.005, 0.01, 0.05, 0.1, 0.4, 0.8, 1.6, 3.2]
+    path = openquake_csv(tmp_path / "long.csv", levels, poes, years=10_000.0, sites=[(0.0, 0.0), (0.1, 0.0)])
+    one_line_error(invoke("risk", "--median", "0.5g", "--beta", "0.4", "--hazard", path, "--out-dir", tmp_path),
+                   "poe-0.0050000", "--trim-poe")
+    for option in ("--trim-poe", "--drop-zero-poe"):
+        result = invoke("risk", "--median", "0.5g", "--beta", "0.4", "--hazard", path, "--out-dir", tmp_path,
+                        option, "--overwrite", "--no-plot")
+        assert result.exit_code == 0, result.output
+        assert "left out 2 levels (0.005 g ... 0.01 g) at the low end with PoE 1" in result.stdout
+        assert "2 levels (1.6 g ... 3.2 g) at the high end with PoE 0" in result.stdout
+        assert "left out 1 level (0.005 g) at the low end with PoE 1 (an infinite rate) and 1 level (3.2 g) at " \
+               "the high end" in result.stdout
+    ds = rockslide.risk(hazard=path, median="0.5g", beta=0.4, trim_poe=True)
+    assert ds.hazard_level.values[0][:4] == pytest.approx(np.array(levels[2:6]) * G)
+    assert ds.hazard_rate.values[0][:4] == pytest.approx(-np.log1p(-np.array(poes[0][2:6])) / 10_000.0, rel=1e-12)
+    assert np.isnan(ds.hazard_level.values[0][4:]).all()
+    # a 1 after a PoE below 1, or a 0 before a positive PoE, is still refused
+    for row, column in (([0.999, 1.0, 0.9, 0.3], "poe-0.0100000"), ([1.0, 0.99, 0.0, 0.3], "poe-0.1000000")):
+        bad = openquake_csv(tmp_path / "bad.csv", [0.005, 0.01, 0.1, 0.4], [row], years=10_000.0)
+        with pytest.raises(CaseError, match=column):
+            rockslide.risk(hazard=bad, median="0.5g", beta=0.4, trim_poe=True)
+    only_ends = openquake_csv(tmp_path / "ends.csv", [0.005, 0.01, 0.1, 0.4], [[1.0, 1.0, 0.5, 0.0]])
+    with pytest.raises(CaseError, match="--trim-poe left out 3 levels"):
+        rockslide.risk(hazard=only_ends, median="0.5g", beta=0.4, trim_poe=True)
 
 
 def test_plain_table_with_and_without_header(tmp_path):

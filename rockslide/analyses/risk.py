@@ -421,7 +421,8 @@ class Analysis:
         The IM: ``name``, ``units`` (SI), ``long_name``, ``label``, ``display_unit``, ``display_scale``.
     curves : list of HazardCurve
     about : list of dict
-        Per curve: ``source``, ``kind``, ``lon``, ``lat``, ``investigation_time`` [yr].
+        Per curve: ``source``, ``kind``, ``lon``, ``lat``, ``investigation_time`` [yr] and, when
+        known, ``dropped_low``, ``dropped_high``: the levels [SI] left out at its ends (`dropped_text`).
     results : list of Rate
     intervals : list of tuple
         Per curve, the rate's range over the fragility's uncertainty [1/yr] (NaNs: none).
@@ -581,7 +582,9 @@ def json_summary(analysis: Analysis) -> dict:
                  "rate_interval": [number(v) for v in analysis.intervals[i]],
                  "probability_in_life": float(probability_in(r.rate, analysis.life)),
                  "return_period": number(return_period(r.rate)), "truncated": truncated(r),
-                 "contributions": {"levels": [float(v) for v in c.levels], "rate": [float(v) for v in r.contributions]}}
+                 "contributions": {"levels": [float(v) for v in c.levels], "rate": [float(v) for v in r.contributions]},
+                 "levels_left_out": {"poe_1": [float(v) for v in analysis.about[i].get("dropped_low", ())],
+                                     "poe_0": [float(v) for v in analysis.about[i].get("dropped_high", ())]}}
         if survivals is not None:
             entry.update({"survival": float(survivals[i]),
                           "survival_interval": [number(v) for v in survival(analysis.intervals[i][::-1], analysis.age)],
@@ -615,6 +618,9 @@ def summary_lines(analysis: Analysis, show) -> list[str]:
             text += (f"; survives {analysis.age:g} yr with probability {survivals[i]:.3g}{shown}: {verdict} at "
                      f"{analysis.confidence:.0%}")
         lines.append(text)
+        dropped = dropped_text(analysis.about[i], show)
+        if dropped:
+            lines.append(f"    {dropped}")
         if r.rate <= 0:
             lines.append("    no contribution")
             continue
@@ -625,6 +631,19 @@ def summary_lines(analysis: Analysis, show) -> list[str]:
             parts.append(f"{where} {100 * r.contributions[top] / r.rate:.3g} %")
         lines.append("    most from " + ", ".join(parts))
     return lines
+
+
+def dropped_text(about: dict, show) -> str:
+    """What the readers' ``trim`` left out of a curve (``about`` as `Analysis.about`), or ""; ``show(x)``
+    writes a level [SI]."""
+    def levels(values) -> str:
+        shown = show(values[0]) if len(values) == 1 else f"{show(values[0])} ... {show(values[-1])}"
+        return f"{len(values)} level{'s' if len(values) > 1 else ''} ({shown})"
+
+    low, high = about.get("dropped_low", ()), about.get("dropped_high", ())
+    parts = ([f"{levels(low)} at the low end with PoE 1 (an infinite rate)"] if low else []) + \
+        ([f"{levels(high)} at the high end with PoE 0"] if high else [])
+    return "left out " + " and ".join(parts) if parts else ""
 
 
 def warnings_of(analysis: Analysis, show) -> list[str]:

@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import math
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -98,6 +98,9 @@ class HazardTable:
     level_units : str or None
         None when ``levels`` are SI; else the unit a plain table's levels are in ("": not said,
         OpenQuake's), converted by `matching`.
+    dropped_low, dropped_high : tuple of float
+        [as ``levels``] the levels `read_hazard` left out with ``trim``: at the low end where the
+        PoE is 1 (an infinite rate), at the high end where it is 0.
     """
 
     name: str
@@ -109,6 +112,8 @@ class HazardTable:
     investigation_time: float = math.nan
     site: tuple = (math.nan, math.nan, math.nan)
     level_units: str | None = None
+    dropped_low: tuple = ()
+    dropped_high: tuple = ()
 
 
 def parse_measure(text: str, *, source: str, field: str | None = None) -> Measure:
@@ -161,7 +166,7 @@ def curve_problem(levels, rates) -> str:
     return ""
 
 
-def read_hazard(path, *, units: str | None = None, drop_zeros: bool = False) -> list[HazardTable]:
+def read_hazard(path, *, units: str | None = None, trim: bool = False) -> list[HazardTable]:
     """The hazard curves of a file: OpenQuake's CSV export (one per site), or a plain table (one).
 
     Parameters
@@ -170,10 +175,13 @@ def read_hazard(path, *, units: str | None = None, drop_zeros: bool = False) -> 
     units : str, optional
         The unit of a plain table's levels when its header does not say (``g``, ``gal``, ``cm/s``);
         default OpenQuake's (g, or cm/s for PGV).
-    drop_zeros : bool
-        End each curve at its last positive PoE or rate: the levels above it, where the PoE is 0
-        (OpenQuake writes 0 below its precision), are left out (the rate is then a lower bound,
-        and says by how much at most). A 0 below a positive value is refused still.
+    trim : bool
+        Leave out the levels at each end of a curve where its PoE has no rate to interpolate: at
+        the low end those where it is 1 (an infinite rate: OpenQuake writes ``1.000000E+00`` there
+        for long investigation times; in a plain table a rate ``inf``), at the high end those
+        where it is 0 (below OpenQuake's precision; in a plain table a rate of 0). The rate is then
+        a lower bound, and says by how much at most; the levels left out are in ``dropped_low`` and
+        ``dropped_high``. A 1 or a 0 between other values is refused still.
 
     Raises
     ------
@@ -199,17 +207,20 @@ def read_hazard(path, *, units: str | None = None, drop_zeros: bool = False) -> 
     filled = [line.strip() for line in lines if line.strip()][:2]
     if filled and filled[0].startswith("#") and ("investigation_time" in filled[0] or "imt=" in filled[0]
                                                  or filled[-1].replace(" ", "").startswith("lon,lat,")):
-        return _read_openquake(lines, source, drop_zeros)
-    return _read_plain(lines, source, units, drop_zeros)
+        return _read_openquake(lines, source, trim)
+    return _read_plain(lines, source, units, trim)
 
 
-def _without_top_zeros(values: np.ndarray) -> int:
-    """How many leading values to keep: all but the zeros at the end."""
-    positive = np.flatnonzero(values != 0)
-    return int(positive[-1]) + 1 if positive.size else 0
+def _kept(values: np.ndarray, infinite: float) -> slice:
+    """The values to keep of a curve trimmed at its ends: all but those equal to ``infinite`` (the
+    value of an infinite rate: a PoE of 1) at the start and the zeros at the end."""
+    finite = np.flatnonzero(values != infinite)
+    first = int(finite[0]) if finite.size else values.size
+    nonzero = np.flatnonzero(values != 0)
+    return slice(first, max(first, int(nonzero[-1]) + 1 if nonzero.size else 0))
 
 
-def _read_openquake(lines: list[str], source: str, drop_zeros: bool) -> list[HazardTable]:
+def _read_openquake(lines: list[str], source: str, trim: bool) -> list[HazardTable]:
     numbered = [(n, line) for n, line in enumerate(lines, 1) if line.strip()]
     (_, comment), rest = numbered[0], numbered[1:]
     fields = {key: value.strip("'\"") for key, value in _FIELD.findall(comment)}
@@ -257,28 +268,32 @@ def _read_openquake(lines: list[str], source: str, drop_zeros: bool) -> list[Haz
         except ValueError:
             raise CaseError(f"not numbers: {line.strip()[:60]!r}", source=source, field=where) from None
         poe = np.array(values[first_poe:])
-        kept = _without_top_zeros(poe) if drop_zeros else poe.size
-        bad = ~((poe[:kept] > 0) & (poe[:kept] < 1))
+        kept = _kept(poe, 1.0) if trim else slice(0, poe.size)
+        bad = ~((poe[kept] > 0) & (poe[kept] < 1))
         if bad.any():
-            i = int(np.argmax(bad))
+            i = kept.start + int(np.argmax(bad))
             raise CaseError(f"PoE {poe[i]:g} at {level_columns[i]}: a probability of exceedance must be "
                             "strictly between 0 and 1 (1 is an infinite rate, 0 has no logarithm to interpolate; "
-                            "leave those levels out, or end each curve at its last positive PoE with "
-                            "--drop-zero-poe)", source=source, field=where)
+                            "leave those levels out" + (", as --trim-poe does at the ends of a curve only)" if trim
+                                                        else ", or with --trim-poe those at the ends of each "
+                                                        "curve: PoE 1 at its lowest levels, 0 at its highest)"),
+                            source=source, field=where)
         site = (values[0], values[1], values[2] if first_poe == 3 else math.nan)
         name = kind or "curve"
+        scaled = np.array(levels) * scale
+        dropped = {"dropped_low": tuple(scaled[:kept.start]), "dropped_high": tuple(scaled[kept.stop:])}
         curves.append(HazardTable(name=f"{name} at {site[0]:g},{site[1]:g}", measure=measure,
-                                  levels=np.array(levels[:kept]) * scale, rates=rate_from_poe(poe[:kept], years),
-                                  source=source, kind=kind, investigation_time=years, site=site))
-        problem = curve_problem(levels[:kept], curves[-1].rates)
+                                  levels=scaled[kept], rates=rate_from_poe(poe[kept], years),
+                                  source=source, kind=kind, investigation_time=years, site=site, **dropped))
+        problem = curve_problem(np.array(levels)[kept], curves[-1].rates)
         if problem:
-            raise CaseError(f"{problem} (levels in {display_unit})", source=source, field=where)
+            raise CaseError(f"{problem} (levels in {display_unit}){_trimmed(dropped)}", source=source, field=where)
     if not curves:
         raise CaseError("no site rows after the header", source=source)
     return curves
 
 
-def _read_plain(lines: list[str], source: str, units: str | None, drop_zeros: bool) -> list[HazardTable]:
+def _read_plain(lines: list[str], source: str, units: str | None, trim: bool) -> list[HazardTable]:
     rows, header, header_line = [], None, 0
     for line_number, line in enumerate(lines, 1):
         text = line.split("#", 1)[0].strip()
@@ -306,9 +321,10 @@ def _read_plain(lines: list[str], source: str, units: str | None, drop_zeros: bo
                                 source=source, field=f"line {header_line}")
             unit = header_unit
     table = np.array(rows, dtype=np.float64).reshape(-1, 2)
-    kept = _without_top_zeros(table[:, 1]) if drop_zeros else len(table)
-    levels, rates = table[:kept, 0], table[:kept, 1]
-    return [_plain_table(source, measure, levels, rates, unit)]
+    kept = _kept(table[:, 1], math.inf) if trim else slice(0, len(table))
+    levels, rates = table[kept, 0], table[kept, 1]
+    dropped = {"dropped_low": tuple(table[:kept.start, 0]), "dropped_high": tuple(table[kept.stop:, 0])}
+    return [_plain_table(source, measure, levels, rates, unit, dropped)]
 
 
 def _cells(text: str) -> list[str]:
@@ -336,14 +352,21 @@ def _header_cell(cell: str) -> tuple[str, str | None]:
     return match.group("name"), match.group("bracket") if match.group("bracket") is not None else match.group("paren")
 
 
-def _plain_table(source: str, measure: Measure | None, levels, rates, unit: str | None) -> HazardTable:
+def _plain_table(source: str, measure: Measure | None, levels, rates, unit: str | None,
+                 dropped: dict) -> HazardTable:
     """A plain table's curve; ``measure`` None (the header does not name one) is settled by
-    `matching` with the fragility's."""
+    `matching` with the fragility's; ``dropped``: its `HazardTable.dropped_low` and ``_high``."""
     problem = curve_problem(levels, rates)
     if problem:
-        raise CaseError(problem, source=source)
+        raise CaseError(problem + _trimmed(dropped), source=source)
     return HazardTable(name=Path(source).name, measure=measure, levels=np.asarray(levels), rates=np.asarray(rates),
-                       source=source, level_units=unit or "")
+                       source=source, level_units=unit or "", **dropped)
+
+
+def _trimmed(dropped: dict) -> str:
+    """`` (--trim-poe left out ...)`` for a message about a trimmed curve, or ""."""
+    left_out = len(dropped["dropped_low"]) + len(dropped["dropped_high"])
+    return f" (--trim-poe left out {left_out} levels at its ends)" if left_out else ""
 
 
 def matching(table: HazardTable, im_name: str, period: float | None, kind: str, label: str) -> HazardTable:
@@ -374,8 +397,9 @@ def matching(table: HazardTable, im_name: str, period: float | None, kind: str, 
     unit = table.level_units or OPENQUAKE_UNITS[kind][0]
     scale = unit_factor(unit, kind, source=table.source, field="level unit")
     measure = table.measure or _from_fragility(im_name, period)
-    return HazardTable(name=table.name, measure=measure, levels=table.levels * scale, rates=table.rates,
-                       source=table.source)
+    return replace(table, measure=measure, levels=table.levels * scale, level_units=None,
+                   dropped_low=tuple(np.asarray(table.dropped_low) * scale),
+                   dropped_high=tuple(np.asarray(table.dropped_high) * scale))
 
 
 def _from_fragility(im_name: str, period: float | None) -> Measure:
