@@ -28,7 +28,7 @@ import numpy as np
 
 from .case import Case, case_with, load_case
 from .core.simulate import Result, Summary
-from .errors import CaseError
+from .errors import CaseError, RockslideError
 
 __all__ = ["load_case", "case_with", "run", "sweep", "fragility", "ensemble", "risk", "read_result", "plot_results",
            "export_pelicun",
@@ -381,14 +381,15 @@ def risk_analysis(fragility=None, hazard=None, *, damage: str = "overturn", stri
     from .analyses import risk as rk
 
     used, measure = _risk_fragility(fragility, damage=damage, stripes=stripes, median=median, beta=beta, im=im)
-    curves, about = _hazard_curves(hazard, measure, hazard_units, trim_poe)
+    curves, about, notes = _hazard_curves(hazard, measure, hazard_units, trim_poe, along_block=used.along_block)
     if not 0.0 < float(confidence) < 1.0:
         raise CaseError(f"must be within 0 and 1 (e.g. 0.95), got {confidence!r}", source="--confidence")
     years = rk.parse_years(life, source="--life")
     age_years = None if age is None else rk.parse_years(age, source="--age")
     about_measure = {key: getattr(measure, key) for key in ("name", "units", "long_name", "label", "display_unit",
                                                             "display_scale")}
-    return rk.analyse(used, about_measure, curves, about, life=years, age=age_years, confidence=float(confidence))
+    return rk.analyse(used, about_measure, curves, about, life=years, age=age_years, confidence=float(confidence),
+                      notes=notes)
 
 
 def _risk_fragility(path, *, damage, stripes, median, beta, im):
@@ -418,6 +419,7 @@ def _risk_fragility(path, *, damage, stripes, median, beta, im):
     if isinstance(ds, RunResult) or "damage_state" not in ds.coords:
         raise CaseError("not a fragility file (NAME.fragility.h5 of 'rockslide fragility')", source=path)
     measure = fr.parse_im(ds.attrs["intensity_measure"])
+    along = measure.rotd is None and _two_components(ds.attrs)
     states = [str(s) for s in ds["damage_state"].values]
     if damage not in states:
         raise CaseError(f"no damage state {damage!r} in the file; it has {', '.join(states)}", source="--damage")
@@ -430,7 +432,7 @@ def _risk_fragility(path, *, damage, stripes, median, beta, im):
             raise CaseError(f"no stripe has a run inside the model for {damage!r}", source=str(path))
         return rk.FragilityUsed(rk.Tabulated(levels[known], fraction[known]), damage, str(path),
                                 "empirical stripes (linear in ln x between them, constant outside)",
-                                variants=[]), measure
+                                variants=[], along_block=along), measure
     theta, b = float(at["median"]), float(at["beta"])
     note = str(at["fit_note"].values)
     if not math.isfinite(theta) or (not math.isfinite(b) and note):
@@ -453,26 +455,40 @@ def _risk_fragility(path, *, damage, stripes, median, beta, im):
             uncertainty = (f"the {level:.0%} percentile interval of the rate over the fits of the {len(pairs)} "
                            f"bootstrap resamples of the records{left_out}")
             return rk.FragilityUsed(rk.Lognormal(theta, b), damage, path, "lognormal fit", theta, b,
-                                    [rk.Lognormal(m, s) for m, s in pairs], uncertainty, level), measure
+                                    [rk.Lognormal(m, s) for m, s in pairs], uncertainty, level, along), measure
     if all(math.isfinite(v) for v in bounds):
         variants = rk.lognormal_box(bounds[:2], bounds[2:])
         uncertainty = (f"the range of the rate over the {level:.0%} bootstrap intervals of the median "
                        f"({measure.show(bounds[0])} ... {measure.show(bounds[1])}) and of beta ({bounds[2]:.3g} ... "
                        f"{bounds[3]:.3g}), on a grid over their rectangle (marginal intervals: a wide range)")
     return rk.FragilityUsed(rk.Lognormal(theta, b), damage, str(path), "lognormal fit", theta, b, variants,
-                            uncertainty), measure
+                            uncertainty, along_block=along), measure
 
 
-def _hazard_curves(hazard, measure, units, trim: bool):
+def _two_components(attrs) -> bool:
+    """Whether a fragility file's suite (its ``suite_text``) has records of two horizontal
+    components: its measure, unless RotD, is then of the motion along the block. False when the
+    file does not say (no suite, or one that does not parse)."""
+    from .case import parse_suite
+
+    try:
+        suite = parse_suite(str(attrs.get("suite_text", "")))
+    except RockslideError:
+        return False
+    return any(entry.horizontal_2 is not None for entry in suite.entries)
+
+
+def _hazard_curves(hazard, measure, units, trim: bool, *, along_block: bool = False):
     """`analyses.risk.HazardCurve` s from `risk`'s ``hazard`` (files or arrays), checked against the
-    fragility's ``measure``; and what is known of each (file, kind, site)."""
+    fragility's ``measure`` (``along_block``: of the motion along the block); what is known of each
+    (file, kind, site); and the notes on their components (`io.hazard.component_note`)."""
     from .analyses import risk as rk
     from .io import hazard as hz
 
     if hazard is None or (not isinstance(hazard, (str, Path, Mapping)) and len(hazard) == 0):
         raise CaseError("give one or more hazard curves (OpenQuake's hazard-curve CSV, or a CSV of level and annual "
                         "rate)", source="--hazard")
-    tables = []
+    tables, named = [], False
     if isinstance(hazard, Mapping):
         for name, (levels, rates) in hazard.items():
             problem = hz.curve_problem(levels, rates)
@@ -482,8 +498,10 @@ def _hazard_curves(hazard, measure, units, trim: bool):
                                          np.asarray(rates, dtype=np.float64), "", level_units=None))
     else:
         for path in [hazard] if isinstance(hazard, (str, Path)) else hazard:
-            tables += [hz.matching(t, measure.name, measure.period, measure.kind, measure.label)
-                       for t in hz.read_hazard(path, units=units, trim=trim)]
+            read = hz.read_hazard(path, units=units, trim=trim)
+            named = named or any(t.measure is not None for t in read)     # says which measure it is of
+            tables += [hz.matching(t, measure.name, measure.period, measure.kind, measure.label, rotd=measure.rotd)
+                       for t in read]
     names = [t.name for t in tables]
     curves, about = [], []
     for t in tables:
@@ -492,7 +510,8 @@ def _hazard_curves(hazard, measure, units, trim: bool):
         about.append({"source": t.source, "kind": t.kind, "lon": t.site[0], "lat": t.site[1],
                       "investigation_time": t.investigation_time, "dropped_low": t.dropped_low,
                       "dropped_high": t.dropped_high})
-    return curves, about
+    note = hz.component_note(measure.label, rotd=measure.rotd, along_block=along_block) if named else ""
+    return curves, about, [note] if note else []
 
 
 def read_result(path: str | Path):

@@ -309,7 +309,7 @@ def test_a_header_naming_the_period_and_the_unit(tmp_path):
         rockslide.risk(hazard=plain, median="0.1g", beta=0.4, im="sa(0.3s)")
 
 
-def fragility_file(path, *, median=0.5 * G, beta=0.4, interval=True, im="pga", bootstrap=None):
+def fragility_file(path, *, median=0.5 * G, beta=0.4, interval=True, im="pga", bootstrap=None, suite_text=None):
     """A fragility file with the variables `rockslide fragility` writes that `risk` reads
     (``bootstrap``: ``(medians, betas)`` of resamples, for the first state)."""
     levels = np.array([0.2, 0.4, 0.6, 0.8, 1.0]) * G
@@ -333,8 +333,10 @@ def fragility_file(path, *, median=0.5 * G, beta=0.4, interval=True, im="pga", b
         coords.append(("resample", np.arange(n, dtype=np.float64), {}))
         for name, values in zip(("median", "beta"), bootstrap, strict=True):
             variables[f"bootstrap_{name}"] = (("damage_state", "resample"), np.array([values, [np.nan] * n]), {})
-    results.write_dataset(path, coords, variables, format=results.FRAGILITY_FORMAT,
-                          attrs={"intensity_measure": im, "confidence_level": 0.95})
+    attrs = {"intensity_measure": im, "confidence_level": 0.95}
+    if suite_text is not None:
+        attrs["suite_text"] = suite_text
+    results.write_dataset(path, coords, variables, format=results.FRAGILITY_FORMAT, attrs=attrs)
     return path
 
 
@@ -503,3 +505,63 @@ def test_bootstrap_resamples_with_a_beta_out_of_bounds_are_left_out(tmp_path):
     assert [float(ds.rate_lower[0]), float(ds.rate_upper[0])] == pytest.approx([low, high], rel=1e-6)
     assert "3 bootstrap resamples" in ds.attrs["fragility_uncertainty"]
     assert "1 with beta outside 0.001 ... 5 left out" in ds.attrs["fragility_uncertainty"]
+
+
+
+# --------------------------------------------------------------------------------------------------
+# Components: a hazard curve is of its ground-motion models' component (RotD50 for NGA-West2)
+# --------------------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(("imt", "plain", "rotd50"), [("PGA", "pga", "rotd50_pga"),
+                                                      ("SA(0.3)", "sa(0.3s)", "rotd50_sa(0.3s)"),
+                                                      ("PGV", "pgv", "rotd50_pgv")])
+def test_rotd50_matches_a_hazard_curve_with_one_note_and_rotd100_does_not(tmp_path, imt, plain, rotd50):
+    # RotD50 PGA against OpenQuake's PGA was refused while RotD50 SA(0.3) against SA(0.3) was accepted
+    # (and RotD100 too): one rule for all, the same rate as the plain measure's, one note for 2 files
+    levels, median = ([5.0, 10.0, 20.0], "12cm/s") if imt == "PGV" else ([0.1, 0.4, 0.6], "0.5g")
+    files = [openquake_csv(tmp_path / f"{kind}.csv", levels, [[0.45, 0.05, 0.006]] * 2, imt=imt, kind=kind,
+                           sites=[(0.0, 0.0), (1.0, 0.0)]) for kind in ("mean", "rlz-001")]
+    hazard = [a for f in files for a in ("--hazard", f)]
+    common = ("--median", median, "--beta", "0.4", *hazard, "--out-dir", tmp_path, "--no-plot", "--json")
+    given = invoke("risk", *common, "--im", plain, "--name", "plain")
+    rotd = invoke("risk", *common, "--im", rotd50, "--name", "rotd")
+    assert given.exit_code == 0 and rotd.exit_code == 0, (given.output, rotd.output)
+    assert [c["rate"] for c in json.loads(rotd.stdout)["curves"]] == [c["rate"] for c in
+                                                                      json.loads(given.stdout)["curves"]]
+    assert json.loads(given.stdout)["notes"] == []
+    notes = json.loads(rotd.stdout)["notes"]
+    assert len(notes) == 1 and "RotD50" in notes[0] and "NGA-West2" in notes[0]
+    text = invoke("risk", *common[:-1], "--im", rotd50, "--name", "text", "--overwrite")
+    assert text.exit_code == 0 and text.stdout.count("note:") == 1 and "RotD50" not in text.stderr
+    assert rockslide.read_result(tmp_path / "text.risk.h5").attrs["notes"] == notes[0]
+    refused = invoke("risk", *common, "--im", rotd50.replace("50", "100"), "--name", "r100")
+    one_line_error(refused, "RotD100", "not RotD100", f"--im '{rotd50}'", "mean.csv")
+
+
+def test_a_fragility_file_of_rotd50_gets_the_note(tmp_path):
+    frag = fragility_file(tmp_path / "rotd.fragility.h5", im="rotd50_pga")
+    path = openquake_csv(tmp_path / "h.csv", [0.1, 0.4, 0.6], [[0.45, 0.05, 0.006]])
+    ds = rockslide.risk(frag, path)
+    assert "RotD50 PGA" in ds.attrs["notes"]
+    refused = fragility_file(tmp_path / "rotd100.fragility.h5", im="rotd100_pga")
+    with pytest.raises(CaseError, match="RotD100"):
+        rockslide.risk(refused, path)
+    # arrays or a table without a header say nothing of the component: no note
+    x = np.array([0.1, 0.4, 0.6]) * G
+    assert rockslide.risk(frag, {"site": (x, [1e-2, 1e-3, 1e-4])}).attrs["notes"] == ""
+
+
+TWO = ("records:\n  - name: a\n    horizontal_1: {file: a1.at2, azimuth: 0deg}\n"
+       "    horizontal_2: {file: a2.at2, azimuth: 90deg}\n")
+
+
+@pytest.mark.parametrize(("suite_text", "along"), [(TWO, True), ("records: [a.at2, b.at2]\n", False),
+                                                   (None, False), ("records: [", False)])
+def test_plain_pga_along_the_block_gets_a_note_only_when_the_file_says_so(tmp_path, suite_text, along):
+    # a two-component suite's PGA is of the motion along the block; one component, no suite in
+    # the file, or one that does not parse: unclear, accepted as before without a note
+    frag = fragility_file(tmp_path / "b.fragility.h5", suite_text=suite_text)
+    path = openquake_csv(tmp_path / "h.csv", [0.1, 0.4, 0.6], [[0.45, 0.05, 0.006]])
+    notes = rockslide.risk(frag, path).attrs["notes"]
+    assert ("along the block" in notes and "RotD50" in notes) if along else notes == ""

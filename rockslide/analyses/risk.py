@@ -397,6 +397,9 @@ class FragilityUsed:
     variants_level : float or None
         The ``variants`` are samples: the rate's interval is their central percentile interval of
         this level. None: the rate's smallest and largest over them.
+    along_block : bool
+        Its intensity measure is of the motion along the block, from records of two horizontal
+        components (the fragility file's suite says so).
     """
 
     curve: object
@@ -408,6 +411,7 @@ class FragilityUsed:
     variants: list = field(default_factory=list)
     uncertainty: str = ""
     variants_level: float | None = None
+    along_block: bool = False
 
 
 @dataclass
@@ -432,6 +436,8 @@ class Analysis:
         [yr] a precariously balanced rock's age.
     confidence : float
         Of the rejection of a hazard curve by the rock's survival.
+    notes : list of str
+        Conditions of the result printed once (`io.hazard.component_note`).
     """
 
     fragility: FragilityUsed
@@ -443,6 +449,7 @@ class Analysis:
     life: float
     age: float | None
     confidence: float
+    notes: list = field(default_factory=list)
 
     @property
     def rates(self) -> np.ndarray:
@@ -454,14 +461,15 @@ class Analysis:
 
 
 def analyse(fragility: FragilityUsed, measure: dict, curves, about, *, life: float, age: float | None = None,
-            confidence: float = 0.95) -> Analysis:
+            confidence: float = 0.95, notes=()) -> Analysis:
     """The rate of ``fragility``'s damage state under each hazard curve, with its interval over the
     fragility's uncertainty (arguments as the attributes of `Analysis`)."""
     results = [rate(fragility.curve, c) for c in curves]
     intervals = [rate_range(fragility.variants, c, fragility.variants_level) if fragility.variants
                  else (math.nan, math.nan) for c in curves]
     return Analysis(fragility=fragility, measure=dict(measure), curves=list(curves), about=list(about),
-                    results=results, intervals=intervals, life=life, age=age, confidence=confidence)
+                    results=results, intervals=intervals, life=life, age=age, confidence=confidence,
+                    notes=list(notes))
 
 
 INTEGRATION = ("lambda_F = integral of P(F|x) |d lambda(x)|, the hazard curve log-log interpolated between its "
@@ -562,6 +570,7 @@ def dataset(analysis: Analysis, command_line: str = "") -> tuple[list, dict, dic
         "intensity_measure_display_scale": im["display_scale"],
         "service_life": analysis.life,
         "integration": INTEGRATION,
+        "notes": "\n".join(analysis.notes),
     }
     if analysis.age is not None:
         attrs.update({"age": analysis.age, "confidence_level": analysis.confidence})
@@ -597,14 +606,14 @@ def json_summary(analysis: Analysis) -> dict:
             "units": {"rate": "1/yr", "levels": analysis.measure["units"], "return_period": "yr"},
             "service_life": analysis.life, "age": analysis.age,
             "confidence": analysis.confidence if analysis.age is not None else None,
-            "integration": INTEGRATION, "curves": curves}
+            "integration": INTEGRATION, "notes": list(analysis.notes), "curves": curves}
 
 
 def summary_lines(analysis: Analysis, show) -> list[str]:
     """The printout: one line per curve, then the warnings of truncation; ``show(x)`` writes a
     level [SI] in its display unit."""
     f = analysis.fragility
-    lines = [f"{f.damage_state}: {f.form} from {f.source}"]
+    lines = [f"{f.damage_state}: {f.form} from {f.source}"] + [f"  note: {note}" for note in analysis.notes]
     survivals = analysis.survivals
     for i, (c, r) in enumerate(zip(analysis.curves, analysis.results, strict=True)):
         low, high = analysis.intervals[i]

@@ -369,29 +369,42 @@ def _trimmed(dropped: dict) -> str:
     return f" (--trim-poe left out {left_out} levels at its ends)" if left_out else ""
 
 
-def matching(table: HazardTable, im_name: str, period: float | None, kind: str, label: str) -> HazardTable:
+def matching(table: HazardTable, im_name: str, period: float | None, kind: str, label: str, *,
+             rotd: int | None = None) -> HazardTable:
     """``table`` with its levels in SI, once its measure is checked against a fragility's.
+
+    A hazard curve that names its measure (OpenQuake's ``PGA``, ``SA(T)``, ``PGV``; a plain
+    table's header) is of the horizontal component its ground-motion models define: RotD50 for the
+    NGA-West2 models, the geometric mean for older ones. A fragility of RotD50 of the same measure
+    (and period) matches it (`component_note` says on what condition); one of RotD100 does not.
 
     Parameters
     ----------
     im_name, period, kind
-        The fragility's measure: ``pga``, ``pgv``, ``sa(0.3 s)``; its period [s] or None; the unit
-        kind of its levels (``acceleration``, ``velocity``, ``dimensionless``).
+        The fragility's measure: ``pga``, ``pgv``, ``sa(0.3 s)``, ``rotd50_pga``...; its period [s]
+        or None; the unit kind of its levels (``acceleration``, ``velocity``, ``dimensionless``).
     label : str
         The fragility's measure for messages (``PGA``, ``Sa(0.3 s, 5 %)``).
+    rotd : int or None
+        50 or 100 when the fragility's measure is RotD50 or RotD100 of ``im_name``'s.
 
     Raises
     ------
     CaseError
-        The measures differ, or the fragility's has no hazard curve (``pga_rocking``).
+        The measures differ, the fragility's is RotD100, or it has no hazard curve (``pga_rocking``).
     """
     if kind not in OPENQUAKE_UNITS:
         raise CaseError(f"the fragility's intensity measure {label} is not one a hazard curve gives (PGA, PGV or "
                         "SA(T)): run 'rockslide fragility' with --im pga, pgv or sa(T)", source=table.source)
-    if table.measure is not None and not table.measure.same_as(im_name, period):
+    base = im_name.split("_", 1)[1] if rotd is not None else im_name
+    if table.measure is not None and not table.measure.same_as(base, period):
         raise CaseError(f"the hazard curve is of {table.measure}, the fragility of {label}: give a hazard curve of "
-                        f"{label} (or a fragility computed with --im {_rockslide_name(table.measure)})",
+                        f"{label} (or a fragility computed with --im {_rockslide_name(table.measure, rotd)})",
                         source=table.source)
+    if table.measure is not None and rotd == 100:
+        raise CaseError(f"the hazard curve is of {table.measure}, the fragility of {label}: a hazard curve is of its "
+                        "ground-motion models' component (RotD50 in NGA-West2, the geometric mean before), not "
+                        f"RotD100; use a fragility with --im 'rotd50_{base.replace(' ', '')}'", source=table.source)
     if table.level_units is None:                  # OpenQuake's: levels already SI
         return table
     unit = table.level_units or OPENQUAKE_UNITS[kind][0]
@@ -402,9 +415,29 @@ def matching(table: HazardTable, im_name: str, period: float | None, kind: str, 
                    dropped_high=tuple(np.asarray(table.dropped_high) * scale))
 
 
+def component_note(label: str, *, rotd: int | None, along_block: bool) -> str:
+    """The condition under which a fragility of ``label`` (RotD50, or of the motion along a block
+    from two-component records) and a hazard curve that names its measure give a consistent rate
+    (Baker and Cornell 2006: the fragility's and the hazard's components must be the same), or ""
+    (a fragility of one component per record: no condition known to state)."""
+    gmpe = ("the component its ground-motion models define (RotD50 for the NGA-West2 models, the geometric mean "
+            "for older ones)")
+    if rotd == 50:
+        return (f"the fragility is of {label}, the hazard curve of {gmpe}: the rate is consistent only if that is "
+                "RotD50; for a geometric-mean hazard, convert it to RotD50 first (e.g. Boore and Kishida 2017)")
+    if along_block:
+        return (f"the fragility is of {label} along the block (its records' two horizontal components turned to "
+                f"the block's direction), the hazard curve of {gmpe}: the rate is consistent only as far as the "
+                "motion along one direction is distributed like that component (its median is close, its scatter "
+                "larger); a fragility with --im 'rotd50_...' matches it")
+    return ""
+
+
 def _from_fragility(im_name: str, period: float | None) -> Measure:
     return Measure("sa", period) if period is not None else Measure(im_name)
 
 
-def _rockslide_name(measure: Measure) -> str:
-    return f"'sa({measure.period:g}s)'" if measure.name == "sa" else measure.name
+def _rockslide_name(measure: Measure, rotd: int | None = None) -> str:
+    """``--im`` of ``measure`` (of its RotD50 when the fragility's is a RotD: a hazard curve's is)."""
+    name = f"sa({measure.period:g}s)" if measure.name == "sa" else measure.name
+    return f"'rotd50_{name}'" if rotd is not None else f"'{name}'" if measure.name == "sa" else name
