@@ -14,12 +14,18 @@ annual rate is ``-ln(1 - PoE) / T`` (the engine's Poisson assumption). OpenQuake
 for PGA and SA, in cm/s for PGV.
 
 **Plain table**: two columns, the IM level and the annual rate of exceedance [1/yr], comma,
-semicolon or white-space separated; ``#`` comments; an optional header whose first cell may name
-the measure and its unit (``PGA [g]``, ``sa(0.3s) [g]``, ``pgv [cm/s]``); without a unit in the
-header the levels are in OpenQuake's units (g, or cm/s for PGV).
+semicolon, tab or white-space separated; ``#`` comments; an optional header whose first cell may
+name the measure and its unit in brackets or parentheses (``PGA [g]``, ``sa(0.3s) [g]``, ``pgv
+(cm/s)``, in a line like ``PGA [g] rate``); without a unit in the header the levels are in
+OpenQuake's units (g, or cm/s for PGV).
+
+A curve that names its measure is of the component its ground-motion models define (RotD50 for
+NGA-West2): `matching` takes a RotD50 fragility for it, refuses a RotD100 one, and
+`component_note` states the condition.
 
 Every curve read is checked (`curve_problem`): two levels or more, increasing; rates positive and
-not increasing; PoE strictly between 0 and 1. A problem is one `CaseError` naming the file, the
+not increasing; PoE strictly between 0 and 1 (with ``trim``, after leaving out PoE 1 at the low end
+and 0 at the high end). A problem is one `CaseError` naming the file, the
 row or column, and what would work.
 """
 
