@@ -112,16 +112,14 @@ def test_a_step_gives_the_hazard_at_the_step(theta):
     assert rk.rate(rk.Tabulated.step(theta * G), curve).rate == pytest.approx(expected, rel=1e-12)
 
 
-@pytest.mark.parametrize("level", [0, 2, 5])
-@pytest.mark.parametrize("offset", [-1e-10, 0.0, 1e-10])
+@pytest.mark.parametrize(("level", "offset"), [(0, 0.0), (0, 1e-10), (2, -1e-10), (2, 0.0), (2, 1e-10),
+                                               (5, -1e-10), (5, 0.0)])      # inside the curve's levels
 def test_a_step_within_rounding_of_a_hazard_level(level, offset):
     # a step at theta = x_i (1 +- 1e-10) gives lambda(theta), which differs from lambda(x_i) by
     # k 1e-10 relative (k < 3 here): 1e-9 separates that from a jump lost or spread over an interval
     curve = rk.HazardCurve("site", np.array([0.05, 0.1, 0.2, 0.4, 0.8, 1.6]) * G,
                            np.array([3e-2, 1e-2, 2.5e-3, 6e-4, 9e-5, 1e-5]))
     theta = curve.levels[level] * (1.0 + offset)
-    if theta < curve.levels[0] or theta > curve.levels[-1]:
-        pytest.skip("outside the curve: no rate to compare with")
     result = rk.rate(rk.Tabulated.step(theta), curve)
     assert result.rate == pytest.approx(curve.rates[level], rel=1e-9)
     assert result.contributions.sum() == pytest.approx(result.rate, rel=1e-12)
