@@ -112,6 +112,19 @@ def test_a_step_gives_the_hazard_at_the_step(theta):
     assert rk.rate(rk.Tabulated.step(theta * G), curve).rate == pytest.approx(expected, rel=1e-12)
 
 
+@pytest.mark.parametrize(("level", "offset"), [(0, 0.0), (0, 1e-10), (2, -1e-10), (2, 0.0), (2, 1e-10),
+                                               (5, -1e-10), (5, 0.0)])      # inside the curve's levels
+def test_a_step_within_rounding_of_a_hazard_level(level, offset):
+    # a step at theta = x_i (1 +- 1e-10) gives lambda(theta), which differs from lambda(x_i) by
+    # k 1e-10 relative (k < 3 here): 1e-9 separates that from a jump lost or spread over an interval
+    curve = rk.HazardCurve("site", np.array([0.05, 0.1, 0.2, 0.4, 0.8, 1.6]) * G,
+                           np.array([3e-2, 1e-2, 2.5e-3, 6e-4, 9e-5, 1e-5]))
+    theta = curve.levels[level] * (1.0 + offset)
+    result = rk.rate(rk.Tabulated.step(theta), curve)
+    assert result.rate == pytest.approx(curve.rates[level], rel=1e-9)
+    assert result.contributions.sum() == pytest.approx(result.rate, rel=1e-12)
+
+
 def test_disaggregation_sums_to_the_rate_and_peaks_near_the_median():
     curve = power_law(60, low=0.01, high=10.0)
     result = rk.rate(rk.Lognormal(THETA * G, BETA), curve)
@@ -217,7 +230,7 @@ def test_spectral_acceleration_and_pgv_units(tmp_path):
 def test_zeros_at_the_top_of_a_curve_only_with_drop_zero_poe(tmp_path):
     # OpenQuake writes 0.000000E+00 where the PoE is below its precision (the manual's example)
     path = openquake_csv(tmp_path / "z.csv", [0.1, 0.2, 0.4, 0.8, 1.6], [[0.3, 0.1, 0.01, 0.0, 0.0]])
-    with pytest.raises(CaseError, match="--drop-zero-poe"):
+    with pytest.raises(CaseError, match="--trim-poe"):
         rockslide.risk(hazard=path, median="0.5g", beta=0.4)
     ds = rockslide.risk(hazard=path, median="0.5g", beta=0.4, drop_zero_poe=True)
     assert np.isfinite(ds.hazard_level.values[0]).sum() == 3
@@ -226,6 +239,36 @@ def test_zeros_at_the_top_of_a_curve_only_with_drop_zero_poe(tmp_path):
     inside = openquake_csv(tmp_path / "in.csv", [0.1, 0.2, 0.4], [[0.3, 0.0, 0.01]])
     with pytest.raises(CaseError, match="poe-0.2000000"):
         rockslide.risk(hazard=inside, median="0.5g", beta=0.4, drop_zero_poe=True)
+
+
+def test_poe_of_1_at_the_low_levels_and_0_at_the_high_trimmed(tmp_path):
+    # OpenQuake writes 1.000000E+00 at the lowest levels for long investigation times (an infinite
+    # rate): --trim-poe (and its former name --drop-zero-poe) leaves out both ends and says so
+    poes = [[1.0, 1.0, 0.999, 0.9, 0.3, 0.05, 0.0, 0.0], [1.0, 0.9999, 0.999, 0.9, 0.3, 0.05, 1e-3, 0.0]]
+    levels = [0.005, 0.01, 0.05, 0.1, 0.4, 0.8, 1.6, 3.2]
+    path = openquake_csv(tmp_path / "long.csv", levels, poes, years=10_000.0, sites=[(0.0, 0.0), (0.1, 0.0)])
+    one_line_error(invoke("risk", "--median", "0.5g", "--beta", "0.4", "--hazard", path, "--out-dir", tmp_path),
+                   "poe-0.0050000", "--trim-poe")
+    for option in ("--trim-poe", "--drop-zero-poe"):
+        result = invoke("risk", "--median", "0.5g", "--beta", "0.4", "--hazard", path, "--out-dir", tmp_path,
+                        option, "--overwrite", "--no-plot")
+        assert result.exit_code == 0, result.output
+        assert "left out 2 levels (0.005 g ... 0.01 g) at the low end with PoE 1" in result.stdout
+        assert "2 levels (1.6 g ... 3.2 g) at the high end with PoE 0" in result.stdout
+        assert "left out 1 level (0.005 g) at the low end with PoE 1 (an infinite rate) and 1 level (3.2 g) at " \
+               "the high end" in result.stdout
+    ds = rockslide.risk(hazard=path, median="0.5g", beta=0.4, trim_poe=True)
+    assert ds.hazard_level.values[0][:4] == pytest.approx(np.array(levels[2:6]) * G)
+    assert ds.hazard_rate.values[0][:4] == pytest.approx(-np.log1p(-np.array(poes[0][2:6])) / 10_000.0, rel=1e-12)
+    assert np.isnan(ds.hazard_level.values[0][4:]).all()
+    # a 1 after a PoE below 1, or a 0 before a positive PoE, is still refused
+    for row, column in (([0.999, 1.0, 0.9, 0.3], "poe-0.0100000"), ([1.0, 0.99, 0.0, 0.3], "poe-0.1000000")):
+        bad = openquake_csv(tmp_path / "bad.csv", [0.005, 0.01, 0.1, 0.4], [row], years=10_000.0)
+        with pytest.raises(CaseError, match=column):
+            rockslide.risk(hazard=bad, median="0.5g", beta=0.4, trim_poe=True)
+    only_ends = openquake_csv(tmp_path / "ends.csv", [0.005, 0.01, 0.1, 0.4], [[1.0, 1.0, 0.5, 0.0]])
+    with pytest.raises(CaseError, match="--trim-poe left out 3 levels"):
+        rockslide.risk(hazard=only_ends, median="0.5g", beta=0.4, trim_poe=True)
 
 
 def test_plain_table_with_and_without_header(tmp_path):
@@ -239,7 +282,32 @@ def test_plain_table_with_and_without_header(tmp_path):
     assert plain_g.hazard_level.values[0] == pytest.approx(np.array([0.05, 0.1, 0.2]) * G)
 
 
-def fragility_file(path, *, median=0.5 * G, beta=0.4, interval=True, im="pga", bootstrap=None):
+@pytest.mark.parametrize("header", ["PGA [gal] rate", "PGA [gal], rate", "PGA [gal];rate", "PGA [gal]\trate",
+                                    "PGA (gal) rate", "PGA (gal), rate [1/yr]", "PGA(gal)\trate (1/yr)",
+                                    "pga  [gal]   rate", "PGA [gal] ; rate"])
+def test_a_header_with_units_in_any_separator(tmp_path, header):
+    # 'PGA [g] rate' gave "line 1: 1 values"; the unit is read (gal: levels / 100 in m/s^2)
+    plain = tmp_path / "site.txt"
+    data = "\n".join(f"{x}{';' if ';' in header else ' '}{r}" for x, r in ((50, 1e-2), (100, 2e-3), (200, 3e-4)))
+    plain.write_text(f"{header}\n{data}\n")
+    ds = rockslide.risk(hazard=plain, median="0.15g", beta=0.4)
+    assert ds.hazard_level.values[0] == pytest.approx([0.5, 1.0, 2.0])
+
+
+def test_a_header_naming_the_period_and_the_unit(tmp_path):
+    plain = tmp_path / "sa.txt"
+    plain.write_text("sa(0.3s) (gal) rate\n50 1e-2\n100 2e-3\n")
+    assert rockslide.risk(hazard=plain, median="0.1g", beta=0.4, im="sa(0.3s)").hazard_level.values[0] == \
+        pytest.approx([0.5, 1.0])
+    plain.write_text("SA (0.3 s) rate\n0.05 1e-2\n0.1 2e-3\n")            # no unit: OpenQuake's, g
+    assert rockslide.risk(hazard=plain, median="0.1g", beta=0.4, im="sa(0.3s)").hazard_level.values[0] == \
+        pytest.approx([0.05 * G, 0.1 * G])
+    with pytest.raises(CaseError, match="SA\\(1\\)"):
+        plain.write_text("sa(1s) [g] rate\n0.05 1e-2\n0.1 2e-3\n")
+        rockslide.risk(hazard=plain, median="0.1g", beta=0.4, im="sa(0.3s)")
+
+
+def fragility_file(path, *, median=0.5 * G, beta=0.4, interval=True, im="pga", bootstrap=None, suite_text=None):
     """A fragility file with the variables `rockslide fragility` writes that `risk` reads
     (``bootstrap``: ``(medians, betas)`` of resamples, for the first state)."""
     levels = np.array([0.2, 0.4, 0.6, 0.8, 1.0]) * G
@@ -263,8 +331,10 @@ def fragility_file(path, *, median=0.5 * G, beta=0.4, interval=True, im="pga", b
         coords.append(("resample", np.arange(n, dtype=np.float64), {}))
         for name, values in zip(("median", "beta"), bootstrap, strict=True):
             variables[f"bootstrap_{name}"] = (("damage_state", "resample"), np.array([values, [np.nan] * n]), {})
-    results.write_dataset(path, coords, variables, format=results.FRAGILITY_FORMAT,
-                          attrs={"intensity_measure": im, "confidence_level": 0.95})
+    attrs = {"intensity_measure": im, "confidence_level": 0.95}
+    if suite_text is not None:
+        attrs["suite_text"] = suite_text
+    results.write_dataset(path, coords, variables, format=results.FRAGILITY_FORMAT, attrs=attrs)
     return path
 
 
@@ -404,3 +474,92 @@ def test_a_file_the_openquake_engine_wrote():
         assert table.rates == pytest.approx([-math.log(1.0 - float(p)) / 50.0 for p in site[3:]], rel=1e-12)
     ds = rockslide.risk(hazard=path, median="0.3g", beta=0.4)
     assert ds.rate.values[0] > 0 and ds.contribution.values[0].sum() == pytest.approx(ds.rate.values[0])
+
+
+@pytest.mark.parametrize("beta", ["1e-300", "1e300", "nan", "0", "-0.4", "6"])
+def test_a_beta_out_of_bounds_is_one_line(tmp_path, beta):
+    # 1e-300 printed 'nan /yr' with exit 0 and 1e300 warned of an overflow: both are refused
+    good = openquake_csv(tmp_path / "good.csv", [0.1, 0.2], [[0.3, 0.1]])
+    result = invoke("risk", "--median", "0.5g", "--beta", beta, "--hazard", good, "--out-dir", tmp_path)
+    one_line_error(result, "--beta", "0.001 ... 5")
+    assert not list(tmp_path.glob("*.risk.*"))
+
+
+@pytest.mark.parametrize("beta", [1e-300, 1e300, math.nan])
+def test_a_fragility_files_beta_out_of_bounds_names_file_and_state(tmp_path, beta):
+    good = openquake_csv(tmp_path / "good.csv", [0.1, 0.2], [[0.3, 0.1]])
+    frag = fragility_file(tmp_path / "odd.fragility.h5", beta=beta, interval=False)
+    one_line_error(invoke("risk", frag, "--hazard", good), "odd.fragility.h5", "beta", "'overturn'", "0.001 ... 5")
+
+
+def test_bootstrap_resamples_with_a_beta_out_of_bounds_are_left_out(tmp_path):
+    # the percentile interval over the resamples that remain, as computed by hand from the closed form
+    medians, betas = np.array([0.45, 0.5, 0.55, 0.5]), np.array([0.35, 1e-300, 0.45, 0.4])
+    frag = fragility_file(tmp_path / "boot.fragility.h5", bootstrap=(medians * G, betas))
+    x = np.geomspace(1e-3, 1e2, 200)
+    ds = rockslide.risk(frag, {"power law": (x * G, K0 * x ** -K)})
+    kept = [closed_form(theta=m, beta=b) for m, b in zip(medians, betas, strict=True) if b > 1e-3]
+    low, high = np.percentile(kept, [2.5, 97.5])
+    assert [float(ds.rate_lower[0]), float(ds.rate_upper[0])] == pytest.approx([low, high], rel=1e-6)
+    assert "3 bootstrap resamples" in ds.attrs["fragility_uncertainty"]
+    assert "1 with beta outside 0.001 ... 5 left out" in ds.attrs["fragility_uncertainty"]
+
+
+
+# --------------------------------------------------------------------------------------------------
+# Components: a hazard curve is of its ground-motion models' component (RotD50 for NGA-West2)
+# --------------------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(("imt", "plain", "rotd50"), [("PGA", "pga", "rotd50_pga"),
+                                                      ("SA(0.3)", "sa(0.3s)", "rotd50_sa(0.3s)"),
+                                                      ("PGV", "pgv", "rotd50_pgv")])
+def test_rotd50_matches_a_hazard_curve_with_one_note_and_rotd100_does_not(tmp_path, imt, plain, rotd50):
+    # RotD50 PGA against OpenQuake's PGA was refused while RotD50 SA(0.3) against SA(0.3) was accepted
+    # (and RotD100 too): one rule for all, the same rate as the plain measure's, one note for 2 files
+    levels, median = ([5.0, 10.0, 20.0], "12cm/s") if imt == "PGV" else ([0.1, 0.4, 0.6], "0.5g")
+    files = [openquake_csv(tmp_path / f"{kind}.csv", levels, [[0.45, 0.05, 0.006]] * 2, imt=imt, kind=kind,
+                           sites=[(0.0, 0.0), (1.0, 0.0)]) for kind in ("mean", "rlz-001")]
+    hazard = [a for f in files for a in ("--hazard", f)]
+    common = ("--median", median, "--beta", "0.4", *hazard, "--out-dir", tmp_path, "--no-plot", "--json")
+    given = invoke("risk", *common, "--im", plain, "--name", "plain")
+    rotd = invoke("risk", *common, "--im", rotd50, "--name", "rotd")
+    assert given.exit_code == 0 and rotd.exit_code == 0, (given.output, rotd.output)
+    assert [c["rate"] for c in json.loads(rotd.stdout)["curves"]] == [c["rate"] for c in
+                                                                      json.loads(given.stdout)["curves"]]
+    assert json.loads(given.stdout)["notes"] == []
+    notes = json.loads(rotd.stdout)["notes"]
+    assert len(notes) == 1 and "RotD50" in notes[0] and "NGA-West2" in notes[0]
+    text = invoke("risk", *common[:-1], "--im", rotd50, "--name", "text", "--overwrite")
+    assert text.exit_code == 0 and text.stdout.count("note:") == 1 and "RotD50" not in text.stderr
+    assert rockslide.read_result(tmp_path / "text.risk.h5").attrs["notes"] == notes[0]
+    refused = invoke("risk", *common, "--im", rotd50.replace("50", "100"), "--name", "r100")
+    one_line_error(refused, "RotD100", "not RotD100", f"--im '{rotd50}'", "mean.csv")
+
+
+def test_a_fragility_file_of_rotd50_gets_the_note(tmp_path):
+    frag = fragility_file(tmp_path / "rotd.fragility.h5", im="rotd50_pga")
+    path = openquake_csv(tmp_path / "h.csv", [0.1, 0.4, 0.6], [[0.45, 0.05, 0.006]])
+    ds = rockslide.risk(frag, path)
+    assert "RotD50 PGA" in ds.attrs["notes"]
+    refused = fragility_file(tmp_path / "rotd100.fragility.h5", im="rotd100_pga")
+    with pytest.raises(CaseError, match="RotD100"):
+        rockslide.risk(refused, path)
+    # arrays or a table without a header say nothing of the component: no note
+    x = np.array([0.1, 0.4, 0.6]) * G
+    assert rockslide.risk(frag, {"site": (x, [1e-2, 1e-3, 1e-4])}).attrs["notes"] == ""
+
+
+TWO = ("records:\n  - name: a\n    horizontal_1: {file: a1.at2, azimuth: 0deg}\n"
+       "    horizontal_2: {file: a2.at2, azimuth: 90deg}\n")
+
+
+@pytest.mark.parametrize(("suite_text", "along"), [(TWO, True), ("records: [a.at2, b.at2]\n", False),
+                                                   (None, False), ("records: [", False)])
+def test_plain_pga_along_the_block_gets_a_note_only_when_the_file_says_so(tmp_path, suite_text, along):
+    # a two-component suite's PGA is of the motion along the block; one component, no suite in
+    # the file, or one that does not parse: unclear, accepted as before without a note
+    frag = fragility_file(tmp_path / "b.fragility.h5", suite_text=suite_text)
+    path = openquake_csv(tmp_path / "h.csv", [0.1, 0.4, 0.6], [[0.45, 0.05, 0.006]])
+    notes = rockslide.risk(frag, path).attrs["notes"]
+    assert ("along the block" in notes and "RotD50" in notes) if along else notes == ""

@@ -65,6 +65,16 @@ from ..errors import CaseError
 NEGLIGIBLE = 1e-3
 #: Intervals of the hazard curve the printout names, those that contribute most first.
 TOP_INTERVALS = 3
+#: Relative distance [-] within which a tabulated fragility's level is a hazard level (`Tabulated.snapped`):
+#: far above the rounding of levels computed in floating point (~1e-15), far below any spacing of them.
+SNAP = 1e-9
+#: The logarithmic standard deviations [-] of a lognormal fragility that `rate` takes (`beta_problem`).
+#: Below 1e-3 the capacity would be known to 0.1 %, finer than any hazard curve's levels are, and
+#: the closed form's terms underflow (beta 1e-300 gave NaN); above 5 one standard deviation spans a
+#: factor e^10 (2e4) about the median, wider than a hazard curve's levels (0.005 ... 5 g is 1e3):
+#: the rate would say only what the curve's ends do, and (k beta)^2 overflows for beta ~1e154.
+#: Fitted fragilities have 0.1 ... 1.5 (FEMA P-58's 0.2 ... 0.8; rocking blocks' 0.3 ... 0.8).
+BETA_RANGE = (1e-3, 5.0)
 #: Levels the disaggregation's density is given at (geometric over the hazard curves' levels).
 DENSITY_POINTS = 400
 
@@ -115,6 +125,22 @@ class HazardCurve:
 # --------------------------------------------------------------------------------------------------
 
 
+def beta_problem(beta) -> str:
+    """Why ``beta`` [-] is not a lognormal fragility's logarithmic standard deviation that `rate`
+    takes (not a number, or outside `BETA_RANGE`), or "" when it is."""
+    low, high = BETA_RANGE
+    try:
+        value = float(beta)
+    except (TypeError, ValueError):
+        value = math.nan
+    if low <= value <= high:
+        return ""
+    shown = f"{value:g}" if not math.isnan(value) else repr(beta) if not isinstance(beta, float) else "NaN"
+    return (f"beta {shown} is not within {low:g} ... {high:g}: below, the capacity would be known more finely "
+            "than a hazard curve's levels; above, its spread would be wider than their range (fitted fragilities "
+            "have 0.1 ... 1.5)")
+
+
 @dataclass(frozen=True)
 class Lognormal:
     """``P(F | x) = Phi(ln(x / median) / beta)``; ``median`` [SI of the IM], ``beta`` [-]."""
@@ -124,6 +150,10 @@ class Lognormal:
 
     def __call__(self, x) -> np.ndarray:
         return ndtr(np.log(np.asarray(x, dtype=np.float64) / self.median) / self.beta)
+
+    def snapped(self, levels) -> Lognormal:
+        """Itself: a lognormal has no levels to move (`Tabulated.snapped`)."""
+        return self
 
     def piece_integrals(self, curve: HazardCurve) -> np.ndarray:
         """``integral lambda dP`` over each interval ``(x_i, x_{i+1}]`` of ``curve`` [1/yr]: the closed
@@ -160,6 +190,20 @@ class Tabulated:
         """``P(F | x) = 1`` for ``x >= threshold``, else 0: a capacity known exactly."""
         return cls(np.array([threshold, threshold]), np.array([0.0, 1.0]))
 
+    def snapped(self, levels) -> Tabulated:
+        """The fragility with each of its levels within `SNAP` (relative) of one of ``levels`` (a
+        hazard curve's) moved onto it: a jump that close to a hazard level is at that level, not
+        in a piece of width ~0 beside it (where its ``Delta P`` would be lost or spread over the
+        next interval). The order of the levels is kept (moving onto the nearest is monotonic)."""
+        levels = np.asarray(levels, dtype=np.float64)
+        nearest = np.clip(np.searchsorted(levels, self.levels), 1, levels.size - 1)
+        below, above = levels[nearest - 1], levels[nearest]
+        target = np.where(np.abs(np.log(self.levels / below)) <= np.abs(np.log(above / self.levels)), below, above)
+        close = np.abs(np.log(self.levels / target)) <= SNAP
+        if not close.any():
+            return self
+        return Tabulated(np.where(close, target, self.levels), self.probabilities)
+
     def _sides(self, x):
         """``P`` just below and at ``x`` (they differ at a jump)."""
         u = np.log(np.asarray(x, dtype=np.float64))
@@ -185,12 +229,9 @@ class Tabulated:
         the intervals cut at the fragility's levels, where ``P`` is linear in ``ln x`` and
         ``lambda`` a power law."""
         x = curve.levels
-        inner = self.levels[(self.levels > x[0]) & (self.levels < x[-1])]
-        # a fragility level within rounding of a hazard level is that level (no piece of width ~0)
-        near = np.searchsorted(x, inner)
-        apart = np.minimum(np.abs(np.log(inner / x[near - 1])), np.abs(np.log(x[near] / inner))) > 1e-9
-        grid = np.unique(np.r_[x, inner[apart]])
-        below, at = self._sides(grid)
+        own = self.snapped(x)
+        grid = np.unique(np.r_[x, own.levels[(own.levels > x[0]) & (own.levels < x[-1])]])
+        below, at = own._sides(grid)
         rate = curve.rate(grid)
         u = np.log(grid)
         du = np.diff(u)
@@ -242,6 +283,7 @@ def rate(fragility, curve: HazardCurve) -> Rate:
     fragility : Lognormal or Tabulated
     curve : HazardCurve
     """
+    fragility = fragility.snapped(curve.levels)     # the same fragility for both terms of eq. (2)
     p = fragility(curve.levels)
     lam = curve.rates
     integrals = fragility.piece_integrals(curve)
@@ -355,6 +397,9 @@ class FragilityUsed:
     variants_level : float or None
         The ``variants`` are samples: the rate's interval is their central percentile interval of
         this level. None: the rate's smallest and largest over them.
+    along_block : bool
+        Its intensity measure is of the motion along the block, from records of two horizontal
+        components (the fragility file's suite says so).
     """
 
     curve: object
@@ -366,6 +411,7 @@ class FragilityUsed:
     variants: list = field(default_factory=list)
     uncertainty: str = ""
     variants_level: float | None = None
+    along_block: bool = False
 
 
 @dataclass
@@ -379,7 +425,8 @@ class Analysis:
         The IM: ``name``, ``units`` (SI), ``long_name``, ``label``, ``display_unit``, ``display_scale``.
     curves : list of HazardCurve
     about : list of dict
-        Per curve: ``source``, ``kind``, ``lon``, ``lat``, ``investigation_time`` [yr].
+        Per curve: ``source``, ``kind``, ``lon``, ``lat``, ``investigation_time`` [yr] and, when
+        known, ``dropped_low``, ``dropped_high``: the levels [SI] left out at its ends (`dropped_text`).
     results : list of Rate
     intervals : list of tuple
         Per curve, the rate's range over the fragility's uncertainty [1/yr] (NaNs: none).
@@ -389,6 +436,8 @@ class Analysis:
         [yr] a precariously balanced rock's age.
     confidence : float
         Of the rejection of a hazard curve by the rock's survival.
+    notes : list of str
+        Conditions of the result printed once (`io.hazard.component_note`).
     """
 
     fragility: FragilityUsed
@@ -400,6 +449,7 @@ class Analysis:
     life: float
     age: float | None
     confidence: float
+    notes: list = field(default_factory=list)
 
     @property
     def rates(self) -> np.ndarray:
@@ -411,14 +461,15 @@ class Analysis:
 
 
 def analyse(fragility: FragilityUsed, measure: dict, curves, about, *, life: float, age: float | None = None,
-            confidence: float = 0.95) -> Analysis:
+            confidence: float = 0.95, notes=()) -> Analysis:
     """The rate of ``fragility``'s damage state under each hazard curve, with its interval over the
     fragility's uncertainty (arguments as the attributes of `Analysis`)."""
     results = [rate(fragility.curve, c) for c in curves]
     intervals = [rate_range(fragility.variants, c, fragility.variants_level) if fragility.variants
                  else (math.nan, math.nan) for c in curves]
     return Analysis(fragility=fragility, measure=dict(measure), curves=list(curves), about=list(about),
-                    results=results, intervals=intervals, life=life, age=age, confidence=confidence)
+                    results=results, intervals=intervals, life=life, age=age, confidence=confidence,
+                    notes=list(notes))
 
 
 INTEGRATION = ("lambda_F = integral of P(F|x) |d lambda(x)|, the hazard curve log-log interpolated between its "
@@ -519,6 +570,7 @@ def dataset(analysis: Analysis, command_line: str = "") -> tuple[list, dict, dic
         "intensity_measure_display_scale": im["display_scale"],
         "service_life": analysis.life,
         "integration": INTEGRATION,
+        "notes": "\n".join(analysis.notes),
     }
     if analysis.age is not None:
         attrs.update({"age": analysis.age, "confidence_level": analysis.confidence})
@@ -539,7 +591,9 @@ def json_summary(analysis: Analysis) -> dict:
                  "rate_interval": [number(v) for v in analysis.intervals[i]],
                  "probability_in_life": float(probability_in(r.rate, analysis.life)),
                  "return_period": number(return_period(r.rate)), "truncated": truncated(r),
-                 "contributions": {"levels": [float(v) for v in c.levels], "rate": [float(v) for v in r.contributions]}}
+                 "contributions": {"levels": [float(v) for v in c.levels], "rate": [float(v) for v in r.contributions]},
+                 "levels_left_out": {"poe_1": [float(v) for v in analysis.about[i].get("dropped_low", ())],
+                                     "poe_0": [float(v) for v in analysis.about[i].get("dropped_high", ())]}}
         if survivals is not None:
             entry.update({"survival": float(survivals[i]),
                           "survival_interval": [number(v) for v in survival(analysis.intervals[i][::-1], analysis.age)],
@@ -552,14 +606,14 @@ def json_summary(analysis: Analysis) -> dict:
             "units": {"rate": "1/yr", "levels": analysis.measure["units"], "return_period": "yr"},
             "service_life": analysis.life, "age": analysis.age,
             "confidence": analysis.confidence if analysis.age is not None else None,
-            "integration": INTEGRATION, "curves": curves}
+            "integration": INTEGRATION, "notes": list(analysis.notes), "curves": curves}
 
 
 def summary_lines(analysis: Analysis, show) -> list[str]:
     """The printout: one line per curve, then the warnings of truncation; ``show(x)`` writes a
     level [SI] in its display unit."""
     f = analysis.fragility
-    lines = [f"{f.damage_state}: {f.form} from {f.source}"]
+    lines = [f"{f.damage_state}: {f.form} from {f.source}"] + [f"  note: {note}" for note in analysis.notes]
     survivals = analysis.survivals
     for i, (c, r) in enumerate(zip(analysis.curves, analysis.results, strict=True)):
         low, high = analysis.intervals[i]
@@ -573,6 +627,9 @@ def summary_lines(analysis: Analysis, show) -> list[str]:
             text += (f"; survives {analysis.age:g} yr with probability {survivals[i]:.3g}{shown}: {verdict} at "
                      f"{analysis.confidence:.0%}")
         lines.append(text)
+        dropped = dropped_text(analysis.about[i], show)
+        if dropped:
+            lines.append(f"    {dropped}")
         if r.rate <= 0:
             lines.append("    no contribution")
             continue
@@ -583,6 +640,19 @@ def summary_lines(analysis: Analysis, show) -> list[str]:
             parts.append(f"{where} {100 * r.contributions[top] / r.rate:.3g} %")
         lines.append("    most from " + ", ".join(parts))
     return lines
+
+
+def dropped_text(about: dict, show) -> str:
+    """What the readers' ``trim`` left out of a curve (``about`` as `Analysis.about`), or ""; ``show(x)``
+    writes a level [SI]."""
+    def levels(values) -> str:
+        shown = show(values[0]) if len(values) == 1 else f"{show(values[0])} ... {show(values[-1])}"
+        return f"{len(values)} level{'s' if len(values) > 1 else ''} ({shown})"
+
+    low, high = about.get("dropped_low", ()), about.get("dropped_high", ())
+    parts = ([f"{levels(low)} at the low end with PoE 1 (an infinite rate)"] if low else []) + \
+        ([f"{levels(high)} at the high end with PoE 0"] if high else [])
+    return "left out " + " and ".join(parts) if parts else ""
 
 
 def warnings_of(analysis: Analysis, show) -> list[str]:

@@ -36,9 +36,11 @@ from .studies import _command_line
               help="A curve is rejected when the rock would have toppled with more than this probability.")
 @click.option("--hazard-units", default=None, metavar="UNIT", help="Unit of a plain table's levels when its "
               "header does not say (default: OpenQuake's, g; cm/s for PGV).")
-@click.option("--drop-zero-poe", is_flag=True, help="End each hazard curve at its last positive PoE (OpenQuake "
-              "writes 0 below its precision): the rate is then a lower bound, and says by how much at most. "
-              "Without it a PoE of 0 is refused.")
+@click.option("--trim-poe", "--drop-zero-poe", "trim_poe", is_flag=True, help="Leave out the levels at the ends of "
+              "each hazard curve where the PoE has no rate: 1 at the lowest levels (OpenQuake writes it for long "
+              "investigation times), 0 at the highest (below its precision). The rate is then a lower bound, and "
+              "says by how much at most; the printout names the levels left out. Without it a PoE of 1 or 0 is "
+              "refused. (--drop-zero-poe: its former name.)")
 @click.option("--out-dir", type=click.Path(file_okay=False, path_type=Path), default=None,
               help="Output folder (default: the fragility file's folder, else the current one).")
 @click.option("--name", default=None, help="Name of the outputs OUT/NAME.risk.h5 and .png (default: the "
@@ -49,7 +51,7 @@ from .studies import _command_line
 @dpi_option("PNG figure")
 @size_option
 def risk(fragility_file, hazard_files, damage, stripes, median, beta, im_text, life, age, confidence, hazard_units,
-         drop_zero_poe, out_dir, name, overwrite, no_plot, as_json, dpi, size):
+         trim_poe, out_dir, name, overwrite, no_plot, as_json, dpi, size):
     """Annual rate of a damage state at a site: a fragility integrated over hazard curves,
     FRAGILITY_FILE (NAME.fragility.h5) or --median/--beta -> OUT/NAME.risk.h5 and OUT/NAME.risk.png.
 
@@ -77,7 +79,7 @@ def risk(fragility_file, hazard_files, damage, stripes, median, beta, im_text, l
     ctx = click.get_current_context()
     analysis = api.risk_analysis(fragility_file, list(hazard_files), damage=damage, stripes=stripes, median=median,
                                  beta=beta, im=im_text, life=life, age=age, confidence=confidence,
-                                 hazard_units=hazard_units, drop_zero_poe=drop_zero_poe)
+                                 hazard_units=hazard_units, trim_poe=trim_poe)
     folder = expand_user(out_dir, source="--out-dir") if out_dir is not None else \
         (fragility_file.parent if fragility_file is not None else Path("."))
     stem = name or (fragility_file.name.removesuffix(".h5").removesuffix(".fragility") if fragility_file

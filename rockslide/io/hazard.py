@@ -14,12 +14,18 @@ annual rate is ``-ln(1 - PoE) / T`` (the engine's Poisson assumption). OpenQuake
 for PGA and SA, in cm/s for PGV.
 
 **Plain table**: two columns, the IM level and the annual rate of exceedance [1/yr], comma,
-semicolon or white-space separated; ``#`` comments; an optional header whose first cell may name
-the measure and its unit (``PGA [g]``, ``sa(0.3s) [g]``, ``pgv [cm/s]``); without a unit in the
-header the levels are in OpenQuake's units (g, or cm/s for PGV).
+semicolon, tab or white-space separated; ``#`` comments; an optional header whose first cell may
+name the measure and its unit in brackets or parentheses (``PGA [g]``, ``sa(0.3s) [g]``, ``pgv
+(cm/s)``, in a line like ``PGA [g] rate``); without a unit in the header the levels are in
+OpenQuake's units (g, or cm/s for PGV).
+
+A curve that names its measure is of the component its ground-motion models define (RotD50 for
+NGA-West2): `matching` takes a RotD50 fragility for it, refuses a RotD100 one, and
+`component_note` states the condition.
 
 Every curve read is checked (`curve_problem`): two levels or more, increasing; rates positive and
-not increasing; PoE strictly between 0 and 1. A problem is one `CaseError` naming the file, the
+not increasing; PoE strictly between 0 and 1 (with ``trim``, after leaving out PoE 1 at the low end
+and 0 at the high end). A problem is one `CaseError` naming the file, the
 row or column, and what would work.
 """
 
@@ -27,7 +33,7 @@ from __future__ import annotations
 
 import math
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -44,7 +50,11 @@ MAX_BYTES = 200 * 2**20
 
 _IMT = re.compile(r"^\s*(?P<name>pga|pgv|sa)\s*(?:\(\s*(?P<period>[^()]*?)\s*\))?\s*$", re.IGNORECASE)
 _FIELD = re.compile(r"(\w+)\s*=\s*('[^']*'|\"[^\"]*\"|[^,\s\"]+)")
-_HEADER_CELL = re.compile(r"^\s*(?P<name>[^\[\]]*?)\s*(?:\[\s*(?P<unit>[^\[\]]*?)\s*\])?\s*$")
+#: A header cell's trailing unit, in brackets or parentheses: ``PGA [g]``, ``pgv (cm/s)``.
+_HEADER_UNIT = re.compile(r"^\s*(?P<name>.*?)\s*(?:\[\s*(?P<bracket>[^\[\]]*?)\s*\]|\(\s*(?P<paren>[^()]*?)\s*\))\s*$")
+#: A header cell in a white-space separated line: a word and the groups in brackets or parentheses
+#: that follow it (``sa (0.3 s) [g]`` is one cell).
+_SPACED_CELL = re.compile(r"[^\s,;\[\]()]+(?:\s*(?:\[[^\[\]]*\]|\([^()]*\)))*")
 
 
 @dataclass(frozen=True)
@@ -94,6 +104,9 @@ class HazardTable:
     level_units : str or None
         None when ``levels`` are SI; else the unit a plain table's levels are in ("": not said,
         OpenQuake's), converted by `matching`.
+    dropped_low, dropped_high : tuple of float
+        [as ``levels``] the levels `read_hazard` left out with ``trim``: at the low end where the
+        PoE is 1 (an infinite rate), at the high end where it is 0.
     """
 
     name: str
@@ -105,6 +118,8 @@ class HazardTable:
     investigation_time: float = math.nan
     site: tuple = (math.nan, math.nan, math.nan)
     level_units: str | None = None
+    dropped_low: tuple = ()
+    dropped_high: tuple = ()
 
 
 def parse_measure(text: str, *, source: str, field: str | None = None) -> Measure:
@@ -157,7 +172,7 @@ def curve_problem(levels, rates) -> str:
     return ""
 
 
-def read_hazard(path, *, units: str | None = None, drop_zeros: bool = False) -> list[HazardTable]:
+def read_hazard(path, *, units: str | None = None, trim: bool = False) -> list[HazardTable]:
     """The hazard curves of a file: OpenQuake's CSV export (one per site), or a plain table (one).
 
     Parameters
@@ -166,10 +181,13 @@ def read_hazard(path, *, units: str | None = None, drop_zeros: bool = False) -> 
     units : str, optional
         The unit of a plain table's levels when its header does not say (``g``, ``gal``, ``cm/s``);
         default OpenQuake's (g, or cm/s for PGV).
-    drop_zeros : bool
-        End each curve at its last positive PoE or rate: the levels above it, where the PoE is 0
-        (OpenQuake writes 0 below its precision), are left out (the rate is then a lower bound,
-        and says by how much at most). A 0 below a positive value is refused still.
+    trim : bool
+        Leave out the levels at each end of a curve where its PoE has no rate to interpolate: at
+        the low end those where it is 1 (an infinite rate: OpenQuake writes ``1.000000E+00`` there
+        for long investigation times; in a plain table a rate ``inf``), at the high end those
+        where it is 0 (below OpenQuake's precision; in a plain table a rate of 0). The rate is then
+        a lower bound, and says by how much at most; the levels left out are in ``dropped_low`` and
+        ``dropped_high``. A 1 or a 0 between other values is refused still.
 
     Raises
     ------
@@ -195,17 +213,20 @@ def read_hazard(path, *, units: str | None = None, drop_zeros: bool = False) -> 
     filled = [line.strip() for line in lines if line.strip()][:2]
     if filled and filled[0].startswith("#") and ("investigation_time" in filled[0] or "imt=" in filled[0]
                                                  or filled[-1].replace(" ", "").startswith("lon,lat,")):
-        return _read_openquake(lines, source, drop_zeros)
-    return _read_plain(lines, source, units, drop_zeros)
+        return _read_openquake(lines, source, trim)
+    return _read_plain(lines, source, units, trim)
 
 
-def _without_top_zeros(values: np.ndarray) -> int:
-    """How many leading values to keep: all but the zeros at the end."""
-    positive = np.flatnonzero(values != 0)
-    return int(positive[-1]) + 1 if positive.size else 0
+def _kept(values: np.ndarray, infinite: float) -> slice:
+    """The values to keep of a curve trimmed at its ends: all but those equal to ``infinite`` (the
+    value of an infinite rate: a PoE of 1) at the start and the zeros at the end."""
+    finite = np.flatnonzero(values != infinite)
+    first = int(finite[0]) if finite.size else values.size
+    nonzero = np.flatnonzero(values != 0)
+    return slice(first, max(first, int(nonzero[-1]) + 1 if nonzero.size else 0))
 
 
-def _read_openquake(lines: list[str], source: str, drop_zeros: bool) -> list[HazardTable]:
+def _read_openquake(lines: list[str], source: str, trim: bool) -> list[HazardTable]:
     numbered = [(n, line) for n, line in enumerate(lines, 1) if line.strip()]
     (_, comment), rest = numbered[0], numbered[1:]
     fields = {key: value.strip("'\"") for key, value in _FIELD.findall(comment)}
@@ -253,35 +274,38 @@ def _read_openquake(lines: list[str], source: str, drop_zeros: bool) -> list[Haz
         except ValueError:
             raise CaseError(f"not numbers: {line.strip()[:60]!r}", source=source, field=where) from None
         poe = np.array(values[first_poe:])
-        kept = _without_top_zeros(poe) if drop_zeros else poe.size
-        bad = ~((poe[:kept] > 0) & (poe[:kept] < 1))
+        kept = _kept(poe, 1.0) if trim else slice(0, poe.size)
+        bad = ~((poe[kept] > 0) & (poe[kept] < 1))
         if bad.any():
-            i = int(np.argmax(bad))
+            i = kept.start + int(np.argmax(bad))
             raise CaseError(f"PoE {poe[i]:g} at {level_columns[i]}: a probability of exceedance must be "
                             "strictly between 0 and 1 (1 is an infinite rate, 0 has no logarithm to interpolate; "
-                            "leave those levels out, or end each curve at its last positive PoE with "
-                            "--drop-zero-poe)", source=source, field=where)
+                            "leave those levels out" + (", as --trim-poe does at the ends of a curve only)" if trim
+                                                        else ", or with --trim-poe those at the ends of each "
+                                                        "curve: PoE 1 at its lowest levels, 0 at its highest)"),
+                            source=source, field=where)
         site = (values[0], values[1], values[2] if first_poe == 3 else math.nan)
         name = kind or "curve"
+        scaled = np.array(levels) * scale
+        dropped = {"dropped_low": tuple(scaled[:kept.start]), "dropped_high": tuple(scaled[kept.stop:])}
         curves.append(HazardTable(name=f"{name} at {site[0]:g},{site[1]:g}", measure=measure,
-                                  levels=np.array(levels[:kept]) * scale, rates=rate_from_poe(poe[:kept], years),
-                                  source=source, kind=kind, investigation_time=years, site=site))
-        problem = curve_problem(levels[:kept], curves[-1].rates)
+                                  levels=scaled[kept], rates=rate_from_poe(poe[kept], years),
+                                  source=source, kind=kind, investigation_time=years, site=site, **dropped))
+        problem = curve_problem(np.array(levels)[kept], curves[-1].rates)
         if problem:
-            raise CaseError(f"{problem} (levels in {display_unit})", source=source, field=where)
+            raise CaseError(f"{problem} (levels in {display_unit}){_trimmed(dropped)}", source=source, field=where)
     if not curves:
         raise CaseError("no site rows after the header", source=source)
     return curves
 
 
-def _read_plain(lines: list[str], source: str, units: str | None, drop_zeros: bool) -> list[HazardTable]:
+def _read_plain(lines: list[str], source: str, units: str | None, trim: bool) -> list[HazardTable]:
     rows, header, header_line = [], None, 0
     for line_number, line in enumerate(lines, 1):
         text = line.split("#", 1)[0].strip()
         if not text:
             continue
-        cells = [c for c in re.split(r"[,;\s]+", text) if c] if "[" not in text else \
-            [c.strip() for c in re.split(r"[,;\t]", text) if c.strip()]
+        cells = _cells(text)
         if len(cells) != 2:
             raise CaseError(f"{len(cells)} values; a plain hazard curve has two columns: the IM level and its "
                             "annual rate of exceedance [1/yr] (or give OpenQuake's export as written)",
@@ -294,8 +318,7 @@ def _read_plain(lines: list[str], source: str, units: str | None, drop_zeros: bo
             header, header_line = cells, line_number
     measure, unit = None, units
     if header is not None:
-        match = _HEADER_CELL.match(header[0])
-        name, header_unit = (match.group("name"), match.group("unit")) if match else (header[0], None)
+        name, header_unit = _header_cell(header[0])
         if _IMT.match(name):
             measure = parse_measure(name, source=source, field=f"line {header_line}")
         if header_unit:
@@ -304,56 +327,123 @@ def _read_plain(lines: list[str], source: str, units: str | None, drop_zeros: bo
                                 source=source, field=f"line {header_line}")
             unit = header_unit
     table = np.array(rows, dtype=np.float64).reshape(-1, 2)
-    kept = _without_top_zeros(table[:, 1]) if drop_zeros else len(table)
-    levels, rates = table[:kept, 0], table[:kept, 1]
-    return [_plain_table(source, measure, levels, rates, unit)]
+    kept = _kept(table[:, 1], math.inf) if trim else slice(0, len(table))
+    levels, rates = table[kept, 0], table[kept, 1]
+    dropped = {"dropped_low": tuple(table[:kept.start, 0]), "dropped_high": tuple(table[kept.stop:, 0])}
+    return [_plain_table(source, measure, levels, rates, unit, dropped)]
 
 
-def _plain_table(source: str, measure: Measure | None, levels, rates, unit: str | None) -> HazardTable:
+def _cells(text: str) -> list[str]:
+    """The cells of a plain table's line: separated by commas, semicolons or tabs, else by white
+    space; a header's units in brackets or parentheses (``PGA [g] rate``, ``sa(0.3s) (g); rate``)
+    stay with their cell."""
+    if not re.search(r"[\[(]", text):
+        return [c for c in re.split(r"[,;\s]+", text) if c]
+    if re.search(r"[,;\t]", text):
+        return [c.strip() for c in re.split(r"[,;\t]", text) if c.strip()]
+    return _SPACED_CELL.findall(text)
+
+
+def _is_measure(text: str) -> bool:
+    match = _IMT.match(text)
+    return match is not None and (match.group("name").lower() == "sa") == (match.group("period") is not None)
+
+
+def _header_cell(cell: str) -> tuple[str, str | None]:
+    """A header cell's name and unit (None: not given): ``PGA [g]``, ``PGA (g)``, ``sa(0.3s) [g]``,
+    ``sa(0.3s)`` (its parentheses are the period, not a unit), ``level (cm/s)``."""
+    match = _HEADER_UNIT.match(cell)
+    if match is None or (_is_measure(cell) and not _is_measure(match.group("name"))):
+        return cell.strip(), None
+    return match.group("name"), match.group("bracket") if match.group("bracket") is not None else match.group("paren")
+
+
+def _plain_table(source: str, measure: Measure | None, levels, rates, unit: str | None,
+                 dropped: dict) -> HazardTable:
     """A plain table's curve; ``measure`` None (the header does not name one) is settled by
-    `matching` with the fragility's."""
+    `matching` with the fragility's; ``dropped``: its `HazardTable.dropped_low` and ``_high``."""
     problem = curve_problem(levels, rates)
     if problem:
-        raise CaseError(problem, source=source)
+        raise CaseError(problem + _trimmed(dropped), source=source)
     return HazardTable(name=Path(source).name, measure=measure, levels=np.asarray(levels), rates=np.asarray(rates),
-                       source=source, level_units=unit or "")
+                       source=source, level_units=unit or "", **dropped)
 
 
-def matching(table: HazardTable, im_name: str, period: float | None, kind: str, label: str) -> HazardTable:
+def _trimmed(dropped: dict) -> str:
+    """`` (--trim-poe left out ...)`` for a message about a trimmed curve, or ""."""
+    left_out = len(dropped["dropped_low"]) + len(dropped["dropped_high"])
+    return f" (--trim-poe left out {left_out} levels at its ends)" if left_out else ""
+
+
+def matching(table: HazardTable, im_name: str, period: float | None, kind: str, label: str, *,
+             rotd: int | None = None) -> HazardTable:
     """``table`` with its levels in SI, once its measure is checked against a fragility's.
+
+    A hazard curve that names its measure (OpenQuake's ``PGA``, ``SA(T)``, ``PGV``; a plain
+    table's header) is of the horizontal component its ground-motion models define: RotD50 for the
+    NGA-West2 models, the geometric mean for older ones. A fragility of RotD50 of the same measure
+    (and period) matches it (`component_note` says on what condition); one of RotD100 does not.
 
     Parameters
     ----------
     im_name, period, kind
-        The fragility's measure: ``pga``, ``pgv``, ``sa(0.3 s)``; its period [s] or None; the unit
-        kind of its levels (``acceleration``, ``velocity``, ``dimensionless``).
+        The fragility's measure: ``pga``, ``pgv``, ``sa(0.3 s)``, ``rotd50_pga``...; its period [s]
+        or None; the unit kind of its levels (``acceleration``, ``velocity``, ``dimensionless``).
     label : str
         The fragility's measure for messages (``PGA``, ``Sa(0.3 s, 5 %)``).
+    rotd : int or None
+        50 or 100 when the fragility's measure is RotD50 or RotD100 of ``im_name``'s.
 
     Raises
     ------
     CaseError
-        The measures differ, or the fragility's has no hazard curve (``pga_rocking``).
+        The measures differ, the fragility's is RotD100, or it has no hazard curve (``pga_rocking``).
     """
     if kind not in OPENQUAKE_UNITS:
         raise CaseError(f"the fragility's intensity measure {label} is not one a hazard curve gives (PGA, PGV or "
                         "SA(T)): run 'rockslide fragility' with --im pga, pgv or sa(T)", source=table.source)
-    if table.measure is not None and not table.measure.same_as(im_name, period):
+    base = im_name.split("_", 1)[1] if rotd is not None else im_name
+    if table.measure is not None and not table.measure.same_as(base, period):
         raise CaseError(f"the hazard curve is of {table.measure}, the fragility of {label}: give a hazard curve of "
-                        f"{label} (or a fragility computed with --im {_rockslide_name(table.measure)})",
+                        f"{label} (or a fragility computed with --im {_rockslide_name(table.measure, rotd)})",
                         source=table.source)
+    if table.measure is not None and rotd == 100:
+        raise CaseError(f"the hazard curve is of {table.measure}, the fragility of {label}: a hazard curve is of its "
+                        "ground-motion models' component (RotD50 in NGA-West2, the geometric mean before), not "
+                        f"RotD100; use a fragility with --im 'rotd50_{base.replace(' ', '')}'", source=table.source)
     if table.level_units is None:                  # OpenQuake's: levels already SI
         return table
     unit = table.level_units or OPENQUAKE_UNITS[kind][0]
     scale = unit_factor(unit, kind, source=table.source, field="level unit")
     measure = table.measure or _from_fragility(im_name, period)
-    return HazardTable(name=table.name, measure=measure, levels=table.levels * scale, rates=table.rates,
-                       source=table.source)
+    return replace(table, measure=measure, levels=table.levels * scale, level_units=None,
+                   dropped_low=tuple(np.asarray(table.dropped_low) * scale),
+                   dropped_high=tuple(np.asarray(table.dropped_high) * scale))
+
+
+def component_note(label: str, *, rotd: int | None, along_block: bool) -> str:
+    """The condition under which a fragility of ``label`` (RotD50, or of the motion along a block
+    from two-component records) and a hazard curve that names its measure give a consistent rate
+    (Baker and Cornell 2006: the fragility's and the hazard's components must be the same), or ""
+    (a fragility of one component per record: no condition known to state)."""
+    gmpe = ("the component its ground-motion models define (RotD50 for the NGA-West2 models, the geometric mean "
+            "for older ones)")
+    if rotd == 50:
+        return (f"the fragility is of {label}, the hazard curve of {gmpe}: the rate is consistent only if that is "
+                "RotD50; for a geometric-mean hazard, convert it to RotD50 first (e.g. Boore and Kishida 2017)")
+    if along_block:
+        return (f"the fragility is of {label} along the block (its records' two horizontal components turned to "
+                f"the block's direction), the hazard curve of {gmpe}: the rate is consistent only as far as the "
+                "motion along one direction is distributed like that component (its median is close, its scatter "
+                "larger); a fragility with --im 'rotd50_...' matches it")
+    return ""
 
 
 def _from_fragility(im_name: str, period: float | None) -> Measure:
     return Measure("sa", period) if period is not None else Measure(im_name)
 
 
-def _rockslide_name(measure: Measure) -> str:
-    return f"'sa({measure.period:g}s)'" if measure.name == "sa" else measure.name
+def _rockslide_name(measure: Measure, rotd: int | None = None) -> str:
+    """``--im`` of ``measure`` (of its RotD50 when the fragility's is a RotD: a hazard curve's is)."""
+    name = f"sa({measure.period:g}s)" if measure.name == "sa" else measure.name
+    return f"'rotd50_{name}'" if rotd is not None else f"'{name}'" if measure.name == "sa" else name
