@@ -612,7 +612,8 @@ def plot_results(results: Sequence, *, size=None, names: Sequence[str] | None = 
         caption = "\n".join(f"{name}: {plots.run_caption(run)}" for run, name in zip(loaded, names, strict=True))
         figure = plots.runs_overlay_figure([run.result for run in loaded], names, title=" and ".join(names),
                                            caption=caption, size=size, time_shift=time_shift, crop=crop,
-                                           unit=plots.pga_unit(loaded[0].case_text))
+                                           unit=plots.pga_unit(loaded[0].case_text),
+                                           floors=[bool(getattr(run, "base", None)) for run in loaded])
     if path is not None:
         plots.save_figure(figure, path, overwrite=overwrite, dpi=dpi)
     return figure
