@@ -654,6 +654,17 @@ def along_the_block(case_text: str) -> str | None:
     return f"along the block ({math.degrees(case.block.orientation):g} deg)"
 
 
+def on_a_floor(case_text: str) -> bool:
+    """Whether a case's block stands on a floor (``ground.floor``); False for a text that is not a case."""
+    from .case import parse_case
+    from .errors import RockslideError
+
+    try:
+        return bool(case_text) and parse_case(case_text, source="<stored case>").ground.floor.given
+    except RockslideError:
+        return False
+
+
 def pga_unit(case_text: str) -> str | None:
     """The unit a case gives its PGA in (None: not given, or the text is not a case)."""
     from .case import parse_case
