@@ -278,9 +278,9 @@ def case_caption(case_text: str = "", *, records=None, step: float | None = None
             unit = case.units.get("ground.scale.pga_horizontal") or "g"
             mark = " (base)" if "pga" in varied else ""
             parts[-1] += f": PGA {scale.pga_horizontal / unit_factor(unit, 'acceleration'):.4g} {unit}{mark}"
-        turned = _orientation_text(case, azimuths)
+        turned = _orientation_text(case, azimuths, varied="azimuth" in varied)
         if turned:
-            parts.append(turned + (" (base)" if "azimuth" in varied else ""))
+            parts.append(turned)
         floor = floor_text(case, brief=True)
         if floor:
             parts.append(floor + (" (base)" if "floor_period" in varied else ""))
@@ -300,19 +300,23 @@ def case_caption(case_text: str = "", *, records=None, step: float | None = None
     return "; ".join(parts)
 
 
-def _orientation_text(case, azimuths=None) -> str | None:
+def _orientation_text(case, azimuths=None, *, varied: bool = False) -> str | None:
     """``"block at 30 deg (components 0 and 90 deg)"`` for a case with two horizontal components
     (None otherwise): ``block.orientation``, else the first component's azimuth; ``azimuths``
-    [rad] as run, else the case's (unknown where it leaves them to the AT2 headers)."""
+    [rad] as run, else the case's (unknown where it leaves them to the AT2 headers); ``varied``:
+    the orientation is an axis of the figure (``--azimuth``)."""
     if not case.ground.two_components:
         return None
     if azimuths is None or any(a is None for a in azimuths):
         azimuths = (case.ground.horizontal.azimuth, case.ground.horizontal_2.azimuth)
     known = all(a is not None and math.isfinite(float(a)) for a in azimuths)
     orientation = case.block.orientation if case.block.orientation is not None else azimuths[0]
-    if orientation is None:
+    if varied:
+        text = "block orientation varied"
+    elif orientation is None:
         return "block along component 1 (H1)"
-    text = f"block at {math.degrees(orientation):g} deg"
+    else:
+        text = f"block at {math.degrees(orientation):g} deg"
     if known:
         text += f" (components {math.degrees(azimuths[0]):g} and {math.degrees(azimuths[1]):g} deg)"
     return text
@@ -321,7 +325,9 @@ def _orientation_text(case, azimuths=None) -> str | None:
 def _case_ground(case) -> str:
     """The case's ground motion in words (its record files, or its pulses)."""
     shown = []
-    for role, spec in (("H", case.ground.horizontal), ("V", case.ground.vertical)):
+    two = case.ground.two_components
+    for role, spec in (("H1" if two else "H", case.ground.horizontal), ("H2", case.ground.horizontal_2),
+                       ("V", case.ground.vertical)):
         if spec is None:
             continue
         name = getattr(spec, "file", None)

@@ -299,4 +299,5 @@ def test_a_floor_run_and_a_ground_run_overlaid_say_which_is_which(tmp_path):
     # one run read back: its floor in colour over the ground under the building in grey (it drew it as "ground")
     alone = plot_results([tmp_path / "on-floor.h5"])
     assert next(ax for ax in alone.axes if ax.get_label() == "ground").get_ylabel().startswith("floor")
-    assert "ground horizontal (under the building)" in [line.get_label() for ax in alone.axes for line in ax.get_lines()]
+    lines = [line.get_label() for ax in alone.axes for line in ax.get_lines()]
+    assert "ground horizontal (under the building)" in lines

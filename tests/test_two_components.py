@@ -496,6 +496,7 @@ def test_orientation_in_the_caption_of_a_case():
     assert "block at 10 deg (components 10 and 100 deg)" in plots.case_caption(text("", ("10 deg", "100 deg")))
     assert "block at 30 deg;" in plots.case_caption(text(", orientation: 30 deg", (None, None)))
     assert "block along component 1" in plots.case_caption(text("", (None, None)))
+    assert "ground h1.at2 (H1), h2.at2 (H2)" in plots.case_caption(text("", (None, None)))
     assert "block at" not in plots.case_caption(text("", (None, None)).replace(
         "horizontal_1: {file: h1.at2}, horizontal_2: {file: h2.at2}", "horizontal: h1.at2"))
 
@@ -529,4 +530,4 @@ def test_azimuth_sweep_csv_in_degrees_and_its_caption_names_both_components(pair
         assert np.array_equal(parsed, stored.variables[variable][1].astype(float)), variable
     caption = sw.stored_caption(results.read_sweep(pair / "out" / "two.sweep.h5"))
     assert "h1.at2 (H1)" in caption and "h2.at2 (H2)" in caption
-    assert "block along component 1" in caption or "(base)" in caption
+    assert "block orientation varied" in caption and "block at" not in caption
