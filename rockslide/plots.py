@@ -810,7 +810,8 @@ def runs_overlay_figure(runs, names, *, title: str = "", caption: str = "", size
         rot_ax.set_ylabel("liftoff angle φ [rad]")
         slip_ax.set_ylabel("slip x [mm]")
         support = "floor / ground" if any(floors) and not all(floors) else "floor" if any(floors) else "ground"
-        ground_ax.set_ylabel(f"{support} acc. H [{unit}]")
+        ground_ax.set_ylabel(f"{support} [{unit}]" if _brief_labels(fig) and any(floors) else
+                             f"{support} acc. H [{unit}]")
         ground_ax.set_xlabel("time [s]")
         ground_ax.set_xlim(t0 + shift, t1 + shift)
         keys = []
@@ -1164,9 +1165,14 @@ def _ground_panel(ax, result, shift, span, *, unit=None, base=None):
     if peak == 0.0:
         ax.set_ylim(-1.0, 1.0)
     title_y = _title_height(ax)
-    ax.set_title("floor acceleration the block stands on (in colour) and the ground under the building "
-                 "(grey, horizontal)" if base is not None else "ground acceleration as applied",
-                 loc="left", fontsize=_pt(10), y=title_y)
+    if base is None:
+        heading = "ground acceleration as applied"
+    elif _narrow(ax.figure):
+        heading = "floor (colour); ground under the building (grey)"
+    else:
+        heading = ("floor acceleration the block stands on (in colour) and the ground under the building "
+                   "(grey, horizontal)")
+    ax.set_title(heading, loc="left", fontsize=_pt(10), y=title_y)
     if peak == 0.0:
         ax.set_title("still ground (no record)", loc="right", fontsize=_pt(9), color="0.3", y=title_y)
 

@@ -292,7 +292,7 @@ def test_a_floor_run_and_a_ground_run_overlaid_say_which_is_which(tmp_path):
     names = [t.get_text().split(":")[0] for t in legend.get_texts()]
     assert names[:2] == ["on-ground", "on-floor (floor)"]
     panel = next(ax for ax in fig.axes if ax.get_label() == "ground")
-    assert panel.get_ylabel().startswith("floor / ground acc.")
+    assert panel.get_ylabel().startswith("floor / ground [")          # column: the brief label
     assert "on a floor: H T = 0.5 s" in _figure_texts(fig)
     only_floor = plot_results([tmp_path / "on-floor.h5", tmp_path / "on-floor.h5"], names=["a", "b"])
     assert next(ax for ax in only_floor.axes if ax.get_label() == "ground").get_ylabel().startswith("floor acc.")
