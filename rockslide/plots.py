@@ -244,16 +244,10 @@ def case_caption(case_text: str = "", *, records=None, step: float | None = None
     str
         One line, parts separated by ``"; "`` (`_headline` wraps it).
     """
-    from .case import floor_text, parse_case
-    from .errors import RockslideError
+    from .case import floor_text
 
     parts = []
-    case = None
-    if case_text:
-        try:
-            case = parse_case(case_text, source="<stored case>")
-        except RockslideError:
-            case = None
+    case = stored_case(case_text)
     if ground:
         parts.append(ground)
     elif records:
@@ -643,16 +637,22 @@ def run_azimuths(run) -> tuple | None:
     return components.azimuth_1, components.azimuth_2
 
 
-def along_the_block(case_text: str) -> str | None:
-    """``"along the block (30 deg)"`` for a case with two horizontal components (the motion that
-    drives the model is their projection on the block's direction); None otherwise."""
+def stored_case(case_text: str):
+    """The `Case` of a case file's text stored with a result (None: empty, or not a case: a figure
+    of a file written by another version still draws)."""
     from .case import parse_case
     from .errors import RockslideError
 
     try:
-        case = parse_case(case_text, source="<stored case>") if case_text else None
+        return parse_case(case_text, source="<stored case>") if case_text else None
     except RockslideError:
         return None
+
+
+def along_the_block(case_text: str) -> str | None:
+    """``"along the block (30 deg)"`` for a case with two horizontal components (the motion that
+    drives the model is their projection on the block's direction); None otherwise."""
+    case = stored_case(case_text)
     if case is None or getattr(case.ground, "horizontal_2", None) is None:
         return None
     if case.block.orientation is None:
@@ -662,25 +662,14 @@ def along_the_block(case_text: str) -> str | None:
 
 def on_a_floor(case_text: str) -> bool:
     """Whether a case's block stands on a floor (``ground.floor``); False for a text that is not a case."""
-    from .case import parse_case
-    from .errors import RockslideError
-
-    try:
-        return bool(case_text) and parse_case(case_text, source="<stored case>").ground.floor.given
-    except RockslideError:
-        return False
+    case = stored_case(case_text)
+    return case is not None and case.ground.floor.given
 
 
 def pga_unit(case_text: str) -> str | None:
     """The unit a case gives its PGA in (None: not given, or the text is not a case)."""
-    from .case import parse_case
-    from .errors import RockslideError
-
-    try:
-        units = parse_case(case_text, source="<stored case>").units if case_text else {}
-    except RockslideError:
-        return None
-    return units.get("ground.scale.pga_horizontal")
+    case = stored_case(case_text)
+    return None if case is None else case.units.get("ground.scale.pga_horizontal")
 
 
 def _legend_columns(handles, width: float) -> int:
