@@ -593,12 +593,13 @@ def plot_results(results: Sequence, *, size=None, names: Sequence[str] | None = 
     items = list(results) if not isinstance(results, (str, Path, RunResult)) else [results]
     if not items:
         raise CaseError("no result to draw; give one file or more", source="plot_results")
-    kinds, loaded, stems = [], [], []
+    kinds, loaded, stems, bases = [], [], [], []
     for item in items:
         if isinstance(item, RunResult):
             kinds.append("result")
             loaded.append(item)
             stems.append(item.name)
+            bases.append(None)
             continue
         kind = stored_files.file_format(item)
         kind = {stored_files.SWEEP_FORMAT: "sweep", stored_files.FRAGILITY_FORMAT: "fragility"}.get(kind, "result")
@@ -613,6 +614,7 @@ def plot_results(results: Sequence, *, size=None, names: Sequence[str] | None = 
             loaded.append(stored_files.read_dataset(item, format=stored_files.FRAGILITY_FORMAT))
         else:
             stored = stored_files.read_result(item)
+            bases.append(stored.base or None)         # the ground under the building of a block on a floor
             loaded.append(RunResult(name=stored.name, result=stored.result, ground=stored.ground,
                                     records=stored.records, case_text=stored.case_text, attrs=stored.attrs))
     kind = kinds[0]
@@ -633,7 +635,7 @@ def plot_results(results: Sequence, *, size=None, names: Sequence[str] | None = 
             figure = stored_figure(loaded[0], size=size)
         else:
             figure = plots.response_figure(loaded[0], title=names[0], time_shift=time_shift, zoom=zoom, crop=crop,
-                                           size=size)
+                                           size=size, base=bases[0])
     elif kind == "sweep":
         from .analyses.sweep import overlay_figure
         figure = overlay_figure(loaded, names, size=size)
@@ -644,7 +646,8 @@ def plot_results(results: Sequence, *, size=None, names: Sequence[str] | None = 
         caption = "\n".join(f"{name}: {plots.run_caption(run)}" for run, name in zip(loaded, names, strict=True))
         figure = plots.runs_overlay_figure([run.result for run in loaded], names, title=" and ".join(names),
                                            caption=caption, size=size, time_shift=time_shift, crop=crop,
-                                           unit=plots.pga_unit(loaded[0].case_text))
+                                           unit=plots.pga_unit(loaded[0].case_text),
+                                           floors=[plots.on_a_floor(run.case_text) for run in loaded])
     if path is not None:
         plots.save_figure(figure, path, overwrite=overwrite, dpi=dpi)
     return figure

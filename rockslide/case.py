@@ -38,6 +38,7 @@ from .units import SI_UNITS, STANDARD_GRAVITY, UNIT_REQUIRED, UNITS, parse_quant
 
 __all__ = [
     "CASE_KEYS",
+    "floor_text",
     "with_orientations",
     "Floor",
     "Mode",
@@ -461,6 +462,39 @@ class Case:
     def to_dict(self) -> dict:
         """The case as a plain nested dict that `load_case` reads back (`case_to_dict`)."""
         return case_to_dict(self)
+
+
+def floor_text(case: Case, *, brief: bool = False) -> str | None:
+    """The floor the block stands on (``ground.floor``) in one line; None without a floor.
+
+    Parameters
+    ----------
+    case : Case
+        The case.
+    brief : bool
+        False: for printouts (``rockslide run``), every word; True: for a figure's caption
+        (`plots.case_caption`), the same values in fewer words (``H``/``V``, ``ζ``, ``Γφ``).
+
+    Returns
+    -------
+    str or None
+        The modes of each direction (period ``T`` [s], damping ratio ``zeta``, participation
+        ``Gamma phi``), or the screening factor ``1 + 2 z/h`` (ASCE 7-16 Eq. 13.3-1) and ``z/h``.
+    """
+    floor = case.ground.floor
+    if not floor.given:
+        return None
+    if floor.z_over_h is not None:
+        if brief:
+            return (f"on a floor: screening, the ground H × {floor.amplification():g} "
+                    f"(1 + 2 z/h, z/h = {floor.z_over_h:g})")
+        return (f"floor: screening only, the horizontal ground times 1 + 2 z/h = {floor.amplification():g} "
+                f"(z/h = {floor.z_over_h:g}, ASCE 7-16 Eq. 13.3-1), not a building's response")
+    mode = ("T = {0.period:g} s (ζ = {0.damping:g}, Γφ = {0.participation:g})" if brief
+            else "T = {0.period:g} s, zeta = {0.damping:g}, participation {0.participation:g}")
+    parts = [f"{role[0].upper() if brief else role} " + ", ".join(mode.format(m) for m in getattr(floor, role))
+             for role in ("horizontal", "vertical") if getattr(floor, role)]
+    return ("on a floor: " + ", ".join(parts)) if brief else "floor of a linear building: " + "; ".join(parts)
 
 
 # --------------------------------------------------------------------------------------------------

@@ -215,9 +215,10 @@ def _headline(fig: Figure, title: str, caption: str, *, size: float = 12.0):
 
 
 def case_caption(case_text: str = "", *, records=None, step: float | None = None, version: str | None = None,
-                 varied=(), ground: str | None = None) -> str:
-    """What a figure shows was computed from: the record(s) and their scaling, the block (width x
-    height, mass, alpha), friction, restitution, the integration step and rockslide's version.
+                 varied=(), ground: str | None = None, azimuths: tuple | None = None) -> str:
+    """What a figure shows was computed from: the record(s) and their scaling, the block's orientation
+    (two horizontal components), the floor it stands on, the block (width x height, mass, alpha),
+    friction, restitution, the integration step and rockslide's version.
 
     Parameters
     ----------
@@ -234,30 +235,29 @@ def case_caption(case_text: str = "", *, records=None, step: float | None = None
         base case's.
     ground : str, optional
         The ground motion in words, in place of the case's (a fragility suite).
+    azimuths : (float, float), optional
+        [rad] The azimuths of the two horizontal components as run (a result's
+        ``ground_azimuth_1``, ``ground_azimuth_2``; default: the case's, where it gives them).
 
     Returns
     -------
     str
         One line, parts separated by ``"; "`` (`_headline` wraps it).
     """
-    from .case import parse_case
-    from .errors import RockslideError
+    from .case import floor_text
 
     parts = []
-    case = None
-    if case_text:
-        try:
-            case = parse_case(case_text, source="<stored case>")
-        except RockslideError:
-            case = None
+    case = stored_case(case_text)
     if ground:
         parts.append(ground)
     elif records:
         factors = {f"{float(e['scale_factor']):.4g}" for e in records if e.get("scale_factor") is not None}
         one = len(factors) == 1 and len(records) > 1
+        two = any(str(e.get("role")) == "horizontal_2" for e in records)
+        names = {"horizontal": "H1" if two else "H", "horizontal_2": "H2", "vertical": "V"}
         shown = []
         for entry in records:
-            role = {"horizontal": "H", "vertical": "V"}.get(str(entry.get("role")), str(entry.get("role", "")))
+            role = names.get(str(entry.get("role")), str(entry.get("role", "")))
             factor = entry.get("scale_factor")
             scaled = f" ×{float(factor):.4g}" if factor is not None and not one else ""
             shown.append(f"{Path(str(entry.get('path', '?'))).name} ({role}){scaled}")
@@ -272,6 +272,12 @@ def case_caption(case_text: str = "", *, records=None, step: float | None = None
             unit = case.units.get("ground.scale.pga_horizontal") or "g"
             mark = " (base)" if "pga" in varied else ""
             parts[-1] += f": PGA {scale.pga_horizontal / unit_factor(unit, 'acceleration'):.4g} {unit}{mark}"
+        turned = _orientation_text(case, azimuths, varied="azimuth" in varied)
+        if turned:
+            parts.append(turned)
+        floor = floor_text(case, brief=True)
+        if floor:
+            parts.append(floor + (" (base)" if "floor_period" in varied else ""))
         b = case.block
         alpha = math.atan2(b.width, b.height)
         parts.append(f"block width × height {b.width:.4g} × {b.height:.4g} m, {b.mass:.4g} kg, "
@@ -288,10 +294,34 @@ def case_caption(case_text: str = "", *, records=None, step: float | None = None
     return "; ".join(parts)
 
 
+def _orientation_text(case, azimuths=None, *, varied: bool = False) -> str | None:
+    """``"block at 30 deg (components 0 and 90 deg)"`` for a case with two horizontal components
+    (None otherwise): ``block.orientation``, else the first component's azimuth; ``azimuths``
+    [rad] as run, else the case's (unknown where it leaves them to the AT2 headers); ``varied``:
+    the orientation is an axis of the figure (``--azimuth``)."""
+    if not case.ground.two_components:
+        return None
+    if azimuths is None or any(a is None for a in azimuths):
+        azimuths = (case.ground.horizontal.azimuth, case.ground.horizontal_2.azimuth)
+    known = all(a is not None and math.isfinite(float(a)) for a in azimuths)
+    orientation = case.block.orientation if case.block.orientation is not None else azimuths[0]
+    if varied:
+        text = "block orientation varied"
+    elif orientation is None:
+        return "block along component 1 (H1)"
+    else:
+        text = f"block at {math.degrees(orientation):g} deg"
+    if known:
+        text += f" (components {math.degrees(azimuths[0]):g} and {math.degrees(azimuths[1]):g} deg)"
+    return text
+
+
 def _case_ground(case) -> str:
     """The case's ground motion in words (its record files, or its pulses)."""
     shown = []
-    for role, spec in (("H", case.ground.horizontal), ("V", case.ground.vertical)):
+    two = case.ground.two_components
+    for role, spec in (("H1" if two else "H", case.ground.horizontal), ("H2", case.ground.horizontal_2),
+                       ("V", case.ground.vertical)):
         if spec is None:
             continue
         name = getattr(spec, "file", None)
@@ -593,19 +623,36 @@ def run_caption(run) -> str:
     attrs = getattr(run, "attrs", None) or {}
     step = attrs.get("integration_step", getattr(run.result, "step", None))
     return case_caption(run.case_text, records=run.records, step=None if step is None else float(step),
-                        version=str(attrs.get("rockslide_version", __version__)))
+                        version=str(attrs.get("rockslide_version", __version__)), azimuths=run_azimuths(run))
+
+
+def run_azimuths(run) -> tuple | None:
+    """[rad] The azimuths of a run's two horizontal components as run (``ground["components"]``:
+    `engine.prepare.Components` of a run, a dict of a file read back); None with one component."""
+    components = (getattr(run, "ground", None) or {}).get("components")
+    if components is None:
+        return None
+    if isinstance(components, dict):
+        return components.get("azimuth_1"), components.get("azimuth_2")
+    return components.azimuth_1, components.azimuth_2
+
+
+def stored_case(case_text: str):
+    """The `Case` of a case file's text stored with a result (None: empty, or not a case: a figure
+    of a file written by another version still draws)."""
+    from .case import parse_case
+    from .errors import RockslideError
+
+    try:
+        return parse_case(case_text, source="<stored case>") if case_text else None
+    except RockslideError:
+        return None
 
 
 def along_the_block(case_text: str) -> str | None:
     """``"along the block (30 deg)"`` for a case with two horizontal components (the motion that
     drives the model is their projection on the block's direction); None otherwise."""
-    from .case import parse_case
-    from .errors import RockslideError
-
-    try:
-        case = parse_case(case_text, source="<stored case>") if case_text else None
-    except RockslideError:
-        return None
+    case = stored_case(case_text)
     if case is None or getattr(case.ground, "horizontal_2", None) is None:
         return None
     if case.block.orientation is None:
@@ -613,16 +660,16 @@ def along_the_block(case_text: str) -> str | None:
     return f"along the block ({math.degrees(case.block.orientation):g} deg)"
 
 
+def on_a_floor(case_text: str) -> bool:
+    """Whether a case's block stands on a floor (``ground.floor``); False for a text that is not a case."""
+    case = stored_case(case_text)
+    return case is not None and case.ground.floor.given
+
+
 def pga_unit(case_text: str) -> str | None:
     """The unit a case gives its PGA in (None: not given, or the text is not a case)."""
-    from .case import parse_case
-    from .errors import RockslideError
-
-    try:
-        units = parse_case(case_text, source="<stored case>").units if case_text else {}
-    except RockslideError:
-        return None
-    return units.get("ground.scale.pga_horizontal")
+    case = stored_case(case_text)
+    return None if case is None else case.units.get("ground.scale.pga_horizontal")
 
 
 def _legend_columns(handles, width: float) -> int:
@@ -673,9 +720,10 @@ OVERLAY_COLOURS = ("#1f4e9c", "#c0392b", "#2e8b57", "#8e44ad", "#d35400", "#16a0
 
 
 def runs_overlay_figure(runs, names, *, title: str = "", caption: str = "", size=None, time_shift: float = 0.0,
-                        crop: tuple | None | str = "auto", unit: str | None = None) -> Figure:
+                        crop: tuple | None | str = "auto", unit: str | None = None, floors=None) -> Figure:
     """Several runs on shared axes: the liftoff angle (with each run's +-alpha where its rotation
-    comes near it), the slip and the horizontal ground acceleration, one colour a run.
+    comes near it), the slip and the horizontal acceleration the block stands on (the ground's, or
+    its floor's), one colour a run.
 
     Parameters
     ----------
@@ -694,14 +742,19 @@ def runs_overlay_figure(runs, names, *, title: str = "", caption: str = "", size
         ``(t0, t1)`` in the figure's time [s]; None = the whole of the longest record.
     unit : str, optional
         Unit of the ground acceleration (`acceleration_unit`; default gal).
+    floors : sequence of bool, optional
+        Whether each run's block stands on a floor (``ground.floor``: a result with a ``base``);
+        its legend entry says ``NAME (floor)`` and the panel ``floor`` (or ``floor / ground`` for
+        both kinds). Default: all on the ground.
 
     Returns
     -------
     matplotlib.figure.Figure
         Axes labelled ``"rotation"``, ``"slip"`` and ``"ground"``; the legend's first entries are
-        ``names``.
+        ``names`` (with `` (floor)`` for a run on a floor).
     """
     shift = float(time_shift)
+    floors = [False] * len(runs) if floors is None else [bool(f) for f in floors]
     ranges = [_choose_range(run, crop, shift) for run in runs]
     t0, t1 = min(r[0] for r in ranges), max(r[1] for r in ranges)
     unit, factor = acceleration_unit(unit)
@@ -738,13 +791,16 @@ def runs_overlay_figure(runs, names, *, title: str = "", caption: str = "", size
             if s.overturned and s.overturn_time is not None and t0 <= s.overturn_time <= t1:
                 for ax in (rot_ax, slip_ax, ground_ax):
                     ax.axvline(s.overturn_time + shift, color=colour, lw=1.2, ls="-.", zorder=2)
-            handles.append(Line2D([], [], color=colour, lw=2.0, label=f"{name}: {s.verdict}"))
+            on = " (floor)" if floors[k] else ""
+            handles.append(Line2D([], [], color=colour, lw=2.0, label=f"{name}{on}: {s.verdict}"))
         for ax in (rot_ax, slip_ax, ground_ax):
             ax.axhline(0.0, color="0.6", lw=0.5, zorder=1)
             ax.grid(True, axis="x", color="0.88", lw=0.6)
         rot_ax.set_ylabel("liftoff angle φ [rad]")
         slip_ax.set_ylabel("slip x [mm]")
-        ground_ax.set_ylabel(f"ground acc. H [{unit}]")
+        support = "floor / ground" if any(floors) and not all(floors) else "floor" if any(floors) else "ground"
+        ground_ax.set_ylabel(f"{support} [{unit}]" if _brief_labels(fig) and any(floors) else
+                             f"{support} acc. H [{unit}]")
         ground_ax.set_xlabel("time [s]")
         ground_ax.set_xlim(t0 + shift, t1 + shift)
         keys = []
@@ -1098,9 +1154,14 @@ def _ground_panel(ax, result, shift, span, *, unit=None, base=None):
     if peak == 0.0:
         ax.set_ylim(-1.0, 1.0)
     title_y = _title_height(ax)
-    ax.set_title("floor acceleration the block stands on (in colour) and the ground under the building "
-                 "(grey, horizontal)" if base is not None else "ground acceleration as applied",
-                 loc="left", fontsize=_pt(10), y=title_y)
+    if base is None:
+        heading = "ground acceleration as applied"
+    elif _narrow(ax.figure):
+        heading = "floor (colour); ground under the building (grey)"
+    else:
+        heading = ("floor acceleration the block stands on (in colour) and the ground under the building "
+                   "(grey, horizontal)")
+    ax.set_title(heading, loc="left", fontsize=_pt(10), y=title_y)
     if peak == 0.0:
         ax.set_title("still ground (no record)", loc="right", fontsize=_pt(9), color="0.3", y=title_y)
 

@@ -243,3 +243,61 @@ def test_a_floor_period_axis_runs_each_point_on_its_own_floor():
     n = single.horizontal.size - 1                       # a case without floor gets one of one mode
     np.testing.assert_allclose(one.factor_h[0] * one.base[0, :n], single.horizontal[:n], rtol=0,
                                atol=1e-12 * np.max(np.abs(single.horizontal)))
+
+
+# --------------------------------------------------------------------------------------------------
+# Figures of a block on a floor: the caption says the floor, the overlay says which run is on one
+# --------------------------------------------------------------------------------------------------
+
+def _figure_texts(fig) -> str:
+    from matplotlib.text import Text
+
+    fig.canvas.draw()
+    return " ".join(t.get_text() for t in fig.findobj(Text) if t.get_text()).replace("\n", " ")
+
+
+def test_floor_text_is_one_implementation_in_case_py():
+    """`rockslide run`'s printout (engine.prepare) and the figures' captions use case.py's."""
+    from rockslide import case as case_module
+
+    assert runner.floor_text is case_module.floor_text
+    on_floor = case_with(load_case(EXAMPLE), {"ground.floor": MODES})
+    # the values of MODES above; zeta 0.05 and participation 1 are Mode's defaults
+    assert case_module.floor_text(on_floor, brief=True) == (
+        "on a floor: H T = 0.6 s (ζ = 0.05, Γφ = 1.3), T = 0.2 s (ζ = 0.03, Γφ = -0.4), "
+        "V T = 0.08 s (ζ = 0.05, Γφ = 1)")
+    screened = case_with(load_case(EXAMPLE), {"ground.floor.z_over_h": 0.75})
+    assert "× 2.5 (1 + 2 z/h, z/h = 0.75)" in case_module.floor_text(screened, brief=True)
+    assert case_module.floor_text(load_case(EXAMPLE)) is None
+
+
+def test_a_floor_run_and_a_ground_run_overlaid_say_which_is_which(tmp_path):
+    """``rockslide plot ground.h5 floor.h5``: the floor's modes in the caption, ``NAME (floor)`` in
+    the legend, and the acceleration panel labelled for both (it drew the floor as "ground")."""
+    from rockslide import plots
+    from rockslide.api import plot_results, read_result
+
+    text = EXAMPLE.read_text().replace("../records/", str(REPO / "records") + "/")
+    (tmp_path / "ground.yaml").write_text(text.replace("name: example", "name: on-ground"))
+    (tmp_path / "floor.yaml").write_text(text.replace("name: example", "name: on-floor").replace(
+        "  tail: 2 s", "  tail: 2 s\n  floor: {horizontal: {period: 0.5 s, damping: 0.04}}"))
+    for name in ("ground", "floor"):
+        result = invoke("run", tmp_path / f"{name}.yaml", "--out-dir", tmp_path, "--no-plot")
+        assert result.exit_code == 0, result.output
+    floor_caption = plots.run_caption(read_result(tmp_path / "on-floor.h5"))
+    assert "on a floor: H T = 0.5 s (ζ = 0.04, Γφ = 1)" in floor_caption          # the case written above
+    assert "floor" not in plots.run_caption(read_result(tmp_path / "on-ground.h5"))
+    fig = plot_results([tmp_path / "on-ground.h5", tmp_path / "on-floor.h5"], size="column")
+    (legend,) = fig.legends
+    names = [t.get_text().split(":")[0] for t in legend.get_texts()]
+    assert names[:2] == ["on-ground", "on-floor (floor)"]
+    panel = next(ax for ax in fig.axes if ax.get_label() == "ground")
+    assert panel.get_ylabel().startswith("floor / ground [")          # column: the brief label
+    assert "on a floor: H T = 0.5 s" in _figure_texts(fig)
+    only_floor = plot_results([tmp_path / "on-floor.h5", tmp_path / "on-floor.h5"], names=["a", "b"])
+    assert next(ax for ax in only_floor.axes if ax.get_label() == "ground").get_ylabel().startswith("floor acc.")
+    # one run read back: its floor in colour over the ground under the building in grey (it drew it as "ground")
+    alone = plot_results([tmp_path / "on-floor.h5"])
+    assert next(ax for ax in alone.axes if ax.get_label() == "ground").get_ylabel().startswith("floor")
+    lines = [line.get_label() for ax in alone.axes for line in ax.get_lines()]
+    assert "ground horizontal (under the building)" in lines

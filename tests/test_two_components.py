@@ -480,3 +480,84 @@ def test_the_bootstrap_over_orientations_resamples_records_not_orientations(pair
     assert np.isfinite(once["median_lower"].values).all()           # a fit, with an interval
     for name in ("median", "beta", "median_lower", "median_upper", "beta_lower", "beta_upper"):
         assert np.allclose(twice[name].values, once[name].values, rtol=1e-9, equal_nan=True), name
+
+
+# --------------------------------------------------------------------------------------------------
+# Figures and tables of two components: the orientation in the caption, the azimuth in degrees
+# --------------------------------------------------------------------------------------------------
+
+def test_two_orientations_plotted_have_different_captions(pair, monkeypatch):
+    """``rockslide plot r0/two.h5 r60/two.h5``: the same case but the block at 0 and 60 deg; the
+    captions gave neither. The components' azimuths, 0 and 90 deg, come from the AT2 headers
+    written by `pair` (the case does not give them): they are the ones the runs stored."""
+    from matplotlib.text import Text
+
+    from rockslide import plots
+    from rockslide.api import plot_results, read_result
+
+    for degrees in (0, 60):
+        _case_file(_case(pair, orientation=f"{degrees} deg"), pair, monkeypatch)
+        result = invoke("run", "two.yaml", "--no-plot", "--out-dir", f"r{degrees}")
+        assert result.exit_code == 0, result.output
+    captions = [plots.run_caption(read_result(pair / f"r{d}" / "two.h5")) for d in (0, 60)]
+    assert "block at 0 deg (components 0 and 90 deg)" in captions[0]
+    assert "block at 60 deg (components 0 and 90 deg)" in captions[1]
+    for caption in captions:
+        assert "h1.at2 (H1), h2.at2 (H2)" in caption
+    fig = plot_results([pair / "r0" / "two.h5", pair / "r60" / "two.h5"], size="column")
+    shown = " ".join(t.get_text() for t in fig.findobj(Text)).replace("\n", " ")
+    assert "block at 0 deg" in shown and "block at 60 deg" in shown
+    assert invoke("plot", pair / "r0" / "two.h5", pair / "r60" / "two.h5", "-o", pair / "both.png").exit_code == 0
+
+
+def test_orientation_in_the_caption_of_a_case():
+    """From the case alone: its azimuths where it gives them, else none; no orientation: the first
+    component's."""
+    from rockslide import plots
+
+    def text(block, azimuths):
+        one, two = ({"file": f"h{k}.at2", **({"azimuth": a} if a else {})} for k, a in enumerate(azimuths, 1))
+        return ("name: t\nblock: {height: 1 m, width: 0.25 m, mass: 50 kg" + block + "}\n"
+                "contact: {mu_static: 0.7, restitution: 0.9}\n"
+                f"ground: {{horizontal_1: {one}, horizontal_2: {two}}}\n".replace("'", ""))
+
+    assert "block at 30 deg (components 10 and 100 deg)" in plots.case_caption(
+        text(", orientation: 30 deg", ("10 deg", "100 deg")))
+    assert "block at 10 deg (components 10 and 100 deg)" in plots.case_caption(text("", ("10 deg", "100 deg")))
+    assert "block at 30 deg;" in plots.case_caption(text(", orientation: 30 deg", (None, None)))
+    assert "block along component 1" in plots.case_caption(text("", (None, None)))
+    assert "ground h1.at2 (H1), h2.at2 (H2)" in plots.case_caption(text("", (None, None)))
+    assert "block at" not in plots.case_caption(text("", (None, None)).replace(
+        "horizontal_1: {file: h1.at2}, horizontal_2: {file: h2.at2}", "horizontal: h1.at2"))
+
+
+def test_azimuth_sweep_csv_in_degrees_and_its_caption_names_both_components(pair, monkeypatch):
+    """``--csv`` writes the azimuth in degrees, as given (it wrote radians under a plotted degree
+    axis); the stored sweep's caption names the second component's file (it read only
+    record_horizontal and record_vertical)."""
+    import csv
+
+    from rockslide.analyses import sweep as sw
+    from rockslide.io import results
+
+    _case_file(_case(pair, scale={"pga_horizontal": "400 gal"}), pair, monkeypatch)
+    result = invoke("sweep", "two.yaml", "--azimuth", "0,30,135", "--mu", "0.5,0.7", "--csv", "--no-plot",
+                    "--no-progress", "--out-dir", "out")
+    assert result.exit_code == 0, result.output
+    with open(pair / "out" / "two.sweep.csv", newline="") as handle:
+        rows = list(csv.DictReader(handle))
+    assert "azimuth [deg]" in rows[0] and "azimuth [rad]" not in rows[0]
+    stored = results.read_dataset(pair / "out" / "two.sweep.h5", format=results.SWEEP_FORMAT)
+    azimuths = dict((name, values) for name, values, _ in stored.coords)["azimuth"]
+    column = np.array([float(row["azimuth [deg]"]) for row in rows]).reshape(3, 2)[:, 0]
+    # the values given on the command line; 1e-12 deg: one rounding of deg -> rad and one back
+    np.testing.assert_allclose(column, [0.0, 30.0, 135.0], rtol=0, atol=1e-12)
+    # and the file's values converted: the same two roundings, 1e-15 rad
+    np.testing.assert_allclose(np.radians(column), azimuths, rtol=0, atol=1e-15)
+    for variable in ("max_rotation", "overturned"):
+        header = next(key for key in rows[0] if key.split(" [")[0] == variable)
+        parsed = np.array([float(row[header]) for row in rows]).reshape(3, 2)
+        assert np.array_equal(parsed, stored.variables[variable][1].astype(float)), variable
+    caption = sw.stored_caption(results.read_sweep(pair / "out" / "two.sweep.h5"))
+    assert "h1.at2 (H1)" in caption and "h2.at2 (H2)" in caption
+    assert "block orientation varied" in caption and "block at" not in caption

@@ -80,10 +80,12 @@ from ..engine.prepare import (
 )
 from ..errors import CaseError
 from ..io import records as rec
+from ..io.results import RECORD_ROLES
 from ..pulses import Pulse, linear_overturning_ratio
 from ..units import STANDARD_GRAVITY, UNIT_REQUIRED, parse_quantity, unit_factor
 
 __all__ = ["AXES", "AxisKind", "Axis", "parse_axis", "plan_sweep", "sweep_variables", "worst_azimuth", "coordinates",
+           "table_coordinates",
            "root_attributes", "spectrum_scales", "figure", "stored_figure"]
 
 #: Points validated between two checks for Ctrl-C (and two calls of the planning's progress).
@@ -773,6 +775,18 @@ def coordinates(plan: Plan) -> list:
     return out
 
 
+def table_coordinates(coords) -> list:
+    """`coordinates` as the ``--csv`` table writes them: an angle axis (``azimuth``) in degrees, as
+    it is given and plotted (``units`` ``deg``); the others as the result file has them (SI)."""
+    out = []
+    for name, values, attrs in coords:
+        kind = AXES.get(name)
+        if kind is not None and kind.kind == "angle":
+            values, attrs = np.asarray(values, dtype=np.float64) / kind.display_scale, {**attrs, "units": "deg"}
+        out.append((name, values, attrs))
+    return out
+
+
 def root_attributes(plan: Plan, command_line: str) -> dict:
     """Root attributes of the result file: provenance of the sweep, and the scales of an
     overturning spectrum (`spectrum_scales`, as ``spectrum_*``)."""
@@ -895,7 +909,7 @@ def caption(case_text: str, axes, records, step, version) -> str:
 def stored_caption(stored) -> str:
     """`caption` of a sweep file read back."""
     attrs = stored.attrs
-    records = [{"role": role, "path": attrs[f"record_{role}"]} for role in ("horizontal", "vertical")
+    records = [{"role": role, "path": attrs[f"record_{role}"]} for role in RECORD_ROLES
                if attrs.get(f"record_{role}")]
     step = attrs.get("integration_step")
     return caption(str(attrs.get("case_text", "")), [name for name, _, _ in stored.coords], records,

@@ -111,12 +111,12 @@ def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, members, s
                 kept = writer.written_result()
                 _draw(kept if kept is not None else results.read_result(writer.tmp).result, case.name,
                       png_path, overwrite=overwrite, dpi=dpi, staging=staging, size=size,
-                      about=(case.text, runner.record_entries(prepared), result.step, None),
+                      about=_run_about(case, prepared, result.step),
                       base=_base_of(runner.base_motion(prepared)))
                 if neighbourhood is not None:
                     _draw_ensemble(neighbourhood, group, result.summary, case.name, ensemble_png,
                                    overwrite=overwrite, dpi=dpi, staging=staging, size=size,
-                                   about=(case.text, runner.record_entries(prepared), result.step, None))
+                                   about=_run_about(case, prepared, result.step))
             stale = [png_path] if no_plot else []
             if overwrite and (no_plot or neighbourhood is None):
                 stale.append(ensemble_png)          # it showed the neighbourhood of the result replaced
@@ -284,7 +284,8 @@ def _time_range(text: str, option: str, words: dict):
 def _draw(result, name, path, *, overwrite, dpi=None, time_shift=0.0, zoom="auto", crop="auto", staging=None,
           size=None, about=None, base=None):
     """Draw the figure of one run (`plots.response_figure`) and save it (`plots.save_figure`).
-    ``about``: (case text, record entries, integration step [s], version or None: this one), for
+    ``about``: (case text, record entries, integration step [s], version or None: this one, the two
+    horizontal components' azimuths [rad] or None), for
     its caption (`plots.case_caption`) and the unit of its ground motion; ``base``: the ground under
     the building of a case on a floor."""
     from .._version import __version__
@@ -292,8 +293,8 @@ def _draw(result, name, path, *, overwrite, dpi=None, time_shift=0.0, zoom="auto
 
     caption, unit, horizontal = "", None, None
     if about is not None:
-        text, entries, step, version = about
-        caption = case_caption(text, records=entries, step=step, version=version or __version__)
+        text, entries, step, version, azimuths = about
+        caption = case_caption(text, records=entries, step=step, version=version or __version__, azimuths=azimuths)
         unit, horizontal = pga_unit(text), along_the_block(text)
     figure = response_figure(result, title=name, time_shift=time_shift, zoom=zoom, crop=crop, size=size,
                              caption=caption, unit=unit, horizontal=horizontal, base=base)
@@ -302,9 +303,20 @@ def _draw(result, name, path, *, overwrite, dpi=None, time_shift=0.0, zoom="auto
 
 def _stored_about(stored) -> tuple:
     """`_draw`'s ``about`` of a result file read back."""
+    from ..plots import run_azimuths
+
     step = stored.attrs.get("integration_step")
     return (stored.case_text, stored.records, None if step is None else float(step),
-            stored.attrs.get("rockslide_version"))
+            stored.attrs.get("rockslide_version"), run_azimuths(stored))
+
+
+def _run_about(case, prepared, step: float) -> tuple:
+    """`_draw`'s ``about`` of a run just computed."""
+    from ..engine import prepare as runner
+
+    components = prepared.components
+    return (case.text, runner.record_entries(prepared), step, None,
+            None if components is None else (components.azimuth_1, components.azimuth_2))
 
 
 def _base_of(group: dict | None) -> dict | None:
@@ -361,7 +373,8 @@ def _draw_ensemble(summary: dict, variables: dict, nominal, name: str, path: Pat
                              summary_text=headline.split("; ", 1)[-1],
                              title=f"{name}: {summary['n']} neighbours (seed {summary['seed']})", size=size,
                              caption="" if about is None else case_caption(about[0], records=about[1], step=about[2],
-                                                                           version=about[3] or __version__))
+                                                                           version=about[3] or __version__,
+                                                                           azimuths=about[4]))
     save_figure(figure, path, overwrite=overwrite, dpi=dpi, staging=staging)
 
 

@@ -196,8 +196,8 @@ def sweep(case_file, mu_kinetic_ratio, records_dir, out_dir, overwrite, no_plot,
             save_figure(sw.figure(plan, variables, size=size), png_path, overwrite=overwrite, dpi=dpi, staging=staging)
         if as_csv:
             from ..io.datasets import sweep_dataset
-            _write_csv(sweep_dataset(sw.coordinates(plan), variables), [a.name for a in plan.axes],
-                       h5_path.with_suffix(".csv"), overwrite=overwrite, staging=staging)
+            _write_csv(sweep_dataset(sw.table_coordinates(sw.coordinates(plan)), variables),
+                       [a.name for a in plan.axes], h5_path.with_suffix(".csv"), overwrite=overwrite, staging=staging)
         staging.publish(remove=_stale_figure(h5_path, png_path, staging, no_plot=no_plot,
                                              format=results.SWEEP_FORMAT))
     done.store.remove()

@@ -203,6 +203,12 @@ def sdof_response(acceleration, dt: float, period: float, damping: float = DAMPI
     return u, velocity
 
 
+def _omega_squared(period: float) -> float:
+    """``omega^2 = (2 pi / T)^2`` [1/s^2] of an oscillator of period ``T`` [s]: Sa = omega^2 max |u|."""
+    omega = 2.0 * math.pi / period
+    return omega * omega
+
+
 def substeps_for(dt: float, period: float) -> int:
     """Equal steps per record interval so that an oscillator of ``period`` [s] is seen at least
     `POINTS_PER_PERIOD` times per period on a record of step ``dt`` [s]."""
@@ -233,8 +239,7 @@ def oscillator_history(acceleration, dt: float, period: float, damping: float = 
 def spectral_acceleration(acceleration, dt: float, period: float, damping: float = DAMPING) -> float:
     """Sa(T, zeta) = omega^2 max |u| [m/s^2], the pseudo-spectral acceleration (module notes)."""
     u, _, _ = oscillator_history(acceleration, dt, period, damping)
-    omega = 2.0 * math.pi / period
-    return float(omega * omega * np.max(np.abs(u)))
+    return float(_omega_squared(period) * np.max(np.abs(u)))
 
 
 def spectral_absolute_acceleration(acceleration, dt: float, period: float, damping: float = DAMPING) -> float:
@@ -406,9 +411,7 @@ def rotd_peaks(a1, a2, dt: float, measure: str, period: float | None = None,
     if measure == "sa":
         if period is None:
             raise ValueError("measure 'sa' needs a period")
-        substeps = max(1, math.ceil(POINTS_PER_PERIOD * dt / period - 1e-9))
-        u1, _ = sdof_response(a1, dt, period, damping, substeps)
-        u2, _ = sdof_response(a2, dt, period, damping, substeps)
-        omega = 2.0 * math.pi / period
-        return omega * omega * rotated_peaks(u1, u2)
+        u1, _, _ = oscillator_history(a1, dt, period, damping)
+        u2, _, _ = oscillator_history(a2, dt, period, damping)
+        return _omega_squared(period) * rotated_peaks(u1, u2)
     raise ValueError(f"unknown measure {measure!r}; expected 'pga', 'pgv' or 'sa'")

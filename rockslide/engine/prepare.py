@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import pulses
-from ..case import Case, Scale
+from ..case import Case, Scale, floor_text
 from ..core.layout import P_G, P_R, P_STEP
 from ..core.simulate import Model, Result, Settings, interval_count, parameters, simulate, substeps, tail_samples
 from ..errors import CaseError, RecordError
@@ -231,24 +231,6 @@ def floor_ground(case: Case, ground: rec.GroundMotion) -> rec.GroundMotion:
         components[role], step = intensity.floor_acceleration(getattr(ground, role), ground.dt, role_modes, m)
     return dataclasses.replace(ground, dt=step, horizontal=rec._frozen(components["horizontal"]),
                                vertical=rec._frozen(components["vertical"]))
-
-
-def floor_text(case: Case) -> str | None:
-    """One line on the floor the block stands on, for printouts (None without a floor); the screening
-    factor is said to be one."""
-    floor = case.ground.floor
-    if not floor.given:
-        return None
-    if floor.z_over_h is not None:
-        return (f"floor: screening only, the horizontal ground times 1 + 2 z/h = {floor.amplification():g} "
-                f"(z/h = {floor.z_over_h:g}, ASCE 7-16 Eq. 13.3-1), not a building's response")
-    parts = []
-    for role in ("horizontal", "vertical"):
-        modes = getattr(floor, role)
-        if modes:
-            parts.append(f"{role} " + ", ".join(f"T = {m.period:g} s, zeta = {m.damping:g}, participation "
-                                                f"{m.participation:g}" for m in modes))
-    return "floor of a linear building: " + "; ".join(parts)
 
 
 def floor_peaks(time, floor_horizontal, base_horizontal) -> dict:
