@@ -324,16 +324,7 @@ def _collect_futures(client, futures: dict, store: ChunkStore, address: str, pro
             elif checked - no_workers_since > SCHEDULER_TIMEOUT:
                 raise _workers_lost(address, store)
         if not finished:
-            _wait_for_one(futures)
-
-
-def _wait_for_one(futures) -> None:
-    """Return when one of ``futures`` finishes, or after a tenth of a second (Ctrl-C and a lost
-    scheduler are checked between): finished tasks are collected at once, not at the next poll."""
-    import distributed
-
-    with contextlib.suppress(Exception):     # the timeout, or a client already closing: the loop checks
-        distributed.wait(list(futures), timeout=0.1, return_when="FIRST_COMPLETED")
+            time.sleep(0.1)
 
 
 def _lost(address: str, store: ChunkStore) -> CaseError:
