@@ -10,7 +10,11 @@ from __future__ import annotations
 
 import os
 import shutil
+import subprocess
+import sys
+import threading
 from pathlib import Path
+from types import SimpleNamespace
 
 import pytest
 
@@ -89,3 +93,38 @@ def ws(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     monkeypatch.delenv("ROCKSLIDE_RECORDS", raising=False)
     return tmp_path
+
+
+@pytest.fixture
+def dask_scheduler():
+    """A dask scheduler in its own process on loopback: ``.address``, ``.process`` (to kill it) and
+    ``.start_worker(preload=None)`` (a worker process of one thread; ``preload``: a Python file the
+    worker runs at its start). Every process is killed at the end."""
+    pytest.importorskip("distributed")
+    env = {**os.environ, "PYTHONPATH": str(REPO)}
+    proc = subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_scheduler", "--host", "127.0.0.1",
+                             "--port", "0", "--no-dashboard"], env=env, stderr=subprocess.PIPE, text=True)
+    workers = []
+    try:
+        address = None
+        for line in proc.stderr:                # synchronise on the scheduler saying where it listens
+            if "Scheduler at:" in line:
+                address = line.split("Scheduler at:")[1].strip()
+                break
+        assert address, "the scheduler did not start"
+        threading.Thread(target=proc.stderr.read, daemon=True).start()
+
+        def start_worker(preload: Path | None = None):
+            extra = ["--preload", str(preload)] if preload else []
+            worker = subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_worker", address, "--nthreads",
+                                       "1", "--no-dashboard", *extra], env=env, stdout=subprocess.DEVNULL,
+                                      stderr=subprocess.DEVNULL)
+            workers.append(worker)
+            return worker
+
+        yield SimpleNamespace(address=address, process=proc, start_worker=start_worker)
+    finally:
+        for p in (proc, *workers):
+            if p.poll() is None:
+                p.kill()
+                p.wait()

@@ -11,7 +11,6 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
-import threading
 import time
 from pathlib import Path
 
@@ -113,36 +112,9 @@ def test_a_worker_without_rockslide_is_named():
 
 
 @pytest.fixture
-def scheduler():
-    """A dask scheduler in its own process on loopback; yields its address."""
-    pytest.importorskip("distributed")
-    env = {**os.environ, "PYTHONPATH": str(REPO)}
-    proc = subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_scheduler", "--host", "127.0.0.1",
-                             "--port", "0", "--no-dashboard"], env=env, stderr=subprocess.PIPE, text=True)
-    workers = []
-    try:
-        address = None
-        for line in proc.stderr:
-            if "Scheduler at:" in line:
-                address = line.split("Scheduler at:")[1].strip()
-                break
-        assert address, "the scheduler did not start"
-        threading.Thread(target=proc.stderr.read, daemon=True).start()
-
-        def start_worker(preload: Path | None = None):
-            extra = ["--preload", str(preload)] if preload else []
-            worker = subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_worker", address, "--nthreads",
-                                       "1", "--no-dashboard", *extra], env=env, stdout=subprocess.DEVNULL,
-                                      stderr=subprocess.DEVNULL)
-            workers.append(worker)
-            return worker
-
-        yield address, start_worker
-    finally:
-        for p in (proc, *workers):
-            if p.poll() is None:
-                p.kill()
-                p.wait()
+def scheduler(dask_scheduler):
+    """``(address, start_worker)`` of `conftest.dask_scheduler`."""
+    return dask_scheduler.address, dask_scheduler.start_worker
 
 
 def _sweep_process(out: Path, address: str, *extra):

@@ -423,44 +423,23 @@ def test_http_server_as_scheduler_is_one_bounded_attempt(ws, monkeypatch):
 
 @posix
 @pytest.mark.slow
-def test_a_scheduler_that_dies_midway_is_one_line_and_the_chunks_stay(tmp_path):
+def test_a_scheduler_that_dies_midway_is_one_line_and_the_chunks_stay(tmp_path, dask_scheduler):
     """A scheduler and a worker in their own processes; the scheduler is killed once the first chunk
     is stored: one line saying so (no distributed tracebacks), exit 2, the chunks kept."""
-    pytest.importorskip("distributed")
-    env = {**os.environ, "PYTHONPATH": str(REPO)}
-    scheduler = subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_scheduler", "--host", "127.0.0.1",
-                                  "--port", "0", "--no-dashboard"], env=env, stderr=subprocess.PIPE, text=True)
-    worker = None
-    try:
-        address = None
-        for line in scheduler.stderr:
-            if "Scheduler at:" in line:
-                address = line.split("Scheduler at:")[1].strip()
-                break
-        assert address, "the scheduler did not start"
-        threading.Thread(target=scheduler.stderr.read, daemon=True).start()
-        worker = subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_worker", address, "--nthreads",
-                                   "1", "--no-dashboard"], env=env, stdout=subprocess.DEVNULL,
-                                  stderr=subprocess.DEVNULL)
-        (tmp_path / "case.yaml").write_text(
-            (REPO / "configs" / "example.yaml").read_text().replace("../records/", ""))
-        for name in SHIPPED:
-            shutil.copy(REPO / "records" / name, tmp_path / name)
-        proc = cli_subprocess(["sweep", "case.yaml", "--mu", "0.60:0.90:0.02", "--pga", "450gal:930gal:20gal",
-                               "--restitution", "0.95", "--chunk-size", "8", "--no-plot", "--no-progress",
-                               "--scheduler", address], tmp_path)
-        deadline = time.monotonic() + 300
-        while not list(tmp_path.glob("out/.example.sweep.chunks/*/chunk-*.npz")):
-            assert proc.poll() is None, proc.communicate()
-            assert time.monotonic() < deadline, "no chunk was stored"
-            time.sleep(0.02)
-        scheduler.kill()
-        _, stderr = proc.communicate(timeout=120)
-    finally:
-        for p in (scheduler, worker):
-            if p is not None and p.poll() is None:
-                p.kill()
-                p.wait()
+    dask_scheduler.start_worker()
+    (tmp_path / "case.yaml").write_text((REPO / "configs" / "example.yaml").read_text().replace("../records/", ""))
+    for name in SHIPPED:
+        shutil.copy(REPO / "records" / name, tmp_path / name)
+    proc = cli_subprocess(["sweep", "case.yaml", "--mu", "0.60:0.90:0.02", "--pga", "450gal:930gal:20gal",
+                           "--restitution", "0.95", "--chunk-size", "8", "--no-plot", "--no-progress",
+                           "--scheduler", dask_scheduler.address], tmp_path)
+    deadline = time.monotonic() + 300
+    while not list(tmp_path.glob("out/.example.sweep.chunks/*/chunk-*.npz")):
+        assert proc.poll() is None, proc.communicate()
+        assert time.monotonic() < deadline, "no chunk was stored"
+        time.sleep(0.02)
+    dask_scheduler.process.kill()
+    _, stderr = proc.communicate(timeout=120)
     lines = stderr.splitlines()
     assert proc.returncode == 2 and len(lines) == 1, stderr
     assert lines[0].startswith("rockslide: error: --scheduler: lost the connection to the dask scheduler")
