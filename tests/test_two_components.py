@@ -8,6 +8,7 @@ components and the block by one angle changes nothing, bit for bit.
 
 from __future__ import annotations
 
+import json
 import math
 
 import h5py
@@ -561,3 +562,13 @@ def test_azimuth_sweep_csv_in_degrees_and_its_caption_names_both_components(pair
     caption = sw.stored_caption(results.read_sweep(pair / "out" / "two.sweep.h5"))
     assert "h1.at2 (H1)" in caption and "h2.at2 (H2)" in caption
     assert "block orientation varied" in caption and "block at" not in caption
+
+
+def test_info_shows_an_at2_components_azimuth(pair):
+    """``rockslide info`` of a PEER AT2 file names the azimuth its title line gives (none for UP)."""
+    shown = invoke("info", pair / "h2.at2")
+    assert shown.exit_code == 0 and "azimuth   90 deg" in shown.stdout
+    vertical = invoke("info", pair / "up.at2")
+    assert vertical.exit_code == 0 and "azimuth" not in vertical.stdout
+    details = json.loads(invoke("info", pair / "h2.at2", "--json").stdout)
+    assert details["azimuth"] == math.radians(90.0)

@@ -69,6 +69,8 @@ def info(record, fmt, units, time_column, column, dt, skip_lines, as_json):
     click.echo(f"  peak      {details['peak_gal']:.2f} gal = {details['peak_g']:.4f} g "
                f"({'+' if details['peak_signed'] > 0 else '-'}) at t = {details['peak_time']:g} s")
     click.echo(f"  mean      {details['mean'] / 0.01:.3f} gal")
+    if details.get("azimuth") is not None:
+        click.echo(f"  azimuth   {math.degrees(details['azimuth']):g} deg (from the title line; ground.horizontal_1/2)")
     for key, value in (details.get("cosmos") or {}).items():
         if value not in (None, "") and key != "comments":
             click.echo(f"  {key.replace('_', ' '):<9} {value}")

@@ -393,7 +393,9 @@ def record_info(path, **options) -> dict:
         counts it), ``units`` (of the file), ``start`` [s], ``peak`` [m/s^2] (max ``|a|``),
         ``peak_gal``, ``peak_g``, ``peak_signed`` [m/s^2] (the sample at the peak, with its sign),
         ``peak_time`` [s] (its time, first one if tied), ``mean`` [m/s^2], ``sha256``; ``cosmos``:
-        a COSMOS file's station, structure type, orientation and location (`io.cosmos`), else None.
+        a COSMOS file's station, structure type, orientation and location (`io.cosmos`), else None;
+        ``azimuth`` [rad]: a PEER AT2 component's azimuth from its title line (`at2_azimuth`), else
+        None.
     """
     record = load_record(path, **options)
     data = record.data
@@ -416,6 +418,7 @@ def record_info(path, **options) -> dict:
         "mean": float(np.mean(data)),
         "sha256": record.sha256,
         "cosmos": dict(record.header["cosmos"]) if record.format == "cosmos" else None,
+        "azimuth": at2_azimuth(record.path) if record.format == "at2" else None,
     }
 
 
