@@ -127,11 +127,44 @@ def test_the_block_stands_on_the_floor_and_the_base_is_the_ground():
     np.testing.assert_array_equal(base.horizontal, plain.ground.horizontal)      # scaled as without a floor
     m = im.substeps_for(base.dt, 0.08)                                           # the fastest mode decides
     assert floor.dt == pytest.approx(base.dt / m, rel=1e-15)
-    assert floor.horizontal.size == (base.horizontal.size - 1) * m + 1
-    expected, _ = im.floor_acceleration(base.horizontal, base.dt, [(0.6, 0.05, 1.3), (0.2, 0.03, -0.4)], m)
+    n_tail = math.ceil(case.ground.tail / base.dt - 1e-9)       # the floor moves on over the case's tail
+    assert floor.horizontal.size == (base.horizontal.size + n_tail - 1) * m + 1
+    still = np.zeros(n_tail)
+    expected, _ = im.floor_acceleration(np.concatenate([base.horizontal, still]), base.dt,
+                                        [(0.6, 0.05, 1.3), (0.2, 0.03, -0.4)], m)
     np.testing.assert_array_equal(floor.horizontal, expected)
-    vertical, _ = im.floor_acceleration(base.vertical, base.dt, [(0.08, 0.05, 1.0)], m)
+    vertical, _ = im.floor_acceleration(np.concatenate([base.vertical, still]), base.dt, [(0.08, 0.05, 1.0)], m)
     np.testing.assert_array_equal(floor.vertical, vertical)
+
+
+def test_the_floor_moves_on_over_the_tail():
+    """A building still moves when the ground stops: with ``ground.tail`` the floor's motion runs
+    on over the tail as its modes' free vibration (the floor of the record padded with still
+    ground, computed independently here), and the run adds no still samples after it, so that it
+    ends, as without a floor, a tail after the record. A long, lightly damped mode on a record cut
+    short keeps moving: without this the block met a step in the floor's motion at the record's end."""
+    from rockslide.analyses import sweep as sw
+
+    case = case_with(load_case(EXAMPLE), {"ground.floor.horizontal": {"period": "2 s", "damping": 0.02},
+                                          "ground.tail": "3 s"})
+    prepared = runner.prepare(case)
+    base, floor = prepared.base, prepared.ground
+    n_tail = math.ceil(3.0 / base.dt - 1e-9)
+    m = round(base.dt / floor.dt)
+    still = np.concatenate([base.horizontal, np.zeros(n_tail)])
+    expected, _ = im.floor_acceleration(still, base.dt, [(2.0, 0.02, 1.0)], m)
+    np.testing.assert_array_equal(floor.horizontal, expected)
+    assert prepared.settings.tail == 0.0
+    over_tail = floor.horizontal[(base.horizontal.size - 1) * m + 1:]
+    assert np.max(np.abs(over_tail)) > 0.05 * np.max(np.abs(floor.horizontal))      # it still moves
+    result = runner.simulate_prepared(prepared)
+    end = base.start + (base.horizontal.size - 1 + n_tail) * base.dt
+    assert result.ground_time[-1] == pytest.approx(end, abs=1e-9)   # a tail after the record, as without floor
+    plan = sw.plan_sweep(case, [sw.parse_axis("mu", "0.52")], records_dir=REPO / "records")
+    n = floor.horizontal.size - 1
+    assert int(plan.count[0]) == n                                  # the sweep's input: the same, no second tail
+    np.testing.assert_allclose(plan.factor_h[0] * plan.base[0, :n], floor.horizontal[:n], rtol=0,
+                               atol=1e-12 * np.max(np.abs(floor.horizontal)))
 
 
 def test_screening_multiplies_the_ground_by_one_plus_two_z_over_h():

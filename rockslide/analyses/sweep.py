@@ -429,7 +429,6 @@ def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = N
         return _plan_pulses(case, axes, ratio, chunk_size, n, progress)
 
     records, entries = _read_records(case, records_dir)
-    settings = settings_for(case, history=False, energy=False)
     # what the block stands on, unscaled: the record (with two horizontal components, the motion
     # along the block's orientation), or each floor's motion from it; one per distinct orientation
     # and floor of the grid (--azimuth, --floor-period), laid end to end in the kernel's input
@@ -457,7 +456,9 @@ def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = N
                 unscaled = ground_along(point, records, scaled=False)[0] if read is None else read
                 support = floor_ground(point, unscaled)
                 check_size(point, support, history=False)
-                piece = ground_array(support.horizontal, support.vertical, support.dt, settings.tail)
+                # the point's own tail: a floor of modes carries its free vibration (`floor_carries_tail`)
+                tail = settings_for(point, history=False, energy=False).tail
+                piece = ground_array(support.horizontal, support.vertical, support.dt, tail)
                 supports[(orientation, floor)] = (support, sum(p.shape[1] for p in pieces), piece.shape[1])
                 pieces.append(piece)
         except CaseError as exc:

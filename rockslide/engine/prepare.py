@@ -206,6 +206,10 @@ def floor_ground(case: Case, ground: rec.GroundMotion) -> rec.GroundMotion:
     horizontal ground times the screening factor ``1 + 2 z/h`` (the code's factor is horizontal: the
     vertical is left as it is). Without a floor, ``ground`` itself.
 
+    A building still moves when its ground stops: with a ``ground.tail``, the modes run on over the
+    tail on still ground, and the floor's motion carries its free vibration there (`settings_for`
+    then adds no still samples of its own: `floor_carries_tail`).
+
     Raises
     ------
     CaseError
@@ -222,6 +226,13 @@ def floor_ground(case: Case, ground: rec.GroundMotion) -> rec.GroundMotion:
                         field="ground.floor")
     if floor.z_over_h is not None:
         return dataclasses.replace(ground, horizontal=rec._frozen(floor.amplification() * ground.horizontal))
+    n_tail = tail_samples(case.ground.tail, ground.dt)
+    if n_tail:                      # the ground is still over the tail; the building is not
+        def still_after(values):
+            values = np.asarray(values)
+            return np.concatenate([values, np.zeros(n_tail)]) if values.size == ground.horizontal.size else values
+        ground = dataclasses.replace(ground, horizontal=still_after(ground.horizontal),
+                                     vertical=still_after(ground.vertical))
     modes = {role: [(m.period, m.damping, m.participation) for m in getattr(floor, role)]
              for role in ("horizontal", "vertical")}
     needed = max(intensity.substeps_for(ground.dt, period) for role in modes for period, _, _ in modes[role])
@@ -231,6 +242,13 @@ def floor_ground(case: Case, ground: rec.GroundMotion) -> rec.GroundMotion:
         components[role], step = intensity.floor_acceleration(getattr(ground, role), ground.dt, role_modes, m)
     return dataclasses.replace(ground, dt=step, horizontal=rec._frozen(components["horizontal"]),
                                vertical=rec._frozen(components["vertical"]))
+
+
+def floor_carries_tail(case: Case) -> bool:
+    """Whether `floor_ground` gives the floor's motion over ``ground.tail`` too (a floor of modes:
+    their free vibration), so that the run adds no still samples after it."""
+    floor = case.ground.floor
+    return floor.given and floor.z_over_h is None and case.ground.tail > 0.0
 
 
 def floor_peaks(time, floor_horizontal, base_horizontal) -> dict:
@@ -319,7 +337,8 @@ def settings_for(case: Case, *, history: bool = True, energy: bool = True) -> Se
     if history:
         interval = case.output.interval
         every = 1 if interval is None else max(1, round(interval / case.solver.dt))
-    return Settings(dt=case.solver.dt, events=case.solver.events, tail=case.ground.tail,
+    return Settings(dt=case.solver.dt, events=case.solver.events,
+                    tail=0.0 if floor_carries_tail(case) else case.ground.tail,
                     rotation=case.initial.rotation, rotation_rate=case.initial.rotation_rate,
                     slip_rate=case.initial.slip_rate, history_every=every, energy=energy)
 
