@@ -168,3 +168,18 @@ def test_the_statue_under_kobe_is_neither_safe_nor_doomed():
     members = rockslide.ensemble(case, 200)
     assert 0.0 < members.attrs["interval_low"] and members.attrs["interval_high"] < 1.0
     assert members.attrs["robust"] == 0 and members.attrs["flips"] > 0
+
+
+def test_the_slenderness_factor_is_named_for_what_it_scales():
+    """``uncertain.slenderness`` scales the width b (b/h times it, h/b divided by it): when it is the
+    quantity the verdict is most sensitive to, the printout says so, lest 'its lowest third' be read
+    as the least slender blocks (they are the slenderest)."""
+    from rockslide.analyses import ensemble as ens
+
+    summary = {"n": 200, "p_overturn": 0.5, "interval": (0.43, 0.57), "n_within_model": 200, "robust": False,
+               "quantities": {"slenderness": {"uniform": [0.98, 1.02]}}, "defaults": False, "seed": 1,
+               "rotation_ratio": {"median": 0.9, "p05": 0.5, "p95": 1.0}, "most_sensitive": "slenderness",
+               "sensitivity": {"slenderness": {"p_low": 1.0, "p_high": 0.0}}}
+    lines = ens.describe(summary, "standing")
+    assert lines[-1] == ("  most sensitive to slenderness (the factor on the width b): overturns in 100 % of its "
+                         "lowest third, 0 % of its highest")

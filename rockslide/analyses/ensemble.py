@@ -295,7 +295,9 @@ def describe(summary: dict, nominal_verdict: str) -> list[str]:
     most = summary["most_sensitive"]
     if most is not None:
         s = summary["sensitivity"][most]
-        lines.append(f"  most sensitive to {most}: overturns in {pct(s['p_low'])} % of its lowest third, "
+        # the name says what its draws scale: slenderness is a factor on the width (case.Uncertain)
+        name = {"slenderness": "slenderness (the factor on the width b)"}.get(most, most)
+        lines.append(f"  most sensitive to {name}: overturns in {pct(s['p_low'])} % of its lowest third, "
                      f"{pct(s['p_high'])} % of its highest")
     return lines
 
