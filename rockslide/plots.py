@@ -26,6 +26,7 @@ in what is stored. The format follows the file name in `save_figure` (PNG, PDF, 
 from __future__ import annotations
 
 import contextvars
+import functools
 import logging
 import math
 import os
@@ -637,9 +638,11 @@ def run_azimuths(run) -> tuple | None:
     return components.azimuth_1, components.azimuth_2
 
 
+@functools.lru_cache(maxsize=16)
 def stored_case(case_text: str):
     """The `Case` of a case file's text stored with a result (None: empty, or not a case: a figure
-    of a file written by another version still draws)."""
+    of a file written by another version still draws). Parsed once per text: a figure asks for its
+    caption, its units, its floor and its orientation (a `Case` is frozen, so it is shared)."""
     from .case import parse_case
     from .errors import RockslideError
 
