@@ -122,9 +122,10 @@ def phases(case_file: Path, suite: str, suite_options: list[str], levels: str, w
     if workers:
         numba.set_num_threads(workers)
     with Clock() as clocks["batch kernel alone, same runs"]:
-        batch.compute(plan.params, plan.states, plan.base, plan.first, plan.count, plan.factor_h, plan.factor_v)
+        batch.compute(plan.case_params(), plan.case_states(), plan.base, plan.first, plan.count, plan.factor_h,
+                      plan.factor_v)
     moving = states[:, K.S_T_SLIP] + states[:, K.S_T_ROCK] + states[:, K.S_T_ROCKSLIP]
-    steps = float((moving / plan.params[:, K.P_STEP]).sum())
+    steps = float((moving / plan.case_column(K.P_STEP)).sum())
     over = int(analysis.variables["overturned"][0].sum())
     return {"clocks": clocks, "steps": steps, "overturned": over, "runs": plan.n_cases,
             "fits": [fr.describe_fit(s, f, im) for s, f in zip(analysis.states, analysis.fits, strict=True)],

@@ -130,9 +130,9 @@ def bench(plan, title: str, out: Path) -> None:
     cpu_wall, cpu = timed_sweep(plan, out, "cpu")
     gpu_wall, device = timed_sweep(plan, out, "gpu")
     moving = cpu[:, K.S_T_SLIP] + cpu[:, K.S_T_ROCK] + cpu[:, K.S_T_ROCKSLIP]
-    steps = float((moving / plan.params[:, K.P_STEP]).sum())
-    order = gpu.launch_order(plan.params, plan.base, plan.first, plan.count, plan.factor_h)
-    useful, issued = gpu.warp_efficiency(cpu, plan.params, order)
+    steps = float((moving / plan.case_column(K.P_STEP)).sum())
+    order = gpu.launch_order(plan.case_params(), plan.base, plan.first, plan.count, plan.factor_h)
+    useful, issued = gpu.warp_efficiency(cpu, plan.case_params(), order)
     print("| where | wall [s] | cases/s | steps/s |")
     print("|---|---:|---:|---:|")
     for where, wall in ((f"CPU, {os.cpu_count()} cores (threaded sweep)", cpu_wall), ("GPU", gpu_wall)):

@@ -124,7 +124,8 @@ def main() -> None:
     # the same cases without chunks, store or progress: the batch kernel alone
     with Clock() as bare:
         numba.set_num_threads(threads)
-        batch.compute(plan.params, plan.states, plan.base, 0, plan.base.shape[1], plan.factor_h, plan.factor_v)
+        batch.compute(plan.case_params(), plan.case_states(), plan.base, 0, plan.base.shape[1], plan.factor_h,
+                      plan.factor_v)
 
     n = plan.n_cases
     shares = sw.time_shares(states)

@@ -250,7 +250,7 @@ def test_a_sweep_runs_the_block_on_the_floor():
     for i, pga in enumerate((2.0, 4.0)):
         point = runner.prepare(case_with(case, {"ground.scale.pga_horizontal": pga})).ground
         n = point.horizontal.size - 1                      # base row 0: each interval's starting value
-        assert plan.params[i, K.P_STEP] <= point.dt
+        assert plan.case_column(K.P_STEP)[i] <= point.dt
         np.testing.assert_allclose(plan.factor_h[i] * plan.base[0, :n], point.horizontal[:n], rtol=0,
                                    atol=1e-12 * np.max(np.abs(point.horizontal)))
 
@@ -268,7 +268,7 @@ def test_a_floor_period_axis_runs_each_point_on_its_own_floor():
                                                              MODES["horizontal"][1]]})
         ground = runner.prepare(point).ground
         n = ground.horizontal.size - 1
-        assert plan.params[i, K.P_STEP] <= ground.dt
+        assert plan.case_column(K.P_STEP)[i] <= ground.dt
         np.testing.assert_allclose(plan.factor_h[i] * plan.base[0, plan.first[i]:plan.first[i] + n],
                                    ground.horizontal[:n], rtol=0, atol=1e-12 * np.max(np.abs(ground.horizontal)))
     one = sw.plan_sweep(load_case(EXAMPLE), [sw.parse_axis("floor_period", "0.5s")], records_dir=REPO / "records")

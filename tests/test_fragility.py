@@ -316,7 +316,7 @@ def planned(example):
     im = fr.parse_im("pga")
     fplan = fr.plan_fragility(example, suite, im, fr.parse_levels("0.7g,1.1g,1.4g", im), records_dir=RECORDS)
     plan = fplan.plan
-    states = batch.compute(plan.params, plan.states, plan.base, plan.first, plan.count, plan.factor_h,
+    states = batch.compute(plan.case_params(), plan.case_states(), plan.base, plan.first, plan.count, plan.factor_h,
                            plan.factor_v)
     return fplan, fr.analyse(fplan, states, fr.damage_states(["slip>50mm"]), resamples=0)
 
@@ -392,7 +392,7 @@ def test_runs_that_leave_the_model_are_counted_and_not_fitted(example):
         fplan = fr.plan_fragility(example, load_suite(SUITE), im, fr.parse_levels("1g,2.5g", im),
                                   records_dir=RECORDS)
     plan = fplan.plan
-    states = batch.compute(plan.params, plan.states, plan.base, plan.first, plan.count, plan.factor_h,
+    states = batch.compute(plan.case_params(), plan.case_states(), plan.base, plan.first, plan.count, plan.factor_h,
                            plan.factor_v)
     analysis = fr.analyse(fplan, states, fr.damage_states(), resamples=0)
     status = analysis.variables["status"][0]

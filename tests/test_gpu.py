@@ -76,7 +76,7 @@ plan = sw.plan_sweep(case, axes, records_dir=Path("records"))
 inputs = ex._chunk_inputs(plan, np.arange(plan.n_cases))
 cpu = batch.compute(*inputs)
 device = gpu.compute(*inputs)
-order = gpu.launch_order(plan.params, plan.base, plan.first, plan.count, plan.factor_h)
+order = gpu.launch_order(plan.case_params(), plan.base, plan.first, plan.count, plan.factor_h)
 print(json.dumps({"identical": bool(np.array_equal(cpu, device, equal_nan=True)),
                   "modes": sorted(set(cpu[:, 0].tolist())), "n": plan.n_cases,
                   "reordered": bool((order != np.arange(plan.n_cases)).any()),

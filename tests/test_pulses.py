@@ -277,7 +277,7 @@ def test_duration_sweep_of_a_rectangular_pulse(tmp_path):
     td = critical_duration(0.5 * 9.80665, alpha, R)
     axes = [sw.parse_axis("duration", f"{0.999 * td!r},{1.001 * td!r}")]
     plan = sw.plan_sweep(case, axes)
-    states = batch.compute(plan.params, plan.states, plan.base, plan.first, plan.count, plan.factor_h,
+    states = batch.compute(plan.case_params(), plan.case_states(), plan.base, plan.first, plan.count, plan.factor_h,
                            plan.factor_v)
     variables = sw.sweep_variables(plan, states)
     np.testing.assert_array_equal(variables["overturn_mode"][0], [0, 1])
@@ -364,7 +364,7 @@ def test_a_sweep_counts_its_undecided_cases(tmp_path):
     text = UNDECIDED_CASE.replace("AMPLITUDE", "0.6 g").replace("TAIL", "0 s")
     case = parse_case(text, source="pn.yaml")
     plan = sw.plan_sweep(case, [sw.parse_axis("amplitude", "0.3g,0.45g,0.6g,0.8g")])
-    states = batch.compute(plan.params, plan.states, plan.base, plan.first, plan.count, plan.factor_h,
+    states = batch.compute(plan.case_params(), plan.case_states(), plan.base, plan.first, plan.count, plan.factor_h,
                            plan.factor_v)
     variables = sw.sweep_variables(plan, states)
     for i, amplitude in enumerate(["0.3 g", "0.45 g", "0.6 g", "0.8 g"]):

@@ -195,11 +195,11 @@ def test_mu_kinetic_follows_the_case_ratio(example):
     odd = case_with(example, {"contact.mu_static": 0.55, "contact.mu_kinetic": 0.5225})
     assert 0.5225 / 0.55 != 0.95 and sw.kinetic_ratio(odd, None) == 0.95   # rounded to 12 digits
     plan = sw.plan_sweep(example, [sw.parse_axis("mu", "0.4,0.6")], records_dir=RECORDS)
-    assert plan.params[:, K.P_MU].tolist() == [0.4, 0.6]
-    assert plan.params[:, K.P_NU].tolist() == [0.95 * 0.4, 0.95 * 0.6]
+    assert plan.case_column(K.P_MU).tolist() == [0.4, 0.6]
+    assert plan.case_column(K.P_NU).tolist() == [0.95 * 0.4, 0.95 * 0.6]
     plan = sw.plan_sweep(example, [sw.parse_axis("mu", "0.4,0.6")], records_dir=RECORDS,
                          mu_kinetic_ratio=1.0)
-    assert plan.params[:, K.P_NU].tolist() == [0.4, 0.6]
+    assert plan.case_column(K.P_NU).tolist() == [0.4, 0.6]
 
 
 def test_pga_replaces_a_factor_and_keeps_a_given_vertical_peak(tmp_path):
@@ -250,7 +250,7 @@ def mixed(example):
     axes = [sw.parse_axis("mu", "0.45,0.6"), sw.parse_axis("pga", "500gal,750gal,900gal"),
             sw.parse_axis("restitution", "0.7,0.9"), sw.parse_axis("height_to_width", "2,2.2")]
     plan = sw.plan_sweep(example, axes, records_dir=RECORDS, chunk_size=5)
-    states = batch.compute(plan.params, plan.states, plan.base, 0, plan.base.shape[1], plan.factor_h,
+    states = batch.compute(plan.case_params(), plan.case_states(), plan.base, 0, plan.base.shape[1], plan.factor_h,
                            plan.factor_v)
     return plan, sw.sweep_variables(plan, states)
 
@@ -306,7 +306,7 @@ def test_a_pool_of_threads_gives_the_batch_result(mixed, tmp_path):
     """The sweep's threads (each taking the next chunk when it is done) give the final states of
     one batch call, bit for bit, whatever order the chunks finish in."""
     plan, _ = mixed
-    direct = batch.compute(plan.params, plan.states, plan.base, plan.first, plan.count, plan.factor_h,
+    direct = batch.compute(plan.case_params(), plan.case_states(), plan.base, plan.first, plan.count, plan.factor_h,
                            plan.factor_v)
     store = chunks.ChunkStore(tmp_path / "chunks", plan.key)
     ex.compute(plan, store, range(plan.n_chunks), workers=3)

@@ -27,7 +27,7 @@ def test_height_to_width_keeps_the_height_and_sets_the_width():
     case = load_case(EXAMPLE)
     axes = [sw.parse_axis("height_to_width", "2,4")]
     plan = sw.plan_sweep(case, axes, records_dir=RECORDS)
-    alpha = plan.params[:, K.P_ALPHA].reshape(plan.shape)
+    alpha = plan.case_column(K.P_ALPHA).reshape(plan.shape)
     assert alpha[0] == pytest.approx(math.atan(1 / 2), rel=1e-14)
     assert alpha[1] == pytest.approx(math.atan(1 / 4), rel=1e-14)
     assert sw.axis_changes("height_to_width", 4.0, case, None) == {"block.width": case.block.height / 4}

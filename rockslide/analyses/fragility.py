@@ -760,7 +760,7 @@ def with_parameter_samples(fplan: FragilityPlan, samples: int, seed: int, chunk_
             values[name][r, 1:] = drawn[name]
     row = np.repeat(np.arange(plan.n_cases), width)                  # (record, level, sample), C order
     record, draw = row // n_levels, np.tile(np.arange(width), plan.n_cases)
-    params, restitution = ens.member_parameters(case, plan.params[row],
+    params, restitution = ens.member_parameters(case, plan.case_params(row),
                                                 {name: v[record, draw] for name, v in values.items()})
     if "restitution" in values:
         values["restitution"] = restitution[np.arange(n_records)[:, None] * n_levels * width + np.arange(width)]
@@ -769,7 +769,8 @@ def with_parameter_samples(fplan: FragilityPlan, samples: int, seed: int, chunk_
     axis = sw.Axis("sample", tuple(float(k) for k in range(width)), tuple(str(k) for k in range(width)),
                    str(samples), kind)
     expanded = Plan(case=case, axes=[*plan.axes, axis], mu_kinetic_ratio=None, params=params,
-                    states=plan.states[row], factor_h=plan.factor_h[row], factor_v=plan.factor_v[row], base=plan.base,
+                    states=plan.case_states(row), factor_h=plan.factor_h[row], factor_v=plan.factor_v[row],
+                    base=plan.base,
                     first=plan.first[row], count=plan.count[row], record_end=plan.record_end[row],
                     step=float(params[:, K.P_STEP].min()), records=plan.records,
                     chunk_size=default_chunk_size(n) if chunk_size is None else int(chunk_size))
@@ -1224,7 +1225,7 @@ def analyse(fplan: FragilityPlan, final_states: np.ndarray, states, *, resamples
     """The results of every run (from the kernel's final states), the exceedances and the fits."""
     plan = fplan.plan
     variables = sw.sweep_variables(plan, final_states)
-    alpha = plan.params[:, K.P_ALPHA].reshape(plan.shape)
+    alpha = plan.case_column(K.P_ALPHA).reshape(plan.shape)
     variables["max_rotation_ratio"] = (variables["max_rotation"][0] / alpha,
                                        {"units": "1", "long_name": "largest rotation |phi| / alpha"})
     variables["scale_factor"] = (plan.factor_h.reshape(plan.shape).copy(),

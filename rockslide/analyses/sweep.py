@@ -59,7 +59,7 @@ from ..case import Case, case_with
 from ..core import kernel as K
 from ..core.physics import OVERTURNED
 from ..core.simulate import ground_array, initial_state, may_still_overturn, parameters
-from ..engine.plan import MAX_POINTS, Plan, default_chunk_size, definition_key
+from ..engine.plan import MAX_GRID_POINTS, MAX_POINTS, Plan, check_memory, default_chunk_size, definition_key
 from ..engine.prepare import (
     ABSURD_ACCELERATION_IN_G,
     RunWarning,
@@ -90,8 +90,9 @@ __all__ = ["AXES", "AxisKind", "Axis", "parse_axis", "plan_sweep", "sweep_variab
 
 #: Points validated between two checks for Ctrl-C (and two calls of the planning's progress).
 PLAN_BATCH = 2000
-#: [s] Time to plan one point of a grid (`plan_sweep`; 0.025-0.03 ms measured on 2 cores), to say
-#: how long the checks of a large grid take before they start.
+#: [s] Time to plan one point of a grid (`plan_sweep`) apart from its scale axes (`_Grid`): about
+#: 0.03 ms on 2 cores (10^6 points of ``--mu`` x ``--pga`` plan in 0.7 s: 1000 points and 1000
+#: scales), to say how long the checks of a large grid take before they start (`planning_seconds`).
 PLAN_SECONDS_PER_POINT = 3e-5
 #: Ranges include their stop when it is within this fraction of a step of the grid.
 RANGE_TOLERANCE = 1e-9
@@ -302,7 +303,7 @@ def _range_texts(option: str, kind: str, text: str, pieces) -> list[str]:
     if q - n >= 1 - Decimal(RANGE_TOLERANCE):
         n += 1
     if n + 1 > MAX_POINTS:
-        raise CaseError(f"{text!r} has {n + 1} values; at most {MAX_POINTS} points in a sweep",
+        raise CaseError(f"{text!r} has {n + 1} values; at most {MAX_POINTS} on one axis",
                         source=option)
     numbers = [start + i * step for i in range(n + 1)]
     if abs(numbers[-1] - stop) <= Decimal(RANGE_TOLERANCE) * step:
@@ -381,7 +382,8 @@ def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = N
     Raises
     ------
     CaseError
-        No axis, an axis twice, a grid above :data:`MAX_POINTS`, a point that is not a valid case
+        No axis, an axis twice, a grid above :data:`MAX_GRID_POINTS` or the memory available
+        (`check_memory`), a point that is not a valid case
         or whose ground motion fails the checks of ``rockslide run`` (naming the option).
     RecordError
         A record cannot be read or scaled.
@@ -403,9 +405,11 @@ def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = N
                         source="--mu-kinetic-ratio")
     ratio = kinetic_ratio(case, mu_kinetic_ratio) if "mu" in names else None
     n = math.prod(len(a) for a in axes)
-    if n > MAX_POINTS:
+    options = "/".join(a.kind.option for a in axes)
+    if n > MAX_GRID_POINTS:
         raise CaseError(f"the grid has {n} points ({' x '.join(str(len(a)) for a in axes)}); at most "
-                        f"{MAX_POINTS}", source="/".join(a.kind.option for a in axes))
+                        f"{MAX_GRID_POINTS}", source=options)
+    check_memory(n, options)
     if chunk_size is not None and (isinstance(chunk_size, bool) or int(chunk_size) < 1):
         raise CaseError(f"must be a whole number >= 1, got {chunk_size!r}", source="--chunk-size")
     chunk_size = default_chunk_size(n) if chunk_size is None else int(chunk_size)
@@ -434,21 +438,14 @@ def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = N
     # and floor of the grid (--azimuth, --floor-period), laid end to end in the kernel's input
     read = None if case.ground.two_components else rec.combine(records["horizontal"], records["vertical"],
                                                               source=case.source, still_dt=case.solver.dt)
+    grid = _Grid(axes, RECORD_SCALE_AXES)                    # the scale axes planned apart
+    n_other = grid.size(grid.other)
     supports: dict = {}                           # (orientation, floor) -> (ground, first column, columns)
     pieces = []
-    first, count = np.empty(n, dtype=np.int64), np.empty(n, dtype=np.int64)
-    record_end = np.empty(n)
-
-    params = np.empty((n, K.N_PARAMS))
-    states = np.empty((n, K.N_STATE))
-    factor_h = np.empty(n)
-    factor_v = np.empty(n)
-    factors: dict[tuple, tuple[float, float]] = {}     # scale section -> (kh, kv)
-    checked: dict[tuple, str | None] = {}              # (scale section, floor, gravity) -> flight warning
-    highest = (0.0, None)                               # the largest scaled peak, at this point
-    flights = _Flights(axes)
-    grounds: dict[tuple, rec.GroundMotion] = {}         # a few scaled supports, for the checks
-    for i, combo, point in _points(case, axes, ratio, progress):
+    params, states = np.empty((n_other, K.N_PARAMS)), np.empty((n_other, K.N_STATE))
+    first, count = np.empty(n_other, dtype=np.int64), np.empty(n_other, dtype=np.int64)
+    record_end = np.empty(n_other)
+    for j, combo, point in _points(case, grid.other_axes, ratio, grid.scaled_progress(progress), grid.named()):
         floor = point.ground.floor
         orientation = point.block.orientation if point.ground.two_components else None
         try:
@@ -462,11 +459,25 @@ def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = N
                 supports[(orientation, floor)] = (support, sum(p.shape[1] for p in pieces), piece.shape[1])
                 pieces.append(piece)
         except CaseError as exc:
-            raise _point_error(exc, axes, combo) from None
-        support, first[i], count[i] = supports[(orientation, floor)]
-        s = point.ground.scale
-        scale = (s.pga_horizontal, s.factor, s.pga_vertical, s.vertical_factor, orientation)
-        if (scale, floor, point.gravity) not in checked:
+            raise _point_error(exc, *grid.named()(combo)) from None
+        support, first[j], count[j] = supports[(orientation, floor)]
+        grid.add_context((orientation, floor, point.gravity), point, combo)
+        point_settings = settings_for(point, history=False, energy=False)
+        start = support.start + case.ground.time_shift
+        params[j] = parameters(model_for(point), support.dt, point_settings, start)
+        record_end[j] = start + count[j] * support.dt
+        states[j] = initial_state(point_settings)
+
+    # the scaled motion: factors and checks once per scale and context (orientation, floor, gravity)
+    factors = np.empty((2, grid.size(grid.scale), len(grid.contexts)))
+    peaks = np.zeros(factors.shape[1:])
+    flights = np.full(factors.shape[1:], None, dtype=object)
+    grounds: dict[tuple, rec.GroundMotion] = {}         # a few scaled supports
+    for c, (rep, rep_combo) in enumerate(grid.contexts.values()):
+        orientation = rep.block.orientation if rep.ground.two_components else None
+        for k, combo, point in _points(rep, grid.scale_axes, ratio, named=grid.named(rep_combo)):
+            s, floor = point.ground.scale, point.ground.floor
+            scale = (s.pga_horizontal, s.factor, s.pga_vertical, s.vertical_factor, orientation)
             if (scale, floor) not in grounds:
                 if len(grounds) >= 16:
                     grounds.clear()
@@ -479,38 +490,121 @@ def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = N
                 grounds[(scale, floor)] = floor_ground(point, scaled)
             ground = grounds[(scale, floor)]
             try:
-                peak = check_against_ground(point, ground, warn=False)
+                peaks[k, c] = check_against_ground(point, ground, warn=False)
             except CaseError as exc:
-                raise _point_error(exc, axes, combo) from None
-            if peak > highest[0]:
-                highest = (peak, combo)
-            checked[(scale, floor, point.gravity)] = flight_warning(point, ground)
-            factors[scale] = (ground.horizontal_factor, ground.vertical_factor)
-        flights.add(checked[(scale, floor, point.gravity)], combo)
-        point_settings = settings_for(point, history=False, energy=False)
-        start = support.start + case.ground.time_shift
-        params[i] = parameters(model_for(point), support.dt, point_settings, start)
-        record_end[i] = start + count[i] * support.dt
-        states[i] = initial_state(point_settings)
-        factor_h[i], factor_v[i] = factors[scale]
-    _warn_coarse_step(case, axes, params)
-    flights.warn(n)
-    if highest[0] > ABSURD_ACCELERATION_IN_G * STANDARD_GRAVITY:
-        warnings.warn(f"{absurd_acceleration(case.source, highest[0])} [at {_point_text(axes, highest[1])}]",
-                      RunWarning, stacklevel=2)
+                raise _point_error(exc, axes, grid.combo(rep_combo, combo)) from None
+            flights[k, c] = flight_warning(point, ground)
+            factors[:, k, c] = ground.horizontal_factor, ground.vertical_factor
+
+    other, scale = grid.indices(grid.other), grid.indices(grid.scale)
+    context = grid.context_of[other]
+    _warn_flights(axes, flights, scale, context)
+    point_peaks = peaks[scale, context]
+    highest = int(np.argmax(point_peaks))
+    if point_peaks[highest] > ABSURD_ACCELERATION_IN_G * STANDARD_GRAVITY:
+        warnings.warn(f"{absurd_acceleration(case.source, float(point_peaks[highest]))} "
+                      f"[at {_point_text(axes, np.unravel_index(highest, grid.shape))}]", RunWarning, stacklevel=2)
+    _warn_coarse_step(case, grid.other_axes, params)
     base = pieces[0] if len(pieces) == 1 else np.concatenate(pieces, axis=1)
     plan = Plan(case=case, axes=axes, mu_kinetic_ratio=ratio, params=params, states=states,
-                factor_h=factor_h, factor_v=factor_v, base=base, first=first, count=count, record_end=record_end,
-                step=float(params[:, K.P_STEP].min()), records=entries, chunk_size=chunk_size)
+                factor_h=factors[0][scale, context], factor_v=factors[1][scale, context], base=base,
+                first=first[other], count=count[other], record_end=record_end[other],
+                step=float(params[:, K.P_STEP].min()), records=entries, chunk_size=chunk_size, rows=other)
     plan.key = definition_key(plan)
     return plan
 
 
-def _points(case: Case, axes, ratio, progress=None):
+class _Grid:
+    """A grid's dimensions split in two: the scale axes (``--pga``, ``--vertical-factor``;
+    ``--amplitude`` of a pulse), which change only the scale factors of the ground motion and the
+    checks of the scaled motion, and the other axes, which change the kernel's parameters, initial
+    state and support. Each half is planned on its own (a 1000 x 1000 ``--mu`` x ``--pga`` grid is
+    1000 points of parameters and 1000 scales, not 10^6 points), and `indices` spreads the halves
+    over the grid with numpy.
+
+    The checks of the scaled motion depend on the scale and a point's *context* (its orientation,
+    floor and gravity; for a pulse, its pulse at amplitude 1 and gravity): `add_context` keeps the
+    first point of each, in flat order, to stand for it.
+    """
+
+    def __init__(self, axes, scale_names):
+        self.axes = list(axes)
+        self.shape = tuple(len(a) for a in self.axes)
+        self.scale = [d for d, a in enumerate(self.axes) if a.name in scale_names]
+        self.other = [d for d in range(len(self.axes)) if d not in self.scale]
+        self.other_axes = [self.axes[d] for d in self.other]
+        self.scale_axes = [self.axes[d] for d in self.scale]
+        self.contexts: dict = {}                  # context -> (its first point, that point's combo)
+        self._context_index: dict = {}
+        self.context_of = np.empty(self.size(self.other), dtype=np.int64)
+        self._seen = 0
+
+    def size(self, dims) -> int:
+        """Points of the sub-grid of dimensions ``dims``."""
+        return math.prod(self.shape[d] for d in dims)
+
+    def scaled_progress(self, progress):
+        """``progress`` for the other half: each of its points stands for every scale."""
+        n_scales = self.size(self.scale)
+        return None if progress is None else (lambda done: progress(done * n_scales))
+
+    def add_context(self, context, point, combo) -> None:
+        """Record the context of the next point of the other half (in its flat order)."""
+        if context not in self.contexts:
+            self.contexts[context] = (point, combo)
+            self._context_index[context] = len(self._context_index)
+        self.context_of[self._seen] = self._context_index[context]
+        self._seen += 1
+
+    def named(self, other_combo=None):
+        """For `_points` over one half: the grid's axes and combo of a point of the other half
+        (``other_combo`` None; its scale axes at their first values, the first such point in flat
+        order), or of the scale half at ``other_combo``."""
+        if other_combo is None:
+            return lambda combo: (self.axes, self.combo(combo, (0,) * len(self.scale)))
+        return lambda combo: (self.axes, self.combo(other_combo, combo))
+
+    def combo(self, other_combo, scale_combo) -> tuple:
+        """The grid's combo of a point from its two halves."""
+        full = [0] * len(self.axes)
+        for dims, part in ((self.other, other_combo), (self.scale, scale_combo)):
+            for d, j in zip(dims, part, strict=True):
+                full[d] = j
+        return tuple(full)
+
+    def indices(self, dims) -> np.ndarray:
+        """``int64[n]``: each point's index in the sub-grid of dimensions ``dims``, in flat C order."""
+        kept = tuple(self.shape[d] if d in dims else 1 for d in range(len(self.shape)))
+        sub = np.arange(self.size(dims), dtype=np.int64).reshape(kept)
+        return np.broadcast_to(sub, self.shape).reshape(-1)
+
+
+def _warn_flights(axes, flights: np.ndarray, *index) -> None:
+    """One warning for the points whose scaled vertical motion lifts the block off the ground (they
+    run and end with the status ``flight``, outside the model, as a run of the same case does),
+    naming the first in flat order (`prepare.flight_warning`). ``flights[index]`` is each point's
+    warning or None."""
+    flying = np.not_equal(flights, None)[index]
+    if flying.any():
+        first = int(np.argmax(flying))
+        shape = tuple(len(a) for a in axes)
+        text = flights[tuple(i[first] for i in index)]
+        warnings.warn(f"{text} [at {_point_text(axes, np.unravel_index(first, shape))}; "
+                      f"{int(np.count_nonzero(flying))} of {flying.size} points fly]", RunWarning, stacklevel=3)
+
+
+def planning_seconds(case: Case, axes) -> float:
+    """[s] About how long `plan_sweep` takes for ``axes`` (the points apart from the scale axes)."""
+    grid = _Grid(axes, ("amplitude",) if is_pulse_case(case) else RECORD_SCALE_AXES)
+    return grid.size(grid.other) * PLAN_SECONDS_PER_POINT
+
+
+def _points(case: Case, axes, ratio, progress=None, named=None):
     """Every point of the grid in flat C order: ``(index, combo, case)``, validated as a case file
     (`case_with`) and by `prepare.check_parameters` (a bad point is a CaseError naming the options
-    responsible). Ctrl-C is noticed, and ``progress`` told, every `PLAN_BATCH` points (a large grid
-    takes a while).
+    responsible, and the point: ``named(combo)`` gives the axes and combo to name it by, for a
+    half of a larger grid, `_Grid.named`). Ctrl-C is noticed, and ``progress`` told, every
+    `PLAN_BATCH` points.
 
     An axis changes one top-level section of the case (`section_of`), and no check of a case
     relates two sections (they check keys alone, or keys within one section), so a point is valid
@@ -540,7 +634,7 @@ def _points(case: Case, axes, ratio, progress=None):
                     changed = case_with(case, changes)
                     check_parameters(changed)
                 except CaseError as exc:
-                    raise _point_error(exc, axes, combo) from None
+                    raise _point_error(exc, *(named(combo) if named else (axes, combo))) from None
                 validated[section][values] = changed
             replaced[section] = getattr(changed, section)
         yield i, combo, replace(case, **replaced)
@@ -557,16 +651,16 @@ def section_of(axis: Axis) -> str:
 def _plan_pulses(case: Case, axes, ratio, chunk_size: int, n: int, progress=None) -> Plan:
     """`plan_sweep` for a case whose ground motion is analytic pulses: one record per distinct
     pulse shape and length (the amplitudes are the scale factors, as `prepare.pulse_ground` applies
-    them), each with its own sampling step and start."""
-    params = np.empty((n, K.N_PARAMS))
-    states = np.empty((n, K.N_STATE))
-    factor_h, factor_v, record_end = np.empty(n), np.empty(n), np.empty(n)
-    first, count = np.empty(n, dtype=np.int64), np.empty(n, dtype=np.int64)
+    them), each with its own sampling step and start. ``--amplitude`` is a scale axis (`_Grid`): the
+    motion is checked once per pulse at the largest amplitude of the grid."""
+    grid = _Grid(axes, ("amplitude",))
+    n_other = grid.size(grid.other)
+    params, states = np.empty((n_other, K.N_PARAMS)), np.empty((n_other, K.N_STATE))
+    factor_v, record_end = np.empty(n_other), np.empty(n_other)
+    first, count = np.empty(n_other, dtype=np.int64), np.empty(n_other, dtype=np.int64)
     records: dict[tuple, tuple] = {}          # (pulses at amplitude 1, dt, tail) -> (first, count, unit)
     pieces = []
-    checked: dict[tuple, str | None] = {}     # (pulse, vertical amplitude, gravity) -> flight warning
-    flights = _Flights(axes)
-    for i, combo, point in _points(case, axes, ratio, progress):
+    for j, combo, point in _points(case, grid.other_axes, ratio, grid.scaled_progress(progress), grid.named()):
         h, v = point.ground.horizontal, point.ground.vertical
         shape = tuple(None if p is None else replace(p, amplitude=1.0) for p in (h, v))
         key = (shape, point.solver.dt, point.ground.tail)
@@ -577,52 +671,48 @@ def _plan_pulses(case: Case, axes, ratio, chunk_size: int, n: int, progress=None
                 piece = ground_array(unit.horizontal, unit.vertical, unit.dt, point.ground.tail)
                 records[key] = (sum(p.shape[1] for p in pieces), piece.shape[1], unit)
                 pieces.append(piece)
-            offset, length, unit = records[key]
-            vertical = (key, None if v is None else v.amplitude, point.gravity)
-            if vertical not in checked:               # flight: g + av > 0 (the vertical pulse)
-                ground = pulse_ground(point, unit)
-                check_against_ground(point, ground, warn=False)
-                checked[vertical] = flight_warning(point, ground)
-            flights.add(checked[vertical], combo)
         except CaseError as exc:
-            raise _point_error(exc, axes, combo) from None
+            raise _point_error(exc, *grid.named()(combo)) from None
+        offset, length, unit = records[key]
+        grid.add_context((key, None if v is None else v.amplitude, point.gravity), point, combo)
         point_settings = settings_for(point, history=False, energy=False)
         start = unit.start + point.ground.time_shift
-        params[i] = parameters(model_for(point), unit.dt, point_settings, start)
-        states[i] = initial_state(point_settings)
-        factor_h[i] = 1.0 if h is None else h.amplitude
-        factor_v[i] = 1.0 if v is None else v.amplitude
-        first[i], count[i] = offset, length
-        record_end[i] = start + length * unit.dt
-    _warn_coarse_step(case, axes, params)
-    flights.warn(n)
+        params[j] = parameters(model_for(point), unit.dt, point_settings, start)
+        states[j] = initial_state(point_settings)
+        factor_v[j] = 1.0 if v is None else v.amplitude
+        first[j], count[j] = offset, length
+        record_end[j] = start + length * unit.dt
+
+    # each amplitude once; each pulse checked at the largest (flight depends on the vertical alone)
+    first_point, first_combo = next(iter(grid.contexts.values()))
+    amplitudes = np.array([1.0 if p.ground.horizontal is None else p.ground.horizontal.amplitude
+                           for _, _, p in _points(first_point, grid.scale_axes, ratio, named=grid.named(first_combo))])
+    largest = int(np.argmax(np.abs(amplitudes)))
+    flights = np.full(len(grid.contexts), None, dtype=object)
+    for c, ((key, _, _), (rep, rep_combo)) in enumerate(grid.contexts.items()):
+        point = rep
+        if grid.scale:
+            point = replace(rep, ground=replace(rep.ground, horizontal=replace(rep.ground.horizontal,
+                                                                               amplitude=amplitudes[largest])))
+        ground = pulse_ground(point, records[key][2])
+        try:
+            check_against_ground(point, ground, warn=False)
+        except CaseError as exc:            # the scaled pulse out of bounds: the amplitude is responsible
+            scale_combo = np.unravel_index(largest, tuple(len(a) for a in grid.scale_axes))
+            raise CaseError(f"{exc.message} [at {_point_text(axes, grid.combo(rep_combo, scale_combo))}]",
+                            source="--amplitude" if grid.scale else exc.source,
+                            field="ground.horizontal.amplitude" if grid.scale else exc.field) from None
+        flights[c] = flight_warning(point, ground)
+
+    other, scale = grid.indices(grid.other), grid.indices(grid.scale)
+    _warn_flights(axes, flights, grid.context_of[other])
+    _warn_coarse_step(case, grid.other_axes, params)
     plan = Plan(case=case, axes=list(axes), mu_kinetic_ratio=ratio, params=params, states=states,
-                factor_h=factor_h, factor_v=factor_v, base=np.concatenate(pieces, axis=1), first=first,
-                count=count, record_end=record_end, step=float(params[:, K.P_STEP].min()), records=[],
-                chunk_size=chunk_size)
+                factor_h=amplitudes[scale], factor_v=factor_v[other], base=np.concatenate(pieces, axis=1),
+                first=first[other], count=count[other], record_end=record_end[other],
+                step=float(params[:, K.P_STEP].min()), records=[], chunk_size=chunk_size, rows=other)
     plan.key = definition_key(plan)
     return plan
-
-
-class _Flights:
-    """The points whose scaled vertical motion lifts the block off the ground: they run, and end
-    with the status ``flight`` (outside the model), as a run of the same case does; one warning for
-    all, naming the first (`prepare.flight_warning`)."""
-
-    def __init__(self, axes):
-        self.axes, self.count, self.first = axes, 0, None
-
-    def add(self, warning: str | None, combo) -> None:
-        if warning:
-            self.count += 1
-            if self.first is None:
-                self.first = (warning, combo)
-
-    def warn(self, n: int) -> None:
-        if self.first is not None:
-            warning, combo = self.first
-            warnings.warn(f"{warning} [at {_point_text(self.axes, combo)}; {self.count} of {n} points fly]",
-                          RunWarning, stacklevel=4)
 
 
 def _warn_coarse_step(case: Case, axes, params: np.ndarray) -> None:
@@ -694,11 +784,12 @@ def sweep_variables(plan: Plan, states: np.ndarray) -> dict:
     modes = ((t_slip > 0) * MODE_BITS["slip"] + (t_rock > 0) * MODE_BITS["liftoff"]
              + (t_rockslip > 0) * MODE_BITS["liftoff_slip"]).astype(np.int8)
     end = np.where(np.isnan(st[:, K.S_END_TIME]), plan.record_end, st[:, K.S_END_TIME])
-    alpha = plan.params[:, K.P_ALPHA]
+    alpha = plan.case_column(K.P_ALPHA)
     undecided = np.zeros(len(st), dtype=bool)
-    for i in np.flatnonzero(st[:, K.S_MODE] != K.REST):              # a block at rest stands
-        undecided[i] = may_still_overturn(st[i], plan.params[i, K.P_R], alpha[i], plan.params[i, K.P_G],
-                                          plan.params[i, K.P_NU], plan.params[i, K.P_TAN_ALPHA])
+    moving = np.flatnonzero(st[:, K.S_MODE] != K.REST)                   # a block at rest stands
+    for i, row in zip(moving, moving if plan.rows is None else plan.rows[moving], strict=True):
+        p = plan.params[row]
+        undecided[i] = may_still_overturn(st[i], p[K.P_R], p[K.P_ALPHA], p[K.P_G], p[K.P_NU], p[K.P_TAN_ALPHA])
 
     def grid(values, dtype):
         return np.asarray(values, dtype=dtype).reshape(shape)

@@ -172,9 +172,9 @@ def sweep(case_file, mu_kinetic_ratio, records_dir, out_dir, overwrite, no_plot,
         finishing = _result_set(h5_path, png_path, overwrite=overwrite, no_plot=no_plot, example="out/case.sweep",
                                 leftovers=ChunkStore.beside(h5_path, "").root.exists())
     n_points = math.prod(len(a) for a in axes) if axes else 0
-    if n_points * sw.PLAN_SECONDS_PER_POINT > 10:
+    if axes and sw.planning_seconds(case, axes) > 10:
         click.echo(f"sweep {case.name}: checking the {n_points} points of the grid first (about "
-                   f"{duration_text(n_points * sw.PLAN_SECONDS_PER_POINT)})")
+                   f"{duration_text(sw.planning_seconds(case, axes))})")
     with tqdm(total=n_points, unit="case", file=sys.stderr, desc=f"{case.name}: checking",
               disable=no_progress or n_points < 10 * sw.PLAN_BATCH or not sys.stderr.isatty(),
               dynamic_ncols=True, leave=False) as bar:
@@ -189,6 +189,7 @@ def sweep(case_file, mu_kinetic_ratio, records_dir, out_dir, overwrite, no_plot,
                     workers=workers, scheduler=scheduler, device=device, no_progress=no_progress, shard=shard,
                     wait_workers=wait_workers)
     variables = sw.sweep_variables(plan, done.states)
+    done.states = None                      # 288 bytes a case: not held while the file is written
     with files.Staging(overwrite=overwrite) as staging:
         results.write_sweep(h5_path, sw.coordinates(plan), variables, overwrite=overwrite, staging=staging,
                             attrs=sw.root_attributes(plan, _command_line(ctx, case_file)))

@@ -130,21 +130,32 @@ class ChunkStore:
             pass
 
 
-def missing_chunks(plan: Plan, store: ChunkStore) -> list[int]:
-    """The chunks of ``plan`` that ``store`` does not hold (a damaged file counts as missing)."""
-    return [c for c in range(plan.n_chunks) if store.load(c, plan.chunk_indices(c)) is None]
+def missing_chunks(plan: Plan, store: ChunkStore, out: np.ndarray | None = None) -> list[int]:
+    """The chunks of ``plan`` that ``store`` does not hold (a damaged file counts as missing); the
+    final states of those it holds go into ``out`` (``float64[n, N_STATE]``) if given, so that
+    `collect` reads only the chunks computed afterwards."""
+    missing = []
+    for chunk in range(plan.n_chunks):
+        indices = plan.chunk_indices(chunk)
+        states = store.load(chunk, indices)
+        if states is None:
+            missing.append(chunk)
+        elif out is not None:
+            out[indices] = states
+    return missing
 
 
-def collect(plan: Plan, store: ChunkStore) -> np.ndarray:
-    """The final states of every case, ``float64[n, N_STATE]`` (flat C order), from the store.
+def collect(plan: Plan, store: ChunkStore, chunks=None, out: np.ndarray | None = None) -> np.ndarray:
+    """The final states of every case, ``float64[n, N_STATE]`` (flat C order), from the store: of
+    ``chunks`` (default: all) into ``out`` (default: a new array).
 
     Raises
     ------
     OutputError
         A chunk is missing or damaged (it was deleted meanwhile): rerun to compute it.
     """
-    out = np.empty((plan.n_cases, K.N_STATE))
-    for chunk in range(plan.n_chunks):
+    out = np.empty((plan.n_cases, K.N_STATE)) if out is None else out
+    for chunk in range(plan.n_chunks) if chunks is None else chunks:
         indices = plan.chunk_indices(chunk)
         states = store.load(chunk, indices)
         if states is None:

@@ -27,6 +27,7 @@ import numpy as np
 
 from .. import interrupts
 from ..core import batch
+from ..core import kernel as K
 from ..errors import CaseError, exception_text
 from .chunks import ChunkStore, MemoryStore, collect, missing_chunks
 from .plan import Plan, bytes_needed
@@ -212,23 +213,30 @@ def local_threads() -> int:
 
 def _chunk_inputs(plan: Plan, indices: np.ndarray):
     """`batch.compute`'s arguments for the cases ``indices`` (an index array, or a slice)."""
-    return (plan.params[indices], plan.states[indices], plan.base, plan.first[indices],
+    return (plan.case_params(indices), plan.case_states(indices), plan.base, plan.first[indices],
             plan.count[indices], plan.factor_h[indices], plan.factor_v[indices])
 
 
 def compute_chunk(inputs, chunk: int, n_chunks: int, identity: dict | None = None) -> np.ndarray:
     """`batch.compute` of chunk ``chunk`` (cases ``chunk, chunk + n_chunks, ...``,
-    `Plan.chunk_indices`) from the whole plan's ``inputs`` (`_chunk_inputs` of every case): a dask
-    task, run where the inputs were sent once. ``identity``: the client's `local_identity`; a
-    worker whose own differs (one that joined after `check_workers_match`) refuses the task."""
+    `Plan.chunk_indices`) from the whole plan's ``inputs`` (`_plan_inputs`): a dask task, run where
+    the inputs were sent once. ``identity``: the client's `local_identity`; a worker whose own
+    differs (one that joined after `check_workers_match`) refuses the task."""
     if identity is not None and _own_identity() != identity:
         mine = _own_identity()
         raise RuntimeError(f"this worker runs rockslide {mine['rockslide']} (core {mine['core'][:12]}, numba "
                            f"{mine['numba']}), the client {identity['rockslide']} (core {identity['core'][:12]}, "
                            f"numba {identity['numba']}): its results would differ; install the same version")
-    params, states, base, first, count, kh, kv = inputs
-    rows = slice(chunk, None, n_chunks)
-    return batch.compute(params[rows], states[rows], base, first[rows], count[rows], kh[rows], kv[rows])
+    params, states, rows, base, first, count, kh, kv = inputs
+    cases = slice(chunk, None, n_chunks)
+    own = cases if rows is None else rows[cases]
+    return batch.compute(params[own], states[own], base, first[cases], count[cases], kh[cases], kv[cases])
+
+
+def _plan_inputs(plan: Plan) -> list:
+    """What `compute_chunk` needs of the whole plan, as stored (distinct rows and ``rows``: a
+    10^6-point sweep sends some 50 MB to each worker, not 450)."""
+    return [plan.params, plan.states, plan.rows, plan.base, plan.first, plan.count, plan.factor_h, plan.factor_v]
 
 
 #: [s] for the connection to a dask scheduler, and for a lost one to come back.
@@ -268,7 +276,7 @@ def _compute_dask(plan, store, chunks, address, progress, wait_workers, say):
             check_workers_match(client.run(worker_identity), identity, address)
             # the plan's arrays are sent once to every worker; a task names its chunk only, so that
             # neither the scheduler's memory nor the client's traffic grows with the tasks
-            shared = client.scatter(list(_chunk_inputs(plan, slice(None))), broadcast=True)
+            shared = client.scatter(_plan_inputs(plan), broadcast=True)
             for chunk in chunks:
                 future = client.submit(compute_chunk, shared, chunk, plan.n_chunks, identity, pure=False)
                 futures[future] = (chunk, plan.chunk_indices(chunk))
@@ -617,7 +625,8 @@ def execute(plan: Plan, store=None, *, workers: int | None = None, scheduler: st
     store.remove_stale_temporaries()
     for other in store.others():
         say(f"  note: {other} holds chunks of another {what} definition (not used; delete it to free the space)")
-    missing = missing_chunks(plan, store)
+    final = None if shard is not None else np.empty((plan.n_cases, K.N_STATE))
+    missing = missing_chunks(plan, store, final)          # each stored chunk read once
     for chunk, reason in sorted(store.damaged.items()):
         say(f"  note: {store.path(chunk)} cannot be used ({reason}); computing it again")
     reused = plan.n_chunks - len(missing)
@@ -651,7 +660,7 @@ def execute(plan: Plan, store=None, *, workers: int | None = None, scheduler: st
     compute(plan, store, missing, workers=workers, scheduler=scheduler, progress=progress, device=device,
             wait_workers=wait_workers, report=say)
     seconds = time.perf_counter() - started
-    return Execution(None if shard is not None else collect(plan, store), computed, seconds, store)
+    return Execution(None if shard is not None else collect(plan, store, missing, final), computed, seconds, store)
 
 
 def parse_shard(text: str | None) -> tuple[int, int] | None:

@@ -21,20 +21,36 @@ import numpy as np
 from .._version import __version__
 from ..core import compiled
 from ..core import kernel as K
+from ..errors import CaseError
 
 if TYPE_CHECKING:
     from ..case import Case
 
 
-#: Largest grid (number of cases) a sweep accepts.
+#: Most values of one sweep axis, and most cases of a fragility analysis or an ensemble.
 MAX_POINTS = 1_000_000
 
 
-#: Chunk sizes: about ``n / CHUNKS_WANTED`` cases, within these bounds (the default).
+#: Most cases of a sweep's grid; below it, the memory of the machine decides (`check_memory`).
+MAX_GRID_POINTS = 100_000_000
+
+
+#: [bytes] Memory a sweep's client needs per case, at its peak (collecting the final states, 288
+#: bytes, and making the result's variables; the plan holds 48): 431 measured on 10^6 cases by
+#: benchmarks/bench_large.py, rounded up. 10^6 cases take about 0.5 GB besides the libraries.
+SWEEP_BYTES_PER_CASE = 500
+
+
+#: Chunk sizes: about ``n / CHUNKS_WANTED`` cases, within these bounds (the default), and larger
+#: chunks beyond ``MAX_CHUNK * MAX_CHUNK_FILES`` cases, so that a chunk folder holds at most
+#: ``MAX_CHUNK_FILES`` files.
 CHUNKS_WANTED = 100
 
 
 MIN_CHUNK, MAX_CHUNK = 4, 256
+
+
+MAX_CHUNK_FILES = 40_000
 
 
 #: The sweep file's format, part of a chunk's definition key: `results.SWEEP_FORMAT` and
@@ -57,8 +73,9 @@ class Plan:
         In dimension order.
     mu_kinetic_ratio : float or None
         ``mu_kinetic / mu_static`` used with ``--mu`` (None without ``--mu``).
-    params, states : float64[n, N_PARAMS], float64[n, N_STATE]
-        Each point's kernel parameters and initial state, flat in C order of the grid.
+    params, states : float64[m, N_PARAMS], float64[m, N_STATE]
+        Each point's kernel parameters and initial state, flat in C order of the grid (m = n); or,
+        with ``rows``, the distinct ones (`case_params`, `case_states`).
     factor_h, factor_v : float64[n]
         Each point's horizontal and vertical scale factors (`records.combine`).
     base : float64[4, K]
@@ -77,6 +94,9 @@ class Plan:
         Cases per chunk.
     key : str
         `definition_key` of the sweep.
+    rows : int64[n], optional
+        Each point's row of ``params`` and ``states`` (a 1000 x 1000 ``--mu`` x ``--pga`` grid has
+        1000 distinct rows: 16 MB instead of 400). None: row i is point i.
     """
 
     case: Case
@@ -94,6 +114,7 @@ class Plan:
     records: list
     chunk_size: int
     key: str = ""
+    rows: np.ndarray | None = None
 
     @property
     def shape(self) -> tuple:
@@ -103,7 +124,7 @@ class Plan:
     @property
     def n_cases(self) -> int:
         """Number of points of the grid."""
-        return int(self.params.shape[0])
+        return int(self.first.shape[0])
 
     @property
     def n_chunks(self) -> int:
@@ -117,7 +138,19 @@ class Plan:
     @property
     def steps_per_case(self) -> int:
         """Integration steps of the longest case that runs to the end of its record and tail."""
-        return int(np.max(self.count * self.params[:, K.P_N_SUB])) if self.n_cases else 0
+        return int(np.max(self.count * self.case_column(K.P_N_SUB))) if self.n_cases else 0
+
+    def case_params(self, cases=slice(None)) -> np.ndarray:
+        """``float64[k, N_PARAMS]``: the kernel parameters of points ``cases`` (indices or a slice)."""
+        return self.params[cases] if self.rows is None else self.params[self.rows[cases]]
+
+    def case_states(self, cases=slice(None)) -> np.ndarray:
+        """``float64[k, N_STATE]``: the initial states of points ``cases`` (indices or a slice)."""
+        return self.states[cases] if self.rows is None else self.states[self.rows[cases]]
+
+    def case_column(self, column: int) -> np.ndarray:
+        """``float64[n]``: one kernel parameter (``K.P_...``) of every point."""
+        return self.params[:, column] if self.rows is None else self.params[self.rows, column]
 
     def describe(self) -> str:
         """``41 mu x 37 pga = 1517 cases``."""
@@ -126,8 +159,33 @@ class Plan:
 
 
 def default_chunk_size(n_cases: int) -> int:
-    """About ``n / CHUNKS_WANTED`` cases per chunk, within ``[MIN_CHUNK, MAX_CHUNK]``."""
-    return int(min(MAX_CHUNK, max(MIN_CHUNK, math.ceil(n_cases / CHUNKS_WANTED))))
+    """About ``n / CHUNKS_WANTED`` cases per chunk, within ``[MIN_CHUNK, MAX_CHUNK]``, or more where
+    that would make more than ``MAX_CHUNK_FILES`` chunks."""
+    size = min(MAX_CHUNK, max(MIN_CHUNK, math.ceil(n_cases / CHUNKS_WANTED)))
+    return int(max(size, math.ceil(n_cases / MAX_CHUNK_FILES)))
+
+
+def check_memory(n_cases: int, source: str, *, bytes_per_case: int = SWEEP_BYTES_PER_CASE) -> None:
+    """Refuse a study whose client would need more memory than this machine has available
+    (`available_memory`), in one line saying both figures; nothing where it cannot be told."""
+    available = available_memory()
+    needed = n_cases * bytes_per_case
+    if available is not None and needed > available:
+        raise CaseError(f"{n_cases} cases need about {needed / 1e6:.3g} MB of memory here ({bytes_per_case} bytes a "
+                        f"case, with a cluster's workers or without); {available / 1e6:.3g} MB are available: split "
+                        "the grid (one axis in parts) or run it on a larger machine", source=source)
+
+
+def available_memory() -> int | None:
+    """[bytes] Memory available to a new allocation (Linux's MemAvailable), or None where unknown."""
+    try:
+        with open("/proc/meminfo") as meminfo:
+            for line in meminfo:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    return None
 
 
 def definition_key(plan: Plan) -> str:
@@ -146,9 +204,16 @@ def definition_key(plan: Plan) -> str:
         "kernel_source": compiled.source_stamp(),
     }
     digest.update(json.dumps(header, sort_keys=True).encode())
-    for array in (plan.params, plan.states, plan.factor_h, plan.factor_v, plan.base, plan.first, plan.count):
-        digest.update(np.ascontiguousarray(array, dtype=np.float64).tobytes())
+    for rows_of in (plan.case_params, plan.case_states):          # every point's, a block at a time
+        for start in range(0, plan.n_cases, HASH_BLOCK):
+            digest.update(np.ascontiguousarray(rows_of(slice(start, start + HASH_BLOCK)), dtype=np.float64))
+    for array in (plan.factor_h, plan.factor_v, plan.base, plan.first, plan.count):
+        digest.update(np.ascontiguousarray(array, dtype=np.float64))
     return digest.hexdigest()
+
+
+#: Points hashed at a time by `definition_key` (a plan with ``rows`` is expanded a block at a time).
+HASH_BLOCK = 1 << 16
 
 
 def bytes_needed(plan: Plan, n_chunks: int) -> int:

@@ -436,9 +436,14 @@ def folder_locks(folders, *, shared: bool = False):
     except ImportError:  # pragma: no cover - Windows
         yield
         return
-    fds = []
+    fds, held = [], []
     try:
         for folder in folders:
+            if not shared:              # threads of this process queue here: flock would keep them apart as
+                lock = _thread_lock(folder)                     # if they were processes, 50 ms at a time
+                while not lock.acquire(timeout=LOCK_RETRY):
+                    interrupts.check()
+                held.append(lock)
             try:
                 fd = os.open(folder, os.O_RDONLY | getattr(os, "O_CLOEXEC", 0))
             except OSError:
@@ -458,6 +463,18 @@ def folder_locks(folders, *, shared: bool = False):
     finally:
         for fd in fds:
             os.close(fd)                        # closing releases the lock
+        for lock in held:
+            lock.release()
+
+
+_THREAD_LOCKS: dict[str, threading.Lock] = {}
+_THREAD_LOCKS_GUARD = threading.Lock()
+
+
+def _thread_lock(folder) -> threading.Lock:
+    """This process's lock of ``folder`` (`folder_locks`): its threads publish one at a time."""
+    with _THREAD_LOCKS_GUARD:
+        return _THREAD_LOCKS.setdefault(os.path.abspath(folder), threading.Lock())
 
 
 @contextlib.contextmanager
