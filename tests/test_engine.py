@@ -290,6 +290,30 @@ def test_the_device_gets_many_chunks_per_launch(monkeypatch):
     assert np.array_equal(chunks.collect(plan, store), chunks.collect(plan, cpu), equal_nan=True)
 
 
+def test_a_resume_never_mixes_chunks_of_the_gpu_and_the_cpu(tmp_path, monkeypatch):
+    """Chunks computed on the CPU are not reused by a run on the GPU, nor the reverse: the GPU rounds
+    the last bits its own way (fused multiply-adds), so its chunks live under a key of their own
+    (`ChunkStore.for_device`). The GPU here is the CPU's kernel behind the device's entry point."""
+    from rockslide.analyses import sweep as sw
+    from rockslide.core import batch, gpu
+    from rockslide.engine import chunks
+    from rockslide.engine import execute as ex
+
+    case = rockslide.load_case(REPO / "configs" / "example.yaml")
+    plan = sw.plan_sweep(case, [sw.parse_axis("mu", "0.3,0.5"), sw.parse_axis("pga", "300gal,900gal")],
+                         records_dir=REPO / "records", chunk_size=1)
+    launched = []
+    monkeypatch.setattr(ex, "check_device", lambda device: None)
+    monkeypatch.setattr(ex, "warm_up", lambda device, say: None)
+    monkeypatch.setattr(gpu, "compute", lambda *inputs: launched.append(len(inputs[0])) or batch.compute(*inputs))
+    store = chunks.ChunkStore.beside(tmp_path / "example.sweep.h5", plan.key)
+    assert ex.execute(plan, store, workers=1).computed == 4
+    assert ex.execute(plan, store, device="gpu").computed == 4 and launched == [4]
+    assert ex.execute(plan, store, device="gpu").computed == 0 and launched == [4]       # its own, reused
+    assert ex.execute(plan, store, workers=1).computed == 0
+    assert store.for_device("gpu").folder != store.folder and store.for_device("cpu") is store
+
+
 def test_device_auto_takes_the_gpu_only_where_it_pays(monkeypatch):
     from rockslide.core import gpu
     from rockslide.engine import execute as ex

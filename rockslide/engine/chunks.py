@@ -44,6 +44,14 @@ class ChunkStore:
         """The file of chunk ``chunk``."""
         return self.folder / f"chunk-{chunk:06d}.npz"
 
+    def for_device(self, device: str) -> ChunkStore:
+        """The store of the chunks computed on ``device``: this one for ``"cpu"`` (threads or a
+        cluster's workers: identical results), one of its own for a GPU, whose fused multiply-adds
+        round the last bits their own way, so that a resume never mixes the two."""
+        if device == "cpu":
+            return self
+        return ChunkStore(self.root, hashlib.sha256(f"{self.key}:{device}".encode()).hexdigest())
+
     def checksum(self, indices: np.ndarray, states: np.ndarray) -> str:
         """SHA-256 of the sweep's key, a chunk's indices and its states (as stored)."""
         digest = hashlib.sha256(self.key.encode())
@@ -178,6 +186,9 @@ class MemoryStore:
 
     def path(self, chunk: int) -> str:
         return f"chunk {chunk} in memory"
+
+    def for_device(self, device: str) -> MemoryStore:
+        return self                             # nothing kept beyond the study: nothing to mix
 
     def load(self, chunk: int, indices: np.ndarray) -> np.ndarray | None:
         stored = self._chunks.get(chunk)

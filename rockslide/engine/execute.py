@@ -622,9 +622,12 @@ def execute(plan: Plan, store=None, *, workers: int | None = None, scheduler: st
     """
     say = report if report is not None else (lambda text: None)
     store = MemoryStore(plan.key) if store is None else store
+    device, why = ("cpu", "") if scheduler else choose_device(device, plan.n_cases)
+    store = store.for_device(device)
     store.remove_stale_temporaries()
     for other in store.others():
-        say(f"  note: {other} holds chunks of another {what} definition (not used; delete it to free the space)")
+        say(f"  note: {other} holds chunks of another {what} definition or device (not used; delete it to free the "
+            "space)")
     final = None if shard is not None else np.empty((plan.n_cases, K.N_STATE))
     missing = missing_chunks(plan, store, final)          # each stored chunk read once
     for chunk, reason in sorted(store.damaged.items()):
@@ -635,7 +638,6 @@ def execute(plan: Plan, store=None, *, workers: int | None = None, scheduler: st
     if shard is not None:
         missing = [c for c in missing if c % shard[1] == shard[0] - 1]
     computed = sum(plan.chunk_indices(c).size for c in missing)
-    device, why = ("cpu", "") if scheduler else choose_device(device, computed)
     where = (f"on the dask scheduler {scheduler}" if scheduler else
              "on this machine's GPU" if device == "gpu" else "on this machine")
     where += f" (--device auto: {why})" if why else ""
