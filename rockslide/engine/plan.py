@@ -35,10 +35,11 @@ MAX_POINTS = 1_000_000
 MAX_GRID_POINTS = 100_000_000
 
 
-#: [bytes] Memory a sweep's client needs per case, at its peak (collecting the final states, 288
-#: bytes, and making the result's variables; the plan holds 48): 431 measured on 10^6 cases by
-#: benchmarks/bench_large.py, rounded up. 10^6 cases take about 0.5 GB besides the libraries.
-SWEEP_BYTES_PER_CASE = 500
+#: [bytes] Memory a sweep's command needs per case at its peak, besides the libraries (the final
+#: states, 288 bytes, the result's variables, 98, the plan, 48, and what writing the file takes): 430
+#: measured by benchmarks/bench_large.py's phases and 550 by ``rockslide sweep`` of 10^6 cases
+#: whole (0.72 GB at its peak on 2 threads, 0.69 GB as a dask client; 0.17 GB of libraries), rounded up.
+SWEEP_BYTES_PER_CASE = 700
 
 
 #: Chunk sizes: about ``n / CHUNKS_WANTED`` cases, within these bounds (the default), and larger
