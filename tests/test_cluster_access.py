@@ -214,6 +214,16 @@ def test_an_unreachable_scheduler_is_said_before_planning(tmp_path):
         rockslide.sweep(EXAMPLE, records_dir=RECORDS, scheduler=address, mu=HUGE[1], pga=HUGE[3])
 
 
+def test_fragility_finds_its_tls_scheduler_first(certificates, tmp_path):
+    """`rockslide fragility` takes the same options: HOST:PORT with TLS files is tls://, and a
+    closed port is said before the suite is read."""
+    port = closed_port()
+    result = invoke("fragility", EXAMPLE, "--suite", tmp_path / "not-read.yaml", "--levels", "0.1g",
+                    "--records-dir", RECORDS, "--out-dir", tmp_path, "--scheduler", f"127.0.0.1:{port}",
+                    *tls_options(*certificates[0]))
+    one_line_error(result, f"--scheduler: cannot connect to the dask scheduler at tls://127.0.0.1:{port}", "refused")
+
+
 @posix
 @pytest.mark.slow
 def test_dasks_table_of_mismatched_versions_never_reaches_the_terminal(tls_scheduler, certificates, tmp_path):
