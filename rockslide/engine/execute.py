@@ -564,7 +564,7 @@ def find_scheduler(scheduler, tls: dict | None = None, *, identify: bool = True)
     """
     if isinstance(scheduler, Scheduler):
         return scheduler
-    if isinstance(scheduler, (str, Path)):
+    if isinstance(scheduler, str):
         given = any(value is not None for value in (tls or {}).values())
         address = scheduler_address(scheduler, default_scheme="tls" if given else "tcp")
         found = Scheduler(address, scheduler_security(address, tls))
