@@ -134,7 +134,7 @@ def run(case: Case | Mapping | str | Path, *, records_dir: str | Path | None = N
 
 def sweep(case: Case | Mapping | str | Path, *, mu_kinetic_ratio: float | None = None,
           records_dir: str | Path | None = None, device: str = "cpu", workers: int | None = None,
-          scheduler: str | None = None, chunk_size: int | None = None, store=None,
+          scheduler=None, wait_workers: float | None = None, chunk_size: int | None = None, store=None,
           progress: Callable[[int], None] | None = None, **axes):
     """A grid of cases over some of the case's values, as ``rockslide sweep`` computes it.
 
@@ -157,8 +157,17 @@ def sweep(case: Case | Mapping | str | Path, *, mu_kinetic_ratio: float | None =
     device : {"cpu", "gpu"}
     workers : int, optional
         Threads (default: all cores).
-    scheduler : str, optional
-        A dask.distributed scheduler's address: compute there.
+    scheduler : str, distributed.Client or cluster object, optional
+        Compute on a dask.distributed cluster (docs/clusters.md): its scheduler's address
+        (``"tcp://host:8786"``; ``"tls://host:8786"`` with the certificates of dask's
+        configuration), a connected ``distributed.Client`` (used as is and left open), or a
+        cluster object with ``scheduler_address`` and optionally ``security``, reached with that
+        security (dask-jobqueue's ``SLURMCluster``, dask-gateway's ``GatewayCluster``,
+        ``distributed.LocalCluster``). The scheduler is asked who it is before any planning, the
+        workers' rockslide is checked against this one's, and the results equal a local run's.
+    wait_workers : float, optional
+        [s] With ``scheduler``: how long to wait for a first worker to join (default 120 s; the
+        jobs of dask-jobqueue start when the queue lets them).
     chunk_size : int, optional
         Cases per chunk (default about 1/100 of the grid, 4 to 256).
     store : engine.chunks.ChunkStore, optional
@@ -186,10 +195,11 @@ def sweep(case: Case | Mapping | str | Path, *, mu_kinetic_ratio: float | None =
                         source="rockslide.sweep")
     parsed = [sw.parse_axis(name, _axis_text(values, sw.AXES[name].kind)) for name, values in axes.items()
               if values is not None]
-    scheduler = check_where(workers=workers, scheduler=scheduler, device=device)
+    scheduler = check_where(workers=workers, scheduler=scheduler, device=device, wait_workers=wait_workers)
     plan = sw.plan_sweep(case, parsed, records_dir=records.records_dir(records_dir),
                          mu_kinetic_ratio=mu_kinetic_ratio, chunk_size=chunk_size)
-    done = execute(plan, store, workers=workers, scheduler=scheduler, device=device, progress=progress)
+    done = execute(plan, store, workers=workers, scheduler=scheduler, device=device, progress=progress,
+                   wait_workers=wait_workers)
     return datasets.sweep_dataset(sw.coordinates(plan), sw.sweep_variables(plan, done.states),
                                   sw.root_attributes(plan, ""))
 
@@ -198,7 +208,7 @@ def fragility(case: Case | Mapping | str | Path, suite: str | Path, *, im: str =
               levels: str | Sequence, damage: Sequence[str] = (), units: str | None = None,
               resamples: int = 1000, case_vertical: bool = False, samples: int = 0, seed: int = 1,
               azimuth: str | None = None, records_dir: str | Path | None = None,
-              device: str = "cpu", workers: int | None = None, scheduler: str | None = None,
+              device: str = "cpu", workers: int | None = None, scheduler=None, wait_workers: float | None = None,
               chunk_size: int | None = None, store=None, progress: Callable[[int], None] | None = None):
     """Fragility curves of the case's block over a record suite, as ``rockslide fragility``.
 
@@ -236,7 +246,7 @@ def fragility(case: Case | Mapping | str | Path, suite: str | Path, *, im: str =
         The block's orientations for a suite of two horizontal components (``"0:180:5"``, degrees
         unless a unit is given): every record at every orientation, the fits over all of them (the
         orientation unknown, uniform); one value states it. Default: the case's ``block.orientation``.
-    records_dir, device, workers, scheduler, chunk_size, store, progress
+    records_dir, device, workers, scheduler, wait_workers, chunk_size, store, progress
         As in `sweep`.
 
     Returns
@@ -254,19 +264,21 @@ def fragility(case: Case | Mapping | str | Path, suite: str | Path, *, im: str =
     measure = fr.parse_im(im)
     parsed = fr.parse_levels(_axis_text(levels, measure.kind), measure)
     states = fr.damage_states(damage)
-    scheduler = check_where(workers=workers, scheduler=scheduler, device=device)
+    scheduler = check_where(workers=workers, scheduler=scheduler, device=device, wait_workers=wait_workers)
     fplan = fr.plan_fragility(case, fr.suite_at_azimuths(fr.suite_from(str(suite), units=units), azimuth),
                               measure, parsed,
                               records_dir=records.records_dir(records_dir), chunk_size=chunk_size,
                               case_vertical=case_vertical, samples=samples, seed=seed)
-    done = execute(fplan.plan, store, workers=workers, scheduler=scheduler, device=device, progress=progress)
+    done = execute(fplan.plan, store, workers=workers, scheduler=scheduler, device=device, progress=progress,
+                   wait_workers=wait_workers)
     analysis = fr.analyse(fplan, done.states, states, resamples=resamples)
     return datasets.study_dataset(*fr.dataset(fplan, analysis))
 
 
 def ensemble(case: Case | Mapping | str | Path, n: int = 200, *, seed: int = 1,
              records_dir: str | Path | None = None, device: str = "cpu", workers: int | None = None,
-             scheduler: str | None = None, store=None, progress: Callable[[int], None] | None = None):
+             scheduler=None, wait_workers: float | None = None, store=None,
+             progress: Callable[[int], None] | None = None):
     """A verdict's neighbourhood: ``n`` cases drawn around ``case`` over what is uncertain, as
     ``rockslide run --ensemble n`` computes them (`analyses.ensemble`).
 
@@ -279,7 +291,7 @@ def ensemble(case: Case | Mapping | str | Path, n: int = 200, *, seed: int = 1,
         Members.
     seed : int
         Seed of the Latin hypercube (the same seed gives the same members).
-    records_dir, device, workers, scheduler, store, progress
+    records_dir, device, workers, scheduler, wait_workers, store, progress
         As in `sweep`.
 
     Returns
@@ -298,11 +310,12 @@ def ensemble(case: Case | Mapping | str | Path, n: int = 200, *, seed: int = 1,
     from .io import datasets, records
 
     case = _case(case)
+    scheduler = check_where(workers=workers, scheduler=scheduler, device=device, wait_workers=wait_workers)
     nominal = run(case, records_dir=records_dir, history=False)
-    scheduler = check_where(workers=workers, scheduler=scheduler, device=device)
     eplan = ens.plan_ensemble(case, n, seed=seed, records_dir=records.records_dir(records_dir))
     summary, members, variables = ens.compute(eplan, nominal.summary.overturned, store=store, workers=workers,
-                                              scheduler=scheduler, device=device, progress=progress)
+                                              scheduler=scheduler, device=device, progress=progress,
+                                              wait_workers=wait_workers)
     attrs = {"name": case.name, "nominal_verdict": nominal.summary.verdict, "p_overturn": summary["p_overturn"],
              "interval_low": summary["interval"][0], "interval_high": summary["interval"][1],
              "flips": summary["flips"], "robust": int(summary["robust"]), "seed": seed,

@@ -8,6 +8,7 @@ naming the file.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import shutil
 import subprocess
@@ -101,9 +102,18 @@ def dask_scheduler():
     ``.start_worker(preload=None)`` (a worker process of one thread; ``preload``: a Python file the
     worker runs at its start). Every process is killed at the end."""
     pytest.importorskip("distributed")
+    with dask_processes() as cluster:
+        yield cluster
+
+
+@contextlib.contextmanager
+def dask_processes(scheduler_options=(), worker_options=()):
+    """`dask_scheduler`'s processes, the scheduler started with ``scheduler_options`` and each
+    worker with ``worker_options`` (dask's command-line options: TLS files...)."""
     env = {**os.environ, "PYTHONPATH": str(REPO)}
     proc = subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_scheduler", "--host", "127.0.0.1",
-                             "--port", "0", "--no-dashboard"], env=env, stderr=subprocess.PIPE, text=True)
+                             "--port", "0", "--no-dashboard", *map(str, scheduler_options)], env=env,
+                            stderr=subprocess.PIPE, text=True)
     workers = []
     try:
         address = None
@@ -117,8 +127,8 @@ def dask_scheduler():
         def start_worker(preload: Path | None = None):
             extra = ["--preload", str(preload)] if preload else []
             worker = subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_worker", address, "--nthreads",
-                                       "1", "--no-dashboard", *extra], env=env, stdout=subprocess.DEVNULL,
-                                      stderr=subprocess.DEVNULL)
+                                       "1", "--no-dashboard", *map(str, worker_options), *extra], env=env,
+                                      stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
             workers.append(worker)
             return worker
 

@@ -537,7 +537,7 @@ BAD_INPUTS = [
     pytest.param({"case.yaml": case_text()}, ("sweep", "case.yaml", "--mu", "0.5", "--scheduler", "tcp://[::1"),
                  ["--scheduler: expected an address like tcp://HOST:PORT, got 'tcp://[::1'"], id="scheduler-ipv6-open"),
     pytest.param({"case.yaml": case_text()}, ("sweep", "case.yaml", "--mu", "0.5", "--scheduler", "tls://[::1]:1"),
-                 ["--scheduler: tls:// addresses are not supported"], id="scheduler-tls"),
+                 ["--scheduler: tls://[::1]:1 is a TLS scheduler: give", "--tls-ca-file"], id="scheduler-tls"),
     pytest.param({"case.yaml": case_text()}, ("sweep", "case.yaml", "--mu", "0.5", "--scheduler", "inproc://x"),
                  ["--scheduler: inproc:// addresses are not supported"], id="scheduler-inproc"),
     pytest.param({"case.yaml": case_text()}, ("sweep", "case.yaml", "--mu", "0.5", "--workers", "0"),

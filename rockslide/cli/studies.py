@@ -68,8 +68,18 @@ def where_options(what: str, unit: str):
         click.option("--workers", type=int, default=None, metavar="N",
                      help="Threads for a local run (default: all cores)."),
         click.option("--scheduler", default=None, metavar="ADDRESS",
-                     help="Compute the chunks on this dask.distributed scheduler (e.g. tcp://10.0.0.5:8786), "
-                          "one task per chunk."),
+                     help="Compute the chunks on this dask.distributed scheduler (e.g. tcp://10.0.0.5:8786, or "
+                          "tls://10.0.0.5:8786 with the TLS options), one task per chunk; it is asked who it is "
+                          "before anything is planned."),
+        click.option("--tls-ca-file", type=click.Path(dir_okay=False, path_type=Path), default=None, metavar="PEM",
+                     help="With a tls:// --scheduler: the cluster's CA certificate (default: dask's configuration "
+                          "distributed.comm.tls.ca-file)."),
+        click.option("--tls-cert", type=click.Path(dir_okay=False, path_type=Path), default=None, metavar="PEM",
+                     help="With a tls:// --scheduler: this client's certificate, signed by the cluster's CA "
+                          "(default: distributed.comm.tls.client.cert)."),
+        click.option("--tls-key", type=click.Path(dir_okay=False, path_type=Path), default=None, metavar="PEM",
+                     help="With a tls:// --scheduler: the key of --tls-cert, unless it is in that file (default: "
+                          "distributed.comm.tls.client.key)."),
         click.option("--device", type=click.Choice(["cpu", "gpu", "auto"]), default="cpu", show_default=True,
                      help="Compute a local run on the CPU's cores or on an NVIDIA GPU (needs the extra: "
                           "pip install 'rockslide[gpu]'; docs/guide/gpu.md); auto: the GPU when one is usable "
@@ -101,6 +111,11 @@ def where_options(what: str, unit: str):
     return decorate
 
 
+def _tls_files(ca_file, cert, key) -> dict:
+    """The TLS options as `engine.execute.TLS_OPTIONS` names them (None: not given)."""
+    return {"tls_ca_file": ca_file, "tls_client_cert": cert, "tls_client_key": key}
+
+
 @main.command(cls=_SweepCommand)
 @click.argument("case_file", type=click.Path(path_type=Path))
 @_axis_option("mu", "dimensionless", "Static friction coefficient mu_static (mu_kinetic follows by the "
@@ -130,8 +145,8 @@ def where_options(what: str, unit: str):
               help="mu_kinetic = R * mu_static for --mu (default: the case's ratio).")
 @records_dir_option
 @where_options("sweep", "case")
-def sweep(case_file, mu_kinetic_ratio, records_dir, out_dir, overwrite, no_plot, workers, scheduler, device,
-          chunk_size, no_progress, dpi, size, as_csv, shard, wait_workers, **_axes):
+def sweep(case_file, mu_kinetic_ratio, records_dir, out_dir, overwrite, no_plot, workers, scheduler, tls_ca_file,
+          tls_cert, tls_key, device, chunk_size, no_progress, dpi, size, as_csv, shard, wait_workers, **_axes):
     """Grid of cases over friction, intensity, vertical factor, restitution, height/width (h/b), gravity or
     the period of the floor the block stands on, over a pulse's amplitude and period or duration,
     or over the block's orientation under two horizontal components (--azimuth,
@@ -163,7 +178,8 @@ def sweep(case_file, mu_kinetic_ratio, records_dir, out_dir, overwrite, no_plot,
     case = load_case(case_file)
     # the axes in the order given (dimension order): `_axis_option` keeps them; **_axes is unordered
     axes = [sw.parse_axis(name, text) for name, text in ctx.meta.get("rockslide.sweep.axes", [])]
-    scheduler = check_where(workers=workers, scheduler=scheduler, device=device, wait_workers=wait_workers)
+    scheduler = check_where(workers=workers, scheduler=scheduler, device=device, wait_workers=wait_workers,
+                            tls=_tls_files(tls_ca_file, tls_cert, tls_key))
     shard = parse_shard(shard)
     h5_path, png_path = _outputs(case, out_dir, ".sweep")
     finishing = _result_set(h5_path, png_path, overwrite=overwrite, no_plot=no_plot, example="out/case.sweep",
@@ -265,7 +281,8 @@ def sweep(case_file, mu_kinetic_ratio, records_dir, out_dir, overwrite, no_plot,
 @where_options("fragility analysis", "run")
 def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, resamples, case_vertical, samples,
               seed, azimuth, as_json, export, export_family, records_dir, out_dir, overwrite, no_plot, workers,
-              scheduler, device, chunk_size, no_progress, dpi, size, as_csv, shard, wait_workers):
+              scheduler, tls_ca_file, tls_cert, tls_key, device, chunk_size, no_progress, dpi, size, as_csv, shard,
+              wait_workers):
     """Fragility curves of a block over a record suite scaled to levels of an intensity measure:
     CASE_FILE (YAML) -> OUT/NAME.fragility.h5 and OUT/NAME.fragility.png.
 
@@ -297,7 +314,8 @@ def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, 
     im = fr.parse_im(im_text)
     levels = fr.parse_levels(levels_text, im)
     states = fr.damage_states(damage_texts)
-    scheduler = check_where(workers=workers, scheduler=scheduler, device=device, wait_workers=wait_workers)
+    scheduler = check_where(workers=workers, scheduler=scheduler, device=device, wait_workers=wait_workers,
+                            tls=_tls_files(tls_ca_file, tls_cert, tls_key))
     shard = parse_shard(shard)
     suite = fr.suite_at_azimuths(fr.suite_from(suite_spec, units=units), azimuth)
     fplan = fr.plan_fragility(case, suite, im, levels, records_dir=records.records_dir(records_dir),

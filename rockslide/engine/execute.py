@@ -35,7 +35,7 @@ from .prepare import STEPS_PER_SECOND
 
 
 def compute(plan: Plan, store: ChunkStore, chunks: Sequence[int], *, workers: int | None = None,
-            scheduler: str | None = None, progress: Callable[[int], None] | None = None,
+            scheduler: str | Scheduler | None = None, progress: Callable[[int], None] | None = None,
             device: str = "cpu", wait_workers: float | None = None,
             report: Callable[[str], None] | None = None) -> None:
     """Compute ``chunks`` of ``plan`` and store each as soon as it is done.
@@ -49,8 +49,9 @@ def compute(plan: Plan, store: ChunkStore, chunks: Sequence[int], *, workers: in
         The chunks to compute (the missing ones).
     workers : int, optional
         Threads for the local run (default: all cores).
-    scheduler : str, optional
-        Address of a dask.distributed scheduler: the chunks are computed there, one task each.
+    scheduler : str or Scheduler, optional
+        A dask.distributed scheduler (its address, or `find_scheduler`'s `Scheduler`): the chunks
+        are computed there, one task each.
     progress : callable, optional
         Called with the number of cases of each finished chunk.
     device : {"cpu", "gpu"}
@@ -248,27 +249,32 @@ SCHEDULER_TIMEOUT = 10.0
 WAIT_FOR_WORKERS = 120.0
 
 
-def _compute_dask(plan, store, chunks, address, progress, wait_workers, say):
+def _compute_dask(plan, store, chunks, scheduler, progress, wait_workers, say):
     """One task per chunk on the cluster (`batch.compute`, serial in the task); each chunk is
     stored as its result arrives. One bounded connection attempt (`identify_scheduler`), a bounded
     wait for the first worker, every worker's rockslide checked against this one's
     (`check_workers_match`), the cluster's log messages kept off the terminal, Ctrl-C checked
-    while waiting."""
+    while waiting. ``scheduler``: an address, or a `Scheduler` (`find_scheduler`); a client the
+    caller gave is used as is and left open."""
     try:
         import distributed
     except ImportError:  # pragma: no cover - a declared dependency
         raise CaseError("needs dask.distributed (pip install 'dask[distributed]')",
                         source="--scheduler") from None
-    address = scheduler_address(address)
-    with _quiet_logs("distributed", "tornado", "asyncio"), warnings.catch_warnings():
-        # dask's own table of mismatched package versions: `check_workers_match` says what matters
-        warnings.filterwarnings("ignore", message=".*[Mm]ismatched versions.*")
-        identify_scheduler(address)
-        try:
-            client = distributed.Client(address, timeout=f"{SCHEDULER_TIMEOUT:g}s", set_as_default=False)
-        except (OSError, TimeoutError, ValueError) as exc:
-            raise CaseError(f"cannot connect to the dask scheduler at {address}: {exception_text(exc)}",
-                            source="--scheduler") from None
+    with _quiet_dask():
+        target = scheduler if isinstance(scheduler, Scheduler) else find_scheduler(scheduler, identify=False)
+        address = target.address
+        if target.client is not None:
+            client = target.client
+        else:
+            # again: planning may have taken long since `check_where` found it
+            identify_scheduler(address, security=target.security)
+            try:
+                client = distributed.Client(address, security=target.security, timeout=f"{SCHEDULER_TIMEOUT:g}s",
+                                            set_as_default=False)
+            except (OSError, TimeoutError, ValueError) as exc:
+                raise CaseError(f"cannot connect to the dask scheduler at {address}: {exception_text(exc)}",
+                                source="--scheduler") from None
         futures = {}
         try:
             _wait_for_workers(client, address, wait_workers, say)
@@ -285,8 +291,9 @@ def _compute_dask(plan, store, chunks, address, progress, wait_workers, say):
             with contextlib.suppress(Exception):
                 if futures:
                     client.cancel(list(futures))
-            with contextlib.suppress(Exception):
-                client.close(timeout=2)
+            if client is not target.client:
+                with contextlib.suppress(Exception):
+                    client.close(timeout=2)
 
 
 def _collect_futures(client, futures: dict, store: ChunkStore, address: str, progress) -> None:
@@ -432,37 +439,173 @@ def check_workers_match(identities: dict, mine: dict, address: str) -> None:
                             "same version on every worker", source="--scheduler")
 
 
-def scheduler_address(address: str) -> str:
-    """``tcp://HOST:PORT`` from ``--scheduler`` (``HOST:PORT`` taken as TCP), or a CaseError.
+@dataclass(frozen=True)
+class Scheduler:
+    """A dask cluster to compute on, found before any planning (`find_scheduler`).
 
-    Only plain TCP: ``tls://`` needs certificates rockslide takes no options for, and ``inproc://``
-    exists only inside one Python process.
+    Attributes
+    ----------
+    address : str
+        The scheduler's address (``tcp://HOST:PORT``, ``tls://HOST:PORT``, or what a cluster
+        object gives).
+    security : distributed.Security or None
+        The credentials that reach it: one object for the first contact (`identify_scheduler`)
+        and the client; None for dask's defaults.
+    client : distributed.Client or None
+        A client the caller connected: used as is and never closed by rockslide.
     """
+
+    address: str
+    security: object = None
+    client: object = None
+
+    def __str__(self) -> str:
+        return self.address
+
+
+#: The TLS options of the commands that take ``--scheduler``, named as dask's own command line
+#: names them: ``(distributed.Security field, option, dask configuration key)``. Without the
+#: option, the key (or its environment variable, ``DASK_DISTRIBUTED__COMM__TLS__CA_FILE``...) holds.
+TLS_OPTIONS = (("tls_ca_file", "--tls-ca-file", "distributed.comm.tls.ca-file"),
+               ("tls_client_cert", "--tls-cert", "distributed.comm.tls.client.cert"),
+               ("tls_client_key", "--tls-key", "distributed.comm.tls.client.key"))
+
+
+def scheduler_address(address: str, *, default_scheme: str = "tcp") -> str:
+    """``tcp://HOST:PORT`` or ``tls://HOST:PORT`` from ``--scheduler`` (``HOST:PORT`` taken as
+    ``default_scheme``), or a CaseError. ``inproc://`` exists only inside one Python process, and
+    other schemes need their own dask packages: give their cluster or client through the Python API."""
     from urllib.parse import urlsplit
 
     text = str(address).strip()
     if "://" not in text:
-        text = f"tcp://{text}"
+        text = f"{default_scheme}://{text}"
     scheme = text.split("://", 1)[0].lower()
-    if scheme != "tcp":
-        raise CaseError(f"{scheme}:// addresses are not supported; expected tcp://HOST:PORT (a scheduler "
-                        "started with 'dask scheduler'; for TLS, reach it through an SSH tunnel)",
-                        source="--scheduler")
+    if scheme not in ("tcp", "tls"):
+        raise CaseError(f"{scheme}:// addresses are not supported; expected tcp://HOST:PORT or tls://HOST:PORT "
+                        "(a scheduler started with 'dask scheduler'; from Python, a cluster object or a "
+                        "distributed.Client can be given as scheduler=)", source="--scheduler")
     try:
         parts = urlsplit(text)
         host, port = parts.hostname, parts.port
     except ValueError:
         host = port = None
     if not host or not port:
-        raise CaseError(f"expected an address like tcp://HOST:PORT, got {_shown(address)}",
+        raise CaseError(f"expected an address like {scheme}://HOST:PORT, got {_shown(address)}",
                         source="--scheduler")
     return text
 
 
-def identify_scheduler(address: str, timeout: float | None = None) -> dict:
+def scheduler_security(address: str, tls: dict | None = None):
+    """The `distributed.Security` that reaches ``address``, or None for plain TCP.
+
+    ``tls`` maps the fields of `TLS_OPTIONS` to the files given on the command line (None: not
+    given); the fields not given come from dask's configuration, as `distributed.Security` reads
+    it. A ``tls://`` address needs a CA certificate and a client certificate; each file must be
+    readable and load (one CaseError naming the option, or the configuration key, that gave it).
+    TLS files with a ``tcp://`` address are refused: the connection would not use them.
+    """
+    given = {field: str(value) for field, value in (tls or {}).items() if value is not None}
+    options = {field: option for field, option, _ in TLS_OPTIONS}
+    if not address.lower().startswith("tls://"):
+        if given:
+            raise CaseError(f"is for a TLS scheduler, but --scheduler {address} is plain TCP (give its tls://HOST:PORT "
+                            "address)", source=options[next(iter(given))])
+        return None
+    import ssl
+
+    from distributed import Security
+
+    security = Security(require_encryption=True, **given)
+    where = {field: option if field in given else f"dask's configuration {key}" for field, option, key in TLS_OPTIONS}
+    if not security.tls_ca_file or not security.tls_client_cert:
+        raise CaseError(f"{address} is a TLS scheduler: give the cluster's CA certificate and this client's "
+                        "certificate with --tls-ca-file and --tls-cert (and --tls-key unless the key is in the "
+                        "certificate file), or in dask's configuration (distributed.comm.tls.ca-file, "
+                        "distributed.comm.tls.client.cert and .key)", source="--scheduler")
+    for field, _, _ in TLS_OPTIONS:
+        value = getattr(security, field)
+        if value and "\n" not in value:            # a file name (dask also takes the PEM text itself)
+            try:
+                with open(value, "rb") as file:
+                    file.read(1)
+            except OSError as exc:
+                raise CaseError(f"cannot read {value}: {exc.strerror or exception_text(exc)}",
+                                source=where[field]) from None
+    try:
+        security.get_connection_args("client")
+    except (ssl.SSLError, OSError, ValueError) as exc:
+        try:
+            ssl.create_default_context(cafile=None if "\n" in security.tls_ca_file else security.tls_ca_file,
+                                       cadata=security.tls_ca_file if "\n" in security.tls_ca_file else None)
+        except (ssl.SSLError, OSError, ValueError):
+            raise CaseError(f"{security.tls_ca_file} is not a CA certificate in PEM format ({exception_text(exc)})",
+                            source=where["tls_ca_file"]) from None
+        key = security.tls_client_key
+        raise CaseError(f"cannot load this client's certificate {security.tls_client_cert} and key "
+                        f"{key or '(in the certificate file)'}: {exception_text(exc)} (a PEM certificate and the key "
+                        f"that belongs to it{', ' + where['tls_client_key'] if key else ''})",
+                        source=where["tls_client_cert"]) from None
+    return security
+
+
+def find_scheduler(scheduler, tls: dict | None = None, *, identify: bool = True) -> Scheduler:
+    """The dask cluster ``scheduler`` names, asked who it is (`identify_scheduler`) unless not
+    ``identify``: before any planning, so that a mistyped address or a wrong certificate is said at
+    once.
+
+    Parameters
+    ----------
+    scheduler : str, Scheduler, distributed.Client or cluster object
+        An address (``tcp://HOST:PORT``, ``tls://HOST:PORT``; `scheduler_address`), a connected
+        client (used as is, not closed), or a cluster object with ``scheduler_address`` and
+        optionally ``security`` (dask-jobqueue's ``SLURMCluster``, dask-gateway's
+        ``GatewayCluster``, ``distributed.LocalCluster``), reached with its own security.
+    tls : dict, optional
+        For an address: the TLS files given on the command line (`scheduler_security`).
+
+    Raises
+    ------
+    CaseError
+        A bad address, missing or unreadable certificates, nothing (or no dask scheduler) at the
+        address, a certificate refused; a closed client; an object that is neither.
+    """
+    if isinstance(scheduler, Scheduler):
+        return scheduler
+    if isinstance(scheduler, str):
+        given = any(value is not None for value in (tls or {}).values())
+        address = scheduler_address(scheduler, default_scheme="tls" if given else "tcp")
+        found = Scheduler(address, scheduler_security(address, tls))
+    else:
+        if any(value is not None for value in (tls or {}).values()):
+            raise CaseError("TLS files go with an address; a client or a cluster object brings its own security",
+                            source="scheduler")
+        try:
+            import distributed
+        except ImportError:  # pragma: no cover - a declared dependency
+            raise CaseError("needs dask.distributed (pip install 'dask[distributed]')", source="scheduler") from None
+        if isinstance(scheduler, distributed.Client):
+            if scheduler.asynchronous or scheduler.status != "running":
+                state = "asynchronous" if scheduler.asynchronous else scheduler.status
+                raise CaseError(f"the distributed.Client given is {state}; give a running, synchronous client, or "
+                                "its cluster or address", source="scheduler")
+            return Scheduler(scheduler.scheduler.address, client=scheduler)
+        address = getattr(scheduler, "scheduler_address", None)
+        if not isinstance(address, str) or not address:
+            raise CaseError(f"expected an address (tcp://HOST:PORT), a distributed.Client or a cluster object with a "
+                            f"scheduler_address, got {type(scheduler).__name__}", source="scheduler")
+        found = Scheduler(address, getattr(scheduler, "security", None))
+    if identify:
+        with _quiet_dask():
+            identify_scheduler(found.address, security=found.security)
+    return found
+
+
+def identify_scheduler(address: str, timeout: float | None = None, *, security=None) -> dict:
     """Ask ``address`` who it is, within ``timeout`` seconds in all (default
-    :data:`SCHEDULER_TIMEOUT`): a dask scheduler answers the ``identity`` request; anything else
-    (nothing listening, an HTTP server) is a CaseError."""
+    :data:`SCHEDULER_TIMEOUT`), with ``security``'s credentials (a `distributed.Security`; None:
+    dask's defaults): a dask scheduler answers the ``identity`` request; anything else (nothing
+    listening, an HTTP server, a certificate refused either way) is a CaseError."""
     timeout = SCHEDULER_TIMEOUT if timeout is None else timeout
     import asyncio
     import socket
@@ -472,14 +615,20 @@ def identify_scheduler(address: str, timeout: float | None = None) -> dict:
     from distributed.comm import connect
 
     parts = urlsplit(address)
+    if parts.scheme in ("tcp", "tls"):
+        try:
+            socket.create_connection((parts.hostname, parts.port), timeout=timeout).close()
+        except OSError as exc:       # refused, unreachable: at once (dask itself retries until its timeout)
+            raise CaseError(f"cannot connect to the dask scheduler at {address}: "
+                            f"{exc.strerror or exception_text(exc)}", source="--scheduler") from None
     try:
-        socket.create_connection((parts.hostname, parts.port), timeout=timeout).close()
-    except OSError as exc:       # refused, unreachable: at once (dask itself retries until its timeout)
-        raise CaseError(f"cannot connect to the dask scheduler at {address}: "
-                        f"{exc.strerror or exception_text(exc)}", source="--scheduler") from None
+        arguments = security.get_connection_args("client") if security is not None else {}
+    except Exception as exc:  # noqa: BLE001 - a cluster object's credentials that do not load
+        raise CaseError(f"the TLS credentials for {address} cannot be loaded: {exception_text(exc)}",
+                        source="--scheduler") from None
 
     async def ask():
-        comm = await connect(address, timeout=timeout)
+        comm = await connect(address, timeout=timeout, **arguments)
         try:
             await comm.write({"op": "identity", "reply": True})
             return await comm.read()
@@ -493,12 +642,48 @@ def identify_scheduler(address: str, timeout: float | None = None) -> dict:
         raise CaseError(f"no dask scheduler answered at {address} within {timeout:g} s (is something "
                         "else listening there?)", source="--scheduler") from None
     except Exception as exc:  # noqa: BLE001 - refused, reset, closed, a bad handshake
-        reason = getattr(exc, "strerror", None) or exception_text(exc)
-        raise CaseError(f"cannot connect to the dask scheduler at {address}: {reason}",
+        raise CaseError(f"cannot connect to the dask scheduler at {address}: {_connection_failure(exc, address)}",
                         source="--scheduler") from None
     if not (isinstance(reply, dict) and reply.get("type") == "Scheduler"):
         raise CaseError(f"{address} answers, but not as a dask scheduler", source="--scheduler")
     return reply
+
+
+def _connection_failure(exc: BaseException, address: str) -> str:
+    """Why a first contact failed, in words: a certificate refused by either side (TLS), a reset
+    (a TLS scheduler reached over plain TCP), or the library's own reason."""
+    import ssl
+
+    chain, cause = [], exc
+    while cause is not None and len(chain) < 8:
+        chain.append(cause)
+        cause = cause.__cause__ or cause.__context__
+    text = " ".join(exception_text(e) for e in chain)
+    if any(isinstance(e, ssl.SSLCertVerificationError) for e in chain) or "CERTIFICATE_VERIFY_FAILED" in text:
+        return ("the scheduler's certificate was not accepted: it is not signed by the CA certificate given "
+                "(--tls-ca-file, or dask's distributed.comm.tls.ca-file)")
+    refused = ("ALERT_UNKNOWN_CA", "ALERT_BAD_CERTIFICATE", "CERTIFICATE_REQUIRED", "ALERT_CERTIFICATE",
+               "EOF occurred in violation of protocol")   # TLS 1.3: the scheduler hangs up after the handshake
+    tls = address.lower().startswith("tls://")
+    if any(word in text for word in refused) or tls and any(isinstance(e, ssl.SSLEOFError) for e in chain):
+        return ("this client's certificate was not accepted by the scheduler: is it signed by the cluster's CA? "
+                "(--tls-cert, or dask's distributed.comm.tls.client.cert)")
+    if tls and "convert to SSL" in text:          # the server spoke first, in plain TCP
+        return "it does not speak TLS (a plain TCP scheduler: give its tcp:// address, without TLS files)"
+    if tls and any(isinstance(e, ssl.SSLError) for e in chain):
+        return f"the TLS handshake failed (is it a TLS scheduler?): {exception_text(chain[-1])}"
+    if not tls and "reset by peer" in text:
+        return "the connection was reset (a TLS scheduler? give its tls:// address and certificates)"
+    return getattr(exc, "strerror", None) or exception_text(exc)
+
+
+@contextlib.contextmanager
+def _quiet_dask():
+    """The cluster's log messages and dask's table of mismatched package versions kept off the
+    terminal (`check_workers_match` says what matters; errors are reported in one line)."""
+    with _quiet_logs("distributed", "tornado", "asyncio"), warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message=".*[Mm]ismatched versions.*")
+        yield
 
 
 @contextlib.contextmanager
@@ -552,24 +737,35 @@ class Execution:
     store: object
 
 
-def check_where(*, workers: int | None = None, scheduler: str | None = None, device: str = "cpu",
-                wait_workers: float | None = None) -> str | None:
+def check_where(*, workers: int | None = None, scheduler=None, device: str = "cpu",
+                wait_workers: float | None = None, tls: dict | None = None) -> Scheduler | None:
     """Refuse ``workers``, ``scheduler`` and ``device`` that do not go together, ``workers`` out of
     range, and ``device="gpu"`` where no GPU can be used, before any planning (one line each,
-    naming the command-line option). Returns the scheduler's address as ``tcp://HOST:PORT``."""
-    if workers is not None and scheduler:
+    naming the command-line option); then find the scheduler (`find_scheduler`: its address
+    parsed, its TLS files read, the scheduler asked who it is), so that a mistyped or unreachable
+    one is said before a long planning.
+
+    ``scheduler``: an address, a `distributed.Client` or a cluster object (`find_scheduler`);
+    ``tls``: the TLS files of `TLS_OPTIONS` given on the command line. Returns the `Scheduler`
+    (whose ``str`` is its address), or None without one."""
+    if isinstance(scheduler, str) and not scheduler:
+        scheduler = None
+    if workers is not None and scheduler is not None:
         raise CaseError("sets the local threads; with --scheduler the cluster's workers compute",
                         source="--workers")
-    if device == "gpu" and scheduler:
+    if device == "gpu" and scheduler is not None:
         raise CaseError("with --scheduler the cluster's workers compute, on their CPUs", source="--device")
-    if wait_workers is not None and not scheduler:
+    if wait_workers is not None and scheduler is None:
         raise CaseError("is the wait for a dask cluster's first worker: give it with --scheduler",
                         source="--wait-workers")
+    given = [option for field, option, _ in TLS_OPTIONS if (tls or {}).get(field) is not None]
+    if given and scheduler is None:
+        raise CaseError("is for a TLS dask scheduler: give it with --scheduler tls://HOST:PORT", source=given[0])
     if device == "gpu" and workers is not None:
         raise CaseError("sets the CPU threads; with --device gpu the GPU computes", source="--workers")
     check_workers(workers)
     check_device(device)
-    return scheduler_address(scheduler) if scheduler else None
+    return find_scheduler(scheduler, tls) if scheduler is not None else None
 
 
 def execute(plan: Plan, store=None, *, workers: int | None = None, scheduler: str | None = None,
