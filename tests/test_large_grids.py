@@ -80,8 +80,9 @@ def test_a_grid_beyond_the_memory_available_is_one_line(tmp_path, monkeypatch):
     monkeypatch.setattr(engine_plan, "available_memory", lambda: 1000)
     result = invoke("sweep", EXAMPLE, "--mu", "0.3,0.5,0.7", "--pga", "300gal,600gal", "--records-dir", RECORDS,
                     "--out-dir", tmp_path, "--no-progress", "--no-plot")
-    line = one_line_error(result, "--mu/--pga", "6 cases need about 0.003 MB of memory", "0.001 MB are available",
-                          "split the grid")
+    needed = 6 * engine_plan.SWEEP_BYTES_PER_CASE
+    line = one_line_error(result, "--mu/--pga", f"6 cases need about {needed / 1e6:.3g} MB of memory",
+                          "0.001 MB are available", "split the grid")
     assert f"{engine_plan.SWEEP_BYTES_PER_CASE} bytes a case" in line
     assert not list(tmp_path.iterdir())
 
