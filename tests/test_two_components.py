@@ -259,6 +259,17 @@ def test_run_command_prints_and_stores_the_components(pair, monkeypatch):
         assert set(f["records"]) == {"horizontal", "horizontal_2"}
 
 
+def test_a_sweep_file_stores_the_azimuths_read_from_the_at2_headers(pair, monkeypatch):
+    """The case gives no azimuth: the sweep reads 0 and 90 deg from the files' titles and stores them
+    as a run's file does (``ground_azimuth_1``, ``ground_azimuth_2`` [rad]), so that the file says
+    which directions its orientations are measured from."""
+    _case_file(_case(pair), pair, monkeypatch)
+    result = invoke("sweep", "two.yaml", "--azimuth", "0,45", "--no-plot")
+    assert result.exit_code == 0, result.output
+    with h5py.File(pair / "out" / "two.sweep.h5") as f:
+        assert f.attrs["ground_azimuth_1"] == 0.0 and f.attrs["ground_azimuth_2"] == math.radians(90.0)
+
+
 def test_case_round_trip(pair):
     case = _case(pair, orientation="30 deg", azimuths=("0 deg", None))
     again = parse_mapping(case_to_dict(case), base_dir=pair)

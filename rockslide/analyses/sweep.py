@@ -68,6 +68,7 @@ from ..engine.prepare import (
     check_parameters,
     check_size,
     coarse_step_warning,
+    component_azimuths,
     flight_warning,
     floor_ground,
     ground_along,
@@ -730,10 +731,17 @@ def _point_text(axes, combo) -> str:
 
 
 def _read_records(case: Case, records_dir: Path | None):
-    """The case's records, read once (`prepare.read_records`), and the provenance entry of each."""
+    """The case's records, read once (`prepare.read_records`), and the provenance entry of each;
+    with two horizontal components, each one's azimuth [rad] as used (given, or from its AT2
+    header: `prepare.component_azimuths`)."""
     records = read_records(case, records_dir)
     entries = [{"role": role, "path": Path(record.path).name, "sha256": record.sha256}
                for role, record in records.items() if record is not None]
+    if case.ground.two_components:
+        azimuths = dict(zip(("horizontal", "horizontal_2"), component_azimuths(case, records), strict=True))
+        for entry in entries:
+            if entry["role"] in azimuths:
+                entry["azimuth"] = azimuths[entry["role"]]
     return records, entries
 
 
@@ -898,6 +906,8 @@ def root_attributes(plan: Plan, command_line: str) -> dict:
     for entry in plan.records:
         attrs[f"record_{entry['role']}"] = entry["path"]
         attrs[f"record_{entry['role']}_sha256"] = entry["sha256"]
+        if "azimuth" in entry:             # as a run's file names them (`results.COMPONENT_KEYS`)
+            attrs[f"ground_azimuth_{2 if entry['role'] == 'horizontal_2' else 1}"] = entry["azimuth"]
     scales = spectrum_scales(plan)
     for key, value in (scales or {}).items():
         attrs[f"spectrum_{key}"] = value
