@@ -81,6 +81,21 @@ def test_workers_that_match_pass():
     check_workers_match({"tcp://a:1": dict(mine), "tcp://b:2": dict(mine)}, mine, "tcp://s:8786")
 
 
+def test_workers_that_must_compile_are_said_once():
+    """A worker whose numba cache holds no batch kernel (`worker_identity`'s ``warm``) compiles it
+    in its first task, a minute or two: said once, naming the workers; nothing when all are warm."""
+    from rockslide.engine.execute import cold_workers_note, worker_identity
+
+    mine = local_identity()
+    assert worker_identity(mine)["warm"] is True      # this process loaded the compiled core (the fixtures)
+    assert "warm" not in worker_identity({**mine, "core": "0" * 64})     # another core's cache is not touched
+    warm, cold = {**mine, "warm": True}, {**mine, "warm": False}
+    assert cold_workers_note({"tcp://a:1": warm, "tcp://b:2": warm}) is None
+    note = cold_workers_note({f"tcp://w:{k}": cold for k in range(5)} | {"tcp://a:1": warm})
+    assert note.startswith("rockslide: note: 5 of 6 dask workers (tcp://w:0, tcp://w:1, tcp://w:2 and 2 more) compile")
+    assert "tcp://a:1" not in note and "\n" not in note
+
+
 @pytest.mark.parametrize("field, words", [
     ("rockslide", ["runs rockslide 9.9.9", "this client"]),
     ("core", ["compiled core", "this client"]),

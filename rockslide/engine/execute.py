@@ -279,7 +279,11 @@ def _compute_dask(plan, store, chunks, scheduler, progress, wait_workers, say):
         try:
             _wait_for_workers(client, address, wait_workers, say)
             identity = local_identity()
-            check_workers_match(client.run(worker_identity), identity, address)
+            identities = client.run(worker_identity, identity)
+            check_workers_match(identities, identity, address)
+            note = cold_workers_note(identities)
+            if note:
+                say(note)
             # the plan's arrays are sent once to every worker; a task names its chunk only, so that
             # neither the scheduler's memory nor the client's traffic grows with the tasks
             shared = client.scatter(_plan_inputs(plan), broadcast=True)
@@ -380,9 +384,12 @@ def _wait_for_workers(client, address: str, wait: float | None, say) -> None:
         time.sleep(0.2)
 
 
-def worker_identity() -> dict:
+def worker_identity(expected: dict | None = None) -> dict:
     """What makes a worker's results this client's: rockslide's version, the compiled core's
-    source stamp and numba's version; or why rockslide cannot be imported there.
+    source stamp and numba's version; where these are ``expected``'s (the client's), also whether
+    its batch kernel is in numba's cache there (``warm``: else its first task compiles it,
+    `cold_workers_note`); or why rockslide cannot be imported there. A worker of another core is
+    not asked: loading its kernel would refresh a cache folder it may share with other workers.
 
     Sent to the workers by value (it names no module-level object of rockslide), so that a worker
     without rockslide answers with the reason instead of failing to unpickle the task.
@@ -392,7 +399,11 @@ def worker_identity() -> dict:
 
         from rockslide._version import __version__
         from rockslide.core import compiled
-        return {"rockslide": __version__, "core": compiled.source_stamp(), "numba": numba.__version__}
+        identity = {"rockslide": __version__, "core": compiled.source_stamp(), "numba": numba.__version__}
+        if expected is not None and all(identity[k] == expected.get(k) for k in identity):
+            from rockslide.core import batch
+            identity["warm"] = compiled.is_warm(batch.run_batch)
+        return identity
     except Exception as exc:  # noqa: BLE001 - any reason a worker cannot import rockslide is the answer
         return {"error": f"{type(exc).__name__}: {exc}"}
 
@@ -413,6 +424,18 @@ def local_identity() -> dict:
     from .._version import __version__
     from ..core import compiled
     return {"rockslide": __version__, "core": compiled.source_stamp(), "numba": numba.__version__}
+
+
+def cold_workers_note(identities: dict) -> str | None:
+    """What to say once when some workers (``{worker address: worker_identity()}``) have no compiled
+    batch kernel in their numba cache: their first task compiles it (a minute or two), which would
+    otherwise look like a cluster that hangs. None when every worker is warm."""
+    cold = sorted(w for w, i in identities.items() if i.get("warm") is False)
+    if not cold:
+        return None
+    names = ", ".join(cold[:3]) + (f" and {len(cold) - 3} more" if len(cold) > 3 else "")
+    return (f"rockslide: note: {len(cold)} of {len(identities)} dask workers ({names}) compile the batch kernel "
+            "first (about a minute on 2 cores, once per machine: their numba cache holds none for this rockslide)")
 
 
 def check_workers_match(identities: dict, mine: dict, address: str) -> None:
