@@ -562,8 +562,8 @@ def plot_results(results: Sequence, *, size=None, names: Sequence[str] | None = 
     Parameters
     ----------
     results : sequence of str, Path or RunResult
-        Result files (of runs, sweeps or fragility analyses: all of one kind) or runs (`run`). One:
-        its own figure (`plots.response_figure`, or the sweep's or fragility analysis's).
+        Result files (of runs, sweeps, fragility or risk analyses: all of one kind) or runs (`run`).
+        One: its own figure (`plots.response_figure`, or the sweep's, fragility or risk analysis's).
         Several runs: liftoff angle, slip and ground motion on shared axes
         (`plots.runs_overlay_figure`); sweeps: their largest rotation side by side on one colour
         scale; fragility analyses: their curves with their confidence bands on one plot.
@@ -606,16 +606,16 @@ def plot_results(results: Sequence, *, size=None, names: Sequence[str] | None = 
     items = list(results) if not isinstance(results, (str, Path, RunResult)) else [results]
     if not items:
         raise CaseError("no result to draw; give one file or more", source="plot_results")
-    kinds, loaded, stems, bases = [], [], [], []
+    kinds, loaded, stems = [], [], []
     for item in items:
         if isinstance(item, RunResult):
             kinds.append("result")
             loaded.append(item)
             stems.append(item.name)
-            bases.append(None)
             continue
         kind = stored_files.file_format(item)
-        kind = {stored_files.SWEEP_FORMAT: "sweep", stored_files.FRAGILITY_FORMAT: "fragility"}.get(kind, "result")
+        kind = {stored_files.SWEEP_FORMAT: "sweep", stored_files.FRAGILITY_FORMAT: "fragility",
+                stored_files.RISK_FORMAT: "risk"}.get(kind, "result")
         if kinds and kind != kinds[0]:
             raise CaseError(f"a {kind} file among {kinds[0]} files ({items[0]}); overlay files of one kind",
                             source=str(item))
@@ -623,13 +623,10 @@ def plot_results(results: Sequence, *, size=None, names: Sequence[str] | None = 
         stems.append(Path(item).name.split(".")[0])
         if kind == "sweep":
             loaded.append(stored_files.read_sweep(item))
-        elif kind == "fragility":
-            loaded.append(stored_files.read_dataset(item, format=stored_files.FRAGILITY_FORMAT))
+        elif kind in ("fragility", "risk"):
+            loaded.append(stored_files.read_dataset(item, format=stored_files.file_format(item)))
         else:
-            stored = stored_files.read_result(item)
-            bases.append(stored.base or None)         # the ground under the building of a block on a floor
-            loaded.append(RunResult(name=stored.name, result=stored.result, ground=stored.ground,
-                                    records=stored.records, case_text=stored.case_text, attrs=stored.attrs))
+            loaded.append(stored_files.read_result(item))   # it gives its own caption and ground under a floor
     kind = kinds[0]
     if names is None:
         names = [item.name if kind == "result" else str(item.attrs.get("name") or stem)
@@ -646,15 +643,21 @@ def plot_results(results: Sequence, *, size=None, names: Sequence[str] | None = 
         elif kind == "fragility":
             from .analyses.fragility import stored_figure
             figure = stored_figure(loaded[0], size=size)
+        elif kind == "risk":
+            from .analyses.risk import stored_figure
+            figure = stored_figure(loaded[0].coords, loaded[0].variables, loaded[0].attrs, size=size)
         else:
             figure = plots.response_figure(loaded[0], title=names[0], time_shift=time_shift, zoom=zoom, crop=crop,
-                                           size=size, base=bases[0])
+                                           size=size)
     elif kind == "sweep":
         from .analyses.sweep import overlay_figure
         figure = overlay_figure(loaded, names, size=size)
     elif kind == "fragility":
         from .analyses.fragility import overlay_figure
         figure = overlay_figure(loaded, names, size=size)
+    elif kind == "risk":
+        raise CaseError("risk files are drawn one at a time (each is one site's hazard and one fragility)",
+                        source=str(items[1]))
     else:
         caption = "\n".join(f"{name}: {plots.run_caption(run)}" for run, name in zip(loaded, names, strict=True))
         figure = plots.runs_overlay_figure([run.result for run in loaded], names, title=" and ".join(names),

@@ -126,8 +126,7 @@ def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, members, s
             written += f" and {ensemble_png}"
     else:
         with files.Staging(overwrite=False) as staging:
-            _draw(stored.result, stored.name, png_path, overwrite=False, dpi=dpi, staging=staging, size=size,
-                  about=_stored_about(stored), base=stored.base or None)
+            _draw(stored, stored.name, png_path, overwrite=False, dpi=dpi, staging=staging, size=size)
             staging.publish()
         result = stored.result
         neighbourhood = None if eplan is None else json.loads(stored.attrs["ensemble"])
@@ -227,21 +226,11 @@ def _draw_stored(result_file, png, *, shift, zoom, span, dpi, replace, staging, 
 
     kind = results.file_format(result_file)
     if kind in (results.SWEEP_FORMAT, results.FRAGILITY_FORMAT, results.RISK_FORMAT):
+        from ..api import plot_results
         from ..plots import save_figure
         what = {results.SWEEP_FORMAT: "sweep", results.FRAGILITY_FORMAT: "fragility"}.get(kind, "risk")
         _only_for_results(shift, zoom, span, f"{what} files")
-        if kind == results.SWEEP_FORMAT:
-            from ..analyses.sweep import stored_figure
-            figure = stored_figure(results.read_sweep(result_file), size=size)
-        elif kind == results.FRAGILITY_FORMAT:
-            from ..analyses.fragility import stored_figure as stored_fragility_figure
-            figure = stored_fragility_figure(results.read_dataset(result_file, format=results.FRAGILITY_FORMAT),
-                                             size=size)
-        else:
-            from ..analyses.risk import stored_figure as stored_risk_figure
-            stored = results.read_dataset(result_file, format=results.RISK_FORMAT)
-            figure = stored_risk_figure(stored.coords, stored.variables, stored.attrs, size=size)
-        save_figure(figure, png, overwrite=replace, dpi=dpi, staging=staging)
+        save_figure(plot_results([result_file], size=size), png, overwrite=replace, dpi=dpi, staging=staging)
     else:
         stored = results.read_result(result_file)
         times = stored.result.ground_time
@@ -251,8 +240,8 @@ def _draw_stored(result_file, png, *, shift, zoom, span, dpi, replace, staging, 
                 if isinstance(pair, tuple) and (pair[1] <= first or pair[0] >= last):
                     raise CaseError(f"{pair[0]:g} to {pair[1]:g} s is outside the result, which runs from "
                                     f"{first:g} to {last:g} s (in the figure's time)", source=option)
-        _draw(stored.result, stored.name, png, overwrite=replace, time_shift=shift, zoom=zoom, crop=span, dpi=dpi,
-              size=size, about=_stored_about(stored), base=stored.base or None, staging=staging)
+        _draw(stored, stored.name, png, overwrite=replace, time_shift=shift, zoom=zoom, crop=span, dpi=dpi,
+              size=size, staging=staging)
 
 
 def _only_for_results(shift, zoom, span, what: str) -> None:
@@ -284,14 +273,15 @@ def _time_range(text: str, option: str, words: dict):
 def _draw(result, name, path, *, overwrite, dpi=None, time_shift=0.0, zoom="auto", crop="auto", staging=None,
           size=None, about=None, base=None):
     """Draw the figure of one run (`plots.response_figure`) and save it (`plots.save_figure`).
-    ``about``: (case text, record entries, integration step [s], version or None: this one, the two
-    horizontal components' azimuths [rad] or None), for
-    its caption (`plots.case_caption`) and the unit of its ground motion; ``base``: the ground under
-    the building of a case on a floor."""
+    ``result``: a run's `Result`, or a result file read back (`results.read_result`: it gives its
+    own caption, unit and ground under the building). ``about`` of a `Result`: (case text, record
+    entries, integration step [s], version or None: this one, the two horizontal components'
+    azimuths [rad] or None), for its caption (`plots.case_caption`) and the unit of its ground
+    motion; ``base``: the ground under the building of a case on a floor."""
     from .._version import __version__
     from ..plots import along_the_block, case_caption, pga_unit, response_figure, save_figure
 
-    caption, unit, horizontal = "", None, None
+    caption, unit, horizontal = None, None, None
     if about is not None:
         text, entries, step, version, azimuths = about
         caption = case_caption(text, records=entries, step=step, version=version or __version__, azimuths=azimuths)
@@ -299,15 +289,6 @@ def _draw(result, name, path, *, overwrite, dpi=None, time_shift=0.0, zoom="auto
     figure = response_figure(result, title=name, time_shift=time_shift, zoom=zoom, crop=crop, size=size,
                              caption=caption, unit=unit, horizontal=horizontal, base=base)
     save_figure(figure, path, overwrite=overwrite, dpi=dpi, staging=staging)
-
-
-def _stored_about(stored) -> tuple:
-    """`_draw`'s ``about`` of a result file read back."""
-    from ..plots import run_azimuths
-
-    step = stored.attrs.get("integration_step")
-    return (stored.case_text, stored.records, None if step is None else float(step),
-            stored.attrs.get("rockslide_version"), run_azimuths(stored))
 
 
 def _run_about(case, prepared, step: float) -> tuple:

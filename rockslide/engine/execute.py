@@ -419,11 +419,7 @@ def _own_identity() -> dict:
 
 def local_identity() -> dict:
     """`worker_identity` of this process."""
-    import numba
-
-    from .._version import __version__
-    from ..core import compiled
-    return {"rockslide": __version__, "core": compiled.source_stamp(), "numba": numba.__version__}
+    return worker_identity()
 
 
 def cold_workers_note(identities: dict) -> str | None:

@@ -166,15 +166,15 @@ def default_chunk_size(n_cases: int) -> int:
     return int(max(size, math.ceil(n_cases / MAX_CHUNK_FILES)))
 
 
-def check_memory(n_cases: int, source: str, *, bytes_per_case: int = SWEEP_BYTES_PER_CASE) -> None:
+def check_memory(n_cases: int, source: str) -> None:
     """Refuse a study whose client would need more memory than this machine has available
     (`available_memory`), in one line saying both figures; nothing where it cannot be told."""
     available = available_memory()
-    needed = n_cases * bytes_per_case
+    needed = n_cases * SWEEP_BYTES_PER_CASE
     if available is not None and needed > available:
-        raise CaseError(f"{n_cases} cases need about {needed / 1e6:.3g} MB of memory here ({bytes_per_case} bytes a "
-                        f"case, with a cluster's workers or without); {available / 1e6:.3g} MB are available: split "
-                        "the grid (one axis in parts) or run it on a larger machine", source=source)
+        raise CaseError(f"{n_cases} cases need about {needed / 1e6:.3g} MB of memory here ({SWEEP_BYTES_PER_CASE} "
+                        f"bytes a case, with a cluster's workers or without); {available / 1e6:.3g} MB are available: "
+                        "split the grid (one axis in parts) or run it on a larger machine", source=source)
 
 
 def available_memory() -> int | None:
