@@ -524,8 +524,10 @@ _NAME_RE = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]*")
 
 
 def _key(type_: str, doc: str, *, required: bool = False, default=None, bounds=(), choices=(),
-         keys: dict | None = None) -> dict:
+         keys: dict | None = None, needs_unit: bool = False) -> dict:
     spec = {"type": type_, "required": required, "default": default, "doc": doc}
+    if needs_unit:                # a bare number is refused (an azimuth of 30 would be 30 rad)
+        spec["needs_unit"] = True
     if type_ in SI_UNIT:
         spec["unit"] = SI_UNIT[type_]
     if bounds:
@@ -565,9 +567,8 @@ _RECORD_KEYS = {**_FILE_KEYS, **_PULSE_KEYS}
 #: One of two horizontal components: a file's keys and its azimuth.
 _COMPONENT_KEYS = {**_FILE_KEYS, "azimuth": _key(
     "angle", "direction the component is measured along, clockwise from north, e.g. '90 deg' "
-    "(default: from the file's header, PEER AT2)", bounds=[(">=", -2.0 * math.pi), ("<=", 2.0 * math.pi)])}
-#: Keys whose bare number is refused (an azimuth of 30 would be 30 rad): they need their unit.
-_UNIT_NEEDED = ("block.orientation", "ground.horizontal_1.azimuth", "ground.horizontal_2.azimuth")
+    "(default: from the file's header, PEER AT2)", bounds=[(">=", -2.0 * math.pi), ("<=", 2.0 * math.pi)],
+    needs_unit=True)}
 
 
 #: The keys of one mode of ``ground.floor.horizontal`` / ``vertical`` (`Mode`).
@@ -598,7 +599,8 @@ CASE_KEYS: dict[str, dict] = {
         "mass": _key("mass", "mass", required=True, bounds=[(">", 0.0)]),
         "orientation": _key("angle", "azimuth of the base width (across the rocking axis), clockwise "
                             "from north, with two horizontal components, e.g. '30 deg' (default: "
-                            "along ground.horizontal_1)", bounds=[(">=", -2.0 * math.pi), ("<=", 2.0 * math.pi)]),
+                            "along ground.horizontal_1)", bounds=[(">=", -2.0 * math.pi), ("<=", 2.0 * math.pi)],
+                            needs_unit=True),
     }),
     "contact": _key("mapping", "block-foundation contact", required=True, keys={
         "mu_static": _key("dimensionless", "static friction coefficient", required=True,
@@ -1314,7 +1316,7 @@ def _read_quantity(value, spec: dict, path: str, ctx: _Ctx) -> float:
         ctx.fail(path, f"{_show(value)} is too large (expected a finite {kind})")
     if written_unit(value):
         ctx.units[path] = written_unit(value)
-    elif path in _UNIT_NEEDED and number != 0.0 and not ctx.si_numbers:
+    elif spec.get("needs_unit") and number != 0.0 and not ctx.si_numbers:
         ctx.fail(path, f"{_show(value)} has no unit; write the angle with its unit, e.g. '30 deg'")
     unit = spec.get("unit", "")
     for op, limit in spec.get("bounds", ()):
@@ -1535,7 +1537,7 @@ def case_to_dict(case: Case, *, case_file: bool = True) -> dict:
             node = out
             for part in parents:
                 node = node.get(part) if isinstance(node, dict) else None
-            needs_unit = spec["type"] in UNIT_REQUIRED or path in _UNIT_NEEDED
+            needs_unit = spec["type"] in UNIT_REQUIRED or spec.get("needs_unit")
             if spec.get("quantity") and isinstance(node, dict) and node.get(leaf) is not None:
                 node[leaf] = _with_si_units(node[leaf], SI_UNIT[spec["quantity"]])
             elif needs_unit and isinstance(node, dict) and node.get(leaf) is not None:

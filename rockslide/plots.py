@@ -253,7 +253,7 @@ def case_caption(case_text: str = "", *, records=None, step: float | None = None
         parts.append(ground)
     elif records:
         factors = {f"{float(e['scale_factor']):.4g}" for e in records if e.get("scale_factor") is not None}
-        one = len(factors) == 1 and len(records) > 1
+        one = len(factors) == 1 and len(records) > 1 and all(e.get("scale_factor") is not None for e in records)
         two = any(str(e.get("role")) == "horizontal_2" for e in records)
         names = {"horizontal": "H1" if two else "H", "horizontal_2": "H2", "vertical": "V"}
         shown = []
@@ -263,7 +263,7 @@ def case_caption(case_text: str = "", *, records=None, step: float | None = None
             scaled = f" ×{float(factor):.4g}" if factor is not None and not one else ""
             shown.append(f"{Path(str(entry.get('path', '?'))).name} ({role}){scaled}")
         parts.append(("records " if len(records) > 1 else "record ") + ", ".join(shown)
-                     + (f", both ×{factors.pop()}" if one else ""))
+                     + (f", {'both' if len(records) == 2 else 'all'} ×{factors.pop()}" if one else ""))
     elif case is not None:
         pulse_axes = {"amplitude", "period", "duration"} & set(varied)
         parts.append(_case_ground(case) + (f" ({', '.join(sorted(pulse_axes))} varied)" if pulse_axes else ""))
@@ -281,7 +281,8 @@ def case_caption(case_text: str = "", *, records=None, step: float | None = None
             parts.append(floor + (" (base)" if "floor_period" in varied else ""))
         b = case.block
         alpha = math.atan2(b.width, b.height)
-        parts.append(f"block width × height {b.width:.4g} × {b.height:.4g} m, {b.mass:.4g} kg, "
+        mark = " (base)" if "height_to_width" in varied else ""
+        parts.append(f"block width × height {b.width:.4g} × {b.height:.4g} m{mark}, {b.mass:.4g} kg, "
                      f"α = {alpha:.4g} rad")
         mark = " (base)" if "mu" in varied else ""
         parts.append(f"μ = {case.contact.mu_static:.4g}{mark} (kinetic {case.contact.mu_kinetic:.4g})")

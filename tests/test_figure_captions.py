@@ -257,3 +257,30 @@ def test_two_sweeps_side_by_side_on_one_colour_scale_in_the_cases_unit(files):
     assert maps[1].get_xlim() == pytest.approx((0.2, 1.0))     # 0.4 g and 0.8 g, cells 0.4 g wide
     single = rockslide.plot_results([files / "statue.sweep.h5"])
     assert all(ax.get_xlabel().replace("\n", " ").endswith("[g]") for ax in single.axes if ax.get_xlabel())
+
+
+def test_a_common_scale_factor_is_said_once_only_when_every_record_has_it():
+    """``both ×f`` for two records scaled alike, ``all ×f`` for three; a record without a factor
+    (the vertical unscaled) keeps each record's own factor in the caption."""
+    from rockslide.plots import case_caption
+
+    def records(*factors):
+        roles = ("horizontal", "vertical", "horizontal_2")
+        return [{"role": role, "path": f"{role}.at2", **({} if f is None else {"scale_factor": f})}
+                for role, f in zip(roles, factors, strict=False)]
+
+    assert "both ×1.5" in case_caption("", records=records(1.5, 1.5))
+    three = case_caption("", records=records(1.5, 1.5, 1.5))
+    assert "all ×1.5" in three and "both" not in three
+    alone = case_caption("", records=records(1.5, None))
+    assert "both" not in alone and "horizontal.at2 (H) ×1.5" in alone
+
+
+def test_a_height_to_width_sweep_marks_the_block_as_the_base_case():
+    from rockslide.plots import case_caption
+
+    from conftest import REPO
+
+    text = (REPO / "configs" / "example.yaml").read_text()
+    assert "0.2 m (base)" in case_caption(text, varied=("height_to_width", "mu"))
+    assert "0.2 m (base)" not in case_caption(text, varied=("mu",))

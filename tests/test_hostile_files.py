@@ -168,6 +168,12 @@ def _dataset_stored_in_a_fifo(f, folder):
     f["ground"].create_dataset("horizontal", shape=(32,), dtype="f8", external=[(str(fifo), 0, 256)])
 
 
+def _a_floor_base_of_ten_billion_rows(f, folder):
+    base = f.create_group("base")              # a block on a floor keeps the ground under the building
+    for name in ("time", "horizontal", "vertical"):
+        base.create_dataset(name, shape=(10**10,), dtype="f8", chunks=(10**6,))
+
+
 HOSTILE_CONTENTS = [
     (_infinite_direction, "direction = inf; expected -1, 0 or 1"),
     (_claims_to_be_a_sweep, "damaged rockslide sweep (no variable 'overturned')"),
@@ -179,6 +185,7 @@ HOSTILE_CONTENTS = [
     (_a_huge_fixed_attribute, "attribute 'notes' of / holds 2097152 bytes"),
     (_nan_step, "integration_step = nan; expected a positive step"),
     (_dataset_stored_in_a_fifo, "values live in another file"),
+    (_a_floor_base_of_ten_billion_rows, "/base/time declares 10000000000 rows"),
 ]
 
 

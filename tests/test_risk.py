@@ -404,6 +404,10 @@ def test_command_writes_file_figure_and_json(tmp_path):
     assert not (tmp_path / "block.risk.png").exists()
     redrawn = invoke("plot", tmp_path / "block.risk.h5", "-o", tmp_path / "again.png")
     assert redrawn.exit_code == 0 and (tmp_path / "again.png").stat().st_size > 10_000
+    # the API draws it as the command does; two risk files are not overlaid: one line
+    assert rockslide.plot_results([tmp_path / "block.risk.h5"]).axes
+    two = invoke("plot", tmp_path / "block.risk.h5", tmp_path / "block.risk.h5", "-o", tmp_path / "two.png")
+    one_line_error(two, "drawn one at a time")
     described = invoke("info", tmp_path / "block.risk.h5", "--json")
     assert described.exit_code == 0
     assert [c["rate"] for c in json.loads(described.stdout)["rates"].values()] == pytest.approx(rates, rel=1e-12)

@@ -351,6 +351,9 @@ def test_suite_pairs(pair):
         load_suite(_suite(pair, "records:\n  - {horizontal_1: h1.at2}\n"))
     with pytest.raises(CaseError, match="exclusive"):
         load_suite(_suite(pair, "records:\n  - {horizontal: h1.at2, horizontal_1: h1.at2, horizontal_2: h2.at2}\n"))
+    # a bare azimuth is refused in a suite as in a case file (it was read as 90 rad)
+    with pytest.raises(CaseError, match=r"records\[0\].horizontal_2.azimuth: an integer 90 has no unit"):
+        load_suite(_suite(pair, "records:\n  - {horizontal_1: h1.at2, horizontal_2: {file: h2.at2, azimuth: 90}}\n"))
 
 
 def test_fragility_by_rotd50_and_along_the_block(pair):

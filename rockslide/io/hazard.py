@@ -415,7 +415,7 @@ def matching(table: HazardTable, im_name: str, period: float | None, kind: str, 
         return table
     unit = table.level_units or OPENQUAKE_UNITS[kind][0]
     scale = unit_factor(unit, kind, source=table.source, field="level unit")
-    measure = table.measure or _from_fragility(im_name, period)
+    measure = table.measure or _from_fragility(base, period)
     return replace(table, measure=measure, levels=table.levels * scale, level_units=None,
                    dropped_low=tuple(np.asarray(table.dropped_low) * scale),
                    dropped_high=tuple(np.asarray(table.dropped_high) * scale))

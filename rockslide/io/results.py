@@ -853,7 +853,10 @@ def _check_result_layout(f: h5py.File) -> None:
     """Every column a result needs, one-dimensional, numeric, of one length per group and at most
     `MAX_RESULT_ROWS` rows, with stored data: checked on the shapes, before anything is read
     (a small file declaring 1e12 rows is refused at once). ValueError says what is wrong."""
-    for group, names in (("time_history", HISTORY_COLUMNS), ("ground", tuple(GROUND_UNITS))):
+    groups = [("time_history", HISTORY_COLUMNS), ("ground", tuple(GROUND_UNITS))]
+    if "base" in f:                            # a block on a floor: the ground under the building
+        groups.append(("base", tuple(GROUND_UNITS)))
+    for group, names in groups:
         lengths = set()
         for name in names:
             ds = f[group][name]
