@@ -277,9 +277,9 @@ def test_a_common_scale_factor_is_said_once_only_when_every_record_has_it():
 
 
 def test_a_height_to_width_sweep_marks_the_block_as_the_base_case():
-    from rockslide.plots import case_caption
-
     from conftest import REPO
+
+    from rockslide.plots import case_caption
 
     text = (REPO / "configs" / "example.yaml").read_text()
     assert "0.2 m (base)" in case_caption(text, varied=("height_to_width", "mu"))

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 
 import h5py
 import numpy as np
@@ -451,6 +452,9 @@ def test_bad_input_is_one_line(tmp_path):
     one_line_error(invoke("risk", "--hazard", good), "--median", "--beta")
     one_line_error(invoke("risk", *lognormal, "--hazard", good, "--age", "old"), "--age")
     one_line_error(invoke("risk", *lognormal, "--hazard", tmp_path / "missing.csv"), "missing.csv", "not found")
+    if hasattr(os, "mkfifo"):                  # a FIFO is refused before it is opened (it was "a folder")
+        os.mkfifo(tmp_path / "pipe.csv")
+        one_line_error(invoke("risk", *lognormal, "--hazard", tmp_path / "pipe.csv"), "pipe.csv", "FIFO")
     frag = fragility_file(tmp_path / "b.fragility.h5")
     one_line_error(invoke("risk", frag, "--hazard", good, "--damage", "slip>1mm"), "slip>1mm", "overturn")
     rocking = fragility_file(tmp_path / "r.fragility.h5", im="pga_rocking", median=0.9)

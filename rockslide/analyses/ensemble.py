@@ -162,7 +162,7 @@ def plan_ensemble(case: Case, n: int = DEFAULT_MEMBERS, *, seed: int = SEED, rec
             warnings.warn(warning, RunWarning, stacklevel=2)
     kind = sw.AxisKind("member", "--ensemble", "dimensionless", "", "member of the ensemble", "1", "member")
     axis = sw.Axis("member", tuple(float(i) for i in range(n)), tuple(str(i) for i in range(n)), str(n), kind)
-    plan = Plan(case=case, axes=[axis], mu_kinetic_ratio=None, params=params, states=nominal.case_states(rows).copy(),
+    plan = Plan(case=case, axes=[axis], mu_kinetic_ratio=None, params=params, states=nominal.case_states(rows),
                 factor_h=nominal.factor_h[rows] * intensity, factor_v=nominal.factor_v[rows] * intensity,
                 base=nominal.base, first=nominal.first[rows], count=nominal.count[rows],
                 record_end=nominal.record_end[rows], step=nominal.step, records=nominal.records,

@@ -607,6 +607,7 @@ def plan_fragility(case: Case, suite: Suite, im: IntensityMeasure, levels: sw.Ax
     highest = (0.0, "")                   # the largest scaled peak, and which run
     flights = []                          # (warning of the first flying run of a record, its runs that fly)
     already_read: dict = {}               # records already read, by file and options
+    rotd: dict = {}                       # RotD of a pair (the same at every orientation of --azimuth)
     for r, entry in enumerate(suite.entries):
         records, specs, found = _read_entry(suite, r, entry, folder, already_read)
         if case_record is not None:
@@ -648,7 +649,10 @@ def plan_fragility(case: Case, suite: Suite, im: IntensityMeasure, levels: sw.Ax
                                 f"response; expected at most {MAX_OSCILLATOR_POINTS:.0e} (a longer period, or a "
                                 "shorter record)", source="--im")
         if im.rotd is not None:
-            value = im.of_pair(records["horizontal"].data, records["horizontal_2"].data, dt)
+            key = (id(records["horizontal"]), id(records["horizontal_2"]))   # `already_read` gives the same objects
+            if key not in rotd:
+                rotd[key] = im.of_pair(records["horizontal"].data, records["horizontal_2"].data, dt)
+            value = rotd[key]
         else:
             measured = ground if im.of_support else read
             value = im.of_record(measured.horizontal, measured.dt, case.gravity, tan_alpha)

@@ -39,6 +39,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import CaseError
+from ..inputs import open_regular
 from ..units import STANDARD_GRAVITY, unit_factor
 
 #: OpenQuake's units of intensity measure levels, by kind of measure [their size in SI].
@@ -196,14 +197,9 @@ def read_hazard(path, *, units: str | None = None, trim: bool = False) -> list[H
         column and why).
     """
     source = str(path)
-    path = Path(path)
-    if not path.is_file():
-        raise CaseError("hazard file not found" if not path.exists() else "is a folder, expected a hazard "
-                        "curve file (CSV)", source=source)
-    if path.stat().st_size > MAX_BYTES:
-        raise CaseError(f"larger than {MAX_BYTES >> 20} MB: not a hazard curve file", source=source)
-    try:
-        text = path.read_bytes().decode("utf-8-sig")
+    try:                  # a regular file only (a FIFO or a device could block), bounded before reading
+        with open_regular(path, what="hazard curve file", error=CaseError, limit=MAX_BYTES) as handle:
+            text = handle.read(MAX_BYTES).decode("utf-8-sig")
     except UnicodeDecodeError:
         raise CaseError("not a text file (expected a CSV hazard curve: OpenQuake's export or two columns of "
                         "level and annual rate)", source=source) from None
