@@ -1720,7 +1720,7 @@ def with_orientations(suite: Suite, orientations) -> Suite:
     for entry in suite.entries:
         if entry.horizontal_2 is None:
             raise CaseError(f"the record {entry.name} has one horizontal component; turning the block needs "
-                            "two (horizontal_1 and horizontal_2 in the suite file)", source="--azimuth")
+                            "two (horizontal_1 and horizontal_2 in the suite file)", source="azimuth")
         entries.extend(dataclasses.replace(entry, name=f"{entry.name}@{math.degrees(o):g}deg", orientation=o)
                        for o in orientations)
     return dataclasses.replace(suite, entries=tuple(entries), orientations=suite.orientations * len(orientations))

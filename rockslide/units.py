@@ -154,7 +154,7 @@ FIGURE_SIZES = {"column": (3.5, None), "page": (7.0, None), "slide": (10.0, 5.62
 FIGURE_SIDE_RANGE = (1.0, 50.0)
 
 
-def parse_figure_size(value, *, source: str = "--size"):
+def parse_figure_size(value, *, source: str = "size"):
     """A figure size as given (``--size``, ``size=``): None (each figure's default), one of
     `FIGURE_SIZES` (``"column"``, ``"page"``, ``"slide"``), ``"WxH"`` in inches (``"6x4"``) or a
     ``(width, height)`` pair [in]. Returns None, the name, or ``(width, height)`` [in]; CaseError

@@ -33,7 +33,7 @@ from ..case import Case, Distribution
 from ..core import kernel as K
 from ..core.simulate import Model, set_model
 from ..engine.execute import execute
-from ..engine.plan import MAX_POINTS, Plan, default_chunk_size, definition_key
+from ..engine.plan import MAX_POINTS, Plan, assemble, default_chunk_size
 from ..engine.prepare import RunWarning, coarse_step_warning
 from ..errors import CaseError
 from . import sweep as sw
@@ -126,9 +126,10 @@ class EnsemblePlan:
 
 
 def plan_ensemble(case: Case, n: int = DEFAULT_MEMBERS, *, seed: int = SEED, records_dir: Path | None = None,
-                  chunk_size: int | None = None) -> EnsemblePlan:
+                  chunk_size: int | None = None, records: dict | None = None) -> EnsemblePlan:
     """Every member's kernel inputs: the nominal case's (`sweep.plan_sweep` at its own values: the
-    checks of ``rockslide run``, once), with each member's block, contact and scale factors.
+    checks of ``rockslide run``, once), with each member's block, contact and scale factors;
+    ``records``: the case's records already read (`engine.prepare.read_records`).
 
     Raises
     ------
@@ -137,7 +138,7 @@ def plan_ensemble(case: Case, n: int = DEFAULT_MEMBERS, *, seed: int = SEED, rec
     """
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or not 1 <= n <= MAX_POINTS:
         raise CaseError(f"expected a whole number of members within 1 ... {MAX_POINTS}, got {n!r}",
-                        source="--ensemble")
+                        source="n")
     if case.solver.method != "kernel":
         raise CaseError(f"an ensemble runs the compiled kernel; got method {case.solver.method!r}",
                         source=case.source, field="solver.method")
@@ -152,7 +153,7 @@ def plan_ensemble(case: Case, n: int = DEFAULT_MEMBERS, *, seed: int = SEED, rec
         axes, rows = [sw.parse_axis("restitution", repr(e))], np.zeros(int(n), dtype=np.int64)
     with warnings.catch_warnings():         # the nominal case's warnings are its run's (`prepare`)
         warnings.simplefilter("ignore", RunWarning)
-        nominal = sw.plan_sweep(case, axes, records_dir=records_dir, chunk_size=1)
+        nominal = sw.plan_sweep(case, axes, records_dir=records_dir, chunk_size=1, records=records)
     n = int(n)
     params, restitution = member_parameters(case, nominal.case_params(rows), values)
     intensity = values.get("intensity", np.ones(n))
@@ -160,14 +161,13 @@ def plan_ensemble(case: Case, n: int = DEFAULT_MEMBERS, *, seed: int = SEED, rec
         warning = coarse_step_warning(case.source, params, lambda i: f"ensemble member {i}: the smallest block")
         if warning:
             warnings.warn(warning, RunWarning, stacklevel=2)
-    kind = sw.AxisKind("member", "--ensemble", "dimensionless", "", "member of the ensemble", "1", "member")
+    kind = sw.AxisKind("member", "member", "dimensionless", "", "member of the ensemble", "1", "member")
     axis = sw.Axis("member", tuple(float(i) for i in range(n)), tuple(str(i) for i in range(n)), str(n), kind)
-    plan = Plan(case=case, axes=[axis], mu_kinetic_ratio=None, params=params, states=nominal.case_states(rows),
-                factor_h=nominal.factor_h[rows] * intensity, factor_v=nominal.factor_v[rows] * intensity,
-                base=nominal.base, first=nominal.first[rows], count=nominal.count[rows],
-                record_end=nominal.record_end[rows], step=nominal.step, records=nominal.records,
-                chunk_size=default_chunk_size(n) if chunk_size is None else int(chunk_size))
-    plan.key = definition_key(plan)
+    plan = assemble(case, [axis], params=params, states=nominal.case_states(rows),
+                    factor_h=nominal.factor_h[rows] * intensity, factor_v=nominal.factor_v[rows] * intensity,
+                    base=nominal.base, first=nominal.first[rows], count=nominal.count[rows],
+                    record_end=nominal.record_end[rows], step=nominal.step, records=nominal.records,
+                    chunk_size=default_chunk_size(n) if chunk_size is None else int(chunk_size))
     stored = dict(values)
     stored["restitution"] = restitution
     return EnsemblePlan(plan=plan, distributions=dists, samples=stored, defaults=defaults, seed=seed)

@@ -59,8 +59,8 @@ from scipy.special import log_ndtr, ndtr, ndtri
 from ..case import Case, RecordSpec, Suite, SuiteEntry, case_with, load_suite, with_orientations
 from ..core import intensity
 from ..core import kernel as K
-from ..core.simulate import ground_array, initial_state, parameters
-from ..engine.plan import MAX_POINTS, Plan, default_chunk_size, definition_key
+from ..core.simulate import ground_array
+from ..engine.plan import MAX_POINTS, Plan, assemble, case_inputs, default_chunk_size
 from ..engine.prepare import (
     ABSURD_ACCELERATION_IN_G,
     MAX_GROUND_SAMPLES,
@@ -74,7 +74,6 @@ from ..engine.prepare import (
     flight_warning,
     floor_ground,
     ground_along,
-    model_for,
     settings_for,
 )
 from ..errors import CaseError, RecordError
@@ -232,7 +231,7 @@ def parse_im(text: str) -> IntensityMeasure:
         inner = rotd.group(2).strip()
         if inner not in ("pga", "pgv") and _SA.match(inner) is None:
             raise CaseError(f"unknown intensity measure {text!r}: RotD{rotd.group(1)} applies to pga, pgv and "
-                            "sa(T), e.g. 'rotd50_sa(1s)'", source="--im")
+                            "sa(T), e.g. 'rotd50_sa(1s)'", source="im")
         base = parse_im(inner)
         percent = int(rotd.group(1))
         return replace(base, name=f"rotd{percent}_{base.name}", label=f"RotD{percent} {base.label}",
@@ -243,18 +242,18 @@ def parse_im(text: str) -> IntensityMeasure:
     if name.replace(" ", "") in ("pgv_pga", "pgv/pga"):
         raise CaseError("PGV/PGA does not change when a record is scaled, so records cannot be scaled "
                         f"to levels of it (it is reported for each record); choose {_IM_CHOICES}",
-                        source="--im")
+                        source="im")
     match = _SA.match(name)
     if match is None:
-        raise CaseError(f"unknown intensity measure {text!r}; expected {_IM_CHOICES}", source="--im")
-    period = parse_quantity(match.group("period"), "time", source="--im")
+        raise CaseError(f"unknown intensity measure {text!r}; expected {_IM_CHOICES}", source="im")
+    period = parse_quantity(match.group("period"), "time", source="im")
     if not period > 0:
         raise CaseError(f"the period of sa(T) must be a positive time, got {match.group('period')!r}",
-                        source="--im")
+                        source="im")
     low, high = SA_PERIODS
     if not low <= period <= high:
         raise CaseError(f"the period of sa(T) must be within {low:g} s ... {high:g} s (a response spectrum's "
-                        f"range: below it Sa is the PGA), got {period:g} s", source="--im")
+                        f"range: below it Sa is the PGA), got {period:g} s", source="im")
     shown, damping = f"{period:g} s", f"{100 * intensity.DAMPING:g} %"
     return IntensityMeasure(f"sa({shown})", "acceleration", "m/s^2",
                             f"pseudo-spectral acceleration of the horizontal record at T = {shown}, "
@@ -270,14 +269,14 @@ def parse_levels(text: str, im: IntensityMeasure) -> sw.Axis:
     CaseError
         Naming ``--levels``.
     """
-    kind = sw.AxisKind("level", "--levels", im.kind, "", f"intensity level: {im.long_name}", im.units,
+    kind = sw.AxisKind("level", "level", im.kind, "", f"intensity level: {im.long_name}", im.units,
                        im.axis_label(), im.display_scale)
     axis = sw.parse_axis("level", text, kind=kind)
     values = np.asarray(axis.values)
     if not (values > 0).all():
-        raise CaseError(f"the levels must be positive, got {text!r}", source="--levels")
+        raise CaseError(f"the levels must be positive, got {text!r}", source="levels")
     if not (np.diff(values) > 0).all():
-        raise CaseError(f"give the levels in increasing order, got {text!r}", source="--levels")
+        raise CaseError(f"give the levels in increasing order, got {text!r}", source="levels")
     return axis
 
 
@@ -329,18 +328,18 @@ def parse_damage(text: str) -> DamageState:
     match = _DAMAGE.match(compact.lower())
     if match is None:
         raise CaseError(f"cannot read {text!r} as a damage state; expected 'overturn', {_DAMAGE_EXAMPLES}",
-                        source="--damage")
+                        source="damage")
     what, value = match.group("what"), compact[len(match.group("what")) + 1:]
     if what == "rotation" and value.lower().endswith("alpha"):
         number = value[:-len("alpha")].rstrip("*") or "1"
-        ratio = parse_quantity(number, "dimensionless", source="--damage")
+        ratio = parse_quantity(number, "dimensionless", source="damage")
         _positive(ratio, text)
         return DamageState(compact, "max_rotation_ratio", ratio, f"max |rotation| > {ratio:g} alpha")
     kind = "angle" if what == "rotation" else "length"
     if re.fullmatch(r"[-+]?[\d.]+(?:[eE][-+]?\d+)?", value):
         unit = "10deg" if kind == "angle" else "50mm"
-        raise CaseError(f"{text!r}: give the threshold's unit (e.g. {what}>{unit})", source="--damage")
-    threshold = parse_quantity(value, kind, source="--damage")
+        raise CaseError(f"{text!r}: give the threshold's unit (e.g. {what}>{unit})", source="damage")
+    threshold = parse_quantity(value, kind, source="damage")
     _positive(threshold, text)
     if what == "rotation":
         return DamageState(compact, "max_rotation", threshold,
@@ -352,7 +351,7 @@ def parse_damage(text: str) -> DamageState:
 
 def _positive(value: float, text: str) -> None:
     if not value > 0:
-        raise CaseError(f"{text!r}: the threshold must be positive", source="--damage")
+        raise CaseError(f"{text!r}: the threshold must be positive", source="damage")
 
 
 def damage_states(texts=()) -> list[DamageState]:
@@ -361,7 +360,7 @@ def damage_states(texts=()) -> list[DamageState]:
     for text in texts:
         state = parse_damage(text)
         if state.name in [s.name for s in states]:
-            raise CaseError(f"{text!r} is given twice (overturning is always included)", source="--damage")
+            raise CaseError(f"{text!r} is given twice (overturning is always included)", source="damage")
         states.append(state)
     return states
 
@@ -408,11 +407,11 @@ def suite_from(spec, *, units: str | None = None) -> Suite:
     text = str(spec)
     path = Path(text).expanduser()
     if units is not None:
-        unit_factor(units, "acceleration", source="--units")
+        unit_factor(units, "acceleration", source="units")
     if path.is_file() and path.suffix.lower() in (".yaml", ".yml"):
         if units is not None:
             raise CaseError("applies to a folder or a glob of records; a suite file gives each "
-                            "record's units: in its entries", source="--units")
+                            "record's units: in its entries", source="units")
         return load_suite(path)
     if path.is_dir():
         files = sorted(p for p in path.iterdir() if p.is_file() and not p.name.startswith(".")
@@ -422,7 +421,7 @@ def suite_from(spec, *, units: str | None = None) -> Suite:
     elif any(c in text for c in "*?[") and not path.exists():
         files = sorted(Path(p) for p in glob.glob(os.path.expanduser(text)) if Path(p).is_file())
         if not files:
-            raise CaseError(f"no file matches {text!r}", source="--suite")
+            raise CaseError(f"no file matches {text!r}", source="suite")
     elif path.is_file():
         raise CaseError("expected a suite file (.yaml), a folder of records or a quoted glob of them "
                         "(like 'records/*.csv')", source=text)
@@ -586,9 +585,9 @@ def plan_fragility(case: Case, suite: Suite, im: IntensityMeasure, levels: sw.Ax
     n = n_records * n_levels
     if n > MAX_POINTS:
         raise CaseError(f"{n_records} records x {n_levels} levels = {n} runs; at most {MAX_POINTS}",
-                        source="--suite/--levels")
+                        source="suite/levels")
     if chunk_size is not None and (isinstance(chunk_size, bool) or int(chunk_size) < 1):
-        raise CaseError(f"must be a whole number >= 1, got {chunk_size!r}", source="--chunk-size")
+        raise CaseError(f"must be a whole number >= 1, got {chunk_size!r}", source="chunk_size")
     chunk_size = default_chunk_size(n) if chunk_size is None else int(chunk_size)
     check_parameters(case)
     folder = records_dir if records_dir is not None else rec.records_dir()
@@ -617,7 +616,7 @@ def plan_fragility(case: Case, suite: Suite, im: IntensityMeasure, levels: sw.Ax
         pair = entry.horizontal_2 is not None
         if im.rotd is not None and not pair:
             raise CaseError(f"{im.label} needs two horizontal components; the record {where} has one "
-                            "(give horizontal_1 and horizontal_2 in the suite file)", source="--im")
+                            "(give horizontal_1 and horizontal_2 in the suite file)", source="im")
         first_key = "ground.horizontal_1" if pair else "ground.horizontal"
         changes = {"ground.horizontal": None, "ground.horizontal_1": None,
                    first_key: specs["horizontal"], "ground.horizontal_2": specs["horizontal_2"],
@@ -647,7 +646,7 @@ def plan_fragility(case: Case, suite: Suite, im: IntensityMeasure, levels: sw.Ax
             if points > MAX_OSCILLATOR_POINTS:
                 raise CaseError(f"{im.label} of the record {where} takes {points:.3g} points of the oscillator's "
                                 f"response; expected at most {MAX_OSCILLATOR_POINTS:.0e} (a longer period, or a "
-                                "shorter record)", source="--im")
+                                "shorter record)", source="im")
         if im.rotd is not None:
             key = (id(records["horizontal"]), id(records["horizontal_2"]))   # `already_read` gives the same objects
             if key not in rotd:
@@ -665,12 +664,11 @@ def plan_fragility(case: Case, suite: Suite, im: IntensityMeasure, levels: sw.Ax
         files.append(found)
         entries.extend({**e, "role": f"{entry.name}.{e['role']}"} for e in ground.files)
 
-        settings = settings_for(record_case, history=False, energy=False)
-        base = ground_array(ground.horizontal, ground.vertical, dt, settings.tail)
+        base = ground_array(ground.horizontal, ground.vertical, dt,
+                            settings_for(record_case, history=False, energy=False).tail)
         start = ground.start + case.ground.time_shift
         rows = slice(r * n_levels, (r + 1) * n_levels)
-        params[rows] = parameters(model_for(record_case), dt, settings, start)
-        states[rows] = initial_state(settings)
+        params[rows], states[rows] = case_inputs(record_case, dt, start)
         factors = level_values / value
         if not np.isfinite(factors).all():
             raise RecordError(f"its {im.label} ({value:g}) is too small to scale to the levels",
@@ -704,15 +702,12 @@ def plan_fragility(case: Case, suite: Suite, im: IntensityMeasure, levels: sw.Ax
         warnings.warn(f"{flights[0][0]}; {sum(k for _, k in flights)} of {n} runs fly", RunWarning, stacklevel=2)
     if highest[0] > ABSURD_ACCELERATION_IN_G * STANDARD_GRAVITY:
         warnings.warn(f"{absurd_acceleration(case.source, highest[0])} [at {highest[1]}]", RunWarning, stacklevel=2)
-    record_kind = sw.AxisKind("record", "--suite", "dimensionless", "", "record of the suite", "1", "record")
+    record_kind = sw.AxisKind("record", "record", "dimensionless", "", "record of the suite", "1", "record")
     record_axis = sw.Axis("record", tuple(float(i) for i in range(n_records)),
                           tuple(e.name for e in suite.entries), suite.source, record_kind)
-    plan = Plan(case=case, axes=[record_axis, levels], mu_kinetic_ratio=None, params=params,
-                   states=states, factor_h=factor_h, factor_v=factor_v,
-                   base=np.ascontiguousarray(np.concatenate(bases, axis=1)), first=first, count=count,
-                   record_end=record_end, step=float(params[:, K.P_STEP].min()), records=entries,
-                   chunk_size=chunk_size)
-    plan.key = definition_key(plan)
+    plan = assemble(case, [record_axis, levels], params=params, states=states, factor_h=factor_h, factor_v=factor_v,
+                    base=np.ascontiguousarray(np.concatenate(bases, axis=1)), first=first, count=count,
+                    record_end=record_end, records=entries, chunk_size=chunk_size)
     fplan = FragilityPlan(plan=plan, suite=suite, im=im, levels=levels, record_cases=record_cases,
                           measures=measures, files=files, vertical_factor=vertical_factor, vertical=vertical,
                           vertical_note=vertical_note)
@@ -737,11 +732,11 @@ def with_parameter_samples(fplan: FragilityPlan, samples: int, seed: int, chunk_
 
     case, plan = fplan.plan.case, fplan.plan
     if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or samples < 0:
-        raise CaseError(f"expected a whole number >= 0, got {samples!r}", source="--samples")
+        raise CaseError(f"expected a whole number >= 0, got {samples!r}", source="samples")
     dists = case.uncertain.given()
     if not dists:
         raise CaseError("needs the case's uncertain section (size, slenderness, friction, restitution) to draw from",
-                        source="--samples")
+                        source="samples")
     if "intensity" in dists:
         raise CaseError("does not apply to a fragility analysis, whose levels set the intensity (remove it, or "
                         "run the case's neighbourhood with rockslide run --ensemble)", source=case.source,
@@ -754,7 +749,7 @@ def with_parameter_samples(fplan: FragilityPlan, samples: int, seed: int, chunk_
     n = plan.n_cases * width
     if n > MAX_POINTS:
         raise CaseError(f"{n_records} records x {n_levels} levels x {width} parameter sets = {n} runs; at most "
-                        f"{MAX_POINTS}", source="--samples")
+                        f"{MAX_POINTS}", source="samples")
     own = {name: (case.contact.restitution if name == "restitution" else 1.0) for name in dists}
     values = {name: np.empty((n_records, width)) for name in dists}
     for r in range(n_records):
@@ -768,17 +763,15 @@ def with_parameter_samples(fplan: FragilityPlan, samples: int, seed: int, chunk_
                                                 {name: v[record, draw] for name, v in values.items()})
     if "restitution" in values:
         values["restitution"] = restitution[np.arange(n_records)[:, None] * n_levels * width + np.arange(width)]
-    kind = sw.AxisKind("sample", "--samples", "dimensionless", "", "parameter sample (0: the case's own values)",
+    kind = sw.AxisKind("sample", "sample", "dimensionless", "", "parameter sample (0: the case's own values)",
                        "1", "sample")
     axis = sw.Axis("sample", tuple(float(k) for k in range(width)), tuple(str(k) for k in range(width)),
                    str(samples), kind)
-    expanded = Plan(case=case, axes=[*plan.axes, axis], mu_kinetic_ratio=None, params=params,
-                    states=plan.case_states(row), factor_h=plan.factor_h[row], factor_v=plan.factor_v[row],
-                    base=plan.base,
-                    first=plan.first[row], count=plan.count[row], record_end=plan.record_end[row],
-                    step=float(params[:, K.P_STEP].min()), records=plan.records,
-                    chunk_size=default_chunk_size(n) if chunk_size is None else int(chunk_size))
-    expanded.key = definition_key(expanded)
+    expanded = assemble(case, [*plan.axes, axis], params=params, states=plan.case_states(row),
+                        factor_h=plan.factor_h[row], factor_v=plan.factor_v[row], base=plan.base,
+                        first=plan.first[row], count=plan.count[row], record_end=plan.record_end[row],
+                        records=plan.records,
+                        chunk_size=default_chunk_size(n) if chunk_size is None else int(chunk_size))
     return replace(fplan, plan=expanded, samples=int(samples), parameter_values=values, distributions=dists,
                    seed=int(seed))
 
@@ -816,7 +809,7 @@ def _vertical_source(case: Case, suite: Suite, folder: Path, case_vertical: bool
     if not case_has:
         if case_vertical:
             raise CaseError("the case has no vertical record to scale with the suite's horizontal ones",
-                            source="--case-vertical")
+                            source="case_vertical")
         return "none", "", None
     spec = case.ground.vertical
     if not case_vertical:

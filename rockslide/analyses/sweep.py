@@ -45,11 +45,9 @@ from __future__ import annotations
 import dataclasses
 import itertools
 import math
-import re
 import warnings
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, replace
-from decimal import Decimal, InvalidOperation
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -57,9 +55,19 @@ import numpy as np
 from .. import interrupts
 from ..case import Case, case_with
 from ..core import kernel as K
-from ..core.physics import OVERTURNED
-from ..core.simulate import ground_array, initial_state, may_still_overturn, parameters
-from ..engine.plan import MAX_GRID_POINTS, MAX_POINTS, Plan, check_memory, default_chunk_size, definition_key
+from ..core.simulate import ground_array
+from ..engine.axes import (  # noqa: F401  (the engine's vocabulary, re-exported: `sweep.AXES`, `sweep.parse_axis`...)
+    _RETIRED_LABELS,
+    AXES,
+    PULSE_AXES,
+    RECORD_SCALE_AXES,
+    RETIRED_AXES,
+    Axis,
+    AxisKind,
+    parse_axis,
+)
+from ..engine.outcomes import MODE_BITS, STATUS_FLAGS, sweep_variables  # noqa: F401  (re-exported)
+from ..engine.plan import MAX_GRID_POINTS, Plan, Supports, assemble, case_inputs, check_memory, default_chunk_size
 from ..engine.prepare import (
     ABSURD_ACCELERATION_IN_G,
     RunWarning,
@@ -83,7 +91,7 @@ from ..errors import CaseError
 from ..io import records as rec
 from ..io.results import RECORD_ROLES
 from ..pulses import Pulse, linear_overturning_ratio
-from ..units import STANDARD_GRAVITY, UNIT_REQUIRED, parse_quantity, unit_factor
+from ..units import STANDARD_GRAVITY, unit_factor
 
 __all__ = ["AXES", "AxisKind", "Axis", "parse_axis", "plan_sweep", "sweep_variables", "worst_azimuth", "coordinates",
            "table_coordinates",
@@ -95,228 +103,6 @@ PLAN_BATCH = 2000
 #: 0.03 ms on 2 cores (10^6 points of ``--mu`` x ``--pga`` plan in 0.7 s: 1000 points and 1000
 #: scales), to say how long the checks of a large grid take before they start (`planning_seconds`).
 PLAN_SECONDS_PER_POINT = 3e-5
-#: Ranges include their stop when it is within this fraction of a step of the grid.
-RANGE_TOLERANCE = 1e-9
-
-
-@dataclass(frozen=True)
-class AxisKind:
-    """What a sweep axis changes.
-
-    Attributes
-    ----------
-    name : str
-        Dimension name in the result file (``mu``, ``pga``...).
-    option : str
-        The command-line option (``--mu``).
-    kind : str
-        Unit kind of its values (a key of `units.UNITS`).
-    key : str
-        The case key it sets (dotted).
-    long_name, units : str
-        The dimension's ``long_name`` and ``units`` attributes (SI; ``1`` for dimensionless).
-    label : str
-        Axis label in figures; ``display_scale`` divides the SI values for it.
-    bare_unit : str
-        The unit of a value written without one (default: SI); ``deg`` for ``--azimuth``.
-    """
-
-    name: str
-    option: str
-    kind: str
-    key: str
-    long_name: str
-    units: str
-    label: str
-    display_scale: float = 1.0
-    bare_unit: str = ""
-
-
-#: The axes a sweep can vary, in the order of ``rockslide sweep --help``.
-AXES: dict[str, AxisKind] = {a.name: a for a in (
-    AxisKind("mu", "--mu", "dimensionless", "contact.mu_static", "static friction coefficient",
-             "1", "static friction coefficient μ"),
-    AxisKind("pga", "--pga", "acceleration", "ground.scale.pga_horizontal",
-             "peak horizontal ground acceleration", "m/s^2", "peak horizontal acceleration [gal]",
-             0.01),
-    AxisKind("vertical_factor", "--vertical-factor", "dimensionless", "ground.scale.vertical_factor",
-             "factor on the vertical record", "1", "vertical factor"),
-    AxisKind("restitution", "--restitution", "dimensionless", "contact.restitution",
-             "coefficient of restitution", "1", "coefficient of restitution e"),
-    AxisKind("height_to_width", "--height-to-width", "dimensionless", "block.width",
-             "height / width h/b, the slenderness ratio (the height kept)", "1", "height / width h/b"),
-    AxisKind("gravity", "--gravity", "acceleration", "gravity", "gravitational acceleration",
-             "m/s^2", "gravity g [m/s²]"),
-    AxisKind("amplitude", "--amplitude", "acceleration", "ground.horizontal.amplitude",
-             "amplitude of the horizontal pulse", "m/s^2", "pulse amplitude a_p [g]", STANDARD_GRAVITY),
-    AxisKind("period", "--period", "time", "ground.horizontal.period", "period of the horizontal pulse",
-             "s", "pulse period T_p [s]"),
-    AxisKind("duration", "--duration", "time", "ground.horizontal.duration",
-             "duration of the horizontal pulse", "s", "pulse duration t_d [s]"),
-    AxisKind("azimuth", "--azimuth", "angle", "block.orientation",
-             "azimuth of the block's width, clockwise from north (two horizontal components)", "rad",
-             "block orientation [deg]", math.pi / 180.0, "deg"),
-    AxisKind("floor_period", "--floor-period", "time", "ground.floor.horizontal",
-             "period of the first horizontal mode of the floor the block stands on", "s",
-             "floor period T_1 [s]"),
-)}
-#: Axes no longer offered, with what replaces them (one line, exit 2 where they are asked for).
-RETIRED_AXES = {
-    "slenderness": "was width / height b/h, the inverse of the field's slenderness ratio h/b "
-                   "(--slenderness 4 built a block 4 times wider than high); give --height-to-width h/b "
-                   "instead (the height kept): --slenderness 0.25 is --height-to-width 4",
-}
-#: Figure labels of retired axes, for files written before they were retired.
-_RETIRED_LABELS = {"slenderness": "width / height b/h"}
-#: The axes that change the horizontal pulse of a pulse case (and only there).
-PULSE_AXES = ("amplitude", "period", "duration")
-#: The axes that scale record files (a pulse is scaled by its amplitude).
-RECORD_SCALE_AXES = ("pga", "vertical_factor")
-
-
-@dataclass(frozen=True)
-class Axis:
-    """One axis of a sweep: its kind and its values.
-
-    Attributes
-    ----------
-    name : str
-        A key of :data:`AXES`.
-    values : tuple of float
-        SI values, in the order given.
-    texts : tuple of str
-        The values as written (``"125gal"``), for messages.
-    spec : str
-        The option's text as given.
-    given_kind : AxisKind, optional
-        What the axis is, for an axis that is not one of :data:`AXES` (``rockslide fragility``'s
-        levels).
-    """
-
-    name: str
-    values: tuple
-    texts: tuple
-    spec: str
-    given_kind: AxisKind | None = None
-
-    @property
-    def kind(self) -> AxisKind:
-        """What the axis changes (:data:`AXES`, or ``given_kind``)."""
-        return self.given_kind if self.given_kind is not None else AXES[self.name]
-
-    def __len__(self) -> int:
-        return len(self.values)
-
-
-# --------------------------------------------------------------------------------------------------
-# Axes
-# --------------------------------------------------------------------------------------------------
-
-_PIECE = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([A-Za-z/^*0-9]*?)\s*$")
-
-
-def parse_axis(name: str, spec: str, kind: AxisKind | None = None) -> Axis:
-    """Read an axis option: ``start:stop:step``, a comma list, or one value.
-
-    Parameters
-    ----------
-    name : str
-        A key of :data:`AXES`, or any name with ``kind``.
-    spec : str
-        The option's text, e.g. ``"0.30:0.70:0.01"``, ``"100gal:1000gal:25gal"``, ``"0.5,0.52,0.55"``.
-    kind : AxisKind, optional
-        What the axis is when it is not one of :data:`AXES` (its ``option`` and unit ``kind``).
-
-    Returns
-    -------
-    Axis
-
-    Raises
-    ------
-    CaseError
-        Naming the option: not a range or list of numbers, unknown unit, a unit on some values
-        only, a step that is not positive, a stop below the start, repeated values, too many values.
-    """
-    given = kind
-    kind = AXES[name] if given is None else given
-    option = kind.option
-    text = str(spec).strip()
-    if not text:
-        raise CaseError("expected start:stop:step or a comma list of values, got an empty text",
-                        source=option)
-    if ":" in text:
-        pieces = text.split(":")
-        if len(pieces) != 3:
-            raise CaseError(f"expected start:stop:step (three values), got {text!r}", source=option)
-        texts = _range_texts(option, kind.kind, text, [_split(option, kind.kind, p) for p in pieces])
-    else:
-        parts = [_split(option, kind.kind, p) for p in text.split(",")]
-        units = {unit for _, unit in parts}
-        if len(units) > 1 and "" in units:
-            none = "" if kind.kind in UNIT_REQUIRED else " or on none (none means SI)"
-            raise CaseError(f"give a unit on every value{none}, got {text!r}", source=option)
-        texts = [f"{number}{unit}" for number, unit in parts]
-    if kind.bare_unit:
-        texts = [t if _PIECE.match(t).group(2) else f"{t}{kind.bare_unit}" for t in texts]
-    values = [parse_quantity(t, kind.kind, source=option) for t in texts]
-    if name == "azimuth":
-        for t, v in zip(texts, values, strict=True):
-            if not abs(v) <= 2.0 * math.pi * (1.0 + 1e-12):
-                raise CaseError(f"{t} is beyond +-360 deg (the azimuth of the block's width, clockwise from "
-                                "north; bare numbers are degrees)", source=option)
-    seen = {}
-    for t, v in zip(texts, values, strict=True):
-        if v in seen:
-            raise CaseError(f"{t} repeats {seen[v]} (each value once)", source=option)
-        seen[v] = t
-    return Axis(name, tuple(values), tuple(texts), text, given)
-
-
-def _split(option: str, kind: str, piece: str) -> tuple[Decimal, str]:
-    """A piece of an axis option as (number, unit text)."""
-    match = _PIECE.match(piece)
-    if not match:
-        what = "a number" if kind == "dimensionless" else "a number with an optional unit"
-        example = {"dimensionless": "0.5", "time": "0.4s"}.get(kind, "800gal")
-        raise CaseError(f"cannot read {piece.strip()!r} as {what} (like {example})", source=option)
-    number, unit = match.group(1), match.group(2)
-    if unit:
-        parse_quantity(f"1 {unit}", kind, source=option)     # an unknown unit fails here
-    try:
-        return Decimal(number), unit
-    except InvalidOperation:  # pragma: no cover - the pattern only lets numbers through
-        raise CaseError(f"cannot read {piece!r} as a number", source=option) from None
-
-
-def _range_texts(option: str, kind: str, text: str, pieces) -> list[str]:
-    """The values of ``start:stop:step`` as texts with their unit, computed in decimal."""
-    (start, u0), (stop, u1), (step, u2) = pieces
-    if len({u0, u1, u2}) != 1:
-        none = "" if kind in UNIT_REQUIRED else ", or all without unit (SI)"
-        raise CaseError(f"give start, stop and step in one unit{none}, got {text!r}", source=option)
-    if step <= 0:
-        raise CaseError(f"the step must be positive, got {text!r}", source=option)
-    if stop < start:
-        raise CaseError(f"the stop is below the start in {text!r} (expected start <= stop)",
-                        source=option)
-    q = (stop - start) / step
-    n = int(q)
-    if q - n >= 1 - Decimal(RANGE_TOLERANCE):
-        n += 1
-    if n + 1 > MAX_POINTS:
-        raise CaseError(f"{text!r} has {n + 1} values; at most {MAX_POINTS} on one axis",
-                        source=option)
-    numbers = [start + i * step for i in range(n + 1)]
-    if abs(numbers[-1] - stop) <= Decimal(RANGE_TOLERANCE) * step:
-        numbers[-1] = stop                               # on the grid: exactly the stop
-    return [f"{_plain(x)}{u0}" for x in numbers]
-
-
-def _plain(number: Decimal) -> str:
-    """A decimal as short plain text (``0.37``, ``125``, ``1E-7``)."""
-    if number == number.to_integral_value() and abs(number) < Decimal("1e15"):
-        return str(number.quantize(Decimal(1)))
-    return str(number.normalize())
 
 
 def axis_changes(axis: str, value: float, case: Case, ratio: float | None) -> dict:
@@ -342,7 +128,7 @@ def kinetic_ratio(case: Case, given: float | None) -> float:
     if given is not None:
         if not (isinstance(given, (int, float)) and math.isfinite(given) and 0.0 <= given <= 1.0):
             raise CaseError(f"must be within [0, 1] (mu_kinetic = ratio * mu_static), got {given!r}",
-                            source="--mu-kinetic-ratio")
+                            source="mu_kinetic_ratio")
         return float(given)
     mu, nu = case.contact.mu_static, case.contact.mu_kinetic
     if mu == 0.0 or nu == mu:
@@ -357,7 +143,7 @@ def kinetic_ratio(case: Case, given: float | None) -> float:
 
 def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = None,
                mu_kinetic_ratio: float | None = None, chunk_size: int | None = None,
-               progress: Callable[[int], None] | None = None) -> Plan:
+               progress: Callable[[int], None] | None = None, records: dict | None = None) -> Plan:
     """Validate every point of the grid and build its kernel inputs.
 
     Parameters
@@ -375,6 +161,8 @@ def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = N
     progress : callable, optional
         Called with the number of points validated, every few thousand points (a large grid takes
         minutes to validate).
+    records : dict, optional
+        The case's records already read (`engine.prepare.read_records`): not read again.
 
     Returns
     -------
@@ -403,7 +191,7 @@ def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = N
                         source=case.source, field="solver.method")
     if mu_kinetic_ratio is not None and "mu" not in names:
         raise CaseError("applies to --mu; give --mu too (or change mu_kinetic in the case file)",
-                        source="--mu-kinetic-ratio")
+                        source="mu_kinetic_ratio")
     ratio = kinetic_ratio(case, mu_kinetic_ratio) if "mu" in names else None
     n = math.prod(len(a) for a in axes)
     options = "/".join(a.kind.option for a in axes)
@@ -412,7 +200,7 @@ def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = N
                         f"{MAX_GRID_POINTS}", source=options)
     check_memory(n, options)
     if chunk_size is not None and (isinstance(chunk_size, bool) or int(chunk_size) < 1):
-        raise CaseError(f"must be a whole number >= 1, got {chunk_size!r}", source="--chunk-size")
+        raise CaseError(f"must be a whole number >= 1, got {chunk_size!r}", source="chunk_size")
     chunk_size = default_chunk_size(n) if chunk_size is None else int(chunk_size)
     pulses = is_pulse_case(case)
     for axis in axes:
@@ -433,7 +221,7 @@ def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = N
                             source=case.source, field="ground.floor")
         return _plan_pulses(case, axes, ratio, chunk_size, n, progress)
 
-    records, entries = _read_records(case, records_dir)
+    records, entries = _read_records(case, records_dir, records)
     # what the block stands on, unscaled: the record (with two horizontal components, the motion
     # along the block's orientation), or each floor's motion from it; one per distinct orientation
     # and floor of the grid (--azimuth, --floor-period), laid end to end in the kernel's input
@@ -441,8 +229,7 @@ def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = N
                                                               source=case.source, still_dt=case.solver.dt)
     grid = _Grid(axes, RECORD_SCALE_AXES)                    # the scale axes planned apart
     n_other = grid.size(grid.other)
-    supports: dict = {}                           # (orientation, floor) -> (ground, first column, columns)
-    pieces = []
+    supports, grounds_of = Supports(), {}        # (orientation, floor) -> the ground the block stands on
     params, states = np.empty((n_other, K.N_PARAMS)), np.empty((n_other, K.N_STATE))
     first, count = np.empty(n_other, dtype=np.int64), np.empty(n_other, dtype=np.int64)
     record_end = np.empty(n_other)
@@ -450,24 +237,21 @@ def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = N
         floor = point.ground.floor
         orientation = point.block.orientation if point.ground.two_components else None
         try:
-            if (orientation, floor) not in supports:
+            if (orientation, floor) not in grounds_of:
                 unscaled = ground_along(point, records, scaled=False)[0] if read is None else read
-                support = floor_ground(point, unscaled)
+                grounds_of[(orientation, floor)] = support = floor_ground(point, unscaled)
                 check_size(point, support, history=False)
                 # the point's own tail: a floor of modes carries its free vibration (`floor_carries_tail`)
                 tail = settings_for(point, history=False, energy=False).tail
-                piece = ground_array(support.horizontal, support.vertical, support.dt, tail)
-                supports[(orientation, floor)] = (support, sum(p.shape[1] for p in pieces), piece.shape[1])
-                pieces.append(piece)
+                supports.add((orientation, floor), ground_array(support.horizontal, support.vertical, support.dt, tail))
         except CaseError as exc:
             raise _point_error(exc, *grid.named()(combo)) from None
-        support, first[j], count[j] = supports[(orientation, floor)]
+        support = grounds_of[(orientation, floor)]
+        first[j], count[j] = supports.window((orientation, floor))
         grid.add_context((orientation, floor, point.gravity), point, combo)
-        point_settings = settings_for(point, history=False, energy=False)
         start = support.start + case.ground.time_shift
-        params[j] = parameters(model_for(point), support.dt, point_settings, start)
+        params[j], states[j] = case_inputs(point, support.dt, start)
         record_end[j] = start + count[j] * support.dt
-        states[j] = initial_state(point_settings)
 
     # the scaled motion: factors and checks once per scale and context (orientation, floor, gravity)
     factors = np.empty((2, grid.size(grid.scale), len(grid.contexts)))
@@ -506,13 +290,10 @@ def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = N
         warnings.warn(f"{absurd_acceleration(case.source, float(point_peaks[highest]))} "
                       f"[at {_point_text(axes, np.unravel_index(highest, grid.shape))}]", RunWarning, stacklevel=2)
     _warn_coarse_step(case, grid.other_axes, params)
-    base = pieces[0] if len(pieces) == 1 else np.concatenate(pieces, axis=1)
-    plan = Plan(case=case, axes=axes, mu_kinetic_ratio=ratio, params=params, states=states,
-                factor_h=factors[0][scale, context], factor_v=factors[1][scale, context], base=base,
-                first=first[other], count=count[other], record_end=record_end[other],
-                step=float(params[:, K.P_STEP].min()), records=entries, chunk_size=chunk_size, rows=other)
-    plan.key = definition_key(plan)
-    return plan
+    return assemble(case, axes, mu_kinetic_ratio=ratio, params=params, states=states,
+                    factor_h=factors[0][scale, context], factor_v=factors[1][scale, context], base=supports.base(),
+                    first=first[other], count=count[other], record_end=record_end[other], records=entries,
+                    chunk_size=chunk_size, rows=other)
 
 
 class _Grid:
@@ -659,30 +440,26 @@ def _plan_pulses(case: Case, axes, ratio, chunk_size: int, n: int, progress=None
     params, states = np.empty((n_other, K.N_PARAMS)), np.empty((n_other, K.N_STATE))
     factor_v, record_end = np.empty(n_other), np.empty(n_other)
     first, count = np.empty(n_other, dtype=np.int64), np.empty(n_other, dtype=np.int64)
-    records: dict[tuple, tuple] = {}          # (pulses at amplitude 1, dt, tail) -> (first, count, unit)
-    pieces = []
+    records: dict[tuple, object] = {}         # (pulses at amplitude 1, dt, tail) -> the pulses sampled
+    supports = Supports()
     for j, combo, point in _points(case, grid.other_axes, ratio, grid.scaled_progress(progress), grid.named()):
         h, v = point.ground.horizontal, point.ground.vertical
         shape = tuple(None if p is None else replace(p, amplitude=1.0) for p in (h, v))
         key = (shape, point.solver.dt, point.ground.tail)
         try:
             if key not in records:
-                unit = unit_pulses(point)
+                records[key] = unit = unit_pulses(point)
                 check_size(point, pulse_ground(point, unit), history=False)
-                piece = ground_array(unit.horizontal, unit.vertical, unit.dt, point.ground.tail)
-                records[key] = (sum(p.shape[1] for p in pieces), piece.shape[1], unit)
-                pieces.append(piece)
+                supports.add(key, ground_array(unit.horizontal, unit.vertical, unit.dt, point.ground.tail))
         except CaseError as exc:
             raise _point_error(exc, *grid.named()(combo)) from None
-        offset, length, unit = records[key]
+        unit = records[key]
         grid.add_context((key, None if v is None else v.amplitude, point.gravity), point, combo)
-        point_settings = settings_for(point, history=False, energy=False)
         start = unit.start + point.ground.time_shift
-        params[j] = parameters(model_for(point), unit.dt, point_settings, start)
-        states[j] = initial_state(point_settings)
+        params[j], states[j] = case_inputs(point, unit.dt, start)
         factor_v[j] = 1.0 if v is None else v.amplitude
-        first[j], count[j] = offset, length
-        record_end[j] = start + length * unit.dt
+        first[j], count[j] = supports.window(key)
+        record_end[j] = start + count[j] * unit.dt
 
     # each amplitude once; each pulse checked at the largest (flight depends on the vertical alone)
     first_point, first_combo = next(iter(grid.contexts.values()))
@@ -695,25 +472,22 @@ def _plan_pulses(case: Case, axes, ratio, chunk_size: int, n: int, progress=None
         if grid.scale:
             point = replace(rep, ground=replace(rep.ground, horizontal=replace(rep.ground.horizontal,
                                                                                amplitude=amplitudes[largest])))
-        ground = pulse_ground(point, records[key][2])
+        ground = pulse_ground(point, records[key])
         try:
             check_against_ground(point, ground, warn=False)
         except CaseError as exc:            # the scaled pulse out of bounds: the amplitude is responsible
             scale_combo = np.unravel_index(largest, tuple(len(a) for a in grid.scale_axes))
             raise CaseError(f"{exc.message} [at {_point_text(axes, grid.combo(rep_combo, scale_combo))}]",
-                            source="--amplitude" if grid.scale else exc.source,
+                            source="amplitude" if grid.scale else exc.source,
                             field="ground.horizontal.amplitude" if grid.scale else exc.field) from None
         flights[c] = flight_warning(point, ground)
 
     other, scale = grid.indices(grid.other), grid.indices(grid.scale)
     _warn_flights(axes, flights, grid.context_of[other])
     _warn_coarse_step(case, grid.other_axes, params)
-    plan = Plan(case=case, axes=list(axes), mu_kinetic_ratio=ratio, params=params, states=states,
-                factor_h=amplitudes[scale], factor_v=factor_v[other], base=np.concatenate(pieces, axis=1),
-                first=first[other], count=count[other], record_end=record_end[other],
-                step=float(params[:, K.P_STEP].min()), records=[], chunk_size=chunk_size, rows=other)
-    plan.key = definition_key(plan)
-    return plan
+    return assemble(case, axes, mu_kinetic_ratio=ratio, params=params, states=states, factor_h=amplitudes[scale],
+                    factor_v=factor_v[other], base=np.concatenate(supports.pieces, axis=1), first=first[other],
+                    count=count[other], record_end=record_end[other], records=[], chunk_size=chunk_size, rows=other)
 
 
 def _warn_coarse_step(case: Case, axes, params: np.ndarray) -> None:
@@ -730,11 +504,11 @@ def _point_text(axes, combo) -> str:
     return ", ".join(f"{a.kind.option} {a.texts[j]}" for a, j in zip(axes, combo, strict=True))
 
 
-def _read_records(case: Case, records_dir: Path | None):
-    """The case's records, read once (`prepare.read_records`), and the provenance entry of each;
-    with two horizontal components, each one's azimuth [rad] as used (given, or from its AT2
-    header: `prepare.component_azimuths`)."""
-    records = read_records(case, records_dir)
+def _read_records(case: Case, records_dir: Path | None, records: dict | None = None):
+    """The case's records, read once (`prepare.read_records`, unless given), and the provenance entry
+    of each; with two horizontal components, each one's azimuth [rad] as used (given, or from its
+    AT2 header: `prepare.component_azimuths`)."""
+    records = read_records(case, records_dir) if records is None else records
     entries = [{"role": role, "path": Path(record.path).name, "sha256": record.sha256}
                for role, record in records.items() if record is not None]
     if case.ground.two_components:
@@ -765,102 +539,6 @@ def _key_root(axis: str) -> str:
 # --------------------------------------------------------------------------------------------------
 # Results
 # --------------------------------------------------------------------------------------------------
-
-#: Bits of the ``modes`` variable.
-MODE_BITS = {"slip": 1, "liftoff": 2, "liftoff_slip": 4}
-
-STATUS_FLAGS = {"flag_values": np.arange(len(K.STATUS_NAMES), dtype=np.int8),
-                "flag_meanings": " ".join(K.STATUS_NAMES)}
-
-
-def sweep_variables(plan: Plan, states: np.ndarray) -> dict:
-    """The result variables on the grid, from the final kernel states.
-
-    Returns
-    -------
-    dict
-        ``name -> (array shaped like the grid, attributes)``; attributes ``units`` and
-        ``long_name`` (and CF ``flag_*`` for the coded ones). Same values as the summary of
-        ``rockslide run`` (`simulate.summarise`, which reads one state vector the same way: a change
-        there is a change here; tests/test_sweep.py compares points with runs).
-    """
-    shape = plan.shape
-    st = states
-    overturned = st[:, K.S_MODE] == OVERTURNED
-    status = st[:, K.S_STATUS].astype(np.int8)
-    t_slip, t_rock, t_rockslip = st[:, K.S_T_SLIP], st[:, K.S_T_ROCK], st[:, K.S_T_ROCKSLIP]
-    modes = ((t_slip > 0) * MODE_BITS["slip"] + (t_rock > 0) * MODE_BITS["liftoff"]
-             + (t_rockslip > 0) * MODE_BITS["liftoff_slip"]).astype(np.int8)
-    end = np.where(np.isnan(st[:, K.S_END_TIME]), plan.record_end, st[:, K.S_END_TIME])
-    alpha = plan.case_column(K.P_ALPHA)
-    undecided = np.zeros(len(st), dtype=bool)
-    moving = np.flatnonzero(st[:, K.S_MODE] != K.REST)                   # a block at rest stands
-    for i, row in zip(moving, moving if plan.rows is None else plan.rows[moving], strict=True):
-        p = plan.params[row]
-        undecided[i] = may_still_overturn(st[i], p[K.P_R], p[K.P_ALPHA], p[K.P_G], p[K.P_NU], p[K.P_TAN_ALPHA])
-
-    def grid(values, dtype):
-        return np.asarray(values, dtype=dtype).reshape(shape)
-
-    nan = np.nan
-    out = {
-        "overturned": (grid(overturned, np.int8),
-                       {"units": "1", "long_name": "overturned (1) or standing (0)",
-                        "flag_values": np.array([0, 1], dtype=np.int8),
-                        "flag_meanings": "standing overturned"}),
-        "overturn_time": (grid(np.where(overturned, st[:, K.S_OVERTURN_TIME], nan), np.float64),
-                          {"units": "s", "long_name": "time the rotation reached pi/2 (NaN: standing)"}),
-        "direction": (grid(np.where(overturned, st[:, K.S_DIRECTION], 0.0), np.int8),
-                      {"units": "1", "long_name": "sign of the rotation at overturning (0: standing)",
-                       "flag_values": np.array([-1, 0, 1], dtype=np.int8),
-                       "flag_meanings": "negative standing positive"}),
-        "fall_start_time": (grid(np.where(overturned, st[:, K.S_FALL_START], nan), np.float64),
-                            {"units": "s", "long_name": "time the rotation last passed alpha before "
-                             "overturning (NaN: standing)"}),
-        "max_rotation": (grid(st[:, K.S_MAX_THETA], np.float64),
-                         {"units": "rad", "long_name": "largest rotation |phi|"}),
-        "alpha": (grid(alpha, np.float64),
-                  {"units": "rad", "long_name": "alpha = atan(b/h): the rotation past which gravity "
-                   "tips the block over"}),
-        "max_rotation_ratio": (grid(st[:, K.S_MAX_THETA] / alpha, np.float64),
-                               {"units": "1", "long_name": "largest rotation / alpha: how near "
-                                "overturning (above 1: past alpha)"}),
-        "max_slip": (grid(st[:, K.S_MAX_X], np.float64),
-                     {"units": "m", "long_name": "largest slip displacement |x|"}),
-        "residual_slip": (grid(st[:, K.S_X], np.float64),
-                          {"units": "m", "long_name": "slip displacement x at the end"}),
-        "impacts": (grid(st[:, K.S_IMPACTS], np.int32),
-                    {"units": "1", "long_name": "number of rocking impacts"}),
-        # the run stops at overturning, so the impacts counted are those before it
-        "overturn_mode": (grid(np.where(overturned, np.where(st[:, K.S_IMPACTS] > 0, 2, 1), 0), np.int8),
-                          {"units": "1", "long_name": "how the block overturned: without any impact "
-                           "before, or after one or more impacts (0: standing)",
-                           "flag_values": np.array([0, 1, 2], dtype=np.int8),
-                           "flag_meanings": "standing without_impact after_impact"}),
-        "undecided": (grid(undecided, np.int8),
-                      {"units": "1", "long_name": "still moving at the end with the energy or tilt to "
-                       "overturn afterwards: 'standing' not decided (give ground.tail)",
-                       "flag_values": np.array([0, 1], dtype=np.int8), "flag_meanings": "decided undecided"}),
-        "status": (grid(status, np.int8),
-                   {"units": "1", "long_name": "ok, or where the computation left the model",
-                    **STATUS_FLAGS}),
-        "modes": (grid(modes, np.int8),
-                  {"units": "1", "long_name": "modes that occurred (bit mask)",
-                   "flag_masks": np.array(list(MODE_BITS.values()), dtype=np.int8),
-                   "flag_meanings": " ".join(MODE_BITS)}),
-        "end_time": (grid(end, np.float64),
-                     {"units": "s", "long_name": "time the computation ended (overturning, leaving "
-                      "the model, or the end of the record and tail)"}),
-        "time_slip": (grid(t_slip, np.float64),
-                      {"units": "s", "long_name": "time spent slipping (SLIP)"}),
-        "time_liftoff": (grid(t_rock, np.float64),
-                         {"units": "s", "long_name": "time spent lifted off without slip (ROCK)"}),
-        "time_liftoff_slip": (grid(t_rockslip, np.float64),
-                              {"units": "s", "long_name": "time spent lifted off and slipping "
-                               "(ROCKSLIP)"}),
-    }
-    return out
-
 
 def coordinates(plan: Plan) -> list:
     """``[(name, SI values, attributes)]`` of the axes, in dimension order."""

@@ -89,13 +89,15 @@ class RockslideGroup(click.Group):
             except RockslideError as exc:
                 if debug:
                     raise
-                click.echo(one_line(f"rockslide: error: {exc}"), err=True)
+                click.echo(one_line(f"rockslide: error: {in_flags(exc)}"), err=True)
                 ctx.exit(EXIT_USER_ERROR)
             except KeyboardInterrupt as exc:
                 if debug:
                     raise
                 stopped = exc if isinstance(exc, interrupts.Interrupted) else interrupts.Interrupted(signal.SIGINT)
-                click.echo(f"rockslide: {stopped.word} (no partial result was written)", err=True)
+                kept = getattr(stopped, "kept", None)
+                click.echo(f"rockslide: {stopped.word}: {kept}" if kept else
+                           f"rockslide: {stopped.word} (no partial result was written)", err=True)
                 ctx.exit(stopped.exit_code)
             except (click.exceptions.ClickException, click.exceptions.Exit, click.exceptions.Abort):
                 raise
@@ -120,6 +122,28 @@ class RockslideGroup(click.Group):
                 click.echo(one_line(f"rockslide: {_unexpected(exc)} (run again with --debug for the "
                                     "traceback)"), err=True)
                 ctx.exit(EXIT_INTERNAL_ERROR)
+
+
+#: The command-line option of each argument of the API whose error names it (`in_flags`): an
+#: argument ``a_b`` is option ``--a-b`` unless named here.
+FLAGS = {name: "--" + name.replace("_", "-") for name in (
+    "mu", "pga", "vertical_factor", "restitution", "height_to_width", "gravity", "amplitude", "period", "duration",
+    "azimuth", "floor_period", "mu_kinetic_ratio", "chunk_size", "device", "workers", "scheduler", "wait_workers",
+    "shard", "tls_ca_file", "confidence", "life", "age", "median", "beta", "hazard", "damage", "im", "levels",
+    "units", "suite", "samples", "case_vertical", "export", "export_family", "records_dir", "size", "out_dir",
+    "name", "seed", "dpi", "time_shift", "crop", "height", "width", "ah_max", "mu_max", "hazard_units", "configs")}
+FLAGS.update({"n": "--ensemble", "member": "--ensemble", "level": "--levels", "record": "--suite",
+              "sample": "--samples", "tls_client_cert": "--tls-cert", "tls_client_key": "--tls-key",
+              "resamples": "--bootstrap", "zoom": "--window", "vertical": "--av"})
+
+
+def in_flags(exc: RockslideError) -> RockslideError:
+    """``exc`` with the API's argument names it is about (``mu``, ``n``, ``beta``) as the command
+    line's options (``--mu``, ``--ensemble``, ``--beta``): the library speaks of its arguments, the
+    command line of its flags."""
+    if exc.source is None or not all(part in FLAGS for part in exc.source.split("/")):
+        return exc
+    return type(exc)(exc.message, source="/".join(FLAGS[part] for part in exc.source.split("/")), field=exc.field)
 
 
 def _stdout_gone() -> bool:
@@ -256,74 +280,11 @@ def dpi_option(what: str):
                         help=f"Resolution of the {what} [dots per inch] (default 150).")
 
 
+def json_line(payload: dict) -> str:
+    """A JSON object on one line (numpy numbers as numbers, paths as text; NaN refused)."""
+    import json
 
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-def _result_set(h5_path: Path, png_path: Path, *, overwrite: bool, no_plot: bool, leftovers: bool = False,
-                example: str = "out/case") -> bool:
-    """Check the outputs of `run`, `sweep` or `fragility` before the work: a result is the set ``NAME.h5`` and
-    ``NAME.png`` (``NAME.h5`` alone with ``--no-plot``).
-
-    Returns True when, without ``overwrite``, ``NAME.h5`` exists but its set is not complete (the
-    figure is missing, or ``leftovers`` of its run remain): the caller decides whether it is this
-    case's result and finishes it. False when the run is to compute (nothing there, or
-    ``overwrite``).
-
-    Raises
-    ------
-    OutputError
-        Without ``overwrite``: the complete set exists, or a ``NAME.png`` exists without its
-        ``NAME.h5`` (a figure of another result).
-    """
-    from ..io import files
-
-    files.check_destination(h5_path, overwrite=True, example=f"{example}.h5")
-    files.check_destination(png_path, overwrite=True, example=f"{example}.png")
-    if overwrite:
-        return False
-    if not (h5_path.exists() or h5_path.is_symlink()):
-        files.refuse_existing(png_path, overwrite=False)
-        return False
-    if (no_plot or png_path.exists() or png_path.is_symlink()) and not leftovers:
-        files.refuse_existing(h5_path, overwrite=False)
-    return True
-
-
-
-
-
-
+    return json.dumps(payload, allow_nan=False, default=_json_default)
 
 
 def _json_default(value):
@@ -332,10 +293,6 @@ def _json_default(value):
     if isinstance(value, Path):
         return str(value)
     raise TypeError(f"cannot serialise {type(value).__name__}")
-
-
-
-
 
 
 def entry() -> None:

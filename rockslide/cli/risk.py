@@ -1,15 +1,15 @@
 """``rockslide risk``: a fragility curve over a site's hazard curves, to an annual rate of reaching
-a damage state (`api.risk_analysis`, `analyses.risk`)."""
+a damage state: a client of `api.risk_study`."""
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import click
 
-from .app import _json_default, _result_set, dpi_option, main, show_warnings, size_option
-from .studies import _command_line
+from .. import api
+from .app import dpi_option, json_line, main, show_warnings, size_option
+from .console import command_line
 
 
 @main.command()
@@ -69,45 +69,19 @@ def risk(fragility_file, hazard_files, damage, stripes, median, beta, im_text, l
         rockslide risk --median 0.5g --beta 0.4 --hazard example/hazard-example-PGA.csv --age 24ka
         rockslide risk --median 0.5g --beta 0.4 --hazard example/hazard-example-PGA.csv --name site --json
     """
-    from .. import api
-    from ..analyses import fragility as fr
-    from ..analyses import risk as rk
-    from ..io import files, results
-    from ..io.files import expand_user
-    from ..plots import save_figure
-
     ctx = click.get_current_context()
-    analysis = api.risk_analysis(fragility_file, list(hazard_files), damage=damage, stripes=stripes, median=median,
-                                 beta=beta, im=im_text, life=life, age=age, confidence=confidence,
-                                 hazard_units=hazard_units, trim_poe=trim_poe)
-    folder = expand_user(out_dir, source="--out-dir") if out_dir is not None else \
-        (fragility_file.parent if fragility_file is not None else Path("."))
-    stem = name or (fragility_file.name.removesuffix(".h5").removesuffix(".fragility") if fragility_file
-                    else "lognormal")
-    h5_path, png_path = folder / f"{stem}.risk.h5", folder / f"{stem}.risk.png"
-    if _result_set(h5_path, png_path, overwrite=overwrite, no_plot=no_plot, example="out/case.risk"):
-        files.refuse_existing(h5_path, overwrite=False)
-    files.remove_stale_temporaries([h5_path, png_path])
+    outputs = api.risk_outputs(fragility_file, out_dir=out_dir, name=name, overwrite=overwrite, plot=not no_plot,
+                               dpi=dpi, size=size)
+    result = api.risk_study(fragility_file, list(hazard_files), damage=damage, stripes=stripes, median=median,
+                            beta=beta, im=im_text, life=life, age=age, confidence=confidence,
+                            hazard_units=hazard_units, trim_poe=trim_poe, outputs=outputs,
+                            command_line=command_line(ctx, fragility_file if fragility_file is not None else "")
+                            .replace(" '' ", " ", 1))
     show_warnings()
-    command_line = _command_line(ctx, fragility_file if fragility_file is not None else "")
-    coords, variables, attrs = rk.dataset(analysis, command_line.replace(" '' ", " ", 1))
-    with files.Staging(overwrite=overwrite) as staging:
-        results.write_dataset(h5_path, coords, variables, format=results.RISK_FORMAT, attrs=attrs,
-                              overwrite=overwrite, staging=staging)
-        if not no_plot:
-            save_figure(rk.figure(analysis, size=size), png_path, overwrite=overwrite, dpi=dpi, staging=staging)
-        staging.publish(remove=[png_path] if no_plot else [])
-    show = fr.parse_im(analysis.measure["name"]).show
-    for line in rk.warnings_of(analysis, show):
-        click.echo(f"rockslide: warning: {line}", err=True)
+    for line in result.warnings:
+        click.echo(line, err=True)
     if as_json:
-        payload = {**rk.json_summary(analysis),
-                   "files": {"hdf5": str(h5_path), "png": None if no_plot else str(png_path)}}
-        click.echo(json.dumps(payload, allow_nan=False, default=_json_default))
+        click.echo(json_line({**result.summary, "files": outputs.files()}))
         return
-    for line in rk.summary_lines(analysis, show):
-        click.echo(line)
-    if analysis.fragility.uncertainty:
-        click.echo(f"  (in parentheses: {analysis.fragility.uncertainty})")
-    click.echo(f"  wrote {h5_path}" + ("" if no_plot else f" and {png_path}"))
-
+    click.echo("\n".join(result.lines))
+    click.echo(f"  wrote {result.written}")

@@ -1,20 +1,18 @@
-"""``rockslide sweep`` and ``rockslide fragility``: studies of many cases, each one engine plan
-(`engine.plan.Plan`) computed by `engine.execute.execute` with its chunks kept beside the result
-(resumable after Ctrl-C or a crash), then its statistics written and drawn."""
+"""``rockslide sweep`` and ``rockslide fragility``: clients of `api.sweep_study` and
+`api.fragility_study`, which plan, compute (resumable from the chunks kept beside the result) and
+write the output set; the commands parse their options, call them and print."""
 
 from __future__ import annotations
 
-import json
-import math
-import sys
 import time
 from pathlib import Path
 
 import click
 
-from .. import interrupts
-from ..errors import CaseError, OutputError
-from .app import _json_default, _result_set, dpi_option, main, records_dir_option, show_warnings, size_option
+from .. import api
+from ..errors import CaseError
+from .app import dpi_option, json_line, main, records_dir_option, size_option
+from .console import bars, command_line, reporter
 
 
 def _axis_option(name: str, kind: str, what: str, example: str):
@@ -49,11 +47,10 @@ class _SweepCommand(click.Command):
             if arg == "--":
                 break
             name = arg.split("=", 1)[0]
-            if name.startswith("--") and name not in known:      # (the sweep module only then: --help stays light)
-                from ..analyses.sweep import RETIRED_AXES
-
-                if name[2:].replace("-", "_") in RETIRED_AXES:
-                    raise CaseError(RETIRED_AXES[name[2:].replace("-", "_")], source=name)
+            if name.startswith("--") and name not in known:      # (the API only then: --help stays light)
+                replaced = api.retired_axis(name[2:].replace("-", "_"))
+                if replaced:
+                    raise CaseError(replaced, source=name)
         return super().parse_args(ctx, args)
 
 
@@ -163,73 +160,19 @@ def sweep(case_file, mu_kinetic_ratio, records_dir, out_dir, overwrite, no_plot,
         rockslide sweep example/example.yaml --mu 0.30:0.70:0.01 --pga 100gal:1000gal:25gal
         rockslide sweep example/spectrum-one-sine.yaml --amplitude 0.25g:2.5g:0.25g --period 0.2:1.6:0.2
     """
-    from tqdm import tqdm
-
-    from ..analyses import sweep as sw
-    from ..case import load_case
-    from ..engine.chunks import ChunkStore
-    from ..engine.execute import check_where, parse_shard
-    from ..engine.prepare import duration_text
-    from ..io import files, records, results
-    from ..plots import save_figure
-
     ctx = click.get_current_context()
     started = time.perf_counter()
-    case = load_case(case_file)
-    # the axes in the order given (dimension order): `_axis_option` keeps them; **_axes is unordered
-    axes = [sw.parse_axis(name, text) for name, text in ctx.meta.get("rockslide.sweep.axes", [])]
-    scheduler = check_where(workers=workers, scheduler=scheduler, device=device, wait_workers=wait_workers,
-                            tls=_tls_files(tls_ca_file, tls_cert, tls_key))
-    shard = parse_shard(shard)
-    h5_path, png_path = _outputs(case, out_dir, ".sweep")
-    finishing = _result_set(h5_path, png_path, overwrite=overwrite, no_plot=no_plot, example="out/case.sweep",
-                            leftovers=ChunkStore.beside(h5_path, "").root.exists())
-    if _one_at_a_time(ctx, h5_path, "sweep"):         # another sweep of this file ran meanwhile
-        finishing = _result_set(h5_path, png_path, overwrite=overwrite, no_plot=no_plot, example="out/case.sweep",
-                                leftovers=ChunkStore.beside(h5_path, "").root.exists())
-    n_points = math.prod(len(a) for a in axes) if axes else 0
-    if axes and sw.planning_seconds(case, axes) > 10:
-        click.echo(f"sweep {case.name}: checking the {n_points} points of the grid first (about "
-                   f"{duration_text(sw.planning_seconds(case, axes))})")
-    with tqdm(total=n_points, unit="case", file=sys.stderr, desc=f"{case.name}: checking",
-              disable=no_progress or n_points < 10 * sw.PLAN_BATCH or not sys.stderr.isatty(),
-              dynamic_ncols=True, leave=False) as bar:
-        plan = sw.plan_sweep(case, axes, records_dir=records.records_dir(records_dir),
-                             mu_kinetic_ratio=mu_kinetic_ratio, chunk_size=chunk_size, progress=bar.update)
-    if finishing:
-        _finish_sweep(plan, ChunkStore.beside(h5_path, plan.key), h5_path, png_path, no_plot=no_plot,
-                      started=started, dpi=dpi, size=size)
-        return
-    files.remove_stale_temporaries([h5_path, png_path])
-    done = _compute(ctx, plan, h5_path, what="sweep", description=plan.describe(), label=case.name, unit="case",
-                    workers=workers, scheduler=scheduler, device=device, no_progress=no_progress, shard=shard,
-                    wait_workers=wait_workers)
-    variables = sw.sweep_variables(plan, done.states)
-    done.states = None                      # 288 bytes a case: not held while the file is written
-    with files.Staging(overwrite=overwrite) as staging:
-        results.write_sweep(h5_path, sw.coordinates(plan), variables, overwrite=overwrite, staging=staging,
-                            attrs=sw.root_attributes(plan, _command_line(ctx, case_file)))
-        if not no_plot:
-            save_figure(sw.figure(plan, variables, size=size), png_path, overwrite=overwrite, dpi=dpi, staging=staging)
-        if as_csv:
-            from ..io.datasets import sweep_dataset
-            _write_csv(sweep_dataset(sw.table_coordinates(sw.coordinates(plan)), variables),
-                       [a.name for a in plan.axes], h5_path.with_suffix(".csv"), overwrite=overwrite, staging=staging)
-        staging.publish(remove=_stale_figure(h5_path, png_path, staging, no_plot=no_plot,
-                                             format=results.SWEEP_FORMAT))
-    done.store.remove()
-    over = int(variables["overturned"][0].sum())
-    outside = int((variables["status"][0] != 0).sum())
-    undecided = int(variables["undecided"][0].sum())
-    click.echo(f"  {over} of {plan.n_cases} overturned, {outside} outside the model; computed "
-               f"{_rate(done, 'cases')}")
-    worst = sw.worst_azimuth(plan, variables)
-    if worst is not None:
-        click.echo(f"  {worst['text']}")
-    if undecided:
-        click.echo(f"  {undecided} undecided: still moving at the end with the energy to overturn "
-                   "(give the case a ground.tail for their free motion)")
-    click.echo(f"  wrote {_written(h5_path, png_path, no_plot, as_csv)} in {time.perf_counter() - started:.1f} s")
+    case = api.load_case(case_file)
+    axes = ctx.meta.get("rockslide.sweep.axes", [])   # in the order given (dimension order); **_axes is unordered
+    outputs = api.OutputSet(api.output_folder(out_dir, case), case.name, "sweep", overwrite=overwrite,
+                            plot=not no_plot, csv=as_csv, dpi=dpi, size=size)
+    result = api.sweep_study(case, axes, mu_kinetic_ratio=mu_kinetic_ratio, records_dir=records_dir, device=device,
+                             workers=workers, scheduler=scheduler, tls=_tls_files(tls_ca_file, tls_cert, tls_key),
+                             wait_workers=wait_workers, chunk_size=chunk_size, outputs=outputs, shard=shard,
+                             report=reporter(), bars=bars(no_progress=no_progress),
+                             command_line=command_line(ctx, case_file, axes))
+    if result is not None:
+        _print(result, started)
 
 
 @main.command()
@@ -302,234 +245,30 @@ def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, 
         rockslide fragility example/example.yaml --suite example/suite-synthetic.yaml --levels 0.1g:1.5g:0.1g \\
             --export pelicun RS.example
     """
-    from ..analyses import fragility as fr
-    from ..case import load_case
-    from ..engine.execute import check_where, parse_shard
-    from ..io import files, records, results
-    from ..plots import save_figure
-
     ctx = click.get_current_context()
     started = time.perf_counter()
-    case = load_case(case_file)
-    im = fr.parse_im(im_text)
-    levels = fr.parse_levels(levels_text, im)
-    states = fr.damage_states(damage_texts)
-    scheduler = check_where(workers=workers, scheduler=scheduler, device=device, wait_workers=wait_workers,
-                            tls=_tls_files(tls_ca_file, tls_cert, tls_key))
-    shard = parse_shard(shard)
-    suite = fr.suite_at_azimuths(fr.suite_from(suite_spec, units=units), azimuth)
-    fplan = fr.plan_fragility(case, suite, im, levels, records_dir=records.records_dir(records_dir),
-                              chunk_size=chunk_size, case_vertical=case_vertical, samples=samples, seed=seed)
-    h5_path, png_path = _outputs(case, out_dir, ".fragility")
-    export_path = None
-    if export[0] == "pelicun":
-        from ..io import pelicun
-        pelicun.check_export(im, export[1])
-        export_path = h5_path.with_suffix(".pelicun.csv")
-        for path in (export_path, export_path.with_suffix(".json")):
-            files.check_destination(path, overwrite=overwrite, example="out/case.fragility.pelicun.csv")
-    if _result_set(h5_path, png_path, overwrite=overwrite, no_plot=no_plot, example="out/case.fragility"):
-        files.refuse_existing(h5_path, overwrite=False)           # input errors first, then outputs
-    if _one_at_a_time(ctx, h5_path, "fragility analysis") and _result_set(
-            h5_path, png_path, overwrite=overwrite, no_plot=no_plot, example="out/case.fragility"):
-        files.refuse_existing(h5_path, overwrite=False)           # published by the one waited for
-    files.remove_stale_temporaries([h5_path, png_path])
-    plan = fplan.plan
-    if fplan.vertical_note:
-        click.echo(f"  note: {fplan.vertical_note}", err=as_json)
-    done = _compute(ctx, plan, h5_path, what="fragility", description=fplan.describe(), label=case.name,
-                    unit="run", workers=workers, scheduler=scheduler, device=device, no_progress=no_progress,
-                    err=as_json, shard=shard, wait_workers=wait_workers)
-    analysis = fr.analyse(fplan, done.states, states, resamples=resamples)
-    coords, variables, attrs = fr.dataset(fplan, analysis, _command_line(ctx, case_file))
-    with files.Staging(overwrite=overwrite) as staging:
-        results.write_dataset(h5_path, coords, variables, format=results.FRAGILITY_FORMAT, attrs=attrs,
-                              overwrite=overwrite, staging=staging)
-        if not no_plot:
-            save_figure(fr.figure(fplan, analysis, size=size), png_path, overwrite=overwrite, dpi=dpi, staging=staging)
-        if as_csv:
-            from ..io.datasets import study_dataset
-            per_run = [name for name, _, _ in coords if name not in ("damage_state", "resample")]
-            _write_csv(study_dataset(coords, variables), per_run, h5_path.with_suffix(".csv"), overwrite=overwrite,
-                       staging=staging)
-        if export_path is not None:
-            from ..io.datasets import study_dataset
-            *_, left_out = pelicun.write_pelicun(study_dataset(coords, variables, attrs), export[1], export_path,
-                                                 family=export_family, overwrite=overwrite, staging=staging)
-        staging.publish(remove=_stale_figure(h5_path, png_path, staging, no_plot=no_plot,
-                                             format=results.FRAGILITY_FORMAT))
-    done.store.remove()
-    elapsed = time.perf_counter() - started
-    if as_json:
-        payload = {**fr.json_summary(fplan, analysis),
-                   "files": {"hdf5": str(h5_path), "png": None if no_plot else str(png_path)},
-                   "elapsed_s": round(elapsed, 3)}
-        click.echo(json.dumps(payload, allow_nan=False, default=_json_default))
+    case = api.load_case(case_file)
+    outputs = api.OutputSet(api.output_folder(out_dir, case), case.name, "fragility", overwrite=overwrite,
+                            plot=not no_plot, csv=as_csv, dpi=dpi, size=size)
+    result = api.fragility_study(
+        case, suite_spec, im=im_text, levels=levels_text, damage=damage_texts, units=units, resamples=resamples,
+        case_vertical=case_vertical, samples=samples, seed=seed, azimuth=azimuth, records_dir=records_dir,
+        device=device, workers=workers, scheduler=scheduler, tls=_tls_files(tls_ca_file, tls_cert, tls_key),
+        wait_workers=wait_workers, chunk_size=chunk_size, outputs=outputs, shard=shard,
+        export=export if export[0] else None, export_family=export_family, report=reporter(err=as_json),
+        bars=bars(no_progress=no_progress), command_line=command_line(ctx, case_file))
+    if result is None:
         return
-    outside = int((analysis.variables["status"][0] != 0).sum())
-    click.echo(f"  computed {_rate(done, 'runs')}; {outside} of {plan.n_cases} outside the model (left out of "
-               "the fits)")
-    undecided = int(analysis.variables["undecided"][0].sum())
-    if undecided:
-        click.echo(f"  {undecided} undecided: still moving at the end with the energy to overturn, counted as "
-                   "not overturned (give the case a ground.tail for their free motion)")
-    for i, (state, fit) in enumerate(zip(analysis.states, analysis.fits, strict=True)):
-        click.echo("  " + fr.describe_fit(state, fit, im))
-        for caveat in fr.caveats(fit, im):
-            click.echo(f"    warning: {caveat}")
-        if analysis.nominal_fits:
-            click.echo("    without parameter uncertainty (the case's values): "
-                       + fr.describe_fit(state, analysis.nominal_fits[i], im).split(": ", 1)[1])
-    if export_path is not None:
-        click.echo(f"  pelicun: {export_path} and {export_path.with_suffix('.json').name} ({export_family}, "
-                   f"ID {export[1]})" + (f"; not exported: {'; '.join(left_out)}" if left_out else ""))
-    click.echo(f"  wrote {_written(h5_path, png_path, no_plot, as_csv)} in {elapsed:.1f} s")
+    if as_json:
+        click.echo(json_line({**result.summary, "files": outputs.files(),
+                              "elapsed_s": round(time.perf_counter() - started, 3)}))
+        return
+    _print(result, started)
 
 
-def _stale_figure(h5_path: Path, png_path: Path, staging, *, no_plot: bool, format: str) -> list[Path]:
-    """The figure to remove when a study's result is published: with ``--no-plot``, ``NAME.png``
-    unless the result it was published with (the ``NAME.h5`` being replaced) holds the same
-    results as the new one (`results.same_results`): a figure must not stand beside results it
-    does not show, but rerunning the same study for its ``--json`` keeps its figure."""
-    from ..io import results
-
-    if not no_plot or not (png_path.exists() or png_path.is_symlink()):
-        return [png_path] if no_plot else []
-    new = next(tmp for tmp, path in staging.items if Path(path) == Path(h5_path))
-    try:
-        same = results.same_results(results.read_dataset(h5_path, format=format),
-                                    results.read_dataset(new, format=format))
-    except OutputError:                 # no result beside it, or another kind: the figure is not its
-        same = False
-    return [] if same else [png_path]
-
-
-def _write_csv(dataset, dims, path: Path, *, overwrite: bool, staging) -> None:
-    """``io.datasets.tidy_table`` of a study, written with the rest of its set."""
-    from ..io.datasets import tidy_table
-    from ..io.files import atomic_write
-
-    with atomic_write(path, overwrite=overwrite, mode="w", what="table", staging=staging) as handle:
-        handle.write(tidy_table(dataset, dims))
-
-
-def _one_at_a_time(ctx, h5_path: Path, what: str) -> bool:
-    """Hold the lock of ``h5_path``'s study (`files.exclusive` on ``.NAME.h5.lock`` beside it)
-    until the command ends, so that two identical sweeps (or fragility analyses) into one folder
-    run one after the other instead of sharing, and removing, one chunk folder (issue 28.6: the
-    second one said "chunk 0 is missing or damaged" and left chunk files). Returns whether it had
-    to wait (the outputs are then checked again)."""
-    from ..io import files
-
-    waited = []
-    lock = h5_path.with_name(f".{h5_path.name}.lock")
-    ctx.with_resource(files.exclusive(lock, waiting_for=f"another {what} writing {h5_path}",
-                                      waited=lambda: waited.append(True)))
-    return bool(waited)
-
-
-def _outputs(case, out_dir, suffix: str) -> tuple[Path, Path]:
-    """``OUT/NAME<suffix>.h5`` and ``.png``; OUT is ``--out-dir`` or the case's ``output.dir``."""
-    from ..io.files import expand_user
-
-    folder = expand_user(out_dir if out_dir is not None else case.output.dir,
-                         source="--out-dir" if out_dir is not None else f"{case.source}: output.dir")
-    return folder / f"{case.name}{suffix}.h5", folder / f"{case.name}{suffix}.png"
-
-
-def _written(h5_path: Path, png_path: Path, no_plot: bool, as_csv: bool = False) -> str:
-    names = [str(h5_path), *([] if no_plot else [str(png_path)]),
-             *([str(h5_path.with_suffix(".csv"))] if as_csv else [])]
-    return ", ".join(names[:-1]) + " and " + names[-1] if len(names) > 1 else names[0]
-
-
-def _rate(done, unit: str) -> str:
-    """``1517 cases in 1.2 s (1264 cases/s)``."""
-    rate = f" ({done.computed / done.seconds:.0f} {unit}/s)" if done.computed and done.seconds > 0 else ""
-    return f"{done.computed} {unit} in {done.seconds:.1f} s{rate}"
-
-
-def _compute(ctx, plan, h5_path, *, what, description, label, unit, workers, scheduler, no_progress,
-             device="cpu", err=False, shard=None, wait_workers=None):
-    """`engine.execute.execute` with the chunks kept beside ``h5_path``, its notes on the console
-    (stderr with ``err``) and a progress bar on a terminal; after Ctrl-C or SIGTERM, says what is
-    kept and exits 130 or 143; with ``shard``, says what this share computed and exits 0."""
-    from tqdm import tqdm
-
-    from ..engine.chunks import ChunkStore
-    from ..engine.execute import execute
-
-    store = ChunkStore.beside(h5_path, plan.key)
-
-    def report(text: str) -> None:
-        click.echo(text, err=err or text.startswith("rockslide:"))
-
-    show_warnings()                     # the input is accepted: its warnings, then the work
-    try:
-        # disable=None: tqdm draws only on a terminal, so that no frames land in log files
-        with tqdm(total=plan.n_cases, unit=unit, file=sys.stderr, disable=True if no_progress else None,
-                  dynamic_ncols=True, desc=label, smoothing=0.1) as bar:
-            done = execute(plan, store, workers=workers, scheduler=scheduler, device=device, progress=bar.update,
-                           report=report, what=what, label=label, description=description, unit=unit,
-                           free_space_at=Path(h5_path).parent, shard=shard, wait_workers=wait_workers)
-    except interrupts.Interrupted as exc:
-        click.echo(f"rockslide: {exc.word}: {store.count()} of {plan.n_chunks} chunks are kept in {store.folder}; "
-                   "the same command resumes from them", err=True)
-        ctx.exit(exc.exit_code)
-    if shard is not None:
-        click.echo(f"{what} {label}: shard {shard[0]}/{shard[1]} computed {done.computed} {unit}s in "
-                   f"{done.seconds:.1f} s; {store.count()} of {plan.n_chunks} chunks are in {store.folder} (the "
-                   "same command without --shard collects them)", err=err)
-        ctx.exit(0)
-    return done
-
-
-
-def _finish_sweep(plan, store, h5_path: Path, png_path: Path, *, no_plot: bool, started: float, dpi=None,
-                  size=None) -> None:
-    """``NAME.sweep.h5`` exists: if it is this sweep's result (same definition key), draw its
-    missing figure and remove its chunks (a run stopped in its final phase); else refuse."""
-    from ..analyses.sweep import stored_figure
-    from ..io import files, results
-    from ..plots import save_figure
-
-    try:
-        stored = results.read_sweep(h5_path)
-    except OutputError:
-        stored = None
-    if stored is None or stored.attrs.get("sweep_key") != plan.key:
-        files.refuse_existing(h5_path, overwrite=False)
-    drawn = ""
-    if not no_plot and not (png_path.exists() or png_path.is_symlink()):
-        save_figure(stored_figure(stored, size=size), png_path, overwrite=False, dpi=dpi)
-        drawn = f"; drew its missing figure {png_path}"
-    store.remove()
-    click.echo(f"sweep {plan.case.name}: {h5_path} is this sweep's complete result{drawn}; removed its "
-               f"chunks ({time.perf_counter() - started:.1f} s)")
-
-
-def _command_line(ctx, case_file) -> str:
-    """A sweep's or fragility analysis's command line: the sweep's axes in the order given, then the
-    other options given."""
-    import shlex
-
-    from click.core import ParameterSource
-
-    axes = ctx.meta.get("rockslide.sweep.axes", [])
-    words = ["rockslide", ctx.command.name, str(case_file)]
-    for name, text in axes:
-        words += [f"--{name.replace('_', '-')}", text]
-    for param in ctx.command.params:
-        if not isinstance(param, click.Option) or param.name in {n for n, _ in axes}:
-            continue
-        if ctx.get_parameter_source(param.name) is not ParameterSource.COMMANDLINE:
-            continue
-        value = ctx.params.get(param.name)
-        if param.is_flag:
-            words += [param.opts[0]] if value else []
-        elif param.multiple:
-            for item in value or ():
-                words += [param.opts[0], str(item)]
-        elif value is not None:
-            words += [param.opts[0], str(value)]
-    return shlex.join(words)
+def _print(result, started: float) -> None:
+    """A study's printout, then what it wrote and how long it took."""
+    for line in result.lines:
+        click.echo(line)
+    if result.written:
+        click.echo(f"  wrote {result.written} in {time.perf_counter() - started:.1f} s")

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core import kernel as K
-from ..errors import OutputError, exception_text
+from ..errors import CaseError, OutputError, exception_text
 from ..io.files import atomic_write, remove_stale_temporaries
 from .plan import Plan
 
@@ -27,11 +27,27 @@ class ChunkStore:
     missing: it is computed again, and `damaged` says which and why.
     """
 
-    def __init__(self, folder: Path, key: str):
+    def __init__(self, folder: Path, key: str | None = None):
         self.root = Path(folder)
-        self.key = key
-        self.folder = self.root / key[:16]
+        self.key = key or ""
+        self.folder = self.root / self.key[:16]
         self.damaged: dict[int, str] = {}
+
+    def for_plan(self, key: str) -> ChunkStore:
+        """This store for the plan whose definition key is ``key`` (`plan.definition_key`): a store
+        made without a key takes the plan's; a store made for another plan is refused (its chunks
+        would be another grid's numbers).
+
+        Raises
+        ------
+        CaseError
+            The store was made for another plan.
+        """
+        if not self.key:
+            return ChunkStore(self.root, key)
+        if self.key != key:
+            raise CaseError(_another_plan(self.key, key, self.root), source="store")
+        return self
 
     @classmethod
     def beside(cls, result_path: Path, key: str) -> ChunkStore:
@@ -184,6 +200,15 @@ class MemoryStore:
         self.damaged: dict[int, str] = {}
         self._chunks: dict[int, tuple[np.ndarray, np.ndarray]] = {}
 
+    def for_plan(self, key: str) -> MemoryStore:
+        """This store for the plan of definition key ``key``: one made without a key takes it; one
+        that holds another plan's chunks is refused (`ChunkStore.for_plan`)."""
+        if not self.key:
+            self.key = key
+        elif self.key != key:
+            raise CaseError(_another_plan(self.key, key, "memory"), source="store")
+        return self
+
     def path(self, chunk: int) -> str:
         return f"chunk {chunk} in memory"
 
@@ -210,3 +235,8 @@ class MemoryStore:
 
     def remove(self) -> None:
         self._chunks.clear()
+
+
+def _another_plan(held: str, wanted: str, where) -> str:
+    return (f"holds the chunks of another study (definition key {held[:16]}..., in {where}), not of this one "
+            f"({wanted[:16]}...): give a store without a key, e.g. ChunkStore(folder), and it takes the plan's")

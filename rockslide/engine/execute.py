@@ -103,13 +103,13 @@ def check_device(device: str) -> None:
     """Refuse a ``--device`` that is not one of `DEVICES`, or ``gpu`` where no GPU run can be made
     (numba-cuda not installed, no CUDA GPU or driver), with one line saying why."""
     if device not in DEVICES:
-        raise CaseError(f"must be one of {', '.join(DEVICES)}, got {device!r}", source="--device")
+        raise CaseError(f"must be one of {', '.join(DEVICES)}, got {device!r}", source="device")
     if device == "gpu":
         from ..core import gpu
         try:
             gpu.require_device()
         except gpu.DeviceUnavailable as exc:
-            raise CaseError(str(exc), source="--device gpu") from None
+            raise CaseError(str(exc), source="device") from None
 
 
 def choose_device(device: str, n_cases: int) -> tuple[str, str]:
@@ -164,7 +164,7 @@ def check_workers(workers: int | None) -> None:
     limit = 4 * local_threads()
     if isinstance(workers, bool) or not 1 <= int(workers) <= limit:
         raise CaseError(f"must be within 1 ... {limit} (4 threads per core here), got {workers!r}",
-                        source="--workers")
+                        source="workers")
 
 
 def _compute_local(plan, store, chunks, workers, progress):
@@ -260,7 +260,7 @@ def _compute_dask(plan, store, chunks, scheduler, progress, wait_workers, say):
         import distributed
     except ImportError:  # pragma: no cover - a declared dependency
         raise CaseError("needs dask.distributed (pip install 'dask[distributed]')",
-                        source="--scheduler") from None
+                        source="scheduler") from None
     with _quiet_dask():
         target = scheduler if isinstance(scheduler, Scheduler) else find_scheduler(scheduler, identify=False)
         address = target.address
@@ -274,7 +274,7 @@ def _compute_dask(plan, store, chunks, scheduler, progress, wait_workers, say):
                                             set_as_default=False)
             except (OSError, TimeoutError, ValueError) as exc:
                 raise CaseError(f"cannot connect to the dask scheduler at {address}: {exception_text(exc)}",
-                                source="--scheduler") from None
+                                source="scheduler") from None
         futures = {}
         try:
             _wait_for_workers(client, address, wait_workers, say)
@@ -319,7 +319,7 @@ def _collect_futures(client, futures: dict, store: ChunkStore, address: str, pro
                     hint = ("" if "would differ" in text else
                             " (are rockslide and its dependencies installed on the workers?)")
                     raise CaseError(f"a task failed on the cluster: {type(exc).__name__}: {text}{hint}",
-                                    source="--scheduler")
+                                    source="scheduler")
                 raise _workers_lost(address, store) if _no_workers(client) else _lost(address, store)
             try:
                 states = np.asarray(future.result(timeout=SCHEDULER_TIMEOUT), dtype=np.float64)
@@ -349,13 +349,13 @@ def _collect_futures(client, futures: dict, store: ChunkStore, address: str, pro
 def _lost(address: str, store: ChunkStore) -> CaseError:
     return CaseError(f"lost the connection to the dask scheduler at {address}; {store.count()} finished "
                      f"chunks are kept in {store.folder} and the same command resumes from them",
-                     source="--scheduler")
+                     source="scheduler")
 
 
 def _workers_lost(address: str, store: ChunkStore) -> CaseError:
     return CaseError(f"every worker of the dask scheduler at {address} is gone (the scheduler still answers); "
                      f"{store.count()} finished chunks are kept in {store.folder}: start workers and the same "
-                     "command resumes from them", source="--scheduler")
+                     "command resumes from them", source="scheduler")
 
 
 def _no_workers(client) -> bool:
@@ -376,7 +376,7 @@ def _wait_for_workers(client, address: str, wait: float | None, say) -> None:
         if time.monotonic() >= deadline:
             raise CaseError(f"no dask worker joined the scheduler at {address} within {wait:g} s (start workers "
                             f"with 'dask worker {address}', or wait longer with --wait-workers SECONDS)",
-                            source="--scheduler")
+                            source="scheduler")
         if not said:
             say(f"  waiting for a first dask worker to join {address} (up to {wait:g} s, --wait-workers)")
             said = True
@@ -443,7 +443,7 @@ def check_workers_match(identities: dict, mine: dict, address: str) -> None:
         names = ", ".join(sorted(broken)[:3]) + (f" and {len(broken) - 3} more" if len(broken) > 3 else "")
         raise CaseError(f"the dask worker{'s' if len(broken) > 1 else ''} {names} cannot import rockslide "
                         f"({next(iter(broken.values()))}); install rockslide=={mine['rockslide']} there",
-                        source="--scheduler")
+                        source="scheduler")
     for what, name in (("rockslide", "rockslide"), ("core", "rockslide's compiled core (source stamp)"),
                        ("numba", "numba")):
         other = {w: i[what] for w, i in identities.items() if i.get(what) != mine[what]}
@@ -455,7 +455,7 @@ def check_workers_match(identities: dict, mine: dict, address: str) -> None:
             several = len(workers) > 1
             raise CaseError(f"the dask worker{'s' if several else ''} {names} run{'' if several else 's'} "
                             f"{name} {shown[0]}, this client {shown[1]}: their results would differ; install the "
-                            "same version on every worker", source="--scheduler")
+                            "same version on every worker", source="scheduler")
 
 
 @dataclass(frozen=True)
@@ -503,7 +503,7 @@ def scheduler_address(address: str, *, default_scheme: str = "tcp") -> str:
     if scheme not in ("tcp", "tls"):
         raise CaseError(f"{scheme}:// addresses are not supported; expected tcp://HOST:PORT or tls://HOST:PORT "
                         "(a scheduler started with 'dask scheduler'; from Python, a cluster object or a "
-                        "distributed.Client can be given as scheduler=)", source="--scheduler")
+                        "distributed.Client can be given as scheduler=)", source="scheduler")
     try:
         parts = urlsplit(text)
         host, port = parts.hostname, parts.port
@@ -511,7 +511,7 @@ def scheduler_address(address: str, *, default_scheme: str = "tcp") -> str:
         host = port = None
     if not host or not port:
         raise CaseError(f"expected an address like {scheme}://HOST:PORT, got {_shown(address)}",
-                        source="--scheduler")
+                        source="scheduler")
     return text
 
 
@@ -541,7 +541,7 @@ def scheduler_security(address: str, tls: dict | None = None):
         raise CaseError(f"{address} is a TLS scheduler: give the cluster's CA certificate and this client's "
                         "certificate with --tls-ca-file and --tls-cert (and --tls-key unless the key is in the "
                         "certificate file), or in dask's configuration (distributed.comm.tls.ca-file, "
-                        "distributed.comm.tls.client.cert and .key)", source="--scheduler")
+                        "distributed.comm.tls.client.cert and .key)", source="scheduler")
     for field, _, _ in TLS_OPTIONS:
         value = getattr(security, field)
         if value and "\n" not in value:            # a file name (dask also takes the PEM text itself)
@@ -639,12 +639,12 @@ def identify_scheduler(address: str, timeout: float | None = None, *, security=N
             socket.create_connection((parts.hostname, parts.port), timeout=timeout).close()
         except OSError as exc:       # refused, unreachable: at once (dask itself retries until its timeout)
             raise CaseError(f"cannot connect to the dask scheduler at {address}: "
-                            f"{exc.strerror or exception_text(exc)}", source="--scheduler") from None
+                            f"{exc.strerror or exception_text(exc)}", source="scheduler") from None
     try:
         arguments = security.get_connection_args("client") if security is not None else {}
     except Exception as exc:  # noqa: BLE001 - a cluster object's credentials that do not load
         raise CaseError(f"the TLS credentials for {address} cannot be loaded: {exception_text(exc)}",
-                        source="--scheduler") from None
+                        source="scheduler") from None
 
     async def ask():
         comm = await connect(address, timeout=timeout, **arguments)
@@ -659,12 +659,12 @@ def identify_scheduler(address: str, timeout: float | None = None, *, security=N
             reply = pool.submit(asyncio.run, asyncio.wait_for(ask(), timeout)).result()
     except (asyncio.TimeoutError, TimeoutError):
         raise CaseError(f"no dask scheduler answered at {address} within {timeout:g} s (is something "
-                        "else listening there?)", source="--scheduler") from None
+                        "else listening there?)", source="scheduler") from None
     except Exception as exc:  # noqa: BLE001 - refused, reset, closed, a bad handshake
         raise CaseError(f"cannot connect to the dask scheduler at {address}: {_connection_failure(exc, address)}",
-                        source="--scheduler") from None
+                        source="scheduler") from None
     if not (isinstance(reply, dict) and reply.get("type") == "Scheduler"):
-        raise CaseError(f"{address} answers, but not as a dask scheduler", source="--scheduler")
+        raise CaseError(f"{address} answers, but not as a dask scheduler", source="scheduler")
     return reply
 
 
@@ -770,18 +770,18 @@ def check_where(*, workers: int | None = None, scheduler=None, device: str = "cp
     if isinstance(scheduler, str) and not scheduler:
         scheduler = None
     if workers is not None and scheduler is not None:
-        raise CaseError("sets the local threads; with --scheduler the cluster's workers compute",
-                        source="--workers")
+        raise CaseError("sets the local threads; with a scheduler the cluster's workers compute",
+                        source="workers")
     if device == "gpu" and scheduler is not None:
-        raise CaseError("with --scheduler the cluster's workers compute, on their CPUs", source="--device")
+        raise CaseError("with a scheduler the cluster's workers compute, on their CPUs", source="device")
     if wait_workers is not None and scheduler is None:
-        raise CaseError("is the wait for a dask cluster's first worker: give it with --scheduler",
-                        source="--wait-workers")
-    given = [option for field, option, _ in TLS_OPTIONS if (tls or {}).get(field) is not None]
+        raise CaseError("is the wait for a dask cluster's first worker: give a scheduler with it",
+                        source="wait_workers")
+    given = [field for field, _, _ in TLS_OPTIONS if (tls or {}).get(field) is not None]
     if given and scheduler is None:
-        raise CaseError("is for a TLS dask scheduler: give it with --scheduler tls://HOST:PORT", source=given[0])
+        raise CaseError("is for a TLS dask scheduler: give it with a scheduler tls://HOST:PORT", source=given[0])
     if device == "gpu" and workers is not None:
-        raise CaseError("sets the CPU threads; with --device gpu the GPU computes", source="--workers")
+        raise CaseError("sets the CPU threads; on the device gpu the GPU computes", source="workers")
     check_workers(workers)
     check_device(device)
     return find_scheduler(scheduler, tls) if scheduler is not None else None
@@ -836,7 +836,7 @@ def execute(plan: Plan, store=None, *, workers: int | None = None, scheduler: st
         Ctrl-C or SIGTERM: the chunks finished before are in ``store``.
     """
     say = report if report is not None else (lambda text: None)
-    store = MemoryStore(plan.key) if store is None else store
+    store = MemoryStore(plan.key) if store is None else store.for_plan(plan.key)
     device, why = ("cpu", "") if scheduler else choose_device(device, plan.n_cases)
     store = store.for_device(device)
     store.remove_stale_temporaries()
@@ -891,7 +891,7 @@ def parse_shard(text: str | None) -> tuple[int, int] | None:
         index = count = None
     if index is None or not 1 <= index <= count <= 1_000_000:
         raise CaseError(f"expected I/N with 1 <= I <= N (this process's share of N, e.g. 3/16), got {text!r}",
-                        source="--shard")
+                        source="shard")
     return index, count
 
 

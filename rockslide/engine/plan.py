@@ -159,6 +159,55 @@ class Plan:
         return f"{dims} = {self.n_cases} case{'s' if self.n_cases != 1 else ''}"
 
 
+def case_inputs(point: Case, dt: float, start: float) -> tuple[np.ndarray, np.ndarray]:
+    """The one road from a case to the kernel: its parameter row and initial state
+    (`core.simulate.parameters`, `core.simulate.initial_state`) for a run without history on a
+    ground motion of step ``dt`` [s] that starts at ``start`` [s]. Every planner calls it, so that a
+    case key reaches the kernel the same way in a run, a sweep, a fragility analysis and an ensemble."""
+    from ..core.simulate import initial_state, parameters
+    from .prepare import model_for, settings_for
+
+    settings = settings_for(point, history=False, energy=False)
+    return parameters(model_for(point), dt, settings, start), initial_state(settings)
+
+
+class Supports:
+    """The unscaled ground motions a study's cases stand on, laid end to end in the kernel's input
+    (``Plan.base``), each once (`add`); each case's window of it (first interval, intervals) is its
+    motion's (`window`)."""
+
+    def __init__(self):
+        self.pieces: list[np.ndarray] = []
+        self.windows: dict = {}
+        self.columns = 0
+
+    def add(self, key, piece: np.ndarray) -> None:
+        """Lay the motion ``key`` (`core.simulate.ground_array`) after the others."""
+        self.windows[key] = (self.columns, piece.shape[1])
+        self.pieces.append(piece)
+        self.columns += piece.shape[1]
+
+    def window(self, key) -> tuple[int, int]:
+        """``(first interval, intervals)`` of the motion ``key``."""
+        return self.windows[key]
+
+    def base(self) -> np.ndarray:
+        """``float64[4, K]``: every motion, in the order added."""
+        return self.pieces[0] if len(self.pieces) == 1 else np.concatenate(self.pieces, axis=1)
+
+
+def assemble(case: Case, axes, *, params, states, factor_h, factor_v, base, first, count, record_end, records,
+             chunk_size: int, rows=None, mu_kinetic_ratio=None, step: float | None = None) -> Plan:
+    """The one assembler of a `Plan` from its cases' kernel inputs (the fields of `Plan`; ``step``
+    defaults to the smallest of the cases'), with its `definition_key`."""
+    plan = Plan(case=case, axes=list(axes), mu_kinetic_ratio=mu_kinetic_ratio, params=params, states=states,
+                factor_h=factor_h, factor_v=factor_v, base=base, first=first, count=count, record_end=record_end,
+                step=float(params[:, K.P_STEP].min()) if step is None else step, records=records,
+                chunk_size=chunk_size, rows=rows)
+    plan.key = definition_key(plan)
+    return plan
+
+
 def default_chunk_size(n_cases: int) -> int:
     """About ``n / CHUNKS_WANTED`` cases per chunk, within ``[MIN_CHUNK, MAX_CHUNK]``, or more where
     that would make more than ``MAX_CHUNK_FILES`` chunks."""

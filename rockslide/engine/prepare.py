@@ -38,6 +38,7 @@ class Prepared:
     settings: Settings
     components: Components | None = None
     base: rec.GroundMotion | None = None
+    records: dict | None = None
 
 
 @dataclass(frozen=True)
@@ -93,13 +94,14 @@ def read_records(case: Case, records_dir: Path | None = None) -> dict[str, rec.R
     return records
 
 
-def load_ground(case: Case, records_dir: Path | None = None) -> rec.GroundMotion:
+def load_ground(case: Case, records_dir: Path | None = None, *, records: dict | None = None) -> rec.GroundMotion:
     """Read, scale and align the case's records (``ground.horizontal`` and ``ground.vertical``), or
     sample its pulses (`pulse_ground`); without either, the still ground sampled at ``solver.dt`` (a
-    free vibration over ``ground.tail``)."""
+    free vibration over ``ground.tail``). ``records``: the case's records already read
+    (`read_records`)."""
     if is_pulse_case(case):
         return pulse_ground(case)
-    records = read_records(case, records_dir)
+    records = read_records(case, records_dir) if records is None else records
     if case.ground.two_components:
         return ground_along(case, records)[0]
     scale = case.ground.scale
@@ -573,10 +575,11 @@ def prepare(case: Case, records_dir: Path | None = None, *, history: bool = True
     ranges, the ground motion, the sizes), warning when the step is too coarse for the block."""
     check_parameters(case)
     components = None
+    records = None if is_pulse_case(case) else read_records(case, records_dir)
     if case.ground.two_components:
-        base, components = ground_along(case, read_records(case, records_dir))
+        base, components = ground_along(case, records)
     else:
-        base = load_ground(case, records_dir)
+        base = load_ground(case, records_dir, records=records)
     check_step(case, base)
     ground = floor_ground(case, base)
     check_against_ground(case, ground)
@@ -586,7 +589,8 @@ def prepare(case: Case, records_dir: Path | None = None, *, history: bool = True
     warning = coarse_step_warning(case.source, parameters(model, ground.dt, settings))
     if warning:
         warnings.warn(warning, RunWarning, stacklevel=2)
-    return Prepared(case, ground, model, settings, components, base=base if ground is not base else None)
+    return Prepared(case, ground, model, settings, components, base=base if ground is not base else None,
+                    records=records)
 
 
 def start_time(prepared: Prepared) -> float:

@@ -66,13 +66,13 @@ def _demand(im_name: str) -> tuple[str, str, float]:
     if match:
         return f"Spectral Acceleration|{float(match.group('period')):g}", "g", STANDARD_GRAVITY
     raise CaseError(f"a fragility in {im_name} has no pelicun demand type; fit it in pfa, pfv, pga, pgv or "
-                    "sa(T) (--im) to export it", source="--export")
+                    "sa(T) (--im) to export it", source="export")
 
 
 def _check_id(component_id: str) -> str:
     if not isinstance(component_id, str) or not _ID.match(component_id):
         raise CaseError(f"expected a component ID of letters, digits, '.', '_' and '-' (as P-58's "
-                        f"E.20.22.001), got {component_id!r}", source="--export")
+                        f"E.20.22.001), got {component_id!r}", source="export")
     return component_id
 
 
@@ -190,11 +190,11 @@ def pelicun_row(fragility, component_id: str, *, family: str = "lognormal") -> t
     """
     _check_id(component_id)
     if family not in FAMILIES:
-        raise CaseError(f"unknown family {family!r}; expected {' or '.join(FAMILIES)}", source="--export-family")
+        raise CaseError(f"unknown family {family!r}; expected {' or '.join(FAMILIES)}", source="export_family")
     demand_type, unit, scale = _demand(str(fragility.attrs["intensity_measure"]))
     states, left_out = _limit_states(fragility, family, scale)
     if not states:
-        raise CaseError("no damage state can be exported: " + "; ".join(left_out), source="--export")
+        raise CaseError("no damage state can be exported: " + "; ".join(left_out), source="export")
     row = {"ID": component_id, "Incomplete": "0", "Demand-Type": demand_type, "Demand-Unit": unit,
            "Demand-Offset": "0", "Demand-Directional": "1"}
     for k, (_, _, fam, theta_0, theta_1) in enumerate(states, start=1):

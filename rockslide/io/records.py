@@ -126,7 +126,7 @@ def records_dir(option: str | os.PathLike | None = None) -> Path:
         ``option``, else ``$ROCKSLIDE_RECORDS`` when set and not empty, else ``Path("records")``.
     """
     if option is not None and str(option) != "":
-        return expand_user(option, source="--records-dir")
+        return expand_user(option, source="records_dir")
     env = os.environ.get(RECORDS_ENV)
     if env:
         return expand_user(env, source=RECORDS_ENV)

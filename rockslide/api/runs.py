@@ -1,0 +1,378 @@
+"""One case: `run` (its result, files and neighbourhood) and `ensemble` (the neighbourhood alone)."""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from ..case import Case
+from ..core.simulate import Result, Summary
+from ..errors import OutputError
+from ._shared import as_case, check_where, with_scale
+
+#: A single run expected to take longer than this [s] says so before it starts (and shows a
+#: progress bar on a terminal).
+LONG_RUN = 10.0
+
+#: A run's figure is drawn from its history kept in memory while it has at most this many rows (96
+#: MB; reading the file back would take as much); a longer history is read back from the file.
+KEEP_HISTORY_ROWS = 2_000_000
+
+
+@dataclass
+class RunResult:
+    """One run of a case (`run`), or a result file read back (`read_result`).
+
+    Attributes
+    ----------
+    name : str
+        The case's name.
+    result : core.simulate.Result
+        Time histories (``history``: time [s], rotation [rad], rotation_rate [rad/s], slip [m],
+        slip_rate [m/s], state), the event log (``events``), the summary, the integration step [s]
+        and the ground motion as applied [m/s^2].
+    ground : dict
+        The ground motion as applied: ``pga_horizontal``, ``pga_vertical`` [m/s^2], the scale
+        factors ``scale_horizontal``, ``scale_vertical`` (None where there is no record); with two
+        horizontal components also ``components`` (`engine.prepare.Components`: azimuths,
+        orientation, peaks along and across the block, the share the planar model ignores).
+    records : list of dict
+        The record files (name, SHA-256, format, scale factor).
+    case : Case or None
+        The case that was run (None for a file read back: its text is ``case_text``).
+    case_text : str
+        The case file's text.
+    attrs : dict
+        For a file read back: all its root attributes (provenance, versions).
+    ensemble : dict or None
+        With ``run(..., ensemble=n)``: the neighbourhood's summary (`analyses.ensemble.summarise`:
+        ``p_overturn``, ``interval``, ``flips``, ``robust``...); for a file read back, its stored one.
+    floor : dict or None
+        For a case on a floor: ``description`` and the peaks of the floor's motion (``pfa``
+        [m/s^2], ``pfv`` [m/s], and of the ground under the building).
+    files : outputs.OutputSet or None
+        The files written (``run(..., outputs=...)``).
+    written : str
+        What was written, as the command line says it.
+    base : dict or None
+        For a file read back of a case on a floor: the ground motion under the building.
+    """
+
+    name: str
+    result: Result
+    ground: dict
+    records: list
+    case: Case | None = None
+    case_text: str = ""
+    attrs: dict = field(default_factory=dict)
+    ensemble: dict | None = None
+    floor: dict | None = None
+    files: object = None
+    written: str = ""
+    base: dict | None = None
+
+    @property
+    def summary(self) -> Summary:
+        """What happened, a `Summary`, with ``overturned``, ``max_rotation`` [rad], ``max_rotation_ratio``
+        (of alpha), ``max_slip`` [m], ``impacts``, ``status``, ``verdict`` and more."""
+        return self.result.summary
+
+    @property
+    def history(self) -> dict:
+        """The time histories by column (numpy arrays; SI)."""
+        return self.result.history
+
+    @property
+    def events(self):
+        """The event log, a numpy structured array with the fields time [s], from, to, cause, edge..."""
+        return self.result.events
+
+    def to_xarray(self):
+        """The run as an ``xarray.Dataset`` (`io.datasets.run_dataset`): histories on ``time``, the
+        ground motion on ``ground_time``, the event log on ``event``, the summary as attributes."""
+        from ..io.datasets import run_dataset
+
+        flat = {**{k: v for k, v in self.ground.items() if k != "components"},
+                **(self.ground.get("components") or {})}
+        ground = {f"ground_{k}": v for k, v in flat.items() if v is not None}
+        return run_dataset(self.result, name=self.name, attrs=ground)
+
+
+def run(case: Case | Mapping | str | Path, *, records_dir: str | Path | None = None, history: bool = True,
+        progress: Callable[[float, float], None] | None = None, outputs=None, ensemble: int | None = None,
+        seed: int = 1, device: str = "cpu", workers: int | None = None, report: Callable[[str], None] | None = None,
+        pga=None, vertical_factor=None, amplitude=None) -> RunResult:
+    """Compute one case, as ``rockslide run`` does.
+
+    Parameters
+    ----------
+    case : Case, mapping or path
+        A case (`load_case`), or what `load_case` reads.
+    records_dir : str or Path, optional
+        Where record files are looked for after the case's folder (default: ``$ROCKSLIDE_RECORDS``,
+        else ``./records``).
+    history : bool
+        Keep the time histories (at ``output.interval``); False keeps the summary and events only.
+    progress : callable, optional
+        Called with (time reached, end time) [s] between kernel chunks.
+    outputs : outputs.OutputSet, optional
+        Also write the result file ``NAME.h5`` and its figure ``NAME.png`` (and ``NAME.ensemble.png``)
+        there, as the command line does: checked before the work, published together. A complete
+        result of the same case (same text, records and ensemble) whose figure is missing gets its
+        figure, and is returned as read back.
+    ensemble : int or True, optional
+        Also run this many neighbours of the case (`ensemble`; True: 200), in memory; their
+        summary is ``RunResult.ensemble`` (and is stored in the result file).
+    seed : int
+        Seed of the ensemble's Latin hypercube.
+    device : {"cpu", "gpu", "auto"}
+        Where the ensemble computes (the run itself is on the CPU).
+    workers : int, optional
+        The ensemble's threads (default: all cores).
+    report : callable, optional
+        Called with each note for the user (a long run, a first compile).
+    pga, vertical_factor, amplitude : str or float, optional
+        The case at another intensity, as a sweep's point at these values (``pga="0.6g"`` is the
+        case with ``ground.scale.pga_horizontal: 0.6 g``; SI numbers, or strings with units).
+
+    Returns
+    -------
+    RunResult
+
+    Raises
+    ------
+    RockslideError
+        A bad case, a record that cannot be read or used (one line naming the file and field).
+    """
+    from ..engine import prepare as engine
+    from ..io import records
+
+    case = with_scale(as_case(case), pga=pga, vertical_factor=vertical_factor, amplitude=amplitude)
+    check_where(workers=workers, device=device)
+    say = report if report is not None else (lambda text: None)
+    started = time.perf_counter()
+    folder = records.records_dir(records_dir)
+    prepared = engine.prepare(case, folder, history=history)          # input errors first
+    eplan = None
+    if ensemble is not None and ensemble is not False:
+        from ..analyses import ensemble as ens
+        n = ens.DEFAULT_MEMBERS if ensemble is True else ensemble
+        eplan = ens.plan_ensemble(case, n, seed=seed, records_dir=folder, records=prepared.records)
+    if outputs is not None:
+        return _run_into(outputs, prepared, eplan, started, say=say, progress=progress, device=device,
+                         workers=workers)
+    result = engine.simulate_prepared(prepared, progress=progress)
+    summary = None if eplan is None else _neighbourhood(eplan, result, device=device, workers=workers)[0]
+    return _run_result(prepared, result, summary)
+
+
+def _run_result(prepared, result, summary, **more) -> RunResult:
+    from ..engine import prepare as engine
+
+    case = prepared.case
+    floor = None
+    if prepared.base is not None:
+        floor = {"description": engine.floor_text(case),
+                 **engine.floor_peaks(result.ground_time, result.ground_horizontal, prepared.base.horizontal)}
+    return RunResult(name=case.name, result=result, ground=engine.applied_ground(prepared),
+                     records=engine.record_entries(prepared), case=case, case_text=case.text, ensemble=summary,
+                     floor=floor, **more)
+
+
+def _neighbourhood(eplan, result, *, device="cpu", workers=None, progress=None):
+    """The ensemble of a run just computed: its summary, dimension and member variables."""
+    from .. import interrupts
+    from ..analyses import ensemble as ens
+
+    return ens.compute(eplan, result.summary.overturned, device=device, workers=workers,
+                       progress=progress or (lambda cases: interrupts.check()))
+
+
+def _run_into(outputs, prepared, eplan, started, *, say, progress, device, workers) -> RunResult:
+    """`run` with its files (``outputs``): the command line's run."""
+    from ..engine import prepare as engine
+    from ..io import results
+
+    case = prepared.case
+    if outputs.check():
+        return _finish_run(outputs, prepared, eplan, started)
+    outputs.remove_stale_temporaries()
+    work = engine.work(prepared)
+    if work.seconds > LONG_RUN:
+        say(f"rockslide: note: {work.describe()}")
+    from ..io import files
+    files.warn_free_space(outputs.folder, work.rows * results.BYTES_PER_ROW)
+    _compile_note(say)
+    ensemble_png = outputs.folder / f"{case.name}.ensemble.png"
+    summary = group = None
+    with outputs.staging() as staging:
+        keep = KEEP_HISTORY_ROWS if outputs.plot else 0
+        with results.ResultWriter(outputs.h5, overwrite=outputs.overwrite, staging=staging, keep_rows=keep) as writer:
+            streamed = case.solver.method == "kernel"
+            result = engine.simulate_prepared(prepared, on_chunk=writer.append_history if streamed else None,
+                                              progress=progress)
+            if eplan is not None:
+                summary, dimension, group = _neighbourhood(eplan, result, device=device, workers=workers)
+            writer.finish(result, **_stored_run(case, prepared, summary, None if group is None else (dimension, group)))
+        if outputs.plot:
+            from ..plots import response_figure
+            kept = writer.written_result()
+            drawn = kept if kept is not None else results.read_result(writer.tmp).result
+            outputs.save_figure(response_figure(drawn, title=case.name, size=outputs.size, **_run_about(prepared,
+                                                                                                       result.step)),
+                                staging)
+            if summary is not None:
+                outputs.save_figure(_ensemble_figure(summary, group, result.summary, case.name, prepared, result.step,
+                                                     size=outputs.size), staging, ensemble_png)
+        stale = [] if outputs.plot else [outputs.png]
+        if outputs.overwrite and (not outputs.plot or summary is None):
+            stale.append(ensemble_png)          # it showed the neighbourhood of the result replaced
+        staging.publish(remove=stale)
+    written = outputs.written() + (f" and {ensemble_png}" if summary is not None and outputs.plot else "")
+    return _run_result(prepared, result, summary, files=outputs, written=written)
+
+
+def _stored_run(case, prepared, summary, group) -> dict:
+    """What `results.ResultWriter.finish` stores beside the histories (``group``: the ensemble's
+    dimension and member variables)."""
+    from ..analyses import ensemble as ens
+    from ..case import case_to_dict
+    from ..engine import prepare as engine
+
+    return dict(name=case.name, case_text=case.text, case=case_to_dict(case, case_file=False),
+                records=engine.record_entries(prepared), ground=engine.applied_ground(prepared),
+                extra_attrs={} if summary is None else ens.attributes(summary),
+                extra_groups={**(engine.base_motion(prepared) or {}),
+                              **({} if group is None else {"ensemble": group})} or None)
+
+
+def _finish_run(outputs, prepared, eplan, started) -> RunResult:
+    """The complete result of this case exists without its figure: draw it (else refuse)."""
+    from ..engine import prepare as engine
+    from ..io import results
+    from ..plots import response_figure
+
+    try:
+        stored = results.read_result(outputs.h5)
+    except OutputError:
+        stored = None
+    case = prepared.case
+    same = (stored is not None and stored.case_text == case.text
+            and [r.get("sha256") for r in stored.records]
+            == [r.get("sha256") for r in engine.record_entries(prepared)]
+            and (eplan is None or _same_ensemble(stored.attrs.get("ensemble"), eplan)))
+    if not same:
+        outputs.refuse()
+    with outputs.staging() as staging:
+        outputs.save_figure(response_figure(stored, title=stored.name, size=outputs.size), staging)
+        staging.publish()
+    summary = None if eplan is None else json.loads(stored.attrs["ensemble"])
+    return _run_result(prepared, stored.result, summary, files=outputs,
+                       written=f"{outputs.png} (the missing figure of the complete {outputs.h5})")
+
+
+def _same_ensemble(text, eplan) -> bool:
+    """Whether a result file's ``ensemble`` attribute is the ensemble ``eplan`` would compute."""
+    try:
+        stored = json.loads(text)
+    except (TypeError, ValueError):
+        return False
+    quantities = {name: d.spec() for name, d in eplan.distributions.items()}
+    return stored.get("n") == eplan.n and stored.get("seed") == eplan.seed and stored.get("quantities") == quantities
+
+
+def _compile_note(say) -> None:
+    """Say that the kernel compiles first, when the build left no machine code for a run."""
+    from ..core import native
+
+    if native.ahead_of_time() is None:      # no machine code from the build: numba's JIT
+        from ..core import kernel
+        from ..engine.execute import first_compile_note
+        note = first_compile_note(kernel.run)
+        if note:
+            say(note)
+
+
+def _run_about(prepared, step: float) -> dict:
+    """`plots.response_figure`'s caption, unit, direction and ground under the building of a run."""
+    from .._version import __version__
+    from ..engine import prepare as engine
+    from ..plots import along_the_block, case_caption, pga_unit
+
+    text = prepared.case.text
+    components = prepared.components
+    azimuths = None if components is None else (components.azimuth_1, components.azimuth_2)
+    base = engine.base_motion(prepared)
+    if base is not None:
+        (_, times, _), variables = base["base"]
+        base = {"time": times, **{role: values for role, (_, values, _) in variables.items()}}
+    return {"caption": case_caption(text, records=engine.record_entries(prepared), step=step, version=__version__,
+                                    azimuths=azimuths),
+            "unit": pga_unit(text), "horizontal": along_the_block(text), "base": base}
+
+
+def _ensemble_figure(summary: dict, variables: dict, nominal, name: str, prepared, step: float, *, size=None):
+    """The neighbourhood's figure (`plots.ensemble_figure`): its members' largest rotations."""
+    from ..analyses import ensemble as ens
+    from ..plots import ensemble_figure
+
+    ok = variables["status"][1] == 0
+    ratio = variables["max_rotation_ratio"][1][ok]
+    over = variables["overturned"][1][ok].astype(bool)
+    headline = ens.describe(summary, nominal.verdict)[0]
+    return ensemble_figure(ratio, over, math.inf if nominal.overturned else nominal.max_rotation_ratio,
+                           summary_text=headline.split("; ", 1)[-1],
+                           title=f"{name}: {summary['n']} neighbours (seed {summary['seed']})", size=size,
+                           caption=_run_about(prepared, step)["caption"])
+
+
+def ensemble(case: Case | Mapping | str | Path, n: int = 200, *, seed: int = 1,
+             records_dir: str | Path | None = None, device: str = "cpu", workers: int | None = None,
+             scheduler=None, wait_workers: float | None = None, store=None,
+             progress: Callable[[int], None] | None = None):
+    """A verdict's neighbourhood: ``n`` cases drawn around ``case`` over what is uncertain, as
+    ``rockslide run --ensemble n`` computes them (`analyses.ensemble`).
+
+    Parameters
+    ----------
+    case : Case, mapping or path
+        Its ``uncertain`` section says what varies (intensity, restitution, friction, size,
+        slenderness); without one, the stated defaults (`analyses.ensemble.DEFAULTS`).
+    n : int
+        Members.
+    seed : int
+        Seed of the Latin hypercube (the same seed gives the same members).
+    records_dir, device, workers, scheduler, wait_workers, store, progress
+        As in `sweep`.
+
+    Returns
+    -------
+    xarray.Dataset
+        Per member (dimension ``member``): the sampled quantities (``sample_intensity``...), and
+        ``overturned``, ``max_rotation`` [rad], ``max_rotation_ratio``, ``status``, ...; the
+        summary as attributes: ``p_overturn``, ``interval_low``, ``interval_high`` (95 % Wilson),
+        ``flips`` (members whose verdict differs from the nominal run's), ``robust``, and the whole
+        summary as JSON in ``ensemble``.
+    """
+    from ..analyses import ensemble as ens
+    from ..engine import prepare as engine
+    from ..io import datasets, records
+
+    case = as_case(case)
+    scheduler = check_where(workers=workers, scheduler=scheduler, device=device, wait_workers=wait_workers)
+    folder = records.records_dir(records_dir)
+    prepared = engine.prepare(case, folder, history=False)
+    eplan = ens.plan_ensemble(case, n, seed=seed, records_dir=folder, records=prepared.records)
+    nominal = engine.simulate_prepared(prepared)
+    summary, members, variables = ens.compute(eplan, nominal.summary.overturned, store=store, workers=workers,
+                                              scheduler=scheduler, device=device, progress=progress,
+                                              wait_workers=wait_workers)
+    attrs = {"name": case.name, "nominal_verdict": nominal.summary.verdict, "p_overturn": summary["p_overturn"],
+             "interval_low": summary["interval"][0], "interval_high": summary["interval"][1],
+             "flips": summary["flips"], "robust": int(summary["robust"]), "seed": seed,
+             "ensemble": json.dumps(summary)}
+    return datasets.study_dataset([members], variables, attrs)

@@ -1,0 +1,108 @@
+"""The smaller tools: a record described, the paper's Table 1 reproduced, a block's mode-initiation
+map, the shipped example written."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+from ..errors import CaseError, OutputError
+
+#: Panels of the criteria map (one per vertical acceleration): more are unreadable, and each takes a while.
+MAX_CRITERIA_PANELS = 12
+
+
+def describe_record(path: str | Path, *, format: str | None = None, units: str | None = None, time_column=None,
+                    column=None, dt: float | None = None, skip_lines: int = 0) -> dict:
+    """An accelerogram's format, step, duration, units and peaks (`io.records.record_info`);
+    ``time_column`` and ``column`` are 1-based numbers or header names."""
+    from ..io.records import record_info
+
+    def column_of(value):
+        if value is None:
+            return None
+        return int(value) if str(value).isdigit() else value
+
+    return record_info(path, format=format, units=units, time_column=column_of(time_column), column=column_of(column),
+                       dt=dt, skip_lines=skip_lines)
+
+
+def is_result_file(path: str | Path) -> bool:
+    """Whether ``path`` starts with HDF5's signature (a file rockslide wrote; a record never does)."""
+    from ..errors import RockslideError
+    from ..inputs import open_regular
+
+    try:
+        with open_regular(path, what="file", error=RockslideError) as handle:   # a FIFO: not opened
+            return handle.read(8) == b"\x89HDF\r\n\x1a\n"
+    except (OSError, RockslideError):
+        return False
+
+
+def table1(configs: str | Path, records_dir: str | Path | None, out: str | Path) -> dict:
+    """The paper's Table 1 and Figures 5-10 (`analyses.table1.reproduce`) from the case files in
+    ``configs`` into ``out``. Returns its report: ``summary`` per gravity (verdicts and descriptions
+    that match the paper), ``files``, ``figures``, ``elapsed`` [s]."""
+    from ..analyses.table1 import reproduce
+    from ..io import records
+
+    configs = Path(configs)
+    if not configs.is_dir():
+        raise CaseError("folder not found; expected the folder of the Table 1 case files "
+                        "(configs/table1 in the repository)", source=str(configs), field="configs")
+    return reproduce(configs, records.records_dir(records_dir), Path(out))
+
+
+def criteria_map(case=None, *, height=None, width=None, vertical="-0.5g,0g,0.5g", ah_max="1.5g", mu_max: float = 1.2,
+                 path: str | Path = "criteria.png", overwrite: bool = False, dpi=None, size=None) -> Path:
+    """Draw the mode-initiation map (rest / slip / liftoff / liftoff-slip) of a block from eqs. 6, 11
+    and 26, of ``case``'s block or of ``height`` and ``width`` (default 0.2 m x 0.1 m): one panel
+    per vertical acceleration of the comma list ``vertical``, up to ``ah_max`` and ``mu_max``."""
+    import numpy as np
+
+    from .._version import __version__
+    from ..core import criteria as crit
+    from ..plots import criteria_figure, save_figure
+    from ..units import STANDARD_GRAVITY, parse_quantity
+    from ._shared import as_case
+
+    block = None if case is None else as_case(case).block
+    h = block.height if block is not None and height is None else \
+        parse_quantity(height or "0.2 m", "length", source="height")
+    w = block.width if block is not None and width is None else \
+        parse_quantity(width or "0.1 m", "length", source="width")
+    if h <= 0 or w <= 0:
+        raise CaseError("height and width must be positive lengths", source="height/width")
+    avs = [parse_quantity(v, "acceleration", source="vertical") / STANDARD_GRAVITY
+           for v in str(vertical).split(",") if v.strip()]
+    ah_max = parse_quantity(ah_max, "acceleration", source="ah_max") / STANDARD_GRAVITY
+    for name, value in (("ah_max", ah_max), ("mu_max", mu_max)):
+        if not (math.isfinite(value) and value > 0):
+            raise CaseError(f"expected a positive finite value, got {value:g}", source=name)
+    if len(avs) > MAX_CRITERIA_PANELS:
+        raise CaseError(f"{len(avs)} vertical accelerations give as many panels; expected at most "
+                        f"{MAX_CRITERIA_PANELS}", source="vertical")
+    if not avs or any(not -1.0 < a for a in avs):
+        raise CaseError("each vertical acceleration must be above -1 g (the block would fly)", source="vertical")
+    path = Path(path)
+    if not overwrite and (path.exists() or path.is_symlink()):
+        raise OutputError(f"{path} exists (use --overwrite to replace it)")
+    ah = np.linspace(0.0, ah_max, 301)
+    mu = np.linspace(0.0, mu_max, 241)
+    maps = [(f"A_v = {a:+.2f} g", crit.mode_map(ah, mu, a, w / 2, h / 2), crit.mode_boundaries(ah, a, w / 2, h / 2))
+            for a in avs]
+    caption = (f"block width × height {w:.4g} × {h:.4g} m, α = {math.atan2(w, h):.4g} rad; from rest under "
+               f"constant accelerations (eqs. 6, 11, 26: no record, no time step; μ across the map, e plays no "
+               f"part); rockslide {__version__}")
+    figure = criteria_figure(ah, mu, maps, title=f"modes initiated from rest: {w:g} m wide, {h:g} m high",
+                             size=size, caption=caption)
+    save_figure(figure, path, overwrite=overwrite, dpi=dpi)
+    return path
+
+
+def write_example(folder: str | Path = "example", *, overwrite: bool = False) -> list[Path]:
+    """Write the shipped example into ``folder`` (`io.example.write_example`): its case files, records,
+    suite and hazard curve; returns the files written, the case file first."""
+    from ..io.example import write_example as write
+
+    return write(folder, overwrite=overwrite)
