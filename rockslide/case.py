@@ -739,10 +739,34 @@ def load_case(path, *, base_dir: Path | None = None) -> Case:
         Naming the file when it is missing, unreadable or invalid.
     """
     if isinstance(path, Mapping):
+        _check_nesting(path)
         return parse_mapping(path, base_dir=base_dir)
+    if not isinstance(path, (str, os.PathLike)) or isinstance(path, bytes):
+        raise CaseError(f"expected a case file's path or a mapping of its keys, got {type(path).__name__}",
+                        source="case")
     p = Path(path)
     text = _read_text(p, "case file")
     return parse_case(text, source=str(path), base_dir=p.absolute().parent)
+
+
+def _check_nesting(mapping) -> None:
+    """Refuse a mapping given for a case that holds itself, or is larger or deeper than a case file
+    may be (:data:`MAX_YAML_NODES`, :data:`MAX_YAML_DEPTH`), before it is read."""
+    count = [0]
+
+    def walk(value, around: tuple) -> None:
+        count[0] += 1
+        if count[0] > MAX_YAML_NODES or len(around) > MAX_YAML_DEPTH:
+            raise CaseError(f"the mapping holds more than {MAX_YAML_NODES} values or {MAX_YAML_DEPTH} levels; a "
+                            "case is a page or two of keys", source="case")
+        if isinstance(value, (Mapping, list, tuple)):
+            if id(value) in around:
+                raise CaseError("the mapping holds itself (a value refers back to a mapping or list around it)",
+                                source="case")
+            for item in value.values() if isinstance(value, Mapping) else value:
+                walk(item, (*around, id(value)))
+
+    walk(mapping, ())
 
 
 def _read_text(path: Path, what: str) -> str:
@@ -1589,6 +1613,8 @@ def case_with(case: Case, changes: Mapping[str, object]) -> Case:
     ``mu_kinetic == mu_static`` (the default), ``mu_kinetic`` follows the new ``mu_static``. An
     explicitly different ``mu_kinetic`` is kept, and a ``mu_static`` below it is rejected.
     """
+    if not isinstance(changes, Mapping):
+        raise CaseError(f"expected a mapping of dotted keys to values, got {type(changes).__name__}", source="changes")
     ctx = _Ctx(case.source, si_numbers=True)
     data = case_to_dict(case, case_file=False)
     if ("contact.mu_static" in changes and "contact.mu_kinetic" not in changes

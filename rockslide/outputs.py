@@ -156,15 +156,17 @@ class OutputSet:
         files.remove_stale_temporaries([self.h5, self.png])
 
     @contextlib.contextmanager
-    def one_at_a_time(self, what: str):
+    def one_at_a_time(self, what: str, *, shard: bool = False):
         """Hold the lock of this set (``.NAME.h5.lock`` beside it) for the block, so that two
         identical studies into one folder run one after the other; yields a list that holds True
-        when another one had it first (the outputs are then to be checked again)."""
+        when another one had it first (the outputs are then to be checked again). The shards of
+        one study (``shard``) share it: they run at once, and a study that collects waits for them."""
         from .io import files
 
         waited: list[bool] = []
         lock = self.h5.with_name(f".{self.h5.name}.lock")
-        with files.exclusive(lock, waiting_for=f"another {what} writing {self.h5}", waited=lambda: waited.append(True)):
+        with files.exclusive(lock, waiting_for=f"another {what} writing {self.h5}", waited=lambda: waited.append(True),
+                             shared=shard):
             yield waited
 
     def staging(self):

@@ -558,7 +558,7 @@ BAD_INPUTS = [
                  ["--av: '1e400 g' is not a finite number"], id="criteria-av-overflow"),
     # -- rockslide table1 --------------------------------------------------------------------------------
     pytest.param({}, ("table1", "--configs", "nosuch", "--out", "out"),
-                 ["nosuch: --configs: folder not found", "Table 1 case files"], id="table1-configs-missing"),
+                 ["--configs: nosuch: folder not found", "Table 1 case files"], id="table1-configs-missing"),
     pytest.param({"configs/fig06a-mu050.yaml": case_text({"contact.mu_static": "slippery"})},
                  ("table1", "--configs", "configs", "--out", "out", "--records-dir", "."),
                  ["fig06a-mu050.yaml: contact.mu_static: cannot read 'slippery'"], id="table1-bad-case"),

@@ -245,7 +245,7 @@ def test_table1_takes_out_dir_and_its_former_name_out():
     help_text = invoke("table1", "--help").stdout
     assert "--out-dir" in help_text and not re.search(r"--out\b(?!-)", help_text)
     for option in ("--out-dir", "--out"):
-        one_line_error(invoke("table1", "--configs", "nosuch", option, "x"), "nosuch: --configs: folder not found")
+        one_line_error(invoke("table1", "--configs", "nosuch", option, "x"), "--configs: nosuch: folder not found")
     one_line_error(invoke("table1", "--out", "x", "--out-dir", "y"), "--out: --out is the former name of --out-dir")
 
 

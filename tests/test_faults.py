@@ -779,8 +779,8 @@ def test_the_promises_quote_the_bounds_in_force():
 def test_docs_promises_quote_the_bounds_in_force():
     """docs/guide/promises.md states the bounds of issue 28 the code enforces (a change of one shows here)."""
     from rockslide.analyses import fragility
+    from rockslide.api import tools
     from rockslide.cli import run as run_command
-    from rockslide.cli import tools
     from rockslide.io import records
 
     page = " ".join((REPO / "docs" / "guide" / "promises.md").read_text().split())
@@ -1035,21 +1035,21 @@ def test_plot_publishes_nothing_when_a_run_replaced_the_result_while_it_drew(ws,
     The race made deterministic: the moment ``plot`` has drawn, a run publishes a new result and
     figure. ``plot`` then publishes nothing (one line, exit 2) and the run's pair stays as it
     published it."""
-    from rockslide.cli import run as run_command
+    from rockslide import plots
 
     (ws / "case.yaml").write_text(case_text(QUICK))
     assert invoke("run", "case.yaml").exit_code == 0
     (ws / "other.yaml").write_text(case_text({**QUICK, "contact.mu_static": 0.8}))
-    real_draw = run_command._draw
+    real_save = plots.save_figure
 
     def draw_then_a_run_publishes(*args, **kwargs):
-        real_draw(*args, **kwargs)
-        monkeypatch.setattr(run_command, "_draw", real_draw)
+        real_save(*args, **kwargs)
+        monkeypatch.setattr(plots, "save_figure", real_save)
         other = cli_subprocess(["run", "other.yaml", "--overwrite"], ws)   # the same names: example.h5, .png
         _, stderr = other.communicate(timeout=300)
         assert other.returncode == 0, stderr
 
-    monkeypatch.setattr(run_command, "_draw", draw_then_a_run_publishes)
+    monkeypatch.setattr(plots, "save_figure", draw_then_a_run_publishes)
     out = ws / "out"
     line = one_error_line(invoke("plot", out / "example.h5"), "example.h5: was replaced while its figure was drawn")
     assert "nothing was written" in line

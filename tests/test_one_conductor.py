@@ -6,7 +6,6 @@ from __future__ import annotations
 import inspect
 import statistics
 import sys
-import tomllib
 
 import numpy as np
 import pytest
@@ -21,9 +20,9 @@ def test_the_command_line_may_not_import_the_inner_layers():
     """A forbidden contract in pyproject.toml keeps `rockslide.cli` off `core`, `engine` and
     `analyses` (checked by `test_docs_and_architecture.test_import_contracts_hold`); here: it is
     there, and no module of the command line names them, at any level of the code."""
-    contracts = tomllib.loads((REPO / "pyproject.toml").read_text())["tool"]["importlinter"]["contracts"]
-    cli = [c for c in contracts if c.get("source_modules") == ["rockslide.cli"]]
-    assert cli and set(cli[0]["forbidden_modules"]) == {"rockslide.core", "rockslide.engine", "rockslide.analyses"}
+    text = " ".join((REPO / "pyproject.toml").read_text().split())
+    assert ('source_modules = ["rockslide.cli"] forbidden_modules = ["rockslide.core", "rockslide.engine", '
+            '"rockslide.analyses"]') in text
     for path in (REPO / "rockslide" / "cli").glob("*.py"):
         text = path.read_text()
         for inner in ("core", "engine", "analyses"):

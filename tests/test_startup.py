@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from rockslide import cli
+from rockslide.api import runs as api_runs
 from rockslide.cli import main
 from rockslide.io import results
 
@@ -111,7 +111,7 @@ def short_example(folder: Path) -> Path:
 def test_the_run_figure_is_the_figure_of_the_file(tmp_path, monkeypatch, kept):
     """The figure a run draws from the result it holds in memory is, byte for byte, the one
     ``rockslide plot`` draws from the file it wrote; a history longer than
-    `cli.KEEP_HISTORY_ROWS` is read back from the file instead (same figure)."""
+    `api.runs.KEEP_HISTORY_ROWS` is read back from the file instead (same figure)."""
     case = short_example(tmp_path)
     out = tmp_path / "out"
     if kept:
@@ -119,7 +119,7 @@ def test_the_run_figure_is_the_figure_of_the_file(tmp_path, monkeypatch, kept):
             raise AssertionError("the run read its result back from the file")
         monkeypatch.setattr(results, "read_result", no_reading_back)
     else:
-        monkeypatch.setattr(cli.run, "KEEP_HISTORY_ROWS", 1000)
+        monkeypatch.setattr(api_runs, "KEEP_HISTORY_ROWS", 1000)
     run = CliRunner().invoke(main, ["run", str(case), "--out-dir", str(out)])
     assert run.exit_code == 0, run.output
     monkeypatch.undo()

@@ -114,23 +114,23 @@ def test_units_as_in_case_files():
 def test_bad_axis_specs_are_one_line_errors_naming_the_option(option, spec, expected, tmp_path):
     with pytest.raises(CaseError) as info:
         sw.parse_axis(option, spec)
-    assert sw.AXES[option].option in str(info.value) and expected in str(info.value)
-    flag = sw.AXES[option].option
+    assert option in str(info.value) and expected in str(info.value) and "--" not in str(info.value)
+    flag = "--" + option.replace("_", "-")
     one_line_error(invoke(*sweep_args(tmp_path, flag, spec)), flag, expected)
     assert not tmp_path.exists() or not any(tmp_path.iterdir())
 
 
 @pytest.mark.parametrize("axes, parts", [
-    (["--mu", "-0.1,0.5"], ["--mu", "contact.mu_static", "--mu -0.1"]),
+    (["--mu", "-0.1,0.5"], ["--mu", "contact.mu_static", "mu -0.1"]),
     (["--restitution", "0.8,1.2"], ["--restitution", "contact.restitution", "1.2"]),
     (["--height-to-width", "0,2"], ["--height-to-width", "block.width"]),
     (["--slenderness", "0.25"], ["--slenderness", "was width / height", "--height-to-width 4"]),
     (["--gravity", "-9.8m/s^2"], ["--gravity", "gravity"]),
     ([], ["give at least one axis"]),
     (["--mu", "0.5", "--mu-kinetic-ratio", "1.5"], ["--mu-kinetic-ratio", "[0, 1]"]),
-    (["--pga", "7m/s^2", "--mu-kinetic-ratio", "0.9"], ["--mu-kinetic-ratio", "--mu"]),
+    (["--pga", "7m/s^2", "--mu-kinetic-ratio", "0.9"], ["--mu-kinetic-ratio", "mu"]),
     (["--mu", "0.5", "--workers", "0"], ["--workers"]),
-    (["--mu", "0.5", "--workers", "1", "--scheduler", "tcp://127.0.0.1:1"], ["--workers", "--scheduler"]),
+    (["--mu", "0.5", "--workers", "1", "--scheduler", "tcp://127.0.0.1:1"], ["--workers", "scheduler"]),
     (["--mu", "0.5", "--chunk-size", "0"], ["--chunk-size"]),
 ])
 def test_bad_points_and_options_are_one_line_errors(axes, parts, tmp_path):

@@ -25,19 +25,34 @@ conductors `sweep_study`, `fragility_study`), `risk`, `stored` (`read_result`, `
 
 from __future__ import annotations
 
-from ..case import Case, case_with, load_case
-from ..core.simulate import Summary
-from ..outputs import OutputSet, check_name, output_folder
-from .reports import record_lines, run_lines, run_payload, stored_lines
-from .risk import risk, risk_analysis, risk_outputs, risk_study
-from .runs import KEEP_HISTORY_ROWS, LONG_RUN, RunResult, ensemble, run
-from .stored import describe_file, export_pelicun, plot_results, read_result, redraw
-from .studies import StudyResult, fragility, fragility_study, retired_axis, sweep, sweep_study
-from .tools import criteria_map, describe_record, is_result_file, table1, write_example
+import importlib
 
-__all__ = ["load_case", "case_with", "run", "sweep", "fragility", "ensemble", "risk", "read_result", "plot_results",
-           "export_pelicun", "RunResult", "Case", "Summary", "StudyResult", "OutputSet", "sweep_study",
-           "fragility_study", "risk_study", "risk_analysis", "describe_file", "redraw", "describe_record",
-           "is_result_file", "table1", "criteria_map", "write_example", "output_folder", "check_name", "run_lines",
-           "run_payload", "record_lines", "stored_lines", "KEEP_HISTORY_ROWS", "LONG_RUN", "retired_axis",
-           "risk_outputs"]
+#: Each public name and the module it lives in (loaded on first use: ``rockslide --help`` and
+#: ``import rockslide`` stay light).
+_WHERE = {
+    "Case": "..case", "case_with": "..case", "load_case": "..case", "Summary": "..core.simulate",
+    "OutputSet": "..outputs", "check_name": "..outputs", "output_folder": "..outputs",
+    "record_lines": ".reports", "run_lines": ".reports", "run_payload": ".reports", "stored_lines": ".reports",
+    "risk": ".risk", "risk_analysis": ".risk", "risk_outputs": ".risk", "risk_study": ".risk",
+    "KEEP_HISTORY_ROWS": ".runs", "LONG_RUN": ".runs", "RunResult": ".runs", "ensemble": ".runs", "run": ".runs",
+    "describe_file": ".stored", "export_pelicun": ".stored", "plot_results": ".stored", "read_result": ".stored",
+    "redraw": ".stored",
+    "StudyResult": ".studies", "fragility": ".studies", "fragility_study": ".studies", "retired_axis": ".studies",
+    "sweep": ".studies", "sweep_study": ".studies",
+    "criteria_map": ".tools", "describe_record": ".tools", "is_result_file": ".tools", "table1": ".tools",
+    "write_example": ".tools",
+}
+
+__all__ = sorted(_WHERE)
+
+
+def __getattr__(name: str):
+    if name in _WHERE:
+        value = getattr(importlib.import_module(_WHERE[name], __name__), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'rockslide.api' has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_WHERE))

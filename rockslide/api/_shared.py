@@ -36,6 +36,10 @@ def with_scale(case: Case, **values) -> Case:
     given = {name: value for name, value in values.items() if value is not None}
     if not given:
         return case
+    for name, value in given.items():
+        if not isinstance(value, (str, int, float)) or isinstance(value, bool):
+            raise CaseError(f"expected one value (a number in SI, or a string with its unit), got "
+                            f"{type(value).__name__}", source=name)
     from ..analyses import sweep as sw
     from ..case import case_with
 
@@ -53,4 +57,75 @@ def check_where(*, workers=None, scheduler=None, device: str = "cpu", wait_worke
     scheduler found, or None."""
     from ..engine.execute import check_where as check
 
+    whole(workers, "workers", 1, optional=True)
+    real(wait_workers, "wait_workers", optional=True)
+    if not isinstance(device, str):
+        raise CaseError(f"expected 'cpu', 'gpu' or 'auto', got {type(device).__name__}", source="device")
     return check(workers=workers, scheduler=scheduler, device=device, wait_workers=wait_workers, tls=tls)
+
+
+def path_arg(value, name: str, *, optional: bool = True):
+    """``value`` if it is a path (str or os.PathLike; None when ``optional``); else a `CaseError`
+    naming the argument."""
+    import os
+
+    if value is None and optional:
+        return None
+    if isinstance(value, (str, os.PathLike)) and not isinstance(value, bytes):
+        return value
+    raise CaseError(f"expected a path (str or pathlib.Path), got {type(value).__name__}", source=name)
+
+
+def whole(value, name: str, low: int | None = None, high: int | None = None, *, optional: bool = False):
+    """``value`` as an int if it is a whole number within ``[low, high]``; else a `CaseError`."""
+    import numbers
+
+    if value is None and optional:
+        return None
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or \
+            (low is not None and value < low) or (high is not None and value > high):
+        bounds = f" within {low} ... {high}" if high is not None else f" >= {low}" if low is not None else ""
+        raise CaseError(f"expected a whole number{bounds}, got {value!r}"[:200], source=name)
+    return int(value)
+
+
+def real(value, name: str, *, optional: bool = False):
+    """``value`` as a float if it is a real number; else a `CaseError` naming the argument."""
+    import numbers
+
+    if value is None and optional:
+        return None
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise CaseError(f"expected a number, got {type(value).__name__}", source=name)
+    return float(value)
+
+
+def callable_arg(value, name: str):
+    """``value`` if it is None or callable; else a `CaseError` naming the argument."""
+    if value is not None and not callable(value):
+        raise CaseError(f"expected a function (or None), got {type(value).__name__}", source=name)
+    return value
+
+
+def axis_values(values, name: str):
+    """An axis given as text, or as values (a sequence, range or iterable of numbers or strings with
+    units), bounded to the most values one axis may have before anything is built."""
+    import itertools
+    import numbers
+
+    from ..engine.plan import MAX_POINTS
+
+    if isinstance(values, str):
+        return values
+    if isinstance(values, (numbers.Number, bytes)) or not hasattr(values, "__iter__"):
+        raise CaseError(f"expected text ('0.3:0.7:0.1', '0.3,0.5') or a sequence of values, got "
+                        f"{type(values).__name__}", source=name)
+    if hasattr(values, "__len__") and len(values) > MAX_POINTS:
+        raise CaseError(f"{len(values)} values; at most {MAX_POINTS} on one axis", source=name)
+    items = list(itertools.islice(values, MAX_POINTS + 1))
+    if len(items) > MAX_POINTS:
+        raise CaseError(f"more than {MAX_POINTS} values; at most {MAX_POINTS} on one axis", source=name)
+    for item in items:
+        if isinstance(item, bool) or not isinstance(item, (str, numbers.Real)):
+            raise CaseError(f"expected numbers (SI) or strings with units, got {type(item).__name__}", source=name)
+    return items

@@ -128,7 +128,7 @@ def risk_analysis(fragility=None, hazard=None, *, damage: str = "overturn", stri
 
     used, measure = _risk_fragility(fragility, damage=damage, stripes=stripes, median=median, beta=beta, im=im)
     curves, about, notes = _hazard_curves(hazard, measure, hazard_units, trim_poe, along_block=used.along_block)
-    if not 0.0 < float(confidence) < 1.0:
+    if isinstance(confidence, bool) or not isinstance(confidence, (int, float)) or not 0.0 < float(confidence) < 1.0:
         raise CaseError(f"must be within 0 and 1 (e.g. 0.95), got {confidence!r}", source="confidence")
     years = rk.parse_years(life, source="life")
     age_years = None if age is None else rk.parse_years(age, source="age")
@@ -146,8 +146,8 @@ def _risk_fragility(path, *, damage, stripes, median, beta, im):
 
     if path is None:
         if median is None or beta is None:
-            raise CaseError("give a fragility file, or a lognormal with both --median and --beta "
-                            "(e.g. --median 0.5g --beta 0.4)", source="FRAGILITY")
+            raise CaseError("give a fragility file, or a lognormal with both median and beta "
+                            "(e.g. median 0.5g, beta 0.4)", source="fragility")
         measure = fr.parse_im(im)
         theta = parse_quantity(median, measure.kind, source="median")
         if not theta > 0:
@@ -158,7 +158,7 @@ def _risk_fragility(path, *, damage, stripes, median, beta, im):
         return rk.FragilityUsed(rk.Lognormal(theta, b), damage, "--median/--beta", "lognormal given", theta, b,
                                 [], ""), measure
     if median is not None or beta is not None:
-        raise CaseError("give either a fragility file or --median/--beta, not both", source="median/beta")
+        raise CaseError("give either a fragility file or median and beta, not both", source="median/beta")
     given = hasattr(path, "data_vars")
     ds = path if given else read_result(path)
     path = "the fragility dataset given" if given else str(path)
@@ -182,8 +182,8 @@ def _risk_fragility(path, *, damage, stripes, median, beta, im):
     theta, b = float(at["median"]), float(at["beta"])
     note = str(at["fit_note"].values)
     if not math.isfinite(theta) or (not math.isfinite(b) and note):
-        raise CaseError(f"no lognormal fit for {damage!r} ({note}); use --stripes for its "
-                        "empirical fractions", source=str(path))
+        raise CaseError(f"no lognormal fit for {damage!r} ({note}); use its empirical fractions instead "
+                        "(stripes)", source=str(path))
     bounds = [float(at[f"{name}_{side}"]) for name in ("median", "beta") for side in ("lower", "upper")]
     for what, value in (("beta", b), ("beta_lower", bounds[2]), ("beta_upper", bounds[3])):
         if (what == "beta" or math.isfinite(value)) and rk.beta_problem(value):
@@ -224,6 +224,35 @@ def _two_components(attrs) -> bool:
     return any(entry.horizontal_2 is not None for entry in suite.entries)
 
 
+#: Most hazard files of one analysis.
+MAX_HAZARD_FILES = 10_000
+
+
+def _hazard_arg(hazard):
+    """``risk``'s ``hazard`` as a mapping or a list of paths (a generator read once, bounded), or a
+    `CaseError` naming it."""
+    import itertools
+    import os
+
+    message = ("give one or more hazard curves (OpenQuake's hazard-curve CSV, or a CSV of level and annual rate; "
+               "from Python also a mapping of name to (levels, rates))")
+    if isinstance(hazard, Mapping):
+        if not hazard:
+            raise CaseError(message, source="hazard")
+        return hazard
+    if isinstance(hazard, (str, os.PathLike)) and not isinstance(hazard, bytes):
+        return [hazard]
+    if hazard is None or isinstance(hazard, bytes) or not hasattr(hazard, "__iter__"):
+        raise CaseError(message, source="hazard")
+    files = list(itertools.islice(hazard, MAX_HAZARD_FILES + 1))
+    if not files or len(files) > MAX_HAZARD_FILES:
+        raise CaseError(message if not files else f"more than {MAX_HAZARD_FILES} hazard files", source="hazard")
+    for item in files:
+        if not isinstance(item, (str, os.PathLike)) or isinstance(item, bytes):
+            raise CaseError(f"expected paths of hazard files, got {type(item).__name__}", source="hazard")
+    return files
+
+
 def _hazard_curves(hazard, measure, units, trim: bool, *, along_block: bool = False):
     """`analyses.risk.HazardCurve` s from `risk`'s ``hazard`` (files or arrays), checked against the
     fragility's ``measure`` (``along_block``: of the motion along the block); what is known of each
@@ -231,19 +260,20 @@ def _hazard_curves(hazard, measure, units, trim: bool, *, along_block: bool = Fa
     from ..analyses import risk as rk
     from ..io import hazard as hz
 
-    if hazard is None or (not isinstance(hazard, (str, Path, Mapping)) and len(hazard) == 0):
-        raise CaseError("give one or more hazard curves (OpenQuake's hazard-curve CSV, or a CSV of level and annual "
-                        "rate)", source="hazard")
+    hazard = _hazard_arg(hazard)
     tables, named = [], False
     if isinstance(hazard, Mapping):
-        for name, (levels, rates) in hazard.items():
+        for name, pair in hazard.items():
+            if isinstance(pair, (str, bytes)) or not hasattr(pair, "__len__") or len(pair) != 2:
+                raise CaseError("expected a pair (levels, annual rates)", source=f"hazard[{name!r}]")
+            levels, rates = pair
             problem = hz.curve_problem(levels, rates)
             if problem:
                 raise CaseError(problem, source=f"hazard[{name!r}]")
             tables.append(hz.HazardTable(str(name), None, np.asarray(levels, dtype=np.float64),
                                          np.asarray(rates, dtype=np.float64), "", level_units=None))
     else:
-        for path in [hazard] if isinstance(hazard, (str, Path)) else hazard:
+        for path in hazard:
             read = hz.read_hazard(path, units=units, trim=trim)
             named = named or any(t.measure is not None for t in read)     # says which measure it is of
             tables += [hz.matching(t, measure.name, measure.period, measure.kind, measure.label, rotd=measure.rotd)

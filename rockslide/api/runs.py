@@ -12,7 +12,7 @@ from pathlib import Path
 from ..case import Case
 from ..core.simulate import Result, Summary
 from ..errors import OutputError
-from ._shared import as_case, check_where, with_scale
+from ._shared import as_case, callable_arg, check_where, path_arg, whole, with_scale
 
 #: A single run expected to take longer than this [s] says so before it starts (and shows a
 #: progress bar on a terminal).
@@ -152,7 +152,14 @@ def run(case: Case | Mapping | str | Path, *, records_dir: str | Path | None = N
     from ..io import records
 
     case = with_scale(as_case(case), pga=pga, vertical_factor=vertical_factor, amplitude=amplitude)
-    check_where(workers=workers, device=device)
+    if ensemble is not None and ensemble is not False:
+        check_where(workers=workers, device=device)     # where the neighbours compute (the engine loads then)
+    path_arg(records_dir, "records_dir")
+    whole(seed, "seed", 0)
+    callable_arg(progress, "progress")
+    callable_arg(report, "report")
+    if ensemble is not True and ensemble is not False:
+        whole(ensemble, "ensemble", 1, optional=True)
     say = report if report is not None else (lambda text: None)
     started = time.perf_counter()
     folder = records.records_dir(records_dir)
@@ -239,13 +246,15 @@ def _run_into(outputs, prepared, eplan, started, *, say, progress, device, worke
 def _stored_run(case, prepared, summary, group) -> dict:
     """What `results.ResultWriter.finish` stores beside the histories (``group``: the ensemble's
     dimension and member variables)."""
-    from ..analyses import ensemble as ens
     from ..case import case_to_dict
     from ..engine import prepare as engine
 
+    attrs = {}
+    if summary is not None:
+        from ..analyses import ensemble as ens
+        attrs = ens.attributes(summary)
     return dict(name=case.name, case_text=case.text, case=case_to_dict(case, case_file=False),
-                records=engine.record_entries(prepared), ground=engine.applied_ground(prepared),
-                extra_attrs={} if summary is None else ens.attributes(summary),
+                records=engine.record_entries(prepared), ground=engine.applied_ground(prepared), extra_attrs=attrs,
                 extra_groups={**(engine.base_motion(prepared) or {}),
                               **({} if group is None else {"ensemble": group})} or None)
 
@@ -363,8 +372,10 @@ def ensemble(case: Case | Mapping | str | Path, n: int = 200, *, seed: int = 1,
     from ..io import datasets, records
 
     case = as_case(case)
+    whole(seed, "seed", 0)
+    callable_arg(progress, "progress")
     scheduler = check_where(workers=workers, scheduler=scheduler, device=device, wait_workers=wait_workers)
-    folder = records.records_dir(records_dir)
+    folder = records.records_dir(path_arg(records_dir, "records_dir"))
     prepared = engine.prepare(case, folder, history=False)
     eplan = ens.plan_ensemble(case, n, seed=seed, records_dir=folder, records=prepared.records)
     nominal = engine.simulate_prepared(prepared)

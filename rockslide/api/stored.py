@@ -7,7 +7,7 @@ import json
 from collections.abc import Sequence
 from pathlib import Path
 
-from ..analyses.kinds import KINDS
+from ..analyses.kinds import KINDS, of_format
 from ..errors import CaseError, OutputError
 from .runs import RunResult
 
@@ -28,17 +28,18 @@ def read_result(path: str | Path):
     OutputError
         The file is missing or is not a rockslide file of a known format and version.
     """
-    from ..io import datasets
+    from ..io import datasets, results
+    from ._shared import path_arg
 
-    kind, stored = _read(path)
+    kind = of_format(results.file_format(path_arg(path, "path", optional=False)))
     if kind.name == "run":
-        return _run_result(stored, path)
+        return _run_result(results.read_result(path), path)
+    stored = results.read_dataset(path, format=kind.format)
     return datasets.study_dataset(stored.coords, stored.variables, stored.attrs)
 
 
 def _read(path):
     """``(kind, what its reader gives)`` of a file rockslide wrote (`analyses.kinds`, `io.results`)."""
-    from ..analyses.kinds import of_format
     from ..io import results
 
     kind = of_format(results.file_format(path))
@@ -115,11 +116,21 @@ def plot_results(results: Sequence, *, size=None, names: Sequence[str] | None = 
     from ..units import parse_figure_size
 
     size = parse_figure_size(size, source="size")
-    items = list(results) if not isinstance(results, (str, Path, RunResult)) else [results]
+    import os
+
+    if isinstance(results, (str, os.PathLike, RunResult)) and not isinstance(results, bytes):
+        items = [results]
+    elif hasattr(results, "__iter__") and not isinstance(results, bytes):
+        items = list(results)
+    else:
+        raise CaseError(f"expected result files or runs, got {type(results).__name__}", source="results")
     if not items:
         raise CaseError("no result to draw; give one file or more", source="plot_results")
     kinds, loaded, stems = [], [], []
     for item in items:
+        if not isinstance(item, RunResult):
+            from ._shared import path_arg
+            path_arg(item, "results", optional=False)
         kind, stored = (KINDS["run"], item) if isinstance(item, RunResult) else _read(item)
         if kinds and kind != kinds[0]:
             raise CaseError(f"a {kind.name} file among {kinds[0].name} files ({items[0]}); overlay files of one "
@@ -187,10 +198,16 @@ def export_pelicun(fragility, component_id: str, path: str | Path, *, family: st
     -------
     csv, json : Path
     """
+    import os
+
     from ..io import pelicun
 
-    if isinstance(fragility, (str, Path)):
+    source = str(fragility) if isinstance(fragility, (str, os.PathLike)) else "fragility"
+    if isinstance(fragility, (str, os.PathLike)):
         fragility = read_result(fragility)
+    if not hasattr(fragility, "coords") or "damage_state" not in fragility.coords:
+        raise CaseError("not a fragility analysis (the dataset of rockslide.fragility, or its NAME.fragility.h5)",
+                        source=source)
     csv_path, json_path, _ = pelicun.write_pelicun(fragility, component_id, path, family=family,
                                                    description=description, overwrite=overwrite)
     return csv_path, json_path

@@ -15,7 +15,7 @@ from pathlib import Path
 
 from ..case import Case
 from ..errors import CaseError
-from ._shared import as_case, axis_text, check_where
+from ._shared import as_case, axis_text, axis_values, callable_arg, check_where, path_arg, real, whole
 
 
 @dataclass
@@ -150,6 +150,8 @@ def sweep_study(case, axes: Sequence[tuple], *, mu_kinetic_ratio=None, records_d
     started = time.perf_counter()
     case = as_case(case)
     axes = _parse_axes(axes)
+    _check_study(records_dir, chunk_size, store, progress)
+    real(mu_kinetic_ratio, "mu_kinetic_ratio", optional=True)
     scheduler = check_where(workers=workers, scheduler=scheduler, device=device, wait_workers=wait_workers, tls=tls)
     shard = _shard(shard)
     with contextlib.ExitStack() as held:
@@ -157,7 +159,7 @@ def sweep_study(case, axes: Sequence[tuple], *, mu_kinetic_ratio=None, records_d
         if outputs is not None:
             leftovers = ChunkStore.beside(outputs.h5, "").root.exists
             finishing = outputs.check(leftovers=leftovers())
-            if held.enter_context(outputs.one_at_a_time("sweep")):     # another sweep of this file ran meanwhile
+            if held.enter_context(outputs.one_at_a_time("sweep", shard=shard is not None)):   # another ran meanwhile
                 finishing = outputs.check(leftovers=leftovers())
         n_points = math.prod(len(a) for a in axes) if axes else 0
         if axes and sw.planning_seconds(case, axes) > 10:
@@ -206,8 +208,18 @@ def _parse_axes(axes):
         if name not in sw.AXES:
             raise CaseError(f"unknown axis {name!r}; expected one of {', '.join(sw.AXES)}", source="axes")
         if values is not None:
-            parsed.append(sw.parse_axis(name, axis_text(values, sw.AXES[name].kind)))
+            parsed.append(sw.parse_axis(name, axis_text(axis_values(values, name), sw.AXES[name].kind)))
     return parsed
+
+
+def _check_study(records_dir, chunk_size, store, progress) -> None:
+    """The arguments every study takes, checked before any work."""
+    path_arg(records_dir, "records_dir")
+    whole(chunk_size, "chunk_size", 1, optional=True)
+    callable_arg(progress, "progress")
+    if store is not None and not hasattr(store, "for_plan"):
+        raise CaseError(f"expected an engine.chunks.ChunkStore or MemoryStore, got {type(store).__name__}",
+                        source="store")
 
 
 def _shard(shard):
@@ -401,16 +413,24 @@ def fragility_study(case, suite, *, im="pga", levels, damage=(), units=None, res
 
     say = report if report is not None else (lambda text: None)
     case = as_case(case)
+    _check_study(records_dir, chunk_size, store, progress)
+    path_arg(suite, "suite", optional=False)
+    for name, value in (("im", im), ("units", units), ("azimuth", azimuth)):
+        if value is not None and not isinstance(value, str):
+            raise CaseError(f"expected text, got {type(value).__name__}", source=name)
+    whole(resamples, "resamples", 0, 100_000)
+    whole(samples, "samples", 0, 100_000)
+    whole(seed, "seed", 0)
     measure = fr.parse_im(im)
-    parsed = fr.parse_levels(axis_text(levels, measure.kind), measure)
-    states = fr.damage_states(damage)
+    parsed = fr.parse_levels(axis_text(axis_values(levels, "levels"), measure.kind), measure)
+    states = fr.damage_states([damage] if isinstance(damage, str) else _texts(damage, "damage"))
     scheduler = check_where(workers=workers, scheduler=scheduler, device=device, wait_workers=wait_workers, tls=tls)
     shard = _shard(shard)
     fplan = fr.plan_fragility(case, fr.suite_at_azimuths(fr.suite_from(str(suite), units=units), azimuth), measure,
                               parsed, records_dir=records.records_dir(records_dir), chunk_size=chunk_size,
                               case_vertical=case_vertical, samples=samples, seed=seed)
     with contextlib.ExitStack() as held:
-        export_path = _check_outputs(outputs, held, measure, export)
+        export_path = _check_outputs(outputs, held, measure, export, shard is not None)
         if fplan.vertical_note:
             say(f"  note: {fplan.vertical_note}")
         done = _execute(fplan.plan, store, outputs, what="fragility", description=fplan.describe(), label=case.name,
@@ -438,7 +458,14 @@ def fragility_study(case, suite, *, im="pga", levels, damage=(), units=None, res
         return result
 
 
-def _check_outputs(outputs, held, measure, export):
+def _texts(values, name: str) -> list[str]:
+    """A sequence of strings, or a `CaseError` naming the argument."""
+    if not hasattr(values, "__iter__") or not all(isinstance(v, str) for v in values):
+        raise CaseError("expected a sequence of strings", source=name)
+    return list(values)
+
+
+def _check_outputs(outputs, held, measure, export, shard: bool):
     """The fragility's outputs checked before the work (input errors first), its lock held; the
     pelicun export's path (or None)."""
     if outputs is None:
@@ -452,7 +479,7 @@ def _check_outputs(outputs, held, measure, export):
             outputs.check_extra(path, "out/case.fragility.pelicun.csv")
     if outputs.check():
         outputs.refuse()
-    if held.enter_context(outputs.one_at_a_time("fragility analysis")) and outputs.check():
+    if held.enter_context(outputs.one_at_a_time("fragility analysis", shard=shard)) and outputs.check():
         outputs.refuse()                                # published by the one waited for
     return export_path
 

@@ -48,8 +48,8 @@ def table1(configs: str | Path, records_dir: str | Path | None, out: str | Path)
 
     configs = Path(configs)
     if not configs.is_dir():
-        raise CaseError("folder not found; expected the folder of the Table 1 case files "
-                        "(configs/table1 in the repository)", source=str(configs), field="configs")
+        raise CaseError(f"{configs}: folder not found; expected the folder of the Table 1 case files "
+                        "(configs/table1 in the repository)", source="configs")
     return reproduce(configs, records.records_dir(records_dir), Path(out))
 
 

@@ -134,16 +134,21 @@ FLAGS = {name: "--" + name.replace("_", "-") for name in (
     "name", "seed", "dpi", "time_shift", "crop", "height", "width", "ah_max", "mu_max", "hazard_units", "configs")}
 FLAGS.update({"n": "--ensemble", "member": "--ensemble", "level": "--levels", "record": "--suite",
               "sample": "--samples", "tls_client_cert": "--tls-cert", "tls_client_key": "--tls-key",
-              "resamples": "--bootstrap", "zoom": "--window", "vertical": "--av"})
+              "resamples": "--bootstrap", "zoom": "--window", "vertical": "--av",
+              "fragility": "FRAGILITY"})
 
 
 def in_flags(exc: RockslideError) -> RockslideError:
     """``exc`` with the API's argument names it is about (``mu``, ``n``, ``beta``) as the command
     line's options (``--mu``, ``--ensemble``, ``--beta``): the library speaks of its arguments, the
     command line of its flags."""
-    if exc.source is None or not all(part in FLAGS for part in exc.source.split("/")):
-        return exc
-    return type(exc)(exc.message, source="/".join(FLAGS[part] for part in exc.source.split("/")), field=exc.field)
+    def flags(words):
+        if words is None or not all(part in FLAGS for part in words.split("/")):
+            return words
+        return "/".join(FLAGS[part] for part in words.split("/"))
+
+    source = flags(exc.source)
+    return exc if source == exc.source else type(exc)(exc.message, source=source, field=exc.field)
 
 
 def _stdout_gone() -> bool:

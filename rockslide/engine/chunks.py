@@ -60,6 +60,14 @@ class ChunkStore:
         """The file of chunk ``chunk``."""
         return self.folder / f"chunk-{chunk:06d}.npz"
 
+    def refuse_links(self) -> None:
+        """Refuse a chunk folder (or its definition's folder) that is a link: planted in a shared
+        output folder, it would send the study's files elsewhere, or feed it chunks from elsewhere."""
+        for folder in (self.root, self.folder):
+            if os.path.islink(folder):
+                raise OutputError("is a link where rockslide keeps a study's chunks; remove it (rockslide never "
+                                  "follows a link at a name it makes)", source=str(folder))
+
     def for_device(self, device: str) -> ChunkStore:
         """The store of the chunks computed on ``device``: this one for ``"cpu"`` (threads or a
         cluster's workers: identical results), one of its own for a GPU, whose fused multiply-adds
@@ -110,6 +118,7 @@ class ChunkStore:
         except OSError as exc:
             raise OutputError(f"cannot create the chunk folder: {exc.strerror or exc}",
                               source=str(self.folder)) from None
+        self.refuse_links()
         path = self.path(chunk)
         if path.is_dir() and not path.is_symlink():
             shutil.rmtree(path, ignore_errors=True)

@@ -247,6 +247,8 @@ SCHEDULER_TIMEOUT = 10.0
 #: [s] How long ``--scheduler`` waits for a first worker by default (``--wait-workers``): on SLURM
 #: or Kubernetes the scheduler starts first and the workers join when their jobs start.
 WAIT_FOR_WORKERS = 120.0
+#: [s] The longest wait for a first worker that may be asked for (a day).
+MAX_WAIT_WORKERS = 86400.0
 
 
 def _compute_dask(plan, store, chunks, scheduler, progress, wait_workers, say):
@@ -290,7 +292,8 @@ def _compute_dask(plan, store, chunks, scheduler, progress, wait_workers, say):
             for chunk in chunks:
                 future = client.submit(compute_chunk, shared, chunk, plan.n_chunks, identity, pure=False)
                 futures[future] = (chunk, plan.chunk_indices(chunk))
-            _collect_futures(client, futures, store, address, progress)
+            stall = max(STALL_SECONDS, STALL_FACTOR * work_estimate(plan, plan.chunk_size, workers=1))
+            _collect_futures(client, futures, store, address, progress, stall=stall, say=say)
         finally:
             with contextlib.suppress(Exception):
                 if futures:
@@ -300,16 +303,39 @@ def _compute_dask(plan, store, chunks, scheduler, progress, wait_workers, say):
                     client.close(timeout=2)
 
 
-def _collect_futures(client, futures: dict, store: ChunkStore, address: str, progress) -> None:
+#: [s] A study on a cluster gives up when no chunk has finished for this long, or for
+#: `STALL_FACTOR` times the longest a chunk could take on one thread (`work_estimate`), whichever is
+#: longer: a worker that stopped answering (frozen, its machine gone to sleep) otherwise keeps the
+#: scheduler waiting for ever. It says what it waits for after `STALL_NOTE` seconds.
+STALL_SECONDS = 600.0
+STALL_FACTOR = 3.0
+STALL_NOTE = 60.0
+
+
+def _collect_futures(client, futures: dict, store: ChunkStore, address: str, progress, *,
+                     stall: float = STALL_SECONDS, say=None) -> None:
     """Store each chunk as its task finishes; Ctrl-C and a lost scheduler are noticed within a
-    fraction of a second and `SCHEDULER_TIMEOUT` respectively."""
+    fraction of a second and `SCHEDULER_TIMEOUT` respectively; ``stall`` seconds without a chunk
+    finished is one line (`STALL_SECONDS`), said first after `STALL_NOTE` seconds."""
 
     lost_since = None
     no_workers_since = None
-    checked = time.monotonic()
+    checked = last_done = time.monotonic()
+    noted = False
     while futures:
         interrupts.check()
+        waited = time.monotonic() - last_done
+        if waited > stall:
+            raise CaseError(f"no chunk finished on the cluster at {address} for {waited:.0f} s ({len(futures)} "
+                            f"waiting; a worker stopped answering?); {store.count()} finished chunks are kept in "
+                            f"{store.folder} and the same command resumes from them", source="scheduler")
+        if waited > STALL_NOTE and not noted and say is not None:
+            say(f"  waiting for {len(futures)} chunks on {address}: none finished for {STALL_NOTE:.0f} s (giving up "
+                f"after {stall:.0f} s without one)")
+            noted = True
         finished = [f for f in futures if f.status in ("finished", "error", "cancelled", "lost")]
+        if finished:
+            last_done, noted = time.monotonic(), False
         for future in finished:
             chunk, indices = futures.pop(future)
             if future.status != "finished":
@@ -774,6 +800,8 @@ def check_where(*, workers: int | None = None, scheduler=None, device: str = "cp
                         source="workers")
     if device == "gpu" and scheduler is not None:
         raise CaseError("with a scheduler the cluster's workers compute, on their CPUs", source="device")
+    if wait_workers is not None and not 0.0 <= float(wait_workers) <= MAX_WAIT_WORKERS:
+        raise CaseError(f"must be within 0 ... {MAX_WAIT_WORKERS:g} s, got {wait_workers!r}", source="wait_workers")
     if wait_workers is not None and scheduler is None:
         raise CaseError("is the wait for a dask cluster's first worker: give a scheduler with it",
                         source="wait_workers")
@@ -839,6 +867,8 @@ def execute(plan: Plan, store=None, *, workers: int | None = None, scheduler: st
     store = MemoryStore(plan.key) if store is None else store.for_plan(plan.key)
     device, why = ("cpu", "") if scheduler else choose_device(device, plan.n_cases)
     store = store.for_device(device)
+    if hasattr(store, "refuse_links"):
+        store.refuse_links()
     store.remove_stale_temporaries()
     for other in store.others():
         say(f"  note: {other} holds chunks of another {what} definition or device (not used; delete it to free the "

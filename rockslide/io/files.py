@@ -27,6 +27,7 @@ import functools
 import os
 import platform
 import re
+import stat
 import threading
 import zlib
 from pathlib import Path
@@ -478,14 +479,18 @@ def _thread_lock(folder) -> threading.Lock:
 
 
 @contextlib.contextmanager
-def exclusive(lock_path, *, waiting_for: str, waited=None):
+def exclusive(lock_path, *, waiting_for: str, waited=None, shared: bool = False):
     """Hold an exclusive ``flock`` on the file ``lock_path`` (created if missing, never through a
     link) for the ``with`` block, waiting interruptibly for another process that holds it
     (`lock_interruptibly`, saying once that it waits for ``waiting_for``); the file is deleted when
     the block ends. Two sweeps (or fragility analyses) of one result file run one after the other
     this way: they share its chunk folder. A waiter that gets the lock of a file deleted meanwhile
     takes the new one (the inode at the name is checked). ``waited`` is called (with no argument)
-    if another process held it. Nothing where locks are unavailable."""
+    if another process held it. Nothing where locks are unavailable. ``shared``: a lock that others
+    holding it ``shared`` too do not wait for (the shards of one study), that an exclusive holder
+    waits for, and that is left in place at the end (another shard may still hold it). A link or
+    anything but a file at ``lock_path`` is refused: a lock that is not taken would let two studies
+    share, and remove, one chunk folder."""
     try:
         import fcntl  # noqa: F401
     except ImportError:  # pragma: no cover - Windows
@@ -495,11 +500,18 @@ def exclusive(lock_path, *, waiting_for: str, waited=None):
     while True:
         try:
             fd = os.open(lock_path, flags, 0o666)
-        except OSError:                          # cannot be made here: nothing to hold
-            yield
+        except OSError as exc:
+            if exc.errno in (errno.ELOOP, errno.EISDIR) or os.path.islink(lock_path):
+                raise OutputError("is a link or a folder where rockslide keeps a study's lock file; remove it "
+                                  "(rockslide never follows a link at a name it makes)",
+                                  source=str(lock_path)) from None
+            yield                                # cannot be made here: nothing to hold
             return
         try:
-            if lock_interruptibly(fd, waiting_for=waiting_for) and waited is not None:
+            if not stat.S_ISREG(os.fstat(fd).st_mode):      # (closed below, as after any error)
+                raise OutputError("is not a plain file where rockslide keeps a study's lock file; remove it",
+                                  source=str(lock_path))
+            if lock_interruptibly(fd, shared=shared, waiting_for=waiting_for) and waited is not None:
                 waited()
             same = os.stat(lock_path, follow_symlinks=False).st_ino == os.fstat(fd).st_ino
         except FileNotFoundError:
@@ -517,10 +529,11 @@ def exclusive(lock_path, *, waiting_for: str, waited=None):
     try:
         yield
     finally:
-        try:
-            os.unlink(lock_path)                 # while it is held: a waiter then takes a new one
-        except OSError:
-            pass
+        if not shared:
+            try:
+                os.unlink(lock_path)             # while it is held: a waiter then takes a new one
+            except OSError:
+                pass
         os.close(fd)
 
 
