@@ -42,7 +42,7 @@ import numpy as np
 from matplotlib import rcParams
 
 from .core.layout import OVERTURNED, REST, ROCK, ROCKSLIP, SLIP, STATE_NAMES
-from .errors import OutputError
+from .errors import CaseError, OutputError
 from .io.files import atomic_write, check_destination
 from .units import FIGURE_SIZES, STANDARD_GRAVITY, parse_figure_size, percent_text, unit_factor
 
@@ -1747,6 +1747,12 @@ def _spectrum_figure(x_edges, y_edges, category, rotation, curves, *, xlabel, yl
 # --------------------------------------------------------------------------------------------------
 
 
+#: Most pixels of a figure drawn (4 bytes each while drawn): ``--size 50x50 --dpi 1200`` passed each
+#: option's own bound and ran out of memory.
+MAX_PIXELS = 1e8
+RASTER_FORMATS = ("png", "jpg", "jpeg", "tif", "tiff", "webp", "raw", "rgba")
+
+
 def save_figure(fig: Figure, path, *, overwrite: bool = False, dpi: float | None = None, staging=None) -> Path:
     """Save ``fig`` to ``path`` atomically (a temporary file in the same folder, then a rename).
 
@@ -1768,6 +1774,12 @@ def save_figure(fig: Figure, path, *, overwrite: bool = False, dpi: float | None
                           + ", ".join(f".{k}" for k in sorted(supported)), source=str(path))
     check_destination(path, overwrite=overwrite, example="out/case.png")
     dpi = DPI if dpi is None else dpi
+    width, height = fig.get_size_inches()
+    pixels = width * height * dpi * dpi
+    if fmt in RASTER_FORMATS and not pixels <= MAX_PIXELS:      # gigabytes of raster: refused before drawing
+        raise CaseError(f"a figure of {width:g} x {height:g} in at {dpi:g} dpi has {pixels:.3g} pixels; at most "
+                        f"{MAX_PIXELS:.0e} (about {4 * MAX_PIXELS / 1e6:.0f} MB to draw): a smaller size or dpi",
+                        source="size/dpi")
     with atomic_write(path, overwrite=overwrite, what="figure", staging=staging) as handle:
         if fmt == "png":
             canvas = fig.canvas if isinstance(fig.canvas, FigureCanvasAgg) else FigureCanvasAgg(fig)

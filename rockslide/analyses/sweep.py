@@ -55,7 +55,7 @@ import numpy as np
 from .. import interrupts
 from ..case import Case, case_with
 from ..core import kernel as K
-from ..core.simulate import ground_array
+from ..core.simulate import ground_array, tail_samples
 from ..engine.axes import (  # noqa: F401  (the engine's vocabulary, re-exported: `sweep.AXES`, `sweep.parse_axis`...)
     _RETIRED_LABELS,
     AXES,
@@ -67,7 +67,17 @@ from ..engine.axes import (  # noqa: F401  (the engine's vocabulary, re-exported
     parse_axis,
 )
 from ..engine.outcomes import MODE_BITS, STATUS_FLAGS, sweep_variables  # noqa: F401  (re-exported)
-from ..engine.plan import MAX_GRID_POINTS, Plan, Supports, assemble, case_inputs, check_memory, default_chunk_size
+from ..engine.plan import (
+    MAX_GRID_POINTS,
+    SUPPORT_BYTES_PER_SAMPLE,
+    Plan,
+    Supports,
+    assemble,
+    case_inputs,
+    check_bytes,
+    check_memory,
+    default_chunk_size,
+)
 from ..engine.prepare import (
     ABSURD_ACCELERATION_IN_G,
     RunWarning,
@@ -222,6 +232,7 @@ def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = N
         return _plan_pulses(case, axes, ratio, chunk_size, n, progress)
 
     records, entries = _read_records(case, records_dir, records)
+    _check_supports(case, axes, records)
     # what the block stands on, unscaled: the record (with two horizontal components, the motion
     # along the block's orientation), or each floor's motion from it; one per distinct orientation
     # and floor of the grid (--azimuth, --floor-period), laid end to end in the kernel's input
@@ -294,6 +305,20 @@ def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = N
                     factor_h=factors[0][scale, context], factor_v=factors[1][scale, context], base=supports.base(),
                     first=first[other], count=count[other], record_end=record_end[other], records=entries,
                     chunk_size=chunk_size, rows=other)
+
+
+def _check_supports(case: Case, axes, records: dict) -> None:
+    """Refuse a grid whose orientations and floors (each a ground motion of its own: `Supports`)
+    would hold more memory than the machine has, before any is computed (10^6 orientations of a
+    long record ran out of memory)."""
+    varied = [a for a in axes if a.name in ("azimuth", "floor_period")]
+    n = math.prod(len(a) for a in varied)
+    horizontal = records.get("horizontal")
+    if n < 2 or horizontal is None:
+        return
+    samples = horizontal.data.size + tail_samples(case.ground.tail, horizontal.dt)
+    check_bytes(n * samples * SUPPORT_BYTES_PER_SAMPLE, f"{n} ground motions of {samples} samples (one per "
+                f"{' and '.join(a.name.replace('_', ' ') for a in varied)})", "/".join(a.kind.option for a in varied))
 
 
 class _Grid:

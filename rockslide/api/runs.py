@@ -105,7 +105,7 @@ class RunResult:
 def run(case: Case | Mapping | str | Path, *, records_dir: str | Path | None = None, history: bool = True,
         progress: Callable[[float, float], None] | None = None, outputs=None, ensemble: int | None = None,
         seed: int = 1, device: str = "cpu", workers: int | None = None, report: Callable[[str], None] | None = None,
-        pga=None, vertical_factor=None, amplitude=None) -> RunResult:
+        pga=None, vertical_factor=None, amplitude=None, bars=None) -> RunResult:
     """Compute one case, as ``rockslide run`` does.
 
     Parameters
@@ -134,7 +134,9 @@ def run(case: Case | Mapping | str | Path, *, records_dir: str | Path | None = N
     workers : int, optional
         The ensemble's threads (default: all cores).
     report : callable, optional
-        Called with each note for the user (a long run, a first compile).
+        Called with each note for the user (a long run, a first compile, a long ensemble).
+    bars : callable, optional
+        Makes the ensemble's progress bar (as `sweep_study`'s ``bars``).
     pga, vertical_factor, amplitude : str or float, optional
         The case at another intensity, as a sweep's point at these values (``pga="0.6g"`` is the
         case with ``ground.scale.pga_horizontal: 0.6 g``; SI numbers, or strings with units).
@@ -169,11 +171,11 @@ def run(case: Case | Mapping | str | Path, *, records_dir: str | Path | None = N
         from ..analyses import ensemble as ens
         n = ens.DEFAULT_MEMBERS if ensemble is True else ensemble
         eplan = ens.plan_ensemble(case, n, seed=seed, records_dir=folder, records=prepared.records)
+    where = {"device": device, "workers": workers, "say": say, "bars": bars}
     if outputs is not None:
-        return _run_into(outputs, prepared, eplan, started, say=say, progress=progress, device=device,
-                         workers=workers)
+        return _run_into(outputs, prepared, eplan, started, progress=progress, **where)
     result = engine.simulate_prepared(prepared, progress=progress)
-    summary = None if eplan is None else _neighbourhood(eplan, result, device=device, workers=workers)[0]
+    summary = None if eplan is None else _neighbourhood(eplan, result, **where)[0]
     return _run_result(prepared, result, summary)
 
 
@@ -190,16 +192,23 @@ def _run_result(prepared, result, summary, **more) -> RunResult:
                      floor=floor, **more)
 
 
-def _neighbourhood(eplan, result, *, device="cpu", workers=None, progress=None):
-    """The ensemble of a run just computed: its summary, dimension and member variables."""
+def _neighbourhood(eplan, result, *, device="cpu", workers=None, say=None, bars=None):
+    """The ensemble of a run just computed: its summary, dimension and member variables; a long one
+    says how long it may take (``say``) and shows its progress (``bars``)."""
     from .. import interrupts
     from ..analyses import ensemble as ens
+    from .studies import _no_bar
 
-    return ens.compute(eplan, result.summary.overturned, device=device, workers=workers,
-                       progress=progress or (lambda cases: interrupts.check()))
+    with (bars or _no_bar)(f"{eplan.plan.case.name}: neighbours", eplan.n, "member") as update:
+        def tell(members: int) -> None:
+            interrupts.check()
+            update(members)
+
+        return ens.compute(eplan, result.summary.overturned, device=device, workers=workers, progress=tell,
+                           report=say, what="ensemble", label=eplan.plan.case.name, unit="member")
 
 
-def _run_into(outputs, prepared, eplan, started, *, say, progress, device, workers) -> RunResult:
+def _run_into(outputs, prepared, eplan, started, *, say, progress, device, workers, bars) -> RunResult:
     """`run` with its files (``outputs``): the command line's run."""
     from ..engine import prepare as engine
     from ..io import results
@@ -223,7 +232,8 @@ def _run_into(outputs, prepared, eplan, started, *, say, progress, device, worke
             result = engine.simulate_prepared(prepared, on_chunk=writer.append_history if streamed else None,
                                               progress=progress)
             if eplan is not None:
-                summary, dimension, group = _neighbourhood(eplan, result, device=device, workers=workers)
+                summary, dimension, group = _neighbourhood(eplan, result, device=device, workers=workers, say=say,
+                                                           bars=bars)
             writer.finish(result, **_stored_run(case, prepared, summary, None if group is None else (dimension, group)))
         if outputs.plot:
             from ..plots import response_figure

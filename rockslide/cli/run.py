@@ -12,7 +12,7 @@ from .. import api
 from ..errors import CaseError
 from ..units import parse_quantity
 from .app import dpi_option, json_line, main, records_dir_option, size_option
-from .console import RunProgress, reporter
+from .console import RunProgress, bars, reporter
 
 #: Largest ``plot --time-shift`` [s]: the bound of a case's start time (``ground.start``).
 MAX_TIME_SHIFT = 1e6
@@ -71,7 +71,7 @@ def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, members, s
     with RunProgress(case.name) as progress:
         result = api.run(case, records_dir=records_dir, outputs=outputs, progress=progress, seed=seed, device=device,
                          ensemble=True if robustness and members is None else members, report=reporter(err=as_json),
-                         pga=pga, vertical_factor=vertical_factor, amplitude=amplitude)
+                         pga=pga, vertical_factor=vertical_factor, amplitude=amplitude, bars=bars())
     elapsed = time.perf_counter() - started
     if as_json:
         click.echo(json_line({**api.run_payload(result), "files": outputs.files(), "elapsed_s": round(elapsed, 3)}))

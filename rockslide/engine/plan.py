@@ -215,6 +215,20 @@ def default_chunk_size(n_cases: int) -> int:
     return int(max(size, math.ceil(n_cases / MAX_CHUNK_FILES)))
 
 
+def check_bytes(needed: float, what: str, source: str) -> None:
+    """Refuse a study that would hold ``needed`` bytes for ``what`` where this machine has less
+    memory available (`available_memory`): one line naming both, before anything is built."""
+    available = available_memory()
+    if available is not None and needed > available:
+        raise CaseError(f"{what} need about {needed / 1e9:.3g} GB of memory; {available / 1e9:.3g} GB are available "
+                        "here: fewer values, a shorter record or a larger machine", source=source)
+
+
+#: [bytes] Memory each distinct ground motion of a study holds per sample (`Supports`): the kernel's
+#: four rows of float64, the motion itself and what computing it takes.
+SUPPORT_BYTES_PER_SAMPLE = 64
+
+
 def check_memory(n_cases: int, source: str) -> None:
     """Refuse a study whose client would need more memory than this machine has available
     (`available_memory`), in one line saying both figures; nothing where it cannot be told."""
