@@ -367,7 +367,7 @@ def _check_counts(data: bytes, fmt: str, source: str) -> None:
             words = line.split()
             if len(words) == 3 and words[0] == "element" and words[1] in ("vertex", "face"):
                 try:
-                    counts[words[1]] = int(words[2])
+                    counts[{"vertex": "vertices", "face": "faces"}[words[1]]] = int(words[2])
                 except ValueError:
                     raise OutputError(f"PLY header line {line.strip()!r}: the count is not an integer",
                                       source=source) from None
@@ -402,12 +402,21 @@ def _solid(mesh) -> None:
                             "self-touching surface)", source=source)
         notes.append("triangles of inconsistent winding turned to agree with their neighbours")
     scale = float(np.max(np.ptp(mesh.vertices, axis=0)))
-    if mesh.volume < 0.0 and abs(mesh.volume) > 1e-9 * scale**3:
+    volume = _signed_volume(mesh)
+    if volume < 0.0 and abs(volume) > 1e-9 * scale**3:
         mesh.invert()          # a consistent closed mesh inside out: every face turned, nothing else
         notes.append("faces turned outward (the file had them inward)")
-    if not mesh.volume > 1e-9 * scale**3:
-        raise CaseError(f"the mesh encloses no volume ({mesh.volume:.3g} m^3 in a box of {scale:.3g} m): "
+        volume = -volume
+    if not volume > 1e-9 * scale**3:
+        raise CaseError(f"the mesh encloses no volume ({volume:.3g} m^3 in a box of {scale:.3g} m): "
                         "a flat or degenerate surface", source=source)
+
+
+def _signed_volume(mesh) -> float:
+    """The volume [m^3] a closed mesh encloses, negative when its faces point inward (the divergence
+    theorem: a sixth of the sum of the triple products of the triangles' corners)."""
+    t = np.asarray(mesh.triangles, dtype=float)
+    return float(np.sum(np.einsum("ij,ij->i", t[:, 0], np.cross(t[:, 1], t[:, 2])))) / 6.0
 
 
 # --------------------------------------------------------------------------------------------------
@@ -509,7 +518,8 @@ def _min_width(points: np.ndarray) -> float:
         length = math.hypot(*edge)
         if length == 0.0:
             continue
-        best = min(best, float(np.max(np.abs(np.cross(edge, points - a)))) / length)
+        rel = points - a
+        best = min(best, float(np.max(np.abs(edge[0] * rel[:, 1] - edge[1] * rel[:, 0]))) / length)
     return 0.0 if best == math.inf else best
 
 
