@@ -345,3 +345,19 @@ def test_density_and_mass_are_checked():
         planar_body(mesh, azimuth=EAST, density=-1.0)
     with pytest.raises(CaseError, match="contact_tolerance"):
         planar_body(mesh, azimuth=EAST, contact_tolerance=0.0)
+
+
+def test_the_meshes_page_runs(tmp_path, monkeypatch, capsys):
+    """docs/meshes.md's example runs as written and prints the text the page shows after it."""
+    import re
+
+    from conftest import REPO
+
+    page = (REPO / "docs" / "meshes.md").read_text()
+    code = re.findall(r"```python\n(.*?)```", page, flags=re.S)
+    shown = re.findall(r"```text\n(.*?)```", page, flags=re.S)
+    assert len(code) == 1 and len(shown) == 1
+    monkeypatch.chdir(tmp_path)
+    exec(compile(code[0], "docs/meshes.md", "exec"), {})          # noqa: S102 - the page's own example
+    assert capsys.readouterr().out == shown[0]
+    assert (tmp_path / "rock.png").stat().st_size > 10_000
