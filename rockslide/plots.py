@@ -2015,7 +2015,9 @@ def body_figure(bodies, *, title: str | None = None, size=None) -> Figure:
 def _body_panel(ax, body) -> None:
     from matplotlib.patches import Arc
 
-    outline = np.asarray(body.outline, dtype=float)
+    outline = np.asarray(body.outline if body.outline is not None else
+                         [[[-body.b1, 0.0], [body.b2, 0.0], [body.b2, 2 * body.h]],
+                          [[-body.b1, 0.0], [body.b2, 2 * body.h], [-body.b1, 2 * body.h]]], dtype=float)
     collection = PolyCollection(outline, facecolors=BODY_COLOUR, edgecolors=BODY_COLOUR, linewidths=0.8,
                                 rasterized=len(outline) > 2000)
     ax.add_collection(collection)
@@ -2053,7 +2055,8 @@ def _body_panel(ax, body) -> None:
                  fontsize=_pt(10))
     ax.set_xlabel("along u [m]")
     ax.set_ylabel("height [m]")
-    ax.grid(True, color="0.93", lw=0.6, zorder=0)
+    ax.set_axisbelow(True)
+    ax.grid(True, color="0.93", lw=0.6)
 
 
 __all__ += ["body_figure"]

@@ -210,7 +210,8 @@ def planar_body(mesh, *, azimuth: float, density: float | None = None, mass: flo
     Parameters
     ----------
     mesh : trimesh.Trimesh
-        A closed mesh [m] (`read_mesh`), in the mesh frame (x east, y north, z up).
+        A closed mesh [m] (`read_mesh`), in the mesh frame (x east, y north, z up). A mesh whose faces
+        point inward is turned outward in place (as `read_mesh` does).
     azimuth : float
         The direction ``u`` [rad], clockwise from north (``+y``).
     density : float, optional
@@ -265,6 +266,9 @@ def box_bodies(width: float, depth: float, height: float, mass: float | None, or
     orientation : float
         The azimuth of the width [rad], clockwise from north (``block.orientation``).
     """
+    orientation = _finite(orientation, "orientation", None)
+    if mass is not None and not _finite(mass, "mass", None) > 0.0:
+        raise CaseError(f"the box's mass must be positive [kg], got {mass!r}", field="mass")
     sides = {"width": width, "depth": depth, "height": height}
     for name, value in sides.items():
         if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
