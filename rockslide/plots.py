@@ -1972,3 +1972,103 @@ def _risk_figure(curves, grid, fragility, *, xlabel, state, title, figsize) -> F
         top.set_title(title, fontsize=_pt(11))
     _freeze_ticks(fig)
     return fig
+
+
+# --------------------------------------------------------------------------------------------------
+# A body from a mesh: its planar outline, support, centre of mass and tipping angles
+# --------------------------------------------------------------------------------------------------
+
+#: Pivot 1 (``ah > 0`` tips the body over it) and pivot 2, as in the figures of the response.
+PIVOT_COLOURS = ("#1f4e9c", "#c0392b")
+BODY_COLOUR = "#cfcac0"
+
+
+def body_figure(bodies, *, title: str | None = None, size=None) -> Figure:
+    """A body's planar models (`io.mesh.PlanarBody`): one panel per plane, side by side.
+
+    Each panel shows the body's silhouette on the vertical plane of its direction ``u`` (``u`` to
+    the right, seen from the side of azimuth + 90 deg: the mesh's triangles facing that side,
+    projected), the support polygon's extent along ``u`` on the resting plane, the centre of mass
+    and the tipping angles ``alpha_1``, ``alpha_2`` drawn from the pivots (``tan(alpha_i) = b_i/h``:
+    pivot 1, on the left, is the one a positive ground acceleration along ``u`` tips the body over).
+
+    Parameters
+    ----------
+    bodies : PlanarBody or sequence of PlanarBody
+        From `io.mesh.planar_bodies` or `io.mesh.box_bodies`.
+    title : str, optional
+        Default: the mesh file's name.
+    size : None, "column", "page", "slide", "WxH" or (width, height)
+        The figure's size [in] (`figure_size`; default 5 x 5.2 in a panel across).
+    """
+    bodies = (bodies,) if hasattr(bodies, "b1") else tuple(bodies)
+    n = len(bodies)
+    figsize = figure_size(size, (5.0 * n, 5.2), column=3.3 * n, page=4.4)
+    stacked = n > 1 and figsize[0] < 5.0
+    with _style(figsize[0]):
+        fig = Figure(figsize=figsize, dpi=DPI, layout="constrained")
+        axes = fig.subplots(n if stacked else 1, 1 if stacked else n, squeeze=False).ravel()
+        for ax, body in zip(axes, bodies, strict=True):
+            _body_panel(ax, body)
+        handles = [Patch(facecolor=BODY_COLOUR, edgecolor="none", label="body (silhouette)"),
+                   Line2D([], [], color="black", lw=3.0, label="support polygon, along u"),
+                   Line2D([], [], ls="none", marker="o", mfc="white", mec="black", label="centre of mass"),
+                   Line2D([], [], color=PIVOT_COLOURS[0], lw=1.4, label="α₁: pivot 1, tips at ah/g = b₁/h (ah > 0)"),
+                   Line2D([], [], color=PIVOT_COLOURS[1], lw=1.4, label="α₂: pivot 2, tips at ah/g = −b₂/h")]
+        fig.legend(handles=handles, loc="outside lower center", ncols=2 if figsize[0] < 12.0 else 3, frameon=False)
+        source = bodies[0].source
+        headline = title if title is not None else (os.path.basename(source) if source else "box")
+        _headline(fig, headline, "planar bodies: an uncoupled screening (no rocking about other edges, "
+                  "no 3-D coupling)")
+        _freeze_ticks(fig)
+    return fig
+
+
+def _body_panel(ax, body) -> None:
+    from matplotlib.patches import Arc
+
+    outline = np.asarray(body.outline if body.outline is not None else
+                         [[[-body.b1, 0.0], [body.b2, 0.0], [body.b2, 2 * body.h]],
+                          [[-body.b1, 0.0], [body.b2, 2 * body.h], [-body.b1, 2 * body.h]]], dtype=float)
+    collection = PolyCollection(outline, facecolors=BODY_COLOUR, edgecolors=BODY_COLOUR, linewidths=0.8,
+                                rasterized=len(outline) > 2000)
+    ax.add_collection(collection)
+    s = np.array([p[0] for p in body.support])
+    ax.plot([s.min(), s.max()], [0.0, 0.0], color="black", lw=3.0, solid_capstyle="butt", zorder=3)
+    low, high = float(outline[..., 0].min()), float(outline[..., 0].max())
+    top = float(outline[..., 1].max())
+    pad = 0.08 * max(high - low, top)
+    ax.axhline(0.0, color="0.45", lw=0.8, zorder=2)
+    ax.plot([0.0, 0.0], [0.0, body.h], color="0.3", lw=0.8, ls=":", zorder=3)
+    radius = 0.45 * body.h
+    for i, (x, b) in enumerate(((-body.b1, body.b1), (body.b2, body.b2))):
+        colour = PIVOT_COLOURS[i]
+        alpha = math.degrees(math.atan2(b, body.h))
+        ax.plot([x, 0.0], [0.0, body.h], color=colour, lw=1.4, zorder=4)
+        ax.plot([x, x], [0.0, 1.05 * body.h], color=colour, lw=0.9, ls="--", zorder=4)
+        start, end = (90.0 - alpha, 90.0) if i == 0 else (90.0, 90.0 + alpha)
+        ax.add_patch(Arc((x, 0.0), 2 * radius, 2 * radius, theta1=start, theta2=end, color=colour, lw=1.0, zorder=4))
+        ax.plot([x], [0.0], marker="^", ms=7, color=colour, mec="black", mew=0.6, zorder=5, clip_on=False)
+        label = f"α{'₁₂'[i]} = {alpha:.3g}°\nb{'₁₂'[i]} = {b:.3g} m"
+        ax.annotate(label, (x, 0.0), xytext=(0, -4), textcoords="offset points", ha="right" if i == 0 else "left",
+                    va="top", fontsize=_pt(8), color=colour)
+    ax.plot([0.0], [body.h], marker="o", ms=7, mfc="white", mec="black", mew=1.2, zorder=6)
+    ax.annotate(f"h = {body.h:.3g} m", (0.0, body.h), xytext=(6, 6), textcoords="offset points", fontsize=_pt(8),
+                bbox={"boxstyle": "round,pad=0.15", "fc": "white", "ec": "none", "alpha": 0.8}, zorder=7)
+    left, right = min(low, -body.b1) - pad, max(high, body.b2) + pad
+    bottom, upper = -2.5 * pad, top + pad
+    spare = max(0.0, 1.0 * (upper - bottom) - (right - left))      # a slender body: room for the labels
+    ax.set_xlim(left - 0.5 * spare, right + 0.5 * spare)
+    ax.set_ylim(bottom, upper)
+    ax.set_aspect("equal", adjustable="box")
+    direction = math.degrees(body.azimuth) % 360.0
+    name = f"{body.plane} ({direction:.4g}°)" if body.plane in ("width", "depth") else f"azimuth {direction:.4g}°"
+    ax.set_title(f"along {name}, u →\ntan α₁ = {body.b1 / body.h:.3g}, tan α₂ = {body.b2 / body.h:.3g}",
+                 fontsize=_pt(10))
+    ax.set_xlabel("along u [m]")
+    ax.set_ylabel("height [m]")
+    ax.set_axisbelow(True)
+    ax.grid(True, color="0.93", lw=0.6)
+
+
+__all__ += ["body_figure"]
