@@ -294,6 +294,65 @@ def rate(fragility, curve: HazardCurve) -> Rate:
                 below=float(p[0] * lam[0]))
 
 
+def rate_below(fragility, curve: HazardCurve, x: float) -> float:
+    """The part of ``lambda_F`` [1/yr] from motions with the IM below ``x`` [SI]: eq. (1) over the
+    hazard curve's levels up to ``x`` (``x`` is put among the levels, where the curve's log-log
+    interpolation is the curve itself). All of it from ``x`` above the last level (the tail is
+    counted at ``P(F | x_m)``, eq. (2)); 0 at or below the first."""
+    levels = curve.levels
+    if x <= levels[0]:
+        return 0.0
+    if x > levels[-1]:
+        return rate(fragility, curve).rate
+    cut = HazardCurve(curve.name, np.unique(np.r_[levels, x]), np.empty(0))
+    cut = HazardCurve(curve.name, cut.levels, curve.rate(cut.levels))
+    parts = rate(fragility, cut).contributions
+    return float(parts[:int(np.searchsorted(cut.levels, x))].sum())
+
+
+@dataclass(frozen=True)
+class RestsOn:
+    """What a rate rests on (`rests_on`): shares of ``lambda_F`` [-] from where no run supports it.
+
+    Attributes
+    ----------
+    below_first_exceedance : float
+        From intensities below the lowest level at which any run reached the state.
+    above_tested : float
+        From intensities above the highest level tested (with the tail above the hazard curve).
+    extrapolated : float
+        Their sum.
+    stripes_rate : float
+        [1/yr] the rate with the per-level fractions made monotone (isotonic), NaN when not known.
+    deviation : float
+        ``rate / stripes_rate - 1`` for a fitted curve (NaN otherwise).
+    """
+
+    below_first_exceedance: float
+    above_tested: float
+    extrapolated: float
+    stripes_rate: float = math.nan
+    deviation: float = math.nan
+
+
+#: A rate with more than this share from intensities where no run supports it draws a warning.
+EXTRAPOLATED_WARNING = 0.10
+
+
+def rests_on(fragility, curve: HazardCurve, total: float, *, first_exceedance: float | None,
+             highest_tested: float | None, stripes=None) -> RestsOn:
+    """The shares of ``total`` (the rate of ``fragility`` under ``curve``) from intensities below
+    ``first_exceedance`` and above ``highest_tested`` [SI], and the rate of ``stripes`` (a
+    `Tabulated` of the per-level fractions) to compare a fitted curve with."""
+    if not total > 0:
+        return RestsOn(math.nan, math.nan, math.nan)
+    below = 0.0 if first_exceedance is None else rate_below(fragility, curve, first_exceedance) / total
+    above = 0.0 if highest_tested is None else 1.0 - rate_below(fragility, curve, highest_tested) / total
+    other = rate(stripes, curve).rate if stripes is not None else math.nan
+    deviation = total / other - 1.0 if stripes is not None and other > 0 else math.nan
+    return RestsOn(below, max(above, 0.0), below + max(above, 0.0), other, deviation)
+
+
 def rate_range(fragilities, curve: HazardCurve, confidence: float | None = None) -> tuple[float, float]:
     """The range of ``lambda_F`` [1/yr] over ``fragilities``: with ``confidence``, its central
     percentile interval (the fragilities are samples, e.g. the fits of bootstrap resamples); without,

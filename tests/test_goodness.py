@@ -1,0 +1,177 @@
+"""Honest statistics (issue 40): goodness of fit of the lognormal, the isotonic curve, the
+monotonicity test, the probit surface on two measures, what a rate rests on, and pelicun's
+sequential states. Pure numerics on counts: no run of the kernel."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy import integrate, stats
+
+from rockslide.analyses import fragility as fr
+from rockslide.analyses import goodness as gf
+from rockslide.analyses import risk as rk
+
+G = 9.80665
+#: The statue on Kobe (issue 40): block 1.8 m x 0.45 m, friction 0.6, e 0.85, Kobe N-S + U-D, 100
+#: parameter sets per level. The issue gives 0.45 ... 0.75 g; at 0.40 g no run overturned.
+KOBE_LEVELS = np.array([0.40, 0.45, 0.50, 0.55, 0.60, 0.65, 0.70, 0.75]) * G
+KOBE_N = np.full(8, 100.0)
+KOBE_Z = np.array([0, 19, 58, 100, 16, 12, 30, 83], dtype=float)
+
+
+def kobe_fit():
+    a, b, ok = fr.probit_mle(np.log(KOBE_LEVELS), KOBE_N[None], KOBE_Z[None])
+    assert ok[0] and b[0] > 0
+    return math.exp(-a[0] / b[0]), 1.0 / b[0]
+
+
+# --------------------------------------------------------------------------------------------------
+# Goodness of fit
+# --------------------------------------------------------------------------------------------------
+
+
+def test_deviance_is_the_likelihood_ratio_written_with_scipy_binom():
+    """The deviance against scipy's binomial log-pmf at the fractions (saturated) and at p."""
+    n = np.array([10.0, 20, 30, 5])
+    z = np.array([0.0, 7, 30, 2])
+    p = np.array([0.05, 0.4, 0.9, 0.5])
+    saturated = stats.binom.logpmf(z, n, z / n).sum()
+    model = stats.binom.logpmf(z, n, p).sum()
+    assert gf.deviance(n, z, p) == pytest.approx(2 * (saturated - model), rel=1e-12)
+
+
+def test_kobe_lognormal_is_rejected_and_the_first_line_says_so():
+    median, beta = kobe_fit()
+    fit = gf.lognormal_goodness(KOBE_LEVELS, KOBE_N, KOBE_Z, median, beta)
+    assert fit.dof == 6
+    assert fit.rejected and fit.p_value < 0.01
+    assert fit.not_monotone and fit.monotone_p_value < 0.01
+    assert fit.sentence().startswith("lognormal REJECTED")
+
+
+def test_kobe_isotonic_is_monotone_and_pools_only_the_violators():
+    """Pool adjacent violators by hand: 0.58, 1.00, 0.16, 0.12, 0.30 pool to their mean 0.432 (equal
+    weights); 0 and 0.19 below and 0.83 above are kept, and sit within their Wilson intervals."""
+    iso = gf.isotonic(KOBE_N, KOBE_Z)
+    assert (np.diff(iso) >= 0).all()
+    expected = np.array([0.0, 0.19, 0.432, 0.432, 0.432, 0.432, 0.432, 0.83])
+    np.testing.assert_allclose(iso, expected, atol=1e-12)
+    low, high = gf.wilson_interval(KOBE_N, KOBE_Z)
+    kept = [0, 1, 7]
+    assert ((iso[kept] >= low[kept]) & (iso[kept] <= high[kept])).all()
+
+
+def test_isotonic_is_the_constrained_maximum_likelihood():
+    """Against scipy's SLSQP maximising the binomial likelihood under p_j <= p_{j+1}, unequal n."""
+    rng = np.random.default_rng(5)
+    n = rng.integers(3, 30, size=7).astype(float)
+    z = rng.binomial(n.astype(int), [0.1, 0.5, 0.3, 0.6, 0.4, 0.9, 0.7]).astype(float)
+    eps = 1e-9
+
+    def negative(p):
+        p = np.clip(p, eps, 1 - eps)
+        return -np.sum(z * np.log(p) + (n - z) * np.log(1 - p))
+
+    cons = [{"type": "ineq", "fun": lambda p, j=j: p[j + 1] - p[j]} for j in range(6)]
+    from scipy import optimize
+    best = optimize.minimize(negative, np.full(7, 0.5), method="SLSQP", constraints=cons, bounds=[(eps, 1 - eps)] * 7,
+                             options={"ftol": 1e-14, "maxiter": 1000})
+    iso = gf.isotonic(n, z)
+    assert negative(iso) <= best.fun + 1e-7
+    np.testing.assert_allclose(iso, best.x, atol=1e-4)
+
+
+def test_a_true_lognormal_is_rejected_no_more_often_than_the_level_allows():
+    """200 suites drawn from a known lognormal (10 levels, 40 runs each), fitted and tested at level
+    0.05: the rejections are Binomial(200, 0.05) if the test holds its level; more than its 99.9 %
+    quantile (19) would say the test rejects true lognormals too often."""
+    levels = np.geomspace(0.1, 1.2, 10) * G
+    n = np.full(10, 40.0)
+    p_true = stats.norm.cdf(np.log(levels / (0.45 * G)) / 0.5)
+    rng = np.random.default_rng(40)
+    p_values = []
+    for _ in range(200):
+        z = rng.binomial(40, p_true).astype(float)
+        a, b, ok = fr.probit_mle(np.log(levels), n[None], z[None])
+        assert ok[0]
+        fit = gf.lognormal_goodness(levels, n, z, math.exp(-a[0] / b[0]), 1 / b[0], resamples=0)
+        p_values.append(fit.p_value)
+    rejected = int((np.array(p_values) < 0.05).sum())
+    assert rejected <= stats.binom.ppf(0.999, 200, 0.05)
+    assert rejected >= stats.binom.ppf(0.001, 200, 0.05)       # and not vacuously conservative
+
+
+def test_monotone_test_does_not_reject_rising_noise():
+    """Fractions of a rising curve with noise: the bootstrap p-value of the isotonic ratio is not
+    small; a large fall (1.0 then 0.1, 100 runs each) is."""
+    n = np.full(6, 30.0)
+    z = np.array([2.0, 6, 5, 15, 14, 27])
+    _, p = gf.monotone_test(n, z, resamples=500)
+    assert p > 0.05
+    _, p = gf.monotone_test(np.full(3, 100.0), np.array([100.0, 10, 90]), resamples=500)
+    assert p < 0.01
+
+
+def test_wilson_interval_matches_its_closed_form():
+    low, high = gf.wilson_interval(np.array([20.0]), np.array([5.0]))
+    q = stats.norm.ppf(0.975)
+    p, n = 0.25, 20
+    centre = (p + q * q / (2 * n)) / (1 + q * q / n)
+    half = q / (1 + q * q / n) * math.sqrt(p * (1 - p) / n + q * q / (4 * n * n))
+    assert low[0] == pytest.approx(centre - half, rel=1e-12)
+    assert high[0] == pytest.approx(centre + half, rel=1e-12)
+
+
+# --------------------------------------------------------------------------------------------------
+# Two measures
+# --------------------------------------------------------------------------------------------------
+
+
+def test_probit_surface_recovers_its_coefficients():
+    """2 x 10^4 runs drawn from P = Phi(1.5 + 2.0 ln PGA + 0.8 ln PGV): each coefficient within 3
+    standard errors (the observed information's) of the truth."""
+    rng = np.random.default_rng(11)
+    m = 20_000
+    pga = np.exp(rng.normal(math.log(0.5), 0.4, m))
+    pgv = np.exp(rng.normal(math.log(0.4), 0.5, m))
+    truth = np.array([1.5, 2.0, 0.8])
+    y = rng.random(m) < stats.norm.cdf(truth[0] + truth[1] * np.log(pga) + truth[2] * np.log(pgv))
+    fit = gf.probit_surface(pga, pgv, y)
+    assert fit.converged
+    assert (np.abs(fit.coefficients - truth) <= 3 * fit.standard_errors).all()
+    assert (fit.standard_errors < 0.1).all()         # the test has teeth: errors are small
+
+
+def test_probit_surface_refuses_separated_runs():
+    fit = gf.probit_surface([1.0, 2, 3, 4], [1.0, 1, 1, 1], [0, 0, 1, 1])
+    assert not fit.converged and "separate" in fit.note
+
+
+# --------------------------------------------------------------------------------------------------
+# What a rate rests on
+# --------------------------------------------------------------------------------------------------
+
+
+def test_share_of_the_rate_below_an_intensity_is_its_closed_form():
+    """Power-law hazard lambda = k0 x^-k, lognormal fragility: the rate from intensities below X is
+    the partial integral of P(F|x) |d lambda| over (0, X]; by parts, k0 theta^-k exp(k^2 beta^2 / 2)
+    Phi(ln(X/theta)/beta + k beta) - P(F|X) lambda(X). The hazard curve starts at 1e-7 g, where
+    P(F) < 1e-40."""
+    k0, k, theta, beta = 1e-4, 2.5, 0.5 * G, 0.4
+    levels = np.geomspace(1e-7, 50.0, 40) * G
+    curve = rk.HazardCurve("power", levels, k0 * levels ** -k)
+    fragility = rk.Lognormal(theta, beta)
+    total = rk.rate(fragility, curve).rate
+    for x in (0.2 * G, 0.37 * G, 0.5 * G, 0.81 * G):
+        closed = (k0 * theta ** -k * math.exp(0.5 * (k * beta) ** 2) * stats.norm.cdf(math.log(x / theta) / beta
+                                                                                    + k * beta)
+                  - fragility(x) * k0 * x ** -k)
+        assert rk.rate_below(fragility, curve, x) == pytest.approx(closed, rel=1e-6)
+        # and by quadrature of eq. (1), independently
+        quad = integrate.quad(lambda u: fragility(math.exp(u)) * k * k0 * math.exp(-k * u), math.log(levels[0]),
+                              math.log(x), limit=200, epsabs=0, epsrel=1e-10)[0]
+        assert rk.rate_below(fragility, curve, x) == pytest.approx(quad, rel=1e-6)
+    assert rk.rate_below(fragility, curve, levels[-1] * 2) == pytest.approx(total, rel=1e-12)
