@@ -326,7 +326,8 @@ def ensemble(case: Case | Mapping | str | Path, n: int = 200, *, seed: int = 1,
 def risk(fragility: str | Path | None = None, hazard=None, *, damage: str = "overturn", stripes: bool = False,
          median: str | float | None = None, beta: float | None = None, im: str = "pga",
          life: str | float = 50.0, age: str | float | None = None, confidence: float = 0.95,
-         hazard_units: str | None = None, trim_poe: bool = False, drop_zero_poe: bool = False):
+         hazard_units: str | None = None, trim_poe: bool = False, drop_zero_poe: bool = False,
+         model: str = "lognormal", fragility_table: str | Path | None = None):
     """The annual rate of a damage state at a site: a fragility integrated over hazard curves, as
     ``rockslide risk`` (`analyses.risk`; docs/risk.md).
 
@@ -367,6 +368,13 @@ def risk(fragility: str | Path | None = None, hazard=None, *, damage: str = "ove
         is one between other values with it.
     drop_zero_poe : bool
         The same as ``trim_poe`` (its former name).
+    model : str
+        The curve taken from a fragility file: ``"lognormal"`` (its maximum-likelihood fit),
+        ``"isotonic"`` (the monotone maximum-likelihood curve of its stripes) or ``"empirical"`` (the
+        fractions themselves, as ``stripes``); each linear in ln x between the levels.
+    fragility_table : str or Path, optional
+        Instead of a fragility file: a CSV of levels and probabilities with the measure and unit in
+        its header (``PGA [g], probability``; `io.hazard.read_fragility_table`).
 
     Returns
     -------
@@ -383,17 +391,26 @@ def risk(fragility: str | Path | None = None, hazard=None, *, damage: str = "ove
 
     analysis = risk_analysis(fragility, hazard, damage=damage, stripes=stripes, median=median, beta=beta, im=im,
                              life=life, age=age, confidence=confidence, hazard_units=hazard_units,
-                             trim_poe=trim_poe or drop_zero_poe)
+                             trim_poe=trim_poe or drop_zero_poe, model=model, fragility_table=fragility_table)
     return datasets.study_dataset(*rk.dataset(analysis))
 
 
 def risk_analysis(fragility=None, hazard=None, *, damage: str = "overturn", stripes: bool = False, median=None,
                   beta=None, im: str = "pga", life=50.0, age=None, confidence: float = 0.95, hazard_units=None,
-                  trim_poe: bool = False):
+                  trim_poe: bool = False, model: str = "lognormal", fragility_table=None):
     """`risk`'s `analyses.risk.Analysis` (for the command's printout and figure); same arguments."""
     from .analyses import risk as rk
 
-    used, measure = _risk_fragility(fragility, damage=damage, stripes=stripes, median=median, beta=beta, im=im)
+    if model not in rk.MODELS:
+        raise CaseError(f"unknown model {model!r}; expected {', '.join(rk.MODELS)}", source="--model")
+    if fragility_table is not None:
+        if fragility is not None or median is not None or beta is not None:
+            raise CaseError("give a fragility table, a fragility file or --median/--beta, one of them",
+                            source="--fragility-table")
+        used, measure = _table_fragility(fragility_table, damage)
+    else:
+        used, measure = _risk_fragility(fragility, damage=damage, stripes=stripes or model == "empirical",
+                                        median=median, beta=beta, im=im, model=model)
     curves, about, notes = _hazard_curves(hazard, measure, hazard_units, trim_poe, along_block=used.along_block)
     if not 0.0 < float(confidence) < 1.0:
         raise CaseError(f"must be within 0 and 1 (e.g. 0.95), got {confidence!r}", source="--confidence")
@@ -405,7 +422,21 @@ def risk_analysis(fragility=None, hazard=None, *, damage: str = "overturn", stri
                       notes=notes)
 
 
-def _risk_fragility(path, *, damage, stripes, median, beta, im):
+def _table_fragility(path, damage):
+    """The fragility of `risk --fragility-table` and its intensity measure."""
+    from .analyses import fragility as fr
+    from .analyses import risk as rk
+    from .io import hazard as hz
+    from .units import unit_factor
+
+    name, unit, levels, p = hz.read_fragility_table(path)
+    measure = fr.parse_im(name)
+    levels = levels * unit_factor(unit, measure.kind, source=str(path))
+    return rk.FragilityUsed(rk.Tabulated(levels, p), damage, str(path), "tabulated (linear in ln x between its "
+                            "levels, constant outside)", highest_tested=float(levels[-1])), measure
+
+
+def _risk_fragility(path, *, damage, stripes, median, beta, im, model="lognormal"):
     """The fragility of `risk` and its intensity measure."""
     from .analyses import fragility as fr
     from .analyses import risk as rk
@@ -437,15 +468,24 @@ def _risk_fragility(path, *, damage, stripes, median, beta, im):
     if damage not in states:
         raise CaseError(f"no damage state {damage!r} in the file; it has {', '.join(states)}", source="--damage")
     at = ds.sel(damage_state=damage)
-    if stripes:
-        fraction = np.asarray(at["fraction_exceeded"].values, dtype=np.float64)
-        levels = np.asarray(ds["level"].values, dtype=np.float64)
-        known = np.isfinite(fraction)
-        if not known.any():
+    fraction = np.asarray(at["fraction_exceeded"].values, dtype=np.float64)
+    levels = np.asarray(ds["level"].values, dtype=np.float64)
+    known = {**rk.evidence(levels, fraction, at["isotonic"].values if "isotonic" in at else None),
+             "vertical_note": str(ds.attrs.get("vertical_note", ""))}
+    if stripes or model == "isotonic":
+        if not np.isfinite(fraction).any():
             raise CaseError(f"no stripe has a run inside the model for {damage!r}", source=str(path))
-        return rk.FragilityUsed(rk.Tabulated(levels[known], fraction[known]), damage, str(path),
+        if model == "isotonic":
+            return rk.FragilityUsed(known["stripes"], damage, str(path), "isotonic curve of the stripes (monotone "
+                                    "maximum likelihood, linear in ln x between them, constant outside)",
+                                    along_block=along, **known), measure
+        kept = np.isfinite(fraction)
+        return rk.FragilityUsed(rk.Tabulated(levels[kept], fraction[kept]), damage, str(path),
                                 "empirical stripes (linear in ln x between them, constant outside)",
-                                variants=[], along_block=along), measure
+                                variants=[], along_block=along, **known), measure
+    if "gof_rejected" in at and int(at["gof_rejected"]) == 1:
+        known["rejection"] = (f"lognormal is REJECTED by its per-level fractions (deviance {float(at['gof_deviance']):.3g}"
+                              f" on {int(at['gof_dof'])} degrees of freedom, p = {float(at['gof_p_value']):.2g})")
     theta, b = float(at["median"]), float(at["beta"])
     note = str(at["fit_note"].values)
     if not math.isfinite(theta) or (not math.isfinite(b) and note):
@@ -468,14 +508,15 @@ def _risk_fragility(path, *, damage, stripes, median, beta, im):
             uncertainty = (f"the {level:.0%} percentile interval of the rate over the fits of the {len(pairs)} "
                            f"bootstrap resamples of the records{left_out}")
             return rk.FragilityUsed(rk.Lognormal(theta, b), damage, path, "lognormal fit", theta, b,
-                                    [rk.Lognormal(m, s) for m, s in pairs], uncertainty, level, along), measure
+                                    [rk.Lognormal(m, s) for m, s in pairs], uncertainty, level, along,
+                                    **known), measure
     if all(math.isfinite(v) for v in bounds):
         variants = rk.lognormal_box(bounds[:2], bounds[2:])
         uncertainty = (f"the range of the rate over the {level:.0%} bootstrap intervals of the median "
                        f"({measure.show(bounds[0])} ... {measure.show(bounds[1])}) and of beta ({bounds[2]:.3g} ... "
                        f"{bounds[3]:.3g}), on a grid over their rectangle (marginal intervals: a wide range)")
     return rk.FragilityUsed(rk.Lognormal(theta, b), damage, str(path), "lognormal fit", theta, b, variants,
-                            uncertainty, along_block=along), measure
+                            uncertainty, along_block=along, **known), measure
 
 
 def _two_components(attrs) -> bool:

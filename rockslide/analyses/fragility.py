@@ -80,6 +80,7 @@ from ..engine.prepare import (
 from ..errors import CaseError, RecordError
 from ..io import records as rec
 from ..units import STANDARD_GRAVITY, parse_quantity, unit_factor
+from . import goodness as gf
 from . import sweep as sw
 
 __all__ = ["IntensityMeasure", "INTENSITY_MEASURES", "parse_im", "parse_levels", "DamageState",
@@ -918,6 +919,15 @@ class StateFit:
         The lowest and the highest intensity level run [SI of the IM] (`caveats`).
     samples : numpy.ndarray
         ``float64[k, 2]``: the (median, beta) of the fitted resamples (for the figure's band).
+    goodness : goodness.GoodnessOfFit or None
+        The lognormal against the per-level fractions and the fractions' monotonicity
+        (`goodness.lognormal_goodness`); None without runs.
+    isotonic : numpy.ndarray
+        ``float64[L]``: the monotone maximum-likelihood curve at the levels (`goodness.isotonic`;
+        NaN where no run is inside the model).
+    isotonic_band : numpy.ndarray or None
+        ``float64[2, L]``: its percentile band over the bootstrap resamples of the records (None
+        without resamples).
     """
 
     median: float | None = None
@@ -939,6 +949,9 @@ class StateFit:
     n_records: int = 0
     tested: tuple = ()
     samples: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
+    goodness: object = None
+    isotonic: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    isotonic_band: np.ndarray | None = None
 
 
 def stripe_counts(exceeded: np.ndarray):
@@ -1107,6 +1120,11 @@ def fit_state(levels, exceeded: np.ndarray, *, resamples: int = BOOTSTRAP_RESAMP
             out.note = "the fitted probability falls as the intensity rises: no fit"
         else:
             out.median, out.beta = float(math.exp(-a[0] / b[0])), float(1.0 / b[0])
+    out.isotonic = gf.isotonic(n, z)
+    if n.sum() > 0:
+        out.goodness = gf.lognormal_goodness(levels, n, z, out.median, out.beta)
+    if resamples > 0 and n.sum() > 0:
+        out.isotonic_band = _isotonic_band(exceeded, resamples, seed, per_record)
     capacity, out.n_censored, out.moments_note = _first_exceedance(levels, exceeded, show)
     if capacity is not None:
         logs = np.log(capacity)
@@ -1114,6 +1132,28 @@ def fit_state(levels, exceeded: np.ndarray, *, resamples: int = BOOTSTRAP_RESAMP
     if resamples > 0 and (out.median is not None or out.moments_median is not None):
         _bootstrap(out, s, exceeded, capacity, resamples, seed, per_record)
     return out
+
+
+def _resample_weights(records: int, resamples: int, seed: int, per_record: int) -> np.ndarray:
+    """``float64[resamples, records * per_record]``: how often each row is drawn when the records
+    are resampled with replacement (each with its ``per_record`` rows); `_bootstrap`'s draws."""
+    rng = np.random.default_rng(seed)
+    picks = rng.integers(0, records, size=(resamples, records))
+    weights = np.zeros((resamples, records))
+    np.add.at(weights, (np.repeat(np.arange(resamples), records), picks.ravel()), 1.0)
+    return np.repeat(weights, per_record, axis=1) if per_record > 1 else weights
+
+
+def _isotonic_band(exceeded, resamples: int, seed: int, per_record: int) -> np.ndarray:
+    """The percentile band (:data:`CONFIDENCE`) of the isotonic curve over resamples of the records."""
+    weights = _resample_weights(exceeded.shape[0] // per_record, resamples, seed, per_record)
+    n = weights @ (exceeded >= 0).astype(np.float64)
+    z = weights @ (exceeded == 1).astype(np.float64)
+    curves = gf.isotonic(n, z)
+    tails = (50.0 * (1.0 - CONFIDENCE), 100.0 - 50.0 * (1.0 - CONFIDENCE))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)          # a level without runs in every resample
+        return np.nanpercentile(curves, tails, axis=0)
 
 
 def _first_exceedance(levels, exceeded, show):
@@ -1284,6 +1324,31 @@ def dataset(fplan: FragilityPlan, analysis: Analysis, command_line: str = "") ->
     variables["fraction_exceeded"] = (("damage_state", "level"), fraction,
                                       {"units": "1", "long_name": "fraction of the runs inside the model "
                                        "that reach the state (NaN: none inside)"})
+    low, high = gf.wilson_interval(n, z, CONFIDENCE)
+    for side, values in (("lower", low), ("upper", high)):
+        variables[f"fraction_{side}"] = (("damage_state", "level"), values, {
+            "units": "1", "long_name": f"{side} bound of the fraction's {CONFIDENCE:.0%} Wilson interval (NaN: no run)"})
+    variables["isotonic"] = (("damage_state", "level"), np.array([f.isotonic for f in analysis.fits]), {
+        "units": "1", "long_name": "monotone maximum-likelihood fragility (pool adjacent violators on the fractions, "
+        "weighted by the runs; NaN: no run)"})
+    for k, side in enumerate(("lower", "upper")):
+        band = np.array([f.isotonic_band[k] if f.isotonic_band is not None else np.full(levels.size, np.nan)
+                         for f in analysis.fits])
+        variables[f"isotonic_{side}"] = (("damage_state", "level"), band, {
+            "units": "1", "long_name": f"{side} bound of the isotonic curve's {CONFIDENCE:.0%} percentile band over "
+            "the bootstrap resamples of the records (NaN: none)"})
+    goods = [f.goodness for f in analysis.fits]
+    for name, text, kind in (
+            ("deviance", "deviance of the lognormal against the per-level binomial (saturated) model", np.float64),
+            ("dof", "degrees of freedom of the deviance: levels with runs minus 2", np.int32),
+            ("p_value", "chi-squared p-value of the deviance (NaN: no test)", np.float64),
+            ("monotone_statistic", "likelihood ratio of the isotonic fit against the saturated model", np.float64),
+            ("monotone_p_value", "its p-value by parametric bootstrap from the isotonic fit", np.float64),
+            ("rejected", f"the lognormal is rejected (p < {gf.REJECT_LEVEL:g})", np.int8),
+            ("not_monotone", f"the fractions fall by more than sampling noise (p < {gf.REJECT_LEVEL:g})", np.int8)):
+        missing = -1 if kind is not np.float64 else math.nan
+        values = np.array([missing if g is None else getattr(g, name) for g in goods], dtype=kind)
+        variables[f"gof_{name}"] = (("damage_state",), values, {"units": "1", "long_name": text})
     per_state = ("damage_state",)
     variables["definition"] = (per_state, np.array([s.long_name for s in analysis.states], dtype=object),
                                {"long_name": "what reaching the state means (an overturned block reaches "
@@ -1400,6 +1465,12 @@ def json_summary(fplan: FragilityPlan, analysis: Analysis) -> dict:
                         "median_ci": _pair(fit.moments_median_ci), "beta_ci": _pair(fit.moments_beta_ci),
                         "n_censored": fit.n_censored, "note": fit.moments_note or None},
             "fraction_exceeded": [None if k == 0 else float(x / k) for x, k in zip(zs, ns, strict=True)],
+            "fraction_interval": [[_finite(a), _finite(b)] for a, b in zip(*gf.wilson_interval(ns, zs, CONFIDENCE),
+                                                                          strict=True)],
+            "isotonic": [_finite(v) for v in fit.isotonic],
+            "isotonic_band": None if fit.isotonic_band is None else [[_finite(v) for v in row]
+                                                                     for row in fit.isotonic_band],
+            "goodness_of_fit": _goodness_json(fit.goodness),
             "caveats": caveats(fit, im),
         }
         if own is not None:
@@ -1424,6 +1495,25 @@ def json_summary(fplan: FragilityPlan, analysis: Analysis) -> dict:
     }
 
 
+def _finite(value):
+    value = float(value)
+    return value if math.isfinite(value) else None
+
+
+def _goodness_json(g) -> dict | None:
+    if g is None:
+        return None
+    return {"deviance": _finite(g.deviance), "dof": g.dof, "p_value": _finite(g.p_value),
+            "test": "likelihood ratio of the lognormal against the per-level binomial model, chi-squared with "
+                    "levels - 2 degrees of freedom",
+            "rejected": g.rejected, "reject_below": gf.REJECT_LEVEL, "max_deviation": _finite(g.max_deviation),
+            "monotone": {"statistic": _finite(g.monotone_statistic), "p_value": _finite(g.monotone_p_value),
+                         "not_monotone": g.not_monotone,
+                         "test": "likelihood ratio of the isotonic fit against the per-level binomial model, p by "
+                                 f"parametric bootstrap ({gf.MONOTONE_RESAMPLES} draws from the isotonic fit)"},
+            "summary": g.sentence(), "note": g.note or None}
+
+
 def _pair(pair):
     return None if pair is None else [float(pair[0]), float(pair[1])]
 
@@ -1437,14 +1527,16 @@ def figure(fplan: FragilityPlan, analysis: Analysis, *, size=None):
     levels = np.asarray(fplan.levels.values)
     grid, curves = _curves(levels, analysis.fitted, analysis.states, analysis.fits, fplan.im, analysis.nominal_fits)
     text = caption(fplan.plan.case.text, suite=str(fplan.suite.source), records=len(fplan.suite.entries), im=fplan.im,
-                   levels=levels, step=fplan.plan.step)
+                   levels=levels, step=fplan.plan.step, vertical_note=fplan.vertical_note)
     return fragility_figure(levels / fplan.im.display_scale, grid / fplan.im.display_scale, curves,
                             xlabel=fplan.im.axis_label(), confidence=CONFIDENCE, title=title, size=size, caption=text)
 
 
-def caption(case_text: str, *, suite: str, records: int, im: IntensityMeasure, levels, step, version=None) -> str:
+def caption(case_text: str, *, suite: str, records: int, im: IntensityMeasure, levels, step, version=None,
+            vertical_note: str = "") -> str:
     """`plots.case_caption` of a fragility analysis: the suite, its records and the levels they
-    were scaled to, in place of the case's records."""
+    were scaled to, in place of the case's records; ``vertical_note`` (the case's vertical record
+    left out, `FragilityPlan.vertical_note`) said after them."""
     from .._version import __version__
     from ..plots import case_caption
 
@@ -1452,6 +1544,8 @@ def caption(case_text: str, *, suite: str, records: int, im: IntensityMeasure, l
     unit = f" {im.display_unit}" if im.display_unit else ""
     ground = (f"suite {Path(suite).name} ({records} records) scaled to {im.label} "
               f"{levels.min():.4g} to {levels.max():.4g}{unit} ({levels.size} levels)")
+    if vertical_note:
+        ground += "; HORIZONTAL ONLY: the case's vertical record is left out (the suite has none; --case-vertical)"
     return case_caption(case_text, ground=ground, step=step, version=version or __version__)
 
 
@@ -1465,7 +1559,11 @@ def _curves(levels, exceeded, states, fits, im: IntensityMeasure, nominal_fits=(
         n, z = stripe_counts(exceeded[..., i])
         with np.errstate(invalid="ignore", divide="ignore"):
             fraction = np.where(n > 0, z / n, np.nan)
-        curve = {"label": _legend(state, fit, im), "fraction": fraction}
+        label = _legend(state, fit, im)
+        if fit.goodness is not None and fit.goodness.rejected:
+            label += f" (lognormal REJECTED, p {'< 1e-6' if fit.goodness.p_value < 1e-6 else f'= {fit.goodness.p_value:.2g}'})"
+        curve = {"label": label, "fraction": fraction,
+                 "fraction_interval": np.array(gf.wilson_interval(n, z, CONFIDENCE)), "isotonic": gf.isotonic(n, z)}
         if fit.median is not None:
             curve["fitted"] = fragility(grid, fit.median, fit.beta)
         if fit.moments_median is not None and fit.moments_beta > 0:
@@ -1486,6 +1584,10 @@ def describe_fit(state: DamageState, fit: StateFit, im: IntensityMeasure) -> str
     counts = f"{fit.n_exceeded} of {fit.n_runs - fit.n_outside_model} runs reach it"
     if fit.median is None:
         line = f"{state.name}: {fit.note}"
+    elif fit.goodness is not None and fit.goodness.rejected:
+        # first, before any number of the curve: it does not describe the data
+        line = (f"{state.name}: {fit.goodness.sentence()}: its median and beta do not describe these runs "
+                f"(use --model isotonic or --model empirical); {_legend(state, fit, im).split(': ', 1)[1]}")
     else:
         line = _legend(state, fit, im)
         if fit.resamples and fit.resamples_fitted < fit.resamples:
@@ -1495,6 +1597,21 @@ def describe_fit(state: DamageState, fit: StateFit, im: IntensityMeasure) -> str
     elif fit.moments_note:
         line += f"; no method-of-moments estimate: {fit.moments_note.replace(': no moments', '')}"
     return f"{line}; {counts}"
+
+
+def goodness_lines(fit: StateFit) -> list[str]:
+    """The goodness of fit of a state's lognormal and the monotonicity of its fractions, one line
+    each (`goodness.GoodnessOfFit`); [] without runs."""
+    g = fit.goodness
+    if g is None:
+        return []
+    lines = [] if g.rejected else [g.sentence()]           # a rejection leads `describe_fit`'s line
+    if not math.isnan(g.max_deviation):
+        lines.append(f"the curve is {g.max_deviation:.2f} from a per-level fraction at most")
+    lines.append(g.monotone_sentence())
+    if g.note:
+        lines.append(g.note)
+    return lines
 
 
 def caveats(fit: StateFit, im: IntensityMeasure) -> list[str]:
@@ -1608,7 +1725,7 @@ def stored_curves(stored) -> dict:
     step = attrs.get("integration_step")
     text = caption(str(attrs.get("case_text", "")), suite=str(attrs.get("suite", "?")), records=exceeded.shape[0],
                    im=im, levels=levels, step=None if step is None else float(step),
-                   version=str(attrs.get("rockslide_version", "?")))
+                   version=str(attrs.get("rockslide_version", "?")), vertical_note=str(attrs.get("vertical_note", "")))
     nominal = ()
     turns = int(attrs.get("orientations_per_record", 1))
     if "sample" not in coords:

@@ -182,14 +182,19 @@ class GoodnessOfFit:
         """``the lognormal is rejected by its stripes (deviance 412 on 6 degrees of freedom, p <
         1e-6)``, or that it is not."""
         if not self.dof >= 1:
-            return "no goodness-of-fit test (fewer than 3 levels with runs)"
+            return "no goodness-of-fit test of the lognormal (fewer than 3 levels with runs)"
+        if math.isnan(self.deviance):
+            return "no lognormal to test"
         p = "p < 1e-6" if self.p_value < 1e-6 else f"p = {self.p_value:.2g}"
         verdict = "REJECTED" if self.rejected else "not rejected"
         return (f"lognormal {verdict} by the per-level fractions (deviance {self.deviance:.3g} on {self.dof} "
                 f"degrees of freedom, {p}; rejected below {REJECT_LEVEL:g})")
 
     def monotone_sentence(self) -> str:
+        """Whether the per-level fractions fall by more than sampling noise, in words."""
         p = f"p = {self.monotone_p_value:.2g}"
+        if math.isnan(self.monotone_statistic):
+            return "no monotonicity test"
         if self.monotone_statistic == 0.0:
             return "the fractions rise with the level"
         if self.not_monotone:
@@ -199,17 +204,23 @@ class GoodnessOfFit:
                f"{self.monotone_statistic:.3g}, {p})"
 
 
-def lognormal_goodness(levels, n, z, median: float, beta: float, *, resamples: int = MONOTONE_RESAMPLES,
+def lognormal_goodness(levels, n, z, median: float | None, beta: float | None, *, resamples: int = MONOTONE_RESAMPLES,
                        seed: int = MONOTONE_SEED) -> GoodnessOfFit:
     """The goodness of fit of ``Phi(ln(x / median) / beta)`` to stripes ``z`` of ``n`` at ``levels``
-    [SI of the IM] (module notes)."""
+    [SI of the IM] (module notes); ``median`` None: the monotonicity test alone. ``resamples`` 0:
+    no monotonicity test (NaN)."""
     levels, n, z = (np.asarray(v, dtype=np.float64) for v in (levels, n, z))
-    p = ndtr(np.log(levels / median) / beta)
     inside = n > 0
+    statistic, monotone_p = monotone_test(n, z, resamples=resamples, seed=seed) if resamples else (math.nan, math.nan)
+    if median is None:
+        return GoodnessOfFit(deviance=math.nan, dof=int(inside.sum()) - 2, p_value=math.nan,
+                             monotone_statistic=statistic, monotone_p_value=monotone_p, rejected=False,
+                             not_monotone=bool(monotone_p < REJECT_LEVEL), max_deviation=math.nan,
+                             note="no lognormal fit to test")
+    p = ndtr(np.log(levels / median) / beta)
     dev = float(deviance(n, z, p))
     dof = int(inside.sum()) - 2
     p_value = float(stats.chi2.sf(dev, dof)) if dof >= 1 else math.nan
-    statistic, monotone_p = monotone_test(n, z, resamples=resamples, seed=seed)
     with np.errstate(invalid="ignore", divide="ignore"):
         deviation = float(np.max(np.abs(p[inside] - z[inside] / n[inside]))) if inside.any() else math.nan
     expected = np.minimum(n * p, n * (1.0 - p))[inside]

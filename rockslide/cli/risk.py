@@ -22,6 +22,12 @@ from .studies import _command_line
               help="The fragility file's damage state (e.g. 'rotation>0.5alpha').")
 @click.option("--stripes", is_flag=True, help="Use the fragility file's empirical fractions per stripe (linear "
               "in ln x between them) instead of its lognormal fit.")
+@click.option("--model", type=click.Choice(["lognormal", "isotonic", "empirical"]), default="lognormal",
+              show_default=True, help="The fragility file's curve: its lognormal fit, the isotonic (monotone "
+              "maximum-likelihood) curve of its stripes, or the stripes' fractions (= --stripes).")
+@click.option("--fragility-table", type=click.Path(path_type=Path), default=None, metavar="FILE",
+              help="Instead of a fragility file: a CSV of levels and probabilities, its header naming the measure "
+              "and unit ('PGA [g], probability').")
 @click.option("--median", default=None, metavar="LEVEL", help="Without a fragility file: the median of a "
               "lognormal fragility, with its unit (0.5g).")
 @click.option("--beta", type=float, default=None, help="Without a fragility file: its logarithmic standard "
@@ -50,7 +56,7 @@ from .studies import _command_line
 @click.option("--json", "as_json", is_flag=True, help="Print the result as one JSON object on stdout.")
 @dpi_option("PNG figure")
 @size_option
-def risk(fragility_file, hazard_files, damage, stripes, median, beta, im_text, life, age, confidence, hazard_units,
+def risk(fragility_file, hazard_files, damage, stripes, model, fragility_table, median, beta, im_text, life, age, confidence, hazard_units,
          trim_poe, out_dir, name, overwrite, no_plot, as_json, dpi, size):
     """Annual rate of a damage state at a site: a fragility integrated over hazard curves,
     FRAGILITY_FILE (NAME.fragility.h5) or --median/--beta -> OUT/NAME.risk.h5 and OUT/NAME.risk.png.
@@ -79,11 +85,12 @@ def risk(fragility_file, hazard_files, damage, stripes, median, beta, im_text, l
     ctx = click.get_current_context()
     analysis = api.risk_analysis(fragility_file, list(hazard_files), damage=damage, stripes=stripes, median=median,
                                  beta=beta, im=im_text, life=life, age=age, confidence=confidence,
-                                 hazard_units=hazard_units, trim_poe=trim_poe)
+                                 hazard_units=hazard_units, trim_poe=trim_poe, model=model,
+                                 fragility_table=fragility_table)
     folder = expand_user(out_dir, source="--out-dir") if out_dir is not None else \
         (fragility_file.parent if fragility_file is not None else Path("."))
     stem = name or (fragility_file.name.removesuffix(".h5").removesuffix(".fragility") if fragility_file
-                    else "lognormal")
+                    else fragility_table.stem if fragility_table else "lognormal")
     h5_path, png_path = folder / f"{stem}.risk.h5", folder / f"{stem}.risk.png"
     if _result_set(h5_path, png_path, overwrite=overwrite, no_plot=no_plot, example="out/case.risk"):
         files.refuse_existing(h5_path, overwrite=False)
