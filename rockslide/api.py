@@ -484,8 +484,9 @@ def _risk_fragility(path, *, damage, stripes, median, beta, im, model="lognormal
                                 "empirical stripes (linear in ln x between them, constant outside)",
                                 variants=[], along_block=along, **known), measure
     if "gof_rejected" in at and int(at["gof_rejected"]) == 1:
-        known["rejection"] = (f"lognormal is REJECTED by its per-level fractions (deviance {float(at['gof_deviance']):.3g}"
-                              f" on {int(at['gof_dof'])} degrees of freedom, p = {float(at['gof_p_value']):.2g})")
+        known["rejection"] = (f"lognormal is REJECTED by its per-level fractions (deviance "
+                              f"{float(at['gof_deviance']):.3g} on {int(at['gof_dof'])} degrees of freedom, "
+                              f"p = {float(at['gof_p_value']):.2g})")
     theta, b = float(at["median"]), float(at["beta"])
     note = str(at["fit_note"].values)
     if not math.isfinite(theta) or (not math.isfinite(b) and note):

@@ -1327,7 +1327,8 @@ def dataset(fplan: FragilityPlan, analysis: Analysis, command_line: str = "") ->
     low, high = gf.wilson_interval(n, z, CONFIDENCE)
     for side, values in (("lower", low), ("upper", high)):
         variables[f"fraction_{side}"] = (("damage_state", "level"), values, {
-            "units": "1", "long_name": f"{side} bound of the fraction's {CONFIDENCE:.0%} Wilson interval (NaN: no run)"})
+            "units": "1",
+            "long_name": f"{side} bound of the fraction's {CONFIDENCE:.0%} Wilson interval (NaN: no run)"})
     variables["isotonic"] = (("damage_state", "level"), np.array([f.isotonic for f in analysis.fits]), {
         "units": "1", "long_name": "monotone maximum-likelihood fragility (pool adjacent violators on the fractions, "
         "weighted by the runs; NaN: no run)"})
@@ -1561,7 +1562,8 @@ def _curves(levels, exceeded, states, fits, im: IntensityMeasure, nominal_fits=(
             fraction = np.where(n > 0, z / n, np.nan)
         label = _legend(state, fit, im)
         if fit.goodness is not None and fit.goodness.rejected:
-            label += f" (lognormal REJECTED, p {'< 1e-6' if fit.goodness.p_value < 1e-6 else f'= {fit.goodness.p_value:.2g}'})"
+            p = fit.goodness.p_value
+            label += f" (lognormal REJECTED, p {'< 1e-6' if p < 1e-6 else f'= {p:.2g}'})"
         curve = {"label": label, "fraction": fraction,
                  "fraction_interval": np.array(gf.wilson_interval(n, z, CONFIDENCE)), "isotonic": gf.isotonic(n, z)}
         if fit.median is not None:

@@ -225,8 +225,9 @@ def lognormal_goodness(levels, n, z, median: float | None, beta: float | None, *
         deviation = float(np.max(np.abs(p[inside] - z[inside] / n[inside]))) if inside.any() else math.nan
     expected = np.minimum(n * p, n * (1.0 - p))[inside]
     note = ""
-    if dof >= 1 and (expected < MIN_EXPECTED).sum() > 0 and (expected < MIN_EXPECTED).sum() >= max(1, inside.sum() // 2):
-        note = (f"at {(expected < MIN_EXPECTED).sum()} of {int(inside.sum())} levels fewer than {MIN_EXPECTED:g} run is "
+    thin = int((expected < MIN_EXPECTED).sum())
+    if dof >= 1 and thin >= max(1, inside.sum() // 2):
+        note = (f"at {thin} of {int(inside.sum())} levels fewer than {MIN_EXPECTED:g} run is "
                 "expected on one side: the chi-squared p-value is rough")
     return GoodnessOfFit(deviance=dev, dof=dof, p_value=p_value, monotone_statistic=statistic,
                          monotone_p_value=monotone_p, rejected=bool(dof >= 1 and p_value < REJECT_LEVEL),

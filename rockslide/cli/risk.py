@@ -56,8 +56,8 @@ from .studies import _command_line
 @click.option("--json", "as_json", is_flag=True, help="Print the result as one JSON object on stdout.")
 @dpi_option("PNG figure")
 @size_option
-def risk(fragility_file, hazard_files, damage, stripes, model, fragility_table, median, beta, im_text, life, age, confidence, hazard_units,
-         trim_poe, out_dir, name, overwrite, no_plot, as_json, dpi, size):
+def risk(fragility_file, hazard_files, damage, stripes, model, fragility_table, median, beta, im_text, life, age,
+         confidence, hazard_units, trim_poe, out_dir, name, overwrite, no_plot, as_json, dpi, size):
     """Annual rate of a damage state at a site: a fragility integrated over hazard curves,
     FRAGILITY_FILE (NAME.fragility.h5) or --median/--beta -> OUT/NAME.risk.h5 and OUT/NAME.risk.png.
 
