@@ -175,3 +175,103 @@ def test_share_of_the_rate_below_an_intensity_is_its_closed_form():
                               math.log(x), limit=200, epsabs=0, epsrel=1e-10)[0]
         assert rk.rate_below(fragility, curve, x) == pytest.approx(quad, rel=1e-6)
     assert rk.rate_below(fragility, curve, levels[-1] * 2) == pytest.approx(total, rel=1e-12)
+
+
+# --------------------------------------------------------------------------------------------------
+# pelicun: sequential states, and pelicun's own probabilities
+# --------------------------------------------------------------------------------------------------
+
+
+def crossing_dataset(medians, betas, fractions, isotonic=None):
+    from rockslide.io.datasets import study_dataset
+
+    levels = np.array([0.1, 0.2, 0.3, 0.4, 0.6, 0.8, 1.0]) * G
+    coords = [("level", levels, {"units": "m/s^2"}),
+              ("damage_state", np.array(["overturn", "rotation>0.5alpha"], dtype=object), {})]
+    variables = {
+        "median": (("damage_state",), np.asarray(medians, float) * G, {"units": "m/s^2"}),
+        "beta": (("damage_state",), np.asarray(betas, float), {"units": "1"}),
+        "definition": (("damage_state",), np.array(["overturning", "max |rotation| > 0.5 alpha"], dtype=object), {}),
+        "fit_note": (("damage_state",), np.array(["", ""], dtype=object), {}),
+        "fraction_exceeded": (("damage_state", "level"), np.array(fractions, dtype=float), {"units": "1"}),
+    }
+    if isotonic is not None:
+        variables["isotonic"] = (("damage_state", "level"), np.array(isotonic, dtype=float), {"units": "1"})
+    return study_dataset(coords, variables, {"intensity_measure": "pga", "title": "t", "fit_method": "ml"})
+
+
+def test_crossing_lognormals_are_never_exported_as_they_are():
+    """Medians 0.3 g and 0.584 g with betas 0.2 and 0.6 cross at exp((0.6 ln 0.3 - 0.2 ln 0.584) / 0.4)
+    = 0.215 g: refused, naming both states and the crossing."""
+    from rockslide.errors import CaseError
+    from rockslide.io import pelicun as pl
+
+    fractions = [[0, 0, 0.3, 0.6, 0.9, 1, 1], [0, 0.1, 0.4, 0.7, 0.95, 1, 1]]
+    expected = math.exp((0.6 * math.log(0.3) - 0.2 * math.log(0.584)) / 0.4)
+    assert expected == pytest.approx(0.215, abs=5e-4)
+    with pytest.raises(CaseError, match=r"rotation>0.5alpha and overturn cross at 0\.215 g"):
+        pl.pelicun_row(crossing_dataset([0.584, 0.3], [0.6, 0.2], fractions), "X.1")
+    # the multilinear curves are made sequential: the higher state lowered to the lower where above
+    crossing = [[0, 0.2, 0.3, 0.6, 0.9, 1, 1], [0, 0.1, 0.4, 0.7, 0.95, 1, 1]]
+    row, notes = pl.pelicun_row(crossing_dataset([math.nan, math.nan], [math.nan, math.nan], crossing, crossing),
+                                "X.1", family="multilinear_CDF")
+    assert any("lowered" in n and "overturn" in n for n in notes)
+    x1, p1 = ([float(v) for v in part.split(",")] for part in row["LS1-Theta_0"].split("|"))
+    x2, p2 = ([float(v) for v in part.split(",")] for part in row["LS2-Theta_0"].split("|"))
+    grid = np.geomspace(0.05, 1.2, 200)
+    assert (np.interp(grid, x2, p2) <= np.interp(grid, x1, p1) + 1e-5).all()
+
+
+def _pelicun_uq():
+    """pelicun's random variables. pelicun 3.10 imports ``scipy.stats._mvn`` (a private module scipy
+    1.17 removed) for the multivariate normal CDF only, which a fragility's curves never call: a
+    stand-in module lets the rest of pelicun load."""
+    import sys
+    import types
+
+    pytest.importorskip("pelicun", reason="pelicun is not installed (pip install pelicun)")
+    try:
+        import scipy.stats._mvn  # noqa: F401
+    except ModuleNotFoundError:
+        sys.modules["scipy.stats._mvn"] = types.SimpleNamespace(mvndst=None)
+    try:
+        from pelicun import uq
+    except ImportError as exc:
+        pytest.skip(f"pelicun does not import here: {exc}")
+    return uq
+
+
+def _pelicun_cdf(uq, family, theta_0, theta_1, x):
+    """A limit state's CDF as pelicun's damage model builds it from the CSV's columns
+    (``DamageModel``: a multilinear Theta_0 split at '|' and ',')."""
+    if family == "multilinear_CDF":
+        xs, ps = (np.array(part.split(","), dtype=float) for part in theta_0.split("|"))
+        theta = np.column_stack((xs, ps))
+    else:
+        theta = np.array([float(theta_0), float(theta_1)])
+    rv = uq.rv_class_map(family)(name="FRG-X", theta=theta, truncation_limits=np.array([np.nan, np.nan]))
+    return rv.cdf(np.asarray(x, dtype=float))
+
+
+def test_pelicun_loads_the_export_and_gives_rockslides_probabilities(tmp_path):
+    """The exported CSV read back as a CSV; pelicun's own random variables of each limit state, at 20
+    intensities, equal rockslide's curves (the lognormal; the isotonic, linear in ln x, as risk
+    integrates it) to 1e-4."""
+    import csv
+
+    from rockslide import api
+
+    uq = _pelicun_uq()
+    fractions = [[0, 0, 0.3, 0.6, 0.9, 1, 1], [0, 0.1, 0.4, 0.7, 0.95, 1, 1]]
+    ds = crossing_dataset([0.35, 0.3], [0.3, 0.3], fractions, fractions)
+    levels = np.array([0.1, 0.2, 0.3, 0.4, 0.6, 0.8, 1.0])
+    x = np.geomspace(0.08, 1.3, 20)
+    for family, curves in (("lognormal", [rk.Lognormal(0.3, 0.3), rk.Lognormal(0.35, 0.3)]),
+                           ("multilinear_CDF", [rk.Tabulated(levels, np.array(fractions[1], float)),
+                                               rk.Tabulated(levels, np.array(fractions[0], float))])):
+        path, _ = api.export_pelicun(ds, "RS.x", tmp_path / f"{family}.csv", family=family)
+        with open(path, newline="") as f:
+            row = next(csv.DictReader(f))
+        for k, curve in enumerate(curves, start=1):
+            got = _pelicun_cdf(uq, row[f"LS{k}-Family"], row[f"LS{k}-Theta_0"], row[f"LS{k}-Theta_1"], x)
+            np.testing.assert_allclose(got, curve(x), atol=1e-4)
