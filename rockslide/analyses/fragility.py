@@ -731,8 +731,11 @@ def with_parameter_samples(fplan: FragilityPlan, samples: int, seed: int, chunk_
     Raises
     ------
     CaseError
-        ``samples`` out of range, no ``uncertain`` section, or ``uncertain.intensity`` (the
-        levels set the intensity).
+        ``samples`` out of range, or ``uncertain.intensity`` (the levels set the intensity).
+
+    Without an ``uncertain`` section the draws are from the stated neighbourhood of ``rockslide run
+    --ensemble`` (`ensemble.DEFAULTS`: friction +-5 %, size and slenderness +-2 %, restitution the
+    case's +-0.05), less the intensity; the file and the JSON list the distributions drawn from.
     """
     from . import ensemble as ens
 
@@ -741,8 +744,9 @@ def with_parameter_samples(fplan: FragilityPlan, samples: int, seed: int, chunk_
         raise CaseError(f"expected a whole number >= 0, got {samples!r}", source="--samples")
     dists = case.uncertain.given()
     if not dists:
-        raise CaseError("needs the case's uncertain section (size, slenderness, friction, restitution) to draw from",
-                        source="--samples")
+        # the stated neighbourhood of `rockslide run --ensemble` (`ensemble.DEFAULTS`), less the
+        # intensity, which the levels set
+        dists = {name: d for name, d in ens.distributions(case)[0].items() if name != "intensity"}
     if "intensity" in dists:
         raise CaseError("does not apply to a fragility analysis, whose levels set the intensity (remove it, or "
                         "run the case's neighbourhood with rockslide run --ensemble)", source=case.source,
