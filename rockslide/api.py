@@ -275,10 +275,10 @@ def fragility(case: Case | Mapping | str | Path, suite: str | Path, *, im: str =
     return datasets.study_dataset(*fr.dataset(fplan, analysis))
 
 
-def ensemble(case: Case | Mapping | str | Path, n: int = 200, *, seed: int = 1,
+def ensemble(case: Case | Mapping | str | Path, n: int | str = 200, *, seed: int = 1,
              records_dir: str | Path | None = None, device: str = "cpu", workers: int | None = None,
              scheduler=None, wait_workers: float | None = None, store=None,
-             progress: Callable[[int], None] | None = None):
+             progress: Callable[[int], None] | None = None, precision: float | None = None):
     """A verdict's neighbourhood: ``n`` cases drawn around ``case`` over what is uncertain, as
     ``rockslide run --ensemble n`` computes them (`analyses.ensemble`).
 
@@ -287,10 +287,14 @@ def ensemble(case: Case | Mapping | str | Path, n: int = 200, *, seed: int = 1,
     case : Case, mapping or path
         Its ``uncertain`` section says what varies (intensity, restitution, friction, size,
         slenderness); without one, the stated defaults (`analyses.ensemble.DEFAULTS`).
-    n : int
-        Members.
+    n : int or str
+        Members; or ``"auto"`` / ``"precision:W"`` as ``precision`` (0.1 / W).
     seed : int
         Seed of the Latin hypercube (the same seed gives the same members).
+    precision : float, optional
+        Add members until the 95 % interval of the probability of overturning is at most this wide
+        (`analyses.ensemble.to_precision`); the summary's ``n`` says how many it took and ``rounds``
+        the members of each round.
     records_dir, device, workers, scheduler, wait_workers, store, progress
         As in `sweep`.
 
@@ -312,10 +316,17 @@ def ensemble(case: Case | Mapping | str | Path, n: int = 200, *, seed: int = 1,
     case = _case(case)
     scheduler = check_where(workers=workers, scheduler=scheduler, device=device, wait_workers=wait_workers)
     nominal = run(case, records_dir=records_dir, history=False)
-    eplan = ens.plan_ensemble(case, n, seed=seed, records_dir=records.records_dir(records_dir))
-    summary, members, variables = ens.compute(eplan, nominal.summary.overturned, store=store, workers=workers,
-                                              scheduler=scheduler, device=device, progress=progress,
-                                              wait_workers=wait_workers)
+    if isinstance(n, str):
+        n, precision = ens.parse_members(n) if precision is None else (None, precision)
+    where = {"store": store, "workers": workers, "scheduler": scheduler, "device": device, "progress": progress,
+             "wait_workers": wait_workers}
+    if precision is not None:
+        eplan, summary, members, variables = ens.to_precision(case, float(precision), nominal.summary.overturned,
+                                                              seed=seed, records_dir=records.records_dir(records_dir),
+                                                              **where)
+    else:
+        eplan = ens.plan_ensemble(case, n, seed=seed, records_dir=records.records_dir(records_dir))
+        summary, members, variables = ens.compute(eplan, nominal.summary.overturned, **where)
     attrs = {"name": case.name, "nominal_verdict": nominal.summary.verdict, "p_overturn": summary["p_overturn"],
              "interval_low": summary["interval"][0], "interval_high": summary["interval"][1],
              "flips": summary["flips"], "robust": int(summary["robust"]), "seed": seed,

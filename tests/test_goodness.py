@@ -275,3 +275,49 @@ def test_pelicun_loads_the_export_and_gives_rockslides_probabilities(tmp_path):
         for k, curve in enumerate(curves, start=1):
             got = _pelicun_cdf(uq, row[f"LS{k}-Family"], row[f"LS{k}-Theta_0"], row[f"LS{k}-Theta_1"], x)
             np.testing.assert_allclose(got, curve(x), atol=1e-4)
+
+
+# --------------------------------------------------------------------------------------------------
+# Ensembles to a stated precision
+# --------------------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("k, n, width", [(30, 100, 0.05), (0, 100, 0.02), (100, 100, 0.05), (50, 100, 0.1)])
+def test_members_needed_is_the_fewest_with_that_width(k, n, width):
+    from rockslide.analyses import ensemble as ens
+
+    m = ens.members_needed(k, n, width)
+    p = min(max(k / n, 0.5 / n), 1 - 0.5 / n)
+    low, high = ens.wilson_interval(p * m, m)
+    assert high - low <= width
+    low, high = ens.wilson_interval(p * (m - 1), m - 1)
+    assert high - low > width
+    if k == 50:     # the normal approximation's 4 z^2 p (1 - p) / w^2 = 384, and Wilson's is close to it
+        assert abs(m - 4 * stats.norm.ppf(0.975) ** 2 * 0.25 / width ** 2) < 5
+
+
+def test_an_ensemble_to_a_precision_says_how_many_it_took():
+    """The example case's neighbourhood until the 95 % interval is within 0.15 wide."""
+    from conftest import REPO
+
+    from rockslide import api
+
+    ds = api.ensemble(REPO / "configs" / "example.yaml", "precision:0.15", seed=3)
+    import json
+    summary = json.loads(ds.attrs["ensemble"])
+    assert summary["interval"][1] - summary["interval"][0] <= 0.15
+    assert summary["n"] == summary["rounds"][-1] == ds.sizes["member"]
+    assert summary["precision"] == 0.15
+    if len(summary["rounds"]) > 1:        # the round before was not precise enough
+        assert summary["rounds"][-2] < summary["n"]
+
+
+def test_ensemble_members_option_reads_auto_and_precision():
+    from rockslide.analyses import ensemble as ens
+    from rockslide.errors import CaseError
+
+    assert ens.parse_members("auto") == (None, ens.AUTO_PRECISION)
+    assert ens.parse_members("precision:0.05") == (None, 0.05)
+    assert ens.parse_members("200") == (200, None)
+    with pytest.raises(CaseError, match="--ensemble"):
+        ens.parse_members("precision:2")

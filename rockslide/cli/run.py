@@ -36,10 +36,11 @@ KEEP_HISTORY_ROWS = 2_000_000
 @click.option("--overwrite", is_flag=True, help="Replace existing results of this case.")
 @click.option("--no-plot", is_flag=True, help="Do not draw the PNG figure (with --overwrite, an earlier "
               "figure of this case is removed: it showed the result replaced).")
-@click.option("--ensemble", "members", type=int, default=None, metavar="N",
+@click.option("--ensemble", "members", default=None, metavar="N|auto|precision:W",
               help="Also run N neighbours of the case, drawn over what is uncertain (the case's uncertain "
                    "section, or intensity +-5 %, restitution +-0.05, friction +-5 %, size and slenderness "
-                   "+-2 %), and report the probability of overturning with its 95 % interval.")
+                   "+-2 %), and report the probability of overturning with its 95 % interval; 'auto' (or "
+                   "precision:W) adds neighbours until that interval is narrower than 0.1 (or W).")
 @click.option("--seed", type=click.IntRange(0, 2**63 - 1), default=1, show_default=True,
               help="Seed of the ensemble's Latin hypercube.")
 @click.option("--robustness", is_flag=True,
@@ -70,7 +71,11 @@ def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, members, s
     ens = eplan = None
     if members is not None or robustness:       # the ensemble's modules (numba's JIT) only when asked
         from ..analyses import ensemble as ens
-        members = ens.DEFAULT_MEMBERS if members is None else members
+        members, precision = (ens.DEFAULT_MEMBERS, None) if members is None else ens.parse_members(members)
+        if precision is not None:           # the members it takes (the last round is computed again below)
+            members = ens.to_precision(case, precision, False, seed=seed,
+                                       records_dir=records.records_dir(records_dir))[0].n
+            click.echo(f"  ensemble: {members} members bring the 95 % interval within {precision:g}", err=as_json)
         eplan = ens.plan_ensemble(case, members, seed=seed, records_dir=records.records_dir(records_dir))
     ground = runner.applied_ground(prepared)
     stored = None        # this case's complete result, of which only the figure is missing

@@ -375,6 +375,8 @@ def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, 
                    "not overturned (give the case a ground.tail for their free motion)")
     for i, (state, fit) in enumerate(zip(analysis.states, analysis.fits, strict=True)):
         click.echo("  " + fr.describe_fit(state, fit, im))
+        for line in fr.goodness_lines(fit):
+            click.echo(f"    {line}")
         for caveat in fr.caveats(fit, im):
             click.echo(f"    warning: {caveat}")
         if analysis.nominal_fits:
