@@ -209,7 +209,8 @@ def fragility(case: Case | Mapping | str | Path, suite: str | Path, *, im: str =
               resamples: int = 1000, case_vertical: bool = False, samples: int = 0, seed: int = 1,
               azimuth: str | None = None, records_dir: str | Path | None = None,
               device: str = "cpu", workers: int | None = None, scheduler=None, wait_workers: float | None = None,
-              chunk_size: int | None = None, store=None, progress: Callable[[int], None] | None = None):
+              chunk_size: int | None = None, store=None, progress: Callable[[int], None] | None = None,
+              model: str = "lognormal"):
     """Fragility curves of the case's block over a record suite, as ``rockslide fragility``.
 
     Parameters
@@ -248,6 +249,10 @@ def fragility(case: Case | Mapping | str | Path, suite: str | Path, *, im: str =
         orientation unknown, uniform); one value states it. Default: the case's ``block.orientation``.
     records_dir, device, workers, scheduler, wait_workers, chunk_size, store, progress
         As in `sweep`.
+    model : str
+        The curve offered to `risk` (its default) and `export_pelicun`: ``"lognormal"``,
+        ``"isotonic"`` or ``"empirical"`` (attribute ``fragility_model``). Every curve is in the
+        dataset whichever is chosen, with the goodness of fit (``gof_*``).
 
     Returns
     -------
@@ -271,7 +276,7 @@ def fragility(case: Case | Mapping | str | Path, suite: str | Path, *, im: str =
                               case_vertical=case_vertical, samples=samples, seed=seed)
     done = execute(fplan.plan, store, workers=workers, scheduler=scheduler, device=device, progress=progress,
                    wait_workers=wait_workers)
-    analysis = fr.analyse(fplan, done.states, states, resamples=resamples)
+    analysis = fr.analyse(fplan, done.states, states, resamples=resamples, model=model)
     return datasets.study_dataset(*fr.dataset(fplan, analysis))
 
 
@@ -338,7 +343,7 @@ def risk(fragility: str | Path | None = None, hazard=None, *, damage: str = "ove
          median: str | float | None = None, beta: float | None = None, im: str = "pga",
          life: str | float = 50.0, age: str | float | None = None, confidence: float = 0.95,
          hazard_units: str | None = None, trim_poe: bool = False, drop_zero_poe: bool = False,
-         model: str = "lognormal", fragility_table: str | Path | None = None):
+         model: str | None = None, fragility_table: str | Path | None = None):
     """The annual rate of a damage state at a site: a fragility integrated over hazard curves, as
     ``rockslide risk`` (`analyses.risk`; docs/risk.md).
 
@@ -379,8 +384,9 @@ def risk(fragility: str | Path | None = None, hazard=None, *, damage: str = "ove
         is one between other values with it.
     drop_zero_poe : bool
         The same as ``trim_poe`` (its former name).
-    model : str
-        The curve taken from a fragility file: ``"lognormal"`` (its maximum-likelihood fit),
+    model : str, optional
+        The curve taken from a fragility file (default: the one its analysis chose, its attribute
+        ``fragility_model``, else the lognormal): ``"lognormal"`` (its maximum-likelihood fit),
         ``"isotonic"`` (the monotone maximum-likelihood curve of its stripes) or ``"empirical"`` (the
         fractions themselves, as ``stripes``); each linear in ln x between the levels.
     fragility_table : str or Path, optional
@@ -408,11 +414,11 @@ def risk(fragility: str | Path | None = None, hazard=None, *, damage: str = "ove
 
 def risk_analysis(fragility=None, hazard=None, *, damage: str = "overturn", stripes: bool = False, median=None,
                   beta=None, im: str = "pga", life=50.0, age=None, confidence: float = 0.95, hazard_units=None,
-                  trim_poe: bool = False, model: str = "lognormal", fragility_table=None):
+                  trim_poe: bool = False, model: str | None = None, fragility_table=None):
     """`risk`'s `analyses.risk.Analysis` (for the command's printout and figure); same arguments."""
     from .analyses import risk as rk
 
-    if model not in rk.MODELS:
+    if model is not None and model not in rk.MODELS:
         raise CaseError(f"unknown model {model!r}; expected {', '.join(rk.MODELS)}", source="--model")
     if fragility_table is not None:
         if fragility is not None or median is not None or beta is not None:
@@ -447,7 +453,7 @@ def _table_fragility(path, damage):
                             "levels, constant outside)", highest_tested=float(levels[-1])), measure
 
 
-def _risk_fragility(path, *, damage, stripes, median, beta, im, model="lognormal"):
+def _risk_fragility(path, *, damage, stripes, median, beta, im, model=None):
     """The fragility of `risk` and its intensity measure."""
     from .analyses import fragility as fr
     from .analyses import risk as rk
@@ -479,6 +485,8 @@ def _risk_fragility(path, *, damage, stripes, median, beta, im, model="lognormal
     if damage not in states:
         raise CaseError(f"no damage state {damage!r} in the file; it has {', '.join(states)}", source="--damage")
     at = ds.sel(damage_state=damage)
+    model = model or str(ds.attrs.get("fragility_model", "lognormal"))
+    stripes = stripes or model == "empirical"
     fraction = np.asarray(at["fraction_exceeded"].values, dtype=np.float64)
     levels = np.asarray(ds["level"].values, dtype=np.float64)
     known = {**rk.evidence(levels, fraction, at["isotonic"].values if "isotonic" in at else None),

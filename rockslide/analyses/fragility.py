@@ -1252,6 +1252,9 @@ class Analysis:
         With parameter samples: `fitted`'s array (else None).
     nominal_fits : list of StateFit
         With parameter samples: the fits of the case's own values alone (no parameter uncertainty).
+    model : str
+        The curve the analysis offers (`MODELS`): what ``rockslide risk`` takes from its file unless
+        told otherwise, and what its pelicun export writes.
     """
 
     variables: dict
@@ -1260,6 +1263,7 @@ class Analysis:
     fits: list
     rows: np.ndarray | None = None
     nominal_fits: list = field(default_factory=list)
+    model: str = "lognormal"
 
     @property
     def fitted(self) -> np.ndarray:
@@ -1268,9 +1272,19 @@ class Analysis:
         return self.exceeded if self.rows is None else self.rows
 
 
+#: The fragility curves an analysis offers: the lognormal fit, the isotonic curve (monotone maximum
+#: likelihood) and the per-level fractions (empirical). The lognormal is the default: where it
+#: holds it is the more precise (docs/guide/fragility.md), and where its runs reject it the
+#: printout says so first.
+MODELS = ("lognormal", "isotonic", "empirical")
+
+
 def analyse(fplan: FragilityPlan, final_states: np.ndarray, states, *, resamples: int = BOOTSTRAP_RESAMPLES,
-            seed: int = BOOTSTRAP_SEED) -> Analysis:
-    """The results of every run (from the kernel's final states), the exceedances and the fits."""
+            seed: int = BOOTSTRAP_SEED, model: str = "lognormal") -> Analysis:
+    """The results of every run (from the kernel's final states), the exceedances and the fits;
+    ``model`` the curve offered (`MODELS`)."""
+    if model not in MODELS:
+        raise CaseError(f"unknown model {model!r}; expected {', '.join(MODELS)}", source="--model")
     plan = fplan.plan
     variables = sw.sweep_variables(plan, final_states)
     alpha = plan.case_column(K.P_ALPHA).reshape(plan.shape)
@@ -1285,7 +1299,7 @@ def analyse(fplan: FragilityPlan, final_states: np.ndarray, states, *, resamples
     if not fplan.samples:
         fits = [fit_state(levels, exceeded[..., i], resamples=resamples, seed=seed, show=fplan.im.show,
                           per_record=turns) for i in range(len(states))]
-        return Analysis(variables=variables, exceeded=exceeded, states=list(states), fits=fits)
+        return Analysis(variables=variables, exceeded=exceeded, states=list(states), fits=fits, model=model)
     records, n_levels = fplan.shape
     rows = np.ascontiguousarray(np.moveaxis(exceeded[:, :, 1:, :], 2, 1).reshape(records * fplan.samples,
                                                                                    n_levels, len(states)))
@@ -1294,7 +1308,7 @@ def analyse(fplan: FragilityPlan, final_states: np.ndarray, states, *, resamples
     nominal = [fit_state(levels, exceeded[:, :, 0, i], resamples=resamples, seed=seed, show=fplan.im.show,
                          per_record=turns) for i in range(len(states))]
     return Analysis(variables=variables, exceeded=exceeded, states=list(states), fits=fits, rows=rows,
-                    nominal_fits=nominal)
+                    nominal_fits=nominal, model=model)
 
 
 _FIT_FIELDS = (("median", "m"), ("beta", "b"), ("moments_median", "m"), ("moments_beta", "b"))
@@ -1436,6 +1450,11 @@ def dataset(fplan: FragilityPlan, analysis: Analysis, command_line: str = "") ->
         "bootstrap_resamples": analysis.fits[0].resamples if analysis.fits else 0,
         "bootstrap_seed": BOOTSTRAP_SEED,
         "confidence_level": CONFIDENCE,
+        "fragility_model": analysis.model,
+        "goodness_of_fit": "deviance of the lognormal against the per-level binomial (saturated) model, chi-squared "
+                           "with levels - 2 degrees of freedom; monotonicity: likelihood ratio of the isotonic fit "
+                           f"against the saturated model, p by parametric bootstrap ({gf.MONOTONE_RESAMPLES} draws); "
+                           f"rejected below {gf.REJECT_LEVEL:g}",
         "fragility_key": plan.key,
         "vertical_factor": fplan.vertical_factor,
         "vertical_motion": fplan.vertical,
@@ -1489,6 +1508,7 @@ def json_summary(fplan: FragilityPlan, analysis: Analysis) -> dict:
         "records": fplan.names,
         "vertical": {"source": fplan.vertical, "note": fplan.vertical_note or None},
         "damage_states": out,
+        "model": analysis.model,
         "n_runs": int(status.size),
         "n_outside_model": int((status != K.STATUS_OK).sum()),
         "n_undecided": int(analysis.variables["undecided"][0].sum()),
@@ -1603,6 +1623,15 @@ def describe_fit(state: DamageState, fit: StateFit, im: IntensityMeasure) -> str
     elif fit.moments_note:
         line += f"; no method-of-moments estimate: {fit.moments_note.replace(': no moments', '')}"
     return f"{line}; {counts}"
+
+
+def isotonic_line(fit: StateFit, levels, im: IntensityMeasure) -> str:
+    """``isotonic: 0 at 0.4, 0.14 at 0.45, ... g``: the monotone curve at the levels."""
+    levels = np.asarray(levels, dtype=np.float64)
+    unit = f" {im.display_unit}" if im.display_unit else ""
+    points = ", ".join(f"{p:.3g} at {im.number(x)}" for x, p in zip(levels, fit.isotonic, strict=True)
+                       if math.isfinite(p))
+    return f"isotonic (monotone maximum likelihood): {points}{unit}"
 
 
 def goodness_lines(fit: StateFit) -> list[str]:

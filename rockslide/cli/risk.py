@@ -22,8 +22,9 @@ from .studies import _command_line
               help="The fragility file's damage state (e.g. 'rotation>0.5alpha').")
 @click.option("--stripes", is_flag=True, help="Use the fragility file's empirical fractions per stripe (linear "
               "in ln x between them) instead of its lognormal fit.")
-@click.option("--model", type=click.Choice(["lognormal", "isotonic", "empirical"]), default="lognormal",
-              show_default=True, help="The fragility file's curve: its lognormal fit, the isotonic (monotone "
+@click.option("--model", type=click.Choice(["lognormal", "isotonic", "empirical"]), default=None,
+              help="The fragility file's curve (default: the one 'rockslide fragility --model' chose, else the "
+              "lognormal): its lognormal fit, the isotonic (monotone "
               "maximum-likelihood) curve of its stripes, or the stripes' fractions (= --stripes).")
 @click.option("--fragility-table", type=click.Path(path_type=Path), default=None, metavar="FILE",
               help="Instead of a fragility file: a CSV of levels and probabilities, its header naming the measure "

@@ -269,6 +269,9 @@ def sweep(case_file, mu_kinetic_ratio, records_dir, out_dir, overwrite, no_plot,
                    "list, e.g. 0:180:5) for a suite of two horizontal components: every record at every "
                    "orientation, the fits over them all (the orientation unknown, uniform); one value states "
                    "it (default: the case's block.orientation).")
+@click.option("--model", type=click.Choice(["lognormal", "isotonic", "empirical"]), default="lognormal",
+              show_default=True, help="The curve offered to 'rockslide risk' and the pelicun export: the lognormal "
+              "fit, the isotonic (monotone maximum-likelihood) curve, or the per-level fractions.")
 @click.option("--json", "as_json", is_flag=True, help="Print the fits as one JSON object on stdout.")
 @click.option("--export", "export", type=(click.Choice(["pelicun"]), str), default=(None, None),
               metavar="pelicun ID",
@@ -280,7 +283,7 @@ def sweep(case_file, mu_kinetic_ratio, records_dir, out_dir, overwrite, no_plot,
 @records_dir_option
 @where_options("fragility analysis", "run")
 def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, resamples, case_vertical, samples,
-              seed, azimuth, as_json, export, export_family, records_dir, out_dir, overwrite, no_plot, workers,
+              seed, azimuth, model, as_json, export, export_family, records_dir, out_dir, overwrite, no_plot, workers,
               scheduler, tls_ca_file, tls_cert, tls_key, device, chunk_size, no_progress, dpi, size, as_csv, shard,
               wait_workers):
     """Fragility curves of a block over a record suite scaled to levels of an intensity measure:
@@ -340,7 +343,9 @@ def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, 
     done = _compute(ctx, plan, h5_path, what="fragility", description=fplan.describe(), label=case.name,
                     unit="run", workers=workers, scheduler=scheduler, device=device, no_progress=no_progress,
                     err=as_json, shard=shard, wait_workers=wait_workers)
-    analysis = fr.analyse(fplan, done.states, states, resamples=resamples)
+    analysis = fr.analyse(fplan, done.states, states, resamples=resamples, model=model)
+    if model != "lognormal" and export_family == "lognormal":
+        export_family = "multilinear_CDF"           # the curve chosen, not the fit
     coords, variables, attrs = fr.dataset(fplan, analysis, _command_line(ctx, case_file))
     with files.Staging(overwrite=overwrite) as staging:
         results.write_dataset(h5_path, coords, variables, format=results.FRAGILITY_FORMAT, attrs=attrs,
@@ -377,6 +382,8 @@ def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, 
         click.echo("  " + fr.describe_fit(state, fit, im))
         for line in fr.goodness_lines(fit):
             click.echo(f"    {line}")
+        if model != "lognormal":
+            click.echo(f"    {fr.isotonic_line(fit, fplan.levels.values, im)}")
         for caveat in fr.caveats(fit, im):
             click.echo(f"    warning: {caveat}")
         if analysis.nominal_fits:
