@@ -1973,3 +1973,44 @@ def _risk_figure(curves, grid, fragility, *, xlabel, state, title, figsize) -> F
         top.set_title(title, fontsize=_pt(11))
     _freeze_ticks(fig)
     return fig
+
+
+def surface_figure(panels, *, xlabel: str, ylabel: str, title: str = "", size=None) -> Figure:
+    """Fragility surfaces on two measures, one panel per damage state: the contours of P, the runs
+    (filled: reached the state), and curves in the first measure at given values of the second.
+
+    Parameters
+    ----------
+    panels : list of dict
+        ``title``, ``g1``, ``g2`` (the grid, in the units shown), ``p`` (``[g2, g1]``), ``x1``,
+        ``x2``, ``y`` (the runs and their outcomes), ``curves`` (``[(label, P on g1)]``).
+    """
+    figsize = figure_size(size, (11.0, 4.8 * max(1, len(panels))), column=4.2, page=5.0)
+    with _style(figsize[0]):
+        fig = Figure(figsize=figsize, dpi=DPI, layout="constrained")
+        axes = fig.subplots(max(1, len(panels)), 2, squeeze=False)
+        for row, panel in zip(axes, panels, strict=False):
+            ax, side = row
+            filled = ax.contourf(panel["g1"], panel["g2"], panel["p"], levels=np.linspace(0, 1, 11), cmap="viridis")
+            ax.contour(panel["g1"], panel["g2"], panel["p"], levels=[0.16, 0.5, 0.84], colors="white", linewidths=1.0)
+            hit = np.asarray(panel["y"]) == 1
+            ax.scatter(panel["x1"][~hit], panel["x2"][~hit], s=8, facecolors="none", edgecolors="0.9", lw=0.6,
+                       label="runs below the state")
+            ax.scatter(panel["x1"][hit], panel["x2"][hit], s=8, c="red", lw=0, label="runs reaching it")
+            ax.set_xscale("log")
+            ax.set_yscale("log")
+            ax.set_xlabel(xlabel)
+            ax.set_ylabel(ylabel)
+            ax.set_title(panel["title"], fontsize=_pt(9))
+            ax.legend(loc="upper left", fontsize=_pt(7), frameon=True)
+            fig.colorbar(filled, ax=ax, label="P(reaching the state)")
+            for label, values in panel["curves"]:
+                side.plot(panel["g1"], values, label=label)
+            side.set_xscale("log")
+            side.set_ylim(-0.02, 1.02)
+            side.set_xlabel(xlabel)
+            side.set_ylabel("P(reaching the state)")
+            side.grid(True, color="0.9")
+            side.legend(loc="upper left", fontsize=_pt(8), frameon=False)
+        _headline(fig, title, "")
+    return fig

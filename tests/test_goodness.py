@@ -321,3 +321,42 @@ def test_ensemble_members_option_reads_auto_and_precision():
     assert ens.parse_members("200") == (200, None)
     with pytest.raises(CaseError, match="--ensemble"):
         ens.parse_members("precision:2")
+
+
+# --------------------------------------------------------------------------------------------------
+# In the fit, its printout and the command
+# --------------------------------------------------------------------------------------------------
+
+
+def test_kobe_fit_state_says_the_rejection_first_and_keeps_the_isotonic_curve():
+    """fit_state on the issue's counts (100 realisations of one record, the realisations of a level
+    arranged so that the counts are the issue's): the state's printout line starts with the rejection."""
+    exceeded = (np.arange(100)[:, None] < KOBE_Z[None, :]).astype(np.int8)
+    fit = fr.fit_state(KOBE_LEVELS, exceeded, resamples=0, per_record=100)
+    line = fr.describe_fit(fr.OVERTURN, fit, fr.INTENSITY_MEASURES["pga"])
+    assert line.startswith("overturn: lognormal REJECTED by the per-level fractions")
+    assert "--model isotonic" in line
+    np.testing.assert_allclose(fit.isotonic, gf.isotonic(KOBE_N, KOBE_Z))
+    assert any("fall as the level rises by more than sampling noise" in t for t in fr.goodness_lines(fit))
+
+
+def test_two_measures_on_the_command_line(tmp_path):
+    """--im pga,pgv: the surface in the JSON and its figure beside the curves; --im pga,pgv/pga too."""
+    import json
+
+    from conftest import REPO, invoke
+
+    for im in ("pga,pgv", "pga,pgv/pga"):
+        out = tmp_path / im.replace("/", "_")
+        result = invoke("fragility", REPO / "configs" / "example.yaml", "--suite", REPO / "records" /
+                        "suite-synthetic.yaml", "--levels", "0.2g:1.6g:0.2g", "--im", im, "--bootstrap", "20",
+                        "--out-dir", out, "--no-progress", "--json")
+        assert result.exit_code == 0, result.output
+        payload = json.loads(result.stdout)
+        surface = payload["surface"]["states"]["overturn"]
+        assert payload["surface"]["scales_with_record"] == (im == "pga,pgv")
+        assert surface["coefficients"] is None or set(surface["coefficients"]) == {"a", "b", "c"}
+        assert (out / "example.fragility.surface.png").exists() == (surface["coefficients"] is not None)
+    from rockslide.errors import CaseError
+    with pytest.raises(CaseError, match="--im"):
+        fr.split_measures("pga,sa(1s)")

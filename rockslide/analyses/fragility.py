@@ -1776,3 +1776,138 @@ def stored_curves(stored) -> dict:
                           per_record=(width - 1) * turns) for i in range(len(states))]
     grid, curves = _curves(levels, exceeded, states, fits, im, nominal)
     return {"levels": levels, "grid": grid, "curves": curves, "im": im, "title": title, "caption": text}
+
+
+# --------------------------------------------------------------------------------------------------
+# Two measures: the probit surface (``--im pga,pgv``, ``--im pga,pgv/pga``)
+# --------------------------------------------------------------------------------------------------
+
+#: The second measures of a two-measure fragility: name -> (label, display unit, its size [SI], whether it
+#: scales with the record).
+SECOND_MEASURES = {"pgv": ("PGV", "cm/s", 0.01, True), "pgv/pga": ("PGV/PGA", "s", 1.0, False)}
+
+
+def split_measures(text: str) -> tuple[str, str | None]:
+    """``"pga,pgv"`` -> ``("pga", "pgv")``; one measure -> ``(text, None)``.
+
+    Raises
+    ------
+    CaseError
+        Naming ``--im``: a second measure other than ``pgv`` or ``pgv/pga``.
+    """
+    parts = [p.strip().lower().replace(" ", "") for p in str(text).split(",")]
+    if len(parts) == 1:
+        return str(text), None
+    second = {"pgv_pga": "pgv/pga"}.get(parts[1], parts[1])
+    if len(parts) != 2 or second not in SECOND_MEASURES:
+        raise CaseError(f"two measures are given as 'pga,pgv' or 'pga,pgv/pga' (the records scaled on the first), "
+                        f"got {text!r}", source="--im")
+    return parts[0], second
+
+
+def second_measure_values(fplan: FragilityPlan, second: str) -> np.ndarray:
+    """``float64[records, levels]``: the second measure of each run [SI]: the record's PGV times the
+    run's factor (PGV scales with the record), or its PGV/PGA (which does not)."""
+    records, n_levels = fplan.shape
+    factors = fplan.plan.factor_h.reshape(records, n_levels, -1)[:, :, 0]
+    if second == "pgv":
+        return fplan.measures["pgv"][:, None] * factors
+    return np.broadcast_to(fplan.measures["pgv_pga"][:, None], (records, n_levels)).copy()
+
+
+def fit_surface(fplan: FragilityPlan, analysis: Analysis, second: str, *, resamples: int = BOOTSTRAP_RESAMPLES,
+                seed: int = BOOTSTRAP_SEED) -> list[dict]:
+    """Per damage state, ``P = Phi(a + b ln IM1 + c ln IM2)`` over every run inside the model
+    (`goodness.probit_surface`), with percentile intervals (:data:`CONFIDENCE`) of ``a, b, c`` over
+    resamples of the records. IM1 is the level [SI], IM2 `second_measure_values` [SI]."""
+    levels = np.asarray(fplan.levels.values, dtype=np.float64)
+    exceeded = analysis.exceeded                              # [records, levels, (samples,) states]
+    records = exceeded.shape[0]
+    im2 = second_measure_values(fplan, second)
+    extra = exceeded.shape[2:-1]
+    shape = exceeded.shape[:-1]
+    x1 = np.broadcast_to(levels.reshape((1, -1) + (1,) * len(extra)), shape)
+    x2 = np.broadcast_to(im2.reshape(im2.shape + (1,) * len(extra)), shape)
+    owner = np.broadcast_to(np.arange(records).reshape((-1, 1) + (1,) * len(extra)), shape)
+    out = []
+    rng = np.random.default_rng(seed)
+    picks = rng.integers(0, records, size=(resamples if records >= 2 else 0, records))
+    tails = (50.0 * (1.0 - CONFIDENCE), 100.0 - 50.0 * (1.0 - CONFIDENCE))
+    for i, state in enumerate(analysis.states):
+        y = exceeded[..., i]
+        inside = y >= 0
+        fit = gf.probit_surface(x1[inside], x2[inside], y[inside])
+        entry = {"state": state.name, "fit": fit, "intervals": None, "resamples_fitted": 0,
+                 "im1": x1[inside], "im2": x2[inside], "outcome": y[inside]}
+        if fit.converged and picks.shape[0]:
+            rows = [np.flatnonzero((owner == r).ravel() & inside.ravel()) for r in range(records)]
+            taken = []
+            for pick in picks:
+                chosen = np.concatenate([rows[r] for r in pick])
+                again = gf.probit_surface(x1.ravel()[chosen], x2.ravel()[chosen], y.ravel()[chosen], iterations=50)
+                if again.converged:
+                    taken.append(again.coefficients)
+            if len(taken) >= 2:
+                entry["intervals"] = np.percentile(np.array(taken), tails, axis=0)
+                entry["resamples_fitted"] = len(taken)
+        out.append(entry)
+    return out
+
+
+def surface_json(surfaces: list[dict], second: str) -> dict:
+    """The ``--json`` object of `fit_surface`: per state the coefficients, their standard errors and
+    intervals (null where there is no fit)."""
+    out = {}
+    for s in surfaces:
+        fit = s["fit"]
+        out[s["state"]] = {
+            "model": f"P = Phi(a + b ln IM1 + c ln {SECOND_MEASURES[second][0]}), IM1 and {second} in SI",
+            "coefficients": None if not fit.converged else dict(zip("abc", map(float, fit.coefficients), strict=True)),
+            "standard_errors": None if not fit.converged else dict(zip("abc", map(float, fit.standard_errors),
+                                                                        strict=True)),
+            "intervals": None if s["intervals"] is None else {
+                k: [float(s["intervals"][0][j]), float(s["intervals"][1][j])] for j, k in enumerate("abc")},
+            "resamples_fitted": s["resamples_fitted"], "n_runs": int(s["outcome"].size), "note": fit.note or None}
+    return {"second_measure": second, "scales_with_record": SECOND_MEASURES[second][3], "states": out}
+
+
+def surface_figure(fplan: FragilityPlan, surfaces: list[dict], second: str, *, size=None):
+    """The contour figure of each state's surface, the runs on it, and its curves in IM1 at the
+    16th, 50th and 84th percentiles of the runs' IM2 (`plots.surface_figure`)."""
+    from ..plots import surface_figure as draw
+
+    label2, unit2, scale2, _ = SECOND_MEASURES[second]
+    im = fplan.im
+    panels = []
+    for s in surfaces:
+        if not s["fit"].converged:
+            continue
+        x1, x2 = s["im1"] / im.display_scale, s["im2"] / scale2
+        g1 = np.geomspace(x1.min() * 0.8, x1.max() * 1.25, 120)
+        g2 = np.geomspace(x2.min() * 0.8, x2.max() * 1.25, 120)
+        p = s["fit"](g1[None, :] * im.display_scale, g2[:, None] * scale2)
+        at = np.percentile(x2, [16, 50, 84])
+        curves = [(f"{label2} = {v:.3g} {unit2}", s["fit"](g1 * im.display_scale, v * scale2)) for v in at]
+        a, b, c = s["fit"].coefficients
+        panels.append({"title": f"{s['state']}: P = Φ({a:.2f} + {b:.2f} ln {im.label} + {c:.2f} ln {label2})",
+                       "g1": g1, "g2": g2, "p": p, "x1": x1, "x2": x2, "y": s["outcome"], "curves": curves})
+    return draw(panels, xlabel=im.axis_label(), ylabel=f"{label2} [{unit2}]",
+                title=f"{fplan.plan.case.name}: {fplan.describe()}", size=size)
+
+
+def surface_lines(surfaces: list[dict], second: str) -> list[str]:
+    """The printout of `fit_surface`: one line per state."""
+    label = SECOND_MEASURES[second][0]
+    lines = []
+    for s in surfaces:
+        fit = s["fit"]
+        if not fit.converged:
+            lines.append(f"{s['state']} on two measures: {fit.note}")
+            continue
+        parts = []
+        for j, name in enumerate("abc"):
+            interval = "" if s["intervals"] is None else \
+                f" [{s['intervals'][0][j]:.3g}, {s['intervals'][1][j]:.3g}]"
+            parts.append(f"{name} {fit.coefficients[j]:.3g} ± {fit.standard_errors[j]:.2g}{interval}")
+        lines.append(f"{s['state']} on two measures: P = Phi(a + b ln IM + c ln {label}) (SI), " + ", ".join(parts))
+    return lines

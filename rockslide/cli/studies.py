@@ -314,6 +314,7 @@ def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, 
     ctx = click.get_current_context()
     started = time.perf_counter()
     case = load_case(case_file)
+    im_text, second = fr.split_measures(im_text)       # --im pga,pgv: scaled on pga, fitted on both
     im = fr.parse_im(im_text)
     levels = fr.parse_levels(levels_text, im)
     states = fr.damage_states(damage_texts)
@@ -347,11 +348,17 @@ def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, 
     if model != "lognormal" and export_family == "lognormal":
         export_family = "multilinear_CDF"           # the curve chosen, not the fit
     coords, variables, attrs = fr.dataset(fplan, analysis, _command_line(ctx, case_file))
+    surfaces = None if second is None else fr.fit_surface(fplan, analysis, second, resamples=min(resamples, 200))
+    if surfaces is not None:
+        attrs["surface"] = json.dumps(fr.surface_json(surfaces, second))
     with files.Staging(overwrite=overwrite) as staging:
         results.write_dataset(h5_path, coords, variables, format=results.FRAGILITY_FORMAT, attrs=attrs,
                               overwrite=overwrite, staging=staging)
         if not no_plot:
             save_figure(fr.figure(fplan, analysis, size=size), png_path, overwrite=overwrite, dpi=dpi, staging=staging)
+            if surfaces is not None:
+                save_figure(fr.surface_figure(fplan, surfaces, second, size=size),
+                            png_path.with_suffix(".surface.png"), overwrite=overwrite, dpi=dpi, staging=staging)
         if as_csv:
             from ..io.datasets import study_dataset
             per_run = [name for name, _, _ in coords if name not in ("damage_state", "resample")]
@@ -367,6 +374,7 @@ def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, 
     elapsed = time.perf_counter() - started
     if as_json:
         payload = {**fr.json_summary(fplan, analysis),
+                   **({} if surfaces is None else {"surface": fr.surface_json(surfaces, second)}),
                    "files": {"hdf5": str(h5_path), "png": None if no_plot else str(png_path)},
                    "elapsed_s": round(elapsed, 3)}
         click.echo(json.dumps(payload, allow_nan=False, default=_json_default))
@@ -389,6 +397,8 @@ def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, 
         if analysis.nominal_fits:
             click.echo("    without parameter uncertainty (the case's values): "
                        + fr.describe_fit(state, analysis.nominal_fits[i], im).split(": ", 1)[1])
+    for line in [] if surfaces is None else fr.surface_lines(surfaces, second):
+        click.echo(f"  {line}")
     if export_path is not None:
         click.echo(f"  pelicun: {export_path} and {export_path.with_suffix('.json').name} ({export_family}, "
                    f"ID {export[1]})" + (f"; not exported: {'; '.join(left_out)}" if left_out else ""))
