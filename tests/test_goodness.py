@@ -360,3 +360,28 @@ def test_two_measures_on_the_command_line(tmp_path):
     from rockslide.errors import CaseError
     with pytest.raises(CaseError, match="--im"):
         fr.split_measures("pga,sa(1s)")
+
+
+def test_fragility_table_gives_the_tabulated_rate(tmp_path):
+    """risk --fragility-table: the CSV's levels in its header's unit, integrated as risk.Tabulated."""
+    from rockslide import api
+
+    table = tmp_path / "statue.csv"
+    table.write_text("PGA [g], probability\n0.4, 0\n0.45, 0.14\n0.5, 0.43\n0.75, 0.43\n0.8, 1\n")
+    levels = np.geomspace(0.05, 3.0, 30) * G
+    hazard = {"site": (levels, 1e-4 * (levels / G) ** -2.5)}
+    ds = api.risk(hazard=hazard, fragility_table=table)
+    expected = rk.rate(rk.Tabulated(np.array([0.4, 0.45, 0.5, 0.75, 0.8]) * G,
+                                    np.array([0, 0.14, 0.43, 0.43, 1.0])), rk.HazardCurve("s", *hazard["site"])).rate
+    assert float(ds.rate[0]) == pytest.approx(expected, rel=1e-12)
+    assert float(ds.share_above_tested[0]) > 0          # above 0.8 g: the curve held at 1
+    from rockslide.errors import CaseError
+    table.write_text("PGA [g], probability\n0.4, 0.5\n0.5, 0.3\n")
+    with pytest.raises(CaseError, match="not decreasing"):
+        api.risk(hazard=hazard, fragility_table=table)
+
+
+def test_a_dropped_vertical_is_said_in_the_caption():
+    caption = fr.caption("name: x\n", suite="s.yaml", records=2, im=fr.INTENSITY_MEASURES["pga"],
+                         levels=[1.0, 2.0], step=1e-4, vertical_note="the suite has no vertical records")
+    assert "HORIZONTAL ONLY" in caption
