@@ -145,9 +145,12 @@ def test_probit_surface_recovers_its_coefficients():
     assert (fit.standard_errors < 0.1).all()         # the test has teeth: errors are small
 
 
-def test_probit_surface_refuses_separated_runs():
-    fit = gf.probit_surface([1.0, 2, 3, 4], [1.0, 1, 1, 1], [0, 0, 1, 1])
+def test_probit_surface_refuses_separated_runs_and_a_constant_measure():
+    fit = gf.probit_surface([1.0, 2, 3, 4], [1.0, 2, 1, 2], [0, 0, 1, 1])
     assert not fit.converged and "separate" in fit.note
+    for second in ([1.0, 1, 1, 1], [0.5, 1, 1.5, 2]):     # constant, or proportional to the first
+        fit = gf.probit_surface([1.0, 2, 3, 4], second, [0, 1, 0, 1])
+        assert not fit.converged and "not identified" in fit.note
 
 
 # --------------------------------------------------------------------------------------------------

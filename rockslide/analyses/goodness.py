@@ -292,6 +292,11 @@ def probit_surface(im1, im2, outcome, *, iterations: int = 100, tolerance: float
     nan3 = np.full(3, np.nan)
     if y.size < 3 or y.min() == y.max():
         return SurfaceFit(nan3, nan3, False, math.nan, "every run on one side of the state: no fit")
+    centred = x[:, 1:] - x[:, 1:].mean(axis=0)
+    if np.linalg.matrix_rank(centred, tol=1e-9 * max(1.0, float(np.abs(centred).max()))) < 2:
+        return SurfaceFit(nan3, nan3, False, math.nan, "the two measures do not vary independently among the runs "
+                          "(one record: its PGV/PGA is one value, its PGV a fixed multiple of its PGA): the surface "
+                          "is not identified, no fit")
     sign = 2.0 * y - 1.0
 
     def loglik(theta):
