@@ -1640,13 +1640,12 @@ def goodness_lines(fit: StateFit) -> list[str]:
     g = fit.goodness
     if g is None:
         return []
-    lines = [] if g.rejected else [g.sentence()]           # a rejection leads `describe_fit`'s line
+    parts = [] if g.rejected else [g.sentence()]           # a rejection leads `describe_fit`'s line
     if not math.isnan(g.max_deviation):
-        lines.append(f"the curve is {g.max_deviation:.2f} from a per-level fraction at most")
-    lines.append(g.monotone_sentence())
+        parts.append(f"the curve is {g.max_deviation:.2f} from a per-level fraction at most")
     if g.note:
-        lines.append(g.note)
-    return lines
+        parts.append(g.note)
+    return ["; ".join(parts), g.monotone_sentence()] if parts else [g.monotone_sentence()]
 
 
 def caveats(fit: StateFit, im: IntensityMeasure) -> list[str]:
