@@ -1522,7 +1522,9 @@ def fragility_figure(levels, grid, curves, *, xlabel: str, confidence: float, ti
         NaN where no run counts), and optionally ``fitted`` (the maximum-likelihood curve on
         ``grid``), ``band`` (``[2, grid]``: lower and upper bound of the confidence band),
         ``moments`` (the method-of-moments curve on ``grid``), ``nominal`` (the fit without
-        parameter uncertainty, on ``grid``), ``colour`` (default: the next of
+        parameter uncertainty, on ``grid``), ``fraction_interval`` (``[2, levels]``: the
+        fractions' intervals, drawn as error bars), ``isotonic`` (the monotone curve at the levels),
+        ``colour`` (default: the next of
         `FRAGILITY_COLOURS`), ``style`` (line style of ``fitted``, default solid), ``levels`` (the
         curve's own stripes, default ``levels``) and ``grid`` (its own, default ``grid``).
         A curve that coincides with an earlier one (same fit and fractions, within 1e-9) is drawn
@@ -1573,6 +1575,13 @@ def fragility_figure(levels, grid, curves, *, xlabel: str, confidence: float, ti
             ms = size_pt * _FONT_SCALE.get() ** 0.5
             ax.plot(at, curve["fraction"], marker, color=colour, ms=ms, ls="none", mfc=face,
                     zorder=5 if over is not None else 4)
+            if curve.get("fraction_interval") is not None and over is None:
+                low, high = np.asarray(curve["fraction_interval"], dtype=float)
+                fraction = np.asarray(curve["fraction"], dtype=float)
+                ax.errorbar(at, fraction, yerr=[fraction - low, high - fraction], fmt="none", ecolor=colour,
+                            elinewidth=0.8, capsize=2.0, zorder=3)
+            if curve.get("isotonic") is not None and over is None:
+                ax.plot(at, curve["isotonic"], color=colour, lw=1.2, ls="-.", zorder=3)
             # the entry shows the curve's line style too (overlays tell damage states by it)
             shown_style = "none" if curve.get("fitted") is None else (0, (3, 2)) if over is not None \
                 else curve.get("style", "-")
@@ -1583,6 +1592,10 @@ def fragility_figure(levels, grid, curves, *, xlabel: str, confidence: float, ti
                 ("moments", Line2D([], [], color="0.3", lw=1.0, ls="--"), "method of moments (first exceedances)"),
                 ("nominal", Line2D([], [], color="0.3", lw=1.2, ls=":"),
                  "without parameter uncertainty (the case's values)"),
+                ("isotonic", Line2D([], [], color="0.3", lw=1.2, ls="-."), "isotonic (monotone maximum-likelihood) "
+                 "curve"),
+                ("fraction_interval", Line2D([], [], color="0.3", marker="|", ls="none", ms=8),
+                 f"{100 * confidence:g} % Wilson interval of each fraction"),
                 ("band", Patch(facecolor="0.3", alpha=0.15), f"{100 * confidence:g} % bootstrap band over records")):
             if any(curve.get(key) is not None for curve in curves):
                 handles.append(handle)
@@ -2072,3 +2085,43 @@ def _body_panel(ax, body) -> None:
 
 
 __all__ += ["body_figure"]
+
+def surface_figure(panels, *, xlabel: str, ylabel: str, title: str = "", size=None) -> Figure:
+    """Fragility surfaces on two measures, one panel per damage state: the contours of P, the runs
+    (filled: reached the state), and curves in the first measure at given values of the second.
+
+    Parameters
+    ----------
+    panels : list of dict
+        ``title``, ``g1``, ``g2`` (the grid, in the units shown), ``p`` (``[g2, g1]``), ``x1``,
+        ``x2``, ``y`` (the runs and their outcomes), ``curves`` (``[(label, P on g1)]``).
+    """
+    figsize = figure_size(size, (11.0, 4.8 * max(1, len(panels))), column=4.2, page=5.0)
+    with _style(figsize[0]):
+        fig = Figure(figsize=figsize, dpi=DPI, layout="constrained")
+        axes = fig.subplots(max(1, len(panels)), 2, squeeze=False)
+        for row, panel in zip(axes, panels, strict=False):
+            ax, side = row
+            filled = ax.contourf(panel["g1"], panel["g2"], panel["p"], levels=np.linspace(0, 1, 11), cmap="viridis")
+            ax.contour(panel["g1"], panel["g2"], panel["p"], levels=[0.16, 0.5, 0.84], colors="white", linewidths=1.0)
+            hit = np.asarray(panel["y"]) == 1
+            ax.scatter(panel["x1"][~hit], panel["x2"][~hit], s=8, facecolors="none", edgecolors="0.9", lw=0.6,
+                       label="runs below the state")
+            ax.scatter(panel["x1"][hit], panel["x2"][hit], s=8, c="red", lw=0, label="runs reaching it")
+            ax.set_xscale("log")
+            ax.set_yscale("log")
+            ax.set_xlabel(xlabel)
+            ax.set_ylabel(ylabel)
+            ax.set_title(panel["title"], fontsize=_pt(9))
+            ax.legend(loc="upper left", fontsize=_pt(7), frameon=True)
+            fig.colorbar(filled, ax=ax, label="P(reaching the state)")
+            for label, values in panel["curves"]:
+                side.plot(panel["g1"], values, label=label)
+            side.set_xscale("log")
+            side.set_ylim(-0.02, 1.02)
+            side.set_xlabel(xlabel)
+            side.set_ylabel("P(reaching the state)")
+            side.grid(True, color="0.9")
+            side.legend(loc="upper left", fontsize=_pt(8), frameon=False)
+        _headline(fig, title, "")
+    return fig

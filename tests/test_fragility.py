@@ -676,10 +676,19 @@ def test_parameter_samples_are_in_the_file_the_json_and_the_figure(tmp_path, exa
     assert invoke("plot", tmp_path / "example.fragility.h5", "-o", tmp_path / "again.png").exit_code == 0
 
 
-def test_parameter_samples_need_an_uncertain_section_without_intensity(example):
+def test_parameter_samples_draw_from_the_stated_defaults_and_refuse_intensity(example):
+    """Without an uncertain section --samples draws from ensemble.DEFAULTS less the intensity (issue 40:
+    it refused to run, although --ensemble has stated defaults)."""
+    from rockslide.analyses import ensemble as ens
+
     im = fr.parse_im("pga")
-    with pytest.raises(CaseError, match="needs the case's uncertain section"):
-        fr.plan_fragility(example, load_suite(SUITE), im, fr.parse_levels("1g", im), records_dir=RECORDS, samples=2)
+    fplan = fr.plan_fragility(example, load_suite(SUITE), im, fr.parse_levels("1g", im), records_dir=RECORDS,
+                              samples=2)
+    assert set(fplan.distributions) == {"friction", "size", "slenderness", "restitution"}
+    assert fplan.distributions["friction"] == ens.DEFAULTS["friction"]
+    e = example.contact.restitution
+    assert fplan.distributions["restitution"].spec() == ens.distributions(example)[0]["restitution"].spec()
+    assert fplan.parameter_values["restitution"][:, 1:].min() >= e - 0.05 - 1e-12
     with pytest.raises(CaseError, match="uncertain.intensity: does not apply"):
         fr.plan_fragility(example.with_(uncertain={"intensity": {"uniform": [0.9, 1.1]}}), load_suite(SUITE), im,
                           fr.parse_levels("1g", im), records_dir=RECORDS, samples=2)

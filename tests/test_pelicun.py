@@ -18,6 +18,7 @@ import pytest
 from conftest import REPO, invoke, one_line_error
 
 from rockslide import api
+from rockslide.analyses import risk as rk
 from rockslide.errors import CaseError
 from rockslide.io import pelicun as pl
 from rockslide.io.datasets import study_dataset
@@ -103,9 +104,17 @@ def test_files_are_written_together_and_read_back(tmp_path):
     with open(csv_path, newline="") as f:
         rows = list(csv.DictReader(f))
     assert len(rows) == 1 and rows[0]["LS1-Family"] == "multilinear_CDF"
-    # rotation: stripes [0, .4, .8, .7, 1, 1] at 0.1 ... 1.1 g -> the monotone [0, .4, .75, 1]
-    assert rows[0]["LS1-Theta_0"] == "0.1,0.3,0.5,0.9|0.0,0.4,0.75,1.0"
-    assert rows[0]["LS2-Theta_0"] == "0.3,0.5,0.7,0.9,1.1|0.0,0.2,0.4,0.9,1.0"
+    # rotation: stripes [0, .4, .8, .7, 1, 1] at 0.1 ... 1.1 g -> the monotone [0, .4, .75, .75, 1, 1]; overturning
+    # [0, 0, .2, .4, .9, 1] as it is. The points, linear in x (pelicun's CDF), follow rockslide's curve, linear in
+    # ln x between the levels (risk.Tabulated), from the last 0 to the first 1, within 1e-5 (plus 1e-6 where flat)
+    levels = np.array([0.1, 0.3, 0.5, 0.7, 0.9, 1.1])
+    for column, curve, (first, last) in (("LS1-Theta_0", [0, 0.4, 0.75, 0.75, 1, 1], (0.1, 0.9)),
+                                         ("LS2-Theta_0", [0, 0, 0.2, 0.4, 0.9, 1], (0.3, 1.1))):
+        xs, ps = ([float(v) for v in part.split(",")] for part in rows[0][column].split("|"))
+        assert (xs[0], xs[-1], ps[0], ps[-1]) == (first, last, 0.0, 1.0)
+        assert (np.diff(xs) > 0).all() and (np.diff(ps) > 1e-8).all()
+        x = np.geomspace(0.05, 1.2, 20)
+        np.testing.assert_allclose(np.interp(x, xs, ps), rk.Tabulated(levels, np.array(curve, float))(x), atol=2e-5)
     assert set(json.loads(json_path.read_text())) == {"RS.cabinet.5F"}
     with pytest.raises(Exception, match="exists"):
         api.export_pelicun(fragility_dataset(), "RS.cabinet.5F", csv_path)

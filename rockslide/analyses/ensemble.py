@@ -39,7 +39,7 @@ from ..errors import CaseError
 from . import sweep as sw
 
 __all__ = ["DEFAULTS", "DEFAULT_MEMBERS", "distributions", "sample", "plan_ensemble", "compute", "summarise",
-           "wilson_interval", "EnsemblePlan"]
+           "wilson_interval", "EnsemblePlan", "members_needed", "to_precision", "parse_members", "AUTO_PRECISION"]
 
 #: Members of an ensemble without ``--ensemble N``'s N (``--robustness``).
 DEFAULT_MEMBERS = 200
@@ -112,6 +112,10 @@ class EnsemblePlan:
     defaults : bool
         Whether :data:`DEFAULTS` stand in for a missing ``uncertain`` section.
     seed : int
+    records : dict or None
+        The case's records as read (`engine.prepare.read_records`), for the rounds that follow.
+    precision : float or None
+        The width of the 95 % interval asked for (`to_precision`): this plan is its first round.
     """
 
     plan: Plan
@@ -119,6 +123,8 @@ class EnsemblePlan:
     samples: dict
     defaults: bool
     seed: int
+    records: dict | None = None
+    precision: float | None = None
 
     @property
     def n(self) -> int:
@@ -170,7 +176,7 @@ def plan_ensemble(case: Case, n: int = DEFAULT_MEMBERS, *, seed: int = SEED, rec
                     chunk_size=default_chunk_size(n) if chunk_size is None else int(chunk_size))
     stored = dict(values)
     stored["restitution"] = restitution
-    return EnsemblePlan(plan=plan, distributions=dists, samples=stored, defaults=defaults, seed=seed)
+    return EnsemblePlan(plan=plan, distributions=dists, samples=stored, defaults=defaults, seed=seed, records=records)
 
 
 def member_parameters(case: Case, params: np.ndarray, values: dict) -> tuple[np.ndarray, np.ndarray]:
@@ -339,3 +345,93 @@ def member_variables(eplan: EnsemblePlan, variables: dict) -> dict:
         values, attrs = variables[name]
         out[name] = (("member",), np.ravel(values), attrs)
     return out
+
+
+#: The width of the 95 % interval of the probability of overturning that ``--ensemble auto`` asks for.
+AUTO_PRECISION = 0.1
+#: Members of the first ensemble of ``--ensemble auto`` (then as many as the width asks).
+PILOT_MEMBERS = 100
+
+
+def parse_members(text) -> tuple[int | None, float | None]:
+    """Read ``--ensemble``: a number of members ``N``, ``auto`` (the interval narrower than
+    :data:`AUTO_PRECISION`) or ``precision:W`` (narrower than ``W``). Returns ``(N, None)`` or
+    ``(None, W)``.
+
+    Raises
+    ------
+    CaseError
+        Naming ``--ensemble``.
+    """
+    value = str(text).strip().lower()
+    if value == "auto":
+        return None, AUTO_PRECISION
+    if value.startswith("precision:"):
+        try:
+            width = float(value.split(":", 1)[1])
+        except ValueError:
+            width = math.nan
+        if not 0.0 < width < 1.0:
+            raise CaseError(f"expected precision:W with W within 0 and 1 (e.g. precision:0.05), got {text!r}",
+                            source="ensemble")
+        return None, width
+    try:
+        return int(value), None
+    except ValueError:
+        raise CaseError(f"expected a number of members, 'auto' or 'precision:W', got {text!r}",
+                        source="ensemble") from None
+
+
+def members_needed(k: int, n: int, width: float, confidence: float = CONFIDENCE) -> int:
+    """The fewest members ``m`` whose Wilson interval (`wilson_interval`) at the proportion ``k / n``
+    seen so far (at least ``1 / 2n`` from 0 and 1: a proportion of 0 still has a width) is at most
+    ``width`` wide; at most `MAX_POINTS`."""
+    p = min(max(k / n, 0.5 / n), 1.0 - 0.5 / n) if n else 0.5
+
+    def wide(m: int) -> float:
+        low, high = wilson_interval(p * m, m, confidence)
+        return high - low
+
+    low, high = 1, MAX_POINTS
+    if wide(high) > width:
+        return high
+    while low < high:                     # the width falls as m grows (p fixed)
+        middle = (low + high) // 2
+        if wide(middle) <= width:
+            high = middle
+        else:
+            low = middle + 1
+    return low
+
+
+def to_precision(case: Case, width: float, nominal_overturned: bool, *, seed: int = SEED,
+                 records_dir: Path | None = None, start: int = PILOT_MEMBERS, records: dict | None = None, **where):
+    """An ensemble grown until the 95 % Wilson interval of its probability of overturning is at
+    most ``width`` wide (``--ensemble auto``, ``precision:W``).
+
+    Starts with ``start`` members; while the interval is wider, plans a new Latin hypercube of the
+    members `members_needed` asks for at the proportion seen (at least 1.5 times as many, so that it
+    ends in a few rounds), and computes it. Each round is one Latin hypercube of its own size (they
+    do not nest), and the one reported is the last; the rounds before cost at most about as much
+    again. The rounds look at the data before stopping, which widens the interval's true
+    coverage by little at these sizes (the stopping rule depends on the width, not on the estimate
+    crossing a threshold).
+
+    Returns
+    -------
+    eplan, summary, members, variables
+        As `plan_ensemble` and `compute`; ``summary`` has ``precision`` (the width asked) and
+        ``rounds`` (the members of each round).
+    """
+    n, rounds = int(start), []
+    while True:
+        eplan = plan_ensemble(case, n, seed=seed, records_dir=records_dir, records=records)
+        summary, members, variables = compute(eplan, nominal_overturned, **where)
+        rounds.append(n)
+        low, high = summary["interval"]
+        if high - low <= width or n >= MAX_POINTS:
+            break
+        n = min(MAX_POINTS, max(members_needed(summary["n_overturned"], summary["n_within_model"], width),
+                                int(math.ceil(1.5 * n))))
+    summary.update({"precision": width, "rounds": rounds})
+    return eplan, summary, members, variables

@@ -79,6 +79,7 @@ from ..engine.prepare import (
 from ..errors import CaseError, RecordError
 from ..io import records as rec
 from ..units import STANDARD_GRAVITY, parse_quantity, unit_factor
+from . import goodness as gf
 from . import sweep as sw
 
 __all__ = ["IntensityMeasure", "INTENSITY_MEASURES", "parse_im", "parse_levels", "DamageState",
@@ -725,8 +726,11 @@ def with_parameter_samples(fplan: FragilityPlan, samples: int, seed: int, chunk_
     Raises
     ------
     CaseError
-        ``samples`` out of range, no ``uncertain`` section, or ``uncertain.intensity`` (the
-        levels set the intensity).
+        ``samples`` out of range, or ``uncertain.intensity`` (the levels set the intensity).
+
+    Without an ``uncertain`` section the draws are from the stated neighbourhood of ``rockslide run
+    --ensemble`` (`ensemble.DEFAULTS`: friction +-5 %, size and slenderness +-2 %, restitution the
+    case's +-0.05), less the intensity; the file and the JSON list the distributions drawn from.
     """
     from . import ensemble as ens
 
@@ -735,8 +739,9 @@ def with_parameter_samples(fplan: FragilityPlan, samples: int, seed: int, chunk_
         raise CaseError(f"expected a whole number >= 0, got {samples!r}", source="samples")
     dists = case.uncertain.given()
     if not dists:
-        raise CaseError("needs the case's uncertain section (size, slenderness, friction, restitution) to draw from",
-                        source="samples")
+        # the stated neighbourhood of `rockslide run --ensemble` (`ensemble.DEFAULTS`), less the
+        # intensity, which the levels set
+        dists = {name: d for name, d in ens.distributions(case)[0].items() if name != "intensity"}
     if "intensity" in dists:
         raise CaseError("does not apply to a fragility analysis, whose levels set the intensity (remove it, or "
                         "run the case's neighbourhood with rockslide run --ensemble)", source=case.source,
@@ -911,6 +916,15 @@ class StateFit:
         The lowest and the highest intensity level run [SI of the IM] (`caveats`).
     samples : numpy.ndarray
         ``float64[k, 2]``: the (median, beta) of the fitted resamples (for the figure's band).
+    goodness : goodness.GoodnessOfFit or None
+        The lognormal against the per-level fractions and the fractions' monotonicity
+        (`goodness.lognormal_goodness`); None without runs.
+    isotonic : numpy.ndarray
+        ``float64[L]``: the monotone maximum-likelihood curve at the levels (`goodness.isotonic`;
+        NaN where no run is inside the model).
+    isotonic_band : numpy.ndarray or None
+        ``float64[2, L]``: its percentile band over the bootstrap resamples of the records (None
+        without resamples).
     """
 
     median: float | None = None
@@ -932,6 +946,9 @@ class StateFit:
     n_records: int = 0
     tested: tuple = ()
     samples: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
+    goodness: object = None
+    isotonic: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    isotonic_band: np.ndarray | None = None
 
 
 def stripe_counts(exceeded: np.ndarray):
@@ -1100,6 +1117,11 @@ def fit_state(levels, exceeded: np.ndarray, *, resamples: int = BOOTSTRAP_RESAMP
             out.note = "the fitted probability falls as the intensity rises: no fit"
         else:
             out.median, out.beta = float(math.exp(-a[0] / b[0])), float(1.0 / b[0])
+    out.isotonic = gf.isotonic(n, z)
+    if n.sum() > 0:
+        out.goodness = gf.lognormal_goodness(levels, n, z, out.median, out.beta)
+    if resamples > 0 and n.sum() > 0:
+        out.isotonic_band = _isotonic_band(exceeded, resamples, seed, per_record)
     capacity, out.n_censored, out.moments_note = _first_exceedance(levels, exceeded, show)
     if capacity is not None:
         logs = np.log(capacity)
@@ -1107,6 +1129,28 @@ def fit_state(levels, exceeded: np.ndarray, *, resamples: int = BOOTSTRAP_RESAMP
     if resamples > 0 and (out.median is not None or out.moments_median is not None):
         _bootstrap(out, s, exceeded, capacity, resamples, seed, per_record)
     return out
+
+
+def _resample_weights(records: int, resamples: int, seed: int, per_record: int) -> np.ndarray:
+    """``float64[resamples, records * per_record]``: how often each row is drawn when the records
+    are resampled with replacement (each with its ``per_record`` rows); `_bootstrap`'s draws."""
+    rng = np.random.default_rng(seed)
+    picks = rng.integers(0, records, size=(resamples, records))
+    weights = np.zeros((resamples, records))
+    np.add.at(weights, (np.repeat(np.arange(resamples), records), picks.ravel()), 1.0)
+    return np.repeat(weights, per_record, axis=1) if per_record > 1 else weights
+
+
+def _isotonic_band(exceeded, resamples: int, seed: int, per_record: int) -> np.ndarray:
+    """The percentile band (:data:`CONFIDENCE`) of the isotonic curve over resamples of the records."""
+    weights = _resample_weights(exceeded.shape[0] // per_record, resamples, seed, per_record)
+    n = weights @ (exceeded >= 0).astype(np.float64)
+    z = weights @ (exceeded == 1).astype(np.float64)
+    curves = gf.isotonic(n, z)
+    tails = (50.0 * (1.0 - CONFIDENCE), 100.0 - 50.0 * (1.0 - CONFIDENCE))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)          # a level without runs in every resample
+        return np.nanpercentile(curves, tails, axis=0)
 
 
 def _first_exceedance(levels, exceeded, show):
@@ -1201,6 +1245,9 @@ class Analysis:
         With parameter samples: `fitted`'s array (else None).
     nominal_fits : list of StateFit
         With parameter samples: the fits of the case's own values alone (no parameter uncertainty).
+    model : str
+        The curve the analysis offers (`MODELS`): what ``rockslide risk`` takes from its file unless
+        told otherwise, and what its pelicun export writes.
     """
 
     variables: dict
@@ -1209,6 +1256,7 @@ class Analysis:
     fits: list
     rows: np.ndarray | None = None
     nominal_fits: list = field(default_factory=list)
+    model: str = "lognormal"
 
     @property
     def fitted(self) -> np.ndarray:
@@ -1217,9 +1265,19 @@ class Analysis:
         return self.exceeded if self.rows is None else self.rows
 
 
+#: The fragility curves an analysis offers: the lognormal fit, the isotonic curve (monotone maximum
+#: likelihood) and the per-level fractions (empirical). The lognormal is the default: where it
+#: holds it is the more precise (docs/guide/fragility.md), and where its runs reject it the
+#: printout says so first.
+MODELS = ("lognormal", "isotonic", "empirical")
+
+
 def analyse(fplan: FragilityPlan, final_states: np.ndarray, states, *, resamples: int = BOOTSTRAP_RESAMPLES,
-            seed: int = BOOTSTRAP_SEED) -> Analysis:
-    """The results of every run (from the kernel's final states), the exceedances and the fits."""
+            seed: int = BOOTSTRAP_SEED, model: str = "lognormal") -> Analysis:
+    """The results of every run (from the kernel's final states), the exceedances and the fits;
+    ``model`` the curve offered (`MODELS`)."""
+    if model not in MODELS:
+        raise CaseError(f"unknown model {model!r}; expected {', '.join(MODELS)}", source="model")
     plan = fplan.plan
     variables = sw.sweep_variables(plan, final_states)
     alpha = plan.case_column(K.P_ALPHA).reshape(plan.shape)
@@ -1234,7 +1292,7 @@ def analyse(fplan: FragilityPlan, final_states: np.ndarray, states, *, resamples
     if not fplan.samples:
         fits = [fit_state(levels, exceeded[..., i], resamples=resamples, seed=seed, show=fplan.im.show,
                           per_record=turns) for i in range(len(states))]
-        return Analysis(variables=variables, exceeded=exceeded, states=list(states), fits=fits)
+        return Analysis(variables=variables, exceeded=exceeded, states=list(states), fits=fits, model=model)
     records, n_levels = fplan.shape
     rows = np.ascontiguousarray(np.moveaxis(exceeded[:, :, 1:, :], 2, 1).reshape(records * fplan.samples,
                                                                                    n_levels, len(states)))
@@ -1243,7 +1301,7 @@ def analyse(fplan: FragilityPlan, final_states: np.ndarray, states, *, resamples
     nominal = [fit_state(levels, exceeded[:, :, 0, i], resamples=resamples, seed=seed, show=fplan.im.show,
                          per_record=turns) for i in range(len(states))]
     return Analysis(variables=variables, exceeded=exceeded, states=list(states), fits=fits, rows=rows,
-                    nominal_fits=nominal)
+                    nominal_fits=nominal, model=model)
 
 
 _FIT_FIELDS = (("median", "m"), ("beta", "b"), ("moments_median", "m"), ("moments_beta", "b"))
@@ -1277,6 +1335,32 @@ def dataset(fplan: FragilityPlan, analysis: Analysis, command_line: str = "") ->
     variables["fraction_exceeded"] = (("damage_state", "level"), fraction,
                                       {"units": "1", "long_name": "fraction of the runs inside the model "
                                        "that reach the state (NaN: none inside)"})
+    low, high = gf.wilson_interval(n, z, CONFIDENCE)
+    for side, values in (("lower", low), ("upper", high)):
+        variables[f"fraction_{side}"] = (("damage_state", "level"), values, {
+            "units": "1",
+            "long_name": f"{side} bound of the fraction's {CONFIDENCE:.0%} Wilson interval (NaN: no run)"})
+    variables["isotonic"] = (("damage_state", "level"), np.array([f.isotonic for f in analysis.fits]), {
+        "units": "1", "long_name": "monotone maximum-likelihood fragility (pool adjacent violators on the fractions, "
+        "weighted by the runs; NaN: no run)"})
+    for k, side in enumerate(("lower", "upper")):
+        band = np.array([f.isotonic_band[k] if f.isotonic_band is not None else np.full(levels.size, np.nan)
+                         for f in analysis.fits])
+        variables[f"isotonic_{side}"] = (("damage_state", "level"), band, {
+            "units": "1", "long_name": f"{side} bound of the isotonic curve's {CONFIDENCE:.0%} percentile band over "
+            "the bootstrap resamples of the records (NaN: none)"})
+    goods = [f.goodness for f in analysis.fits]
+    for name, text, kind in (
+            ("deviance", "deviance of the lognormal against the per-level binomial (saturated) model", np.float64),
+            ("dof", "degrees of freedom of the deviance: levels with runs minus 2", np.int32),
+            ("p_value", "chi-squared p-value of the deviance (NaN: no test)", np.float64),
+            ("monotone_statistic", "likelihood ratio of the isotonic fit against the saturated model", np.float64),
+            ("monotone_p_value", "its p-value by parametric bootstrap from the isotonic fit", np.float64),
+            ("rejected", f"the lognormal is rejected (p < {gf.REJECT_LEVEL:g})", np.int8),
+            ("not_monotone", f"the fractions fall by more than sampling noise (p < {gf.REJECT_LEVEL:g})", np.int8)):
+        missing = -1 if kind is not np.float64 else math.nan
+        values = np.array([missing if g is None else getattr(g, name) for g in goods], dtype=kind)
+        variables[f"gof_{name}"] = (("damage_state",), values, {"units": "1", "long_name": text})
     per_state = ("damage_state",)
     variables["definition"] = (per_state, np.array([s.long_name for s in analysis.states], dtype=object),
                                {"long_name": "what reaching the state means (an overturned block reaches "
@@ -1359,6 +1443,11 @@ def dataset(fplan: FragilityPlan, analysis: Analysis, command_line: str = "") ->
         "bootstrap_resamples": analysis.fits[0].resamples if analysis.fits else 0,
         "bootstrap_seed": BOOTSTRAP_SEED,
         "confidence_level": CONFIDENCE,
+        "fragility_model": analysis.model,
+        "goodness_of_fit": "deviance of the lognormal against the per-level binomial (saturated) model, chi-squared "
+                           "with levels - 2 degrees of freedom; monotonicity: likelihood ratio of the isotonic fit "
+                           f"against the saturated model, p by parametric bootstrap ({gf.MONOTONE_RESAMPLES} draws); "
+                           f"rejected below {gf.REJECT_LEVEL:g}",
         "fragility_key": plan.key,
         "vertical_factor": fplan.vertical_factor,
         "vertical_motion": fplan.vertical,
@@ -1393,6 +1482,12 @@ def json_summary(fplan: FragilityPlan, analysis: Analysis) -> dict:
                         "median_ci": _pair(fit.moments_median_ci), "beta_ci": _pair(fit.moments_beta_ci),
                         "n_censored": fit.n_censored, "note": fit.moments_note or None},
             "fraction_exceeded": [None if k == 0 else float(x / k) for x, k in zip(zs, ns, strict=True)],
+            "fraction_interval": [[_finite(a), _finite(b)] for a, b in zip(*gf.wilson_interval(ns, zs, CONFIDENCE),
+                                                                          strict=True)],
+            "isotonic": [_finite(v) for v in fit.isotonic],
+            "isotonic_band": None if fit.isotonic_band is None else [[_finite(v) for v in row]
+                                                                     for row in fit.isotonic_band],
+            "goodness_of_fit": _goodness_json(fit.goodness),
             "caveats": caveats(fit, im),
         }
         if own is not None:
@@ -1406,6 +1501,7 @@ def json_summary(fplan: FragilityPlan, analysis: Analysis) -> dict:
         "records": fplan.names,
         "vertical": {"source": fplan.vertical, "note": fplan.vertical_note or None},
         "damage_states": out,
+        "model": analysis.model,
         "n_runs": int(status.size),
         "n_outside_model": int((status != K.STATUS_OK).sum()),
         "n_undecided": int(analysis.variables["undecided"][0].sum()),
@@ -1415,6 +1511,25 @@ def json_summary(fplan: FragilityPlan, analysis: Analysis) -> dict:
         "bootstrap": {"resamples": analysis.fits[0].resamples if analysis.fits else 0, "seed": BOOTSTRAP_SEED,
                       "confidence": CONFIDENCE},
     }
+
+
+def _finite(value):
+    value = float(value)
+    return value if math.isfinite(value) else None
+
+
+def _goodness_json(g) -> dict | None:
+    if g is None:
+        return None
+    return {"deviance": _finite(g.deviance), "dof": g.dof, "p_value": _finite(g.p_value),
+            "test": "likelihood ratio of the lognormal against the per-level binomial model, chi-squared with "
+                    "levels - 2 degrees of freedom",
+            "rejected": g.rejected, "reject_below": gf.REJECT_LEVEL, "max_deviation": _finite(g.max_deviation),
+            "monotone": {"statistic": _finite(g.monotone_statistic), "p_value": _finite(g.monotone_p_value),
+                         "not_monotone": g.not_monotone,
+                         "test": "likelihood ratio of the isotonic fit against the per-level binomial model, p by "
+                                 f"parametric bootstrap ({gf.MONOTONE_RESAMPLES} draws from the isotonic fit)"},
+            "summary": g.sentence(), "note": g.note or None}
 
 
 def _pair(pair):
@@ -1430,14 +1545,16 @@ def figure(fplan: FragilityPlan, analysis: Analysis, *, size=None):
     levels = np.asarray(fplan.levels.values)
     grid, curves = _curves(levels, analysis.fitted, analysis.states, analysis.fits, fplan.im, analysis.nominal_fits)
     text = caption(fplan.plan.case.text, suite=str(fplan.suite.source), records=len(fplan.suite.entries), im=fplan.im,
-                   levels=levels, step=fplan.plan.step)
+                   levels=levels, step=fplan.plan.step, vertical_note=fplan.vertical_note)
     return fragility_figure(levels / fplan.im.display_scale, grid / fplan.im.display_scale, curves,
                             xlabel=fplan.im.axis_label(), confidence=CONFIDENCE, title=title, size=size, caption=text)
 
 
-def caption(case_text: str, *, suite: str, records: int, im: IntensityMeasure, levels, step, version=None) -> str:
+def caption(case_text: str, *, suite: str, records: int, im: IntensityMeasure, levels, step, version=None,
+            vertical_note: str = "") -> str:
     """`plots.case_caption` of a fragility analysis: the suite, its records and the levels they
-    were scaled to, in place of the case's records."""
+    were scaled to, in place of the case's records; ``vertical_note`` (the case's vertical record
+    left out, `FragilityPlan.vertical_note`) said after them."""
     from .._version import __version__
     from ..plots import case_caption
 
@@ -1445,6 +1562,8 @@ def caption(case_text: str, *, suite: str, records: int, im: IntensityMeasure, l
     unit = f" {im.display_unit}" if im.display_unit else ""
     ground = (f"suite {Path(suite).name} ({records} records) scaled to {im.label} "
               f"{levels.min():.4g} to {levels.max():.4g}{unit} ({levels.size} levels)")
+    if vertical_note:
+        ground += "; HORIZONTAL ONLY: the case's vertical record is left out (the suite has none; --case-vertical)"
     return case_caption(case_text, ground=ground, step=step, version=version or __version__)
 
 
@@ -1458,7 +1577,12 @@ def _curves(levels, exceeded, states, fits, im: IntensityMeasure, nominal_fits=(
         n, z = stripe_counts(exceeded[..., i])
         with np.errstate(invalid="ignore", divide="ignore"):
             fraction = np.where(n > 0, z / n, np.nan)
-        curve = {"label": _legend(state, fit, im), "fraction": fraction}
+        label = _legend(state, fit, im)
+        if fit.goodness is not None and fit.goodness.rejected:
+            p = fit.goodness.p_value
+            label += f" (lognormal REJECTED, p {'< 1e-6' if p < 1e-6 else f'= {p:.2g}'})"
+        curve = {"label": label, "fraction": fraction,
+                 "fraction_interval": np.array(gf.wilson_interval(n, z, CONFIDENCE)), "isotonic": gf.isotonic(n, z)}
         if fit.median is not None:
             curve["fitted"] = fragility(grid, fit.median, fit.beta)
         if fit.moments_median is not None and fit.moments_beta > 0:
@@ -1479,6 +1603,10 @@ def describe_fit(state: DamageState, fit: StateFit, im: IntensityMeasure) -> str
     counts = f"{fit.n_exceeded} of {fit.n_runs - fit.n_outside_model} runs reach it"
     if fit.median is None:
         line = f"{state.name}: {fit.note}"
+    elif fit.goodness is not None and fit.goodness.rejected:
+        # first, before any number of the curve: it does not describe the data
+        line = (f"{state.name}: {fit.goodness.sentence()}: its median and beta do not describe these runs "
+                f"(use --model isotonic or --model empirical); {_legend(state, fit, im).split(': ', 1)[1]}")
     else:
         line = _legend(state, fit, im)
         if fit.resamples and fit.resamples_fitted < fit.resamples:
@@ -1488,6 +1616,29 @@ def describe_fit(state: DamageState, fit: StateFit, im: IntensityMeasure) -> str
     elif fit.moments_note:
         line += f"; no method-of-moments estimate: {fit.moments_note.replace(': no moments', '')}"
     return f"{line}; {counts}"
+
+
+def isotonic_line(fit: StateFit, levels, im: IntensityMeasure) -> str:
+    """``isotonic: 0 at 0.4, 0.14 at 0.45, ... g``: the monotone curve at the levels."""
+    levels = np.asarray(levels, dtype=np.float64)
+    unit = f" {im.display_unit}" if im.display_unit else ""
+    points = ", ".join(f"{p:.3g} at {im.number(x)}" for x, p in zip(levels, fit.isotonic, strict=True)
+                       if math.isfinite(p))
+    return f"isotonic (monotone maximum likelihood): {points}{unit}"
+
+
+def goodness_lines(fit: StateFit) -> list[str]:
+    """The goodness of fit of a state's lognormal and the monotonicity of its fractions, one line
+    each (`goodness.GoodnessOfFit`); [] without runs."""
+    g = fit.goodness
+    if g is None:
+        return []
+    parts = [] if g.rejected else [g.sentence()]           # a rejection leads `describe_fit`'s line
+    if not math.isnan(g.max_deviation):
+        parts.append(f"the curve is {g.max_deviation:.2f} from a per-level fraction at most")
+    if g.note:
+        parts.append(g.note)
+    return ["; ".join(parts), g.monotone_sentence()] if parts else [g.monotone_sentence()]
 
 
 def caveats(fit: StateFit, im: IntensityMeasure) -> list[str]:
@@ -1601,7 +1752,7 @@ def stored_curves(stored) -> dict:
     step = attrs.get("integration_step")
     text = caption(str(attrs.get("case_text", "")), suite=str(attrs.get("suite", "?")), records=exceeded.shape[0],
                    im=im, levels=levels, step=None if step is None else float(step),
-                   version=str(attrs.get("rockslide_version", "?")))
+                   version=str(attrs.get("rockslide_version", "?")), vertical_note=str(attrs.get("vertical_note", "")))
     nominal = ()
     turns = int(attrs.get("orientations_per_record", 1))
     if "sample" not in coords:
@@ -1617,3 +1768,138 @@ def stored_curves(stored) -> dict:
                           per_record=(width - 1) * turns) for i in range(len(states))]
     grid, curves = _curves(levels, exceeded, states, fits, im, nominal)
     return {"levels": levels, "grid": grid, "curves": curves, "im": im, "title": title, "caption": text}
+
+
+# --------------------------------------------------------------------------------------------------
+# Two measures: the probit surface (``--im pga,pgv``, ``--im pga,pgv/pga``)
+# --------------------------------------------------------------------------------------------------
+
+#: The second measures of a two-measure fragility: name -> (label, display unit, its size [SI], whether it
+#: scales with the record).
+SECOND_MEASURES = {"pgv": ("PGV", "cm/s", 0.01, True), "pgv/pga": ("PGV/PGA", "s", 1.0, False)}
+
+
+def split_measures(text: str) -> tuple[str, str | None]:
+    """``"pga,pgv"`` -> ``("pga", "pgv")``; one measure -> ``(text, None)``.
+
+    Raises
+    ------
+    CaseError
+        Naming ``--im``: a second measure other than ``pgv`` or ``pgv/pga``.
+    """
+    parts = [p.strip().lower().replace(" ", "") for p in str(text).split(",")]
+    if len(parts) == 1:
+        return str(text), None
+    second = {"pgv_pga": "pgv/pga"}.get(parts[1], parts[1])
+    if len(parts) != 2 or second not in SECOND_MEASURES:
+        raise CaseError(f"two measures are given as 'pga,pgv' or 'pga,pgv/pga' (the records scaled on the first), "
+                        f"got {text!r}", source="im")
+    return parts[0], second
+
+
+def second_measure_values(fplan: FragilityPlan, second: str) -> np.ndarray:
+    """``float64[records, levels]``: the second measure of each run [SI]: the record's PGV times the
+    run's factor (PGV scales with the record), or its PGV/PGA (which does not)."""
+    records, n_levels = fplan.shape
+    factors = fplan.plan.factor_h.reshape(records, n_levels, -1)[:, :, 0]
+    if second == "pgv":
+        return fplan.measures["pgv"][:, None] * factors
+    return np.broadcast_to(fplan.measures["pgv_pga"][:, None], (records, n_levels)).copy()
+
+
+def fit_surface(fplan: FragilityPlan, analysis: Analysis, second: str, *, resamples: int = BOOTSTRAP_RESAMPLES,
+                seed: int = BOOTSTRAP_SEED) -> list[dict]:
+    """Per damage state, ``P = Phi(a + b ln IM1 + c ln IM2)`` over every run inside the model
+    (`goodness.probit_surface`), with percentile intervals (:data:`CONFIDENCE`) of ``a, b, c`` over
+    resamples of the records. IM1 is the level [SI], IM2 `second_measure_values` [SI]."""
+    levels = np.asarray(fplan.levels.values, dtype=np.float64)
+    exceeded = analysis.exceeded                              # [records, levels, (samples,) states]
+    records = exceeded.shape[0]
+    im2 = second_measure_values(fplan, second)
+    extra = exceeded.shape[2:-1]
+    shape = exceeded.shape[:-1]
+    x1 = np.broadcast_to(levels.reshape((1, -1) + (1,) * len(extra)), shape)
+    x2 = np.broadcast_to(im2.reshape(im2.shape + (1,) * len(extra)), shape)
+    owner = np.broadcast_to(np.arange(records).reshape((-1, 1) + (1,) * len(extra)), shape)
+    out = []
+    rng = np.random.default_rng(seed)
+    picks = rng.integers(0, records, size=(resamples if records >= 2 else 0, records))
+    tails = (50.0 * (1.0 - CONFIDENCE), 100.0 - 50.0 * (1.0 - CONFIDENCE))
+    for i, state in enumerate(analysis.states):
+        y = exceeded[..., i]
+        inside = y >= 0
+        fit = gf.probit_surface(x1[inside], x2[inside], y[inside])
+        entry = {"state": state.name, "fit": fit, "intervals": None, "resamples_fitted": 0,
+                 "im1": x1[inside], "im2": x2[inside], "outcome": y[inside]}
+        if fit.converged and picks.shape[0]:
+            rows = [np.flatnonzero((owner == r).ravel() & inside.ravel()) for r in range(records)]
+            taken = []
+            for pick in picks:
+                chosen = np.concatenate([rows[r] for r in pick])
+                again = gf.probit_surface(x1.ravel()[chosen], x2.ravel()[chosen], y.ravel()[chosen], iterations=50)
+                if again.converged:
+                    taken.append(again.coefficients)
+            if len(taken) >= 2:
+                entry["intervals"] = np.percentile(np.array(taken), tails, axis=0)
+                entry["resamples_fitted"] = len(taken)
+        out.append(entry)
+    return out
+
+
+def surface_json(surfaces: list[dict], second: str) -> dict:
+    """The ``--json`` object of `fit_surface`: per state the coefficients, their standard errors and
+    intervals (null where there is no fit)."""
+    out = {}
+    for s in surfaces:
+        fit = s["fit"]
+        out[s["state"]] = {
+            "model": f"P = Phi(a + b ln IM1 + c ln {SECOND_MEASURES[second][0]}), IM1 and {second} in SI",
+            "coefficients": None if not fit.converged else dict(zip("abc", map(float, fit.coefficients), strict=True)),
+            "standard_errors": None if not fit.converged else dict(zip("abc", map(float, fit.standard_errors),
+                                                                        strict=True)),
+            "intervals": None if s["intervals"] is None else {
+                k: [float(s["intervals"][0][j]), float(s["intervals"][1][j])] for j, k in enumerate("abc")},
+            "resamples_fitted": s["resamples_fitted"], "n_runs": int(s["outcome"].size), "note": fit.note or None}
+    return {"second_measure": second, "scales_with_record": SECOND_MEASURES[second][3], "states": out}
+
+
+def surface_figure(fplan: FragilityPlan, surfaces: list[dict], second: str, *, size=None):
+    """The contour figure of each state's surface, the runs on it, and its curves in IM1 at the
+    16th, 50th and 84th percentiles of the runs' IM2 (`plots.surface_figure`)."""
+    from ..plots import surface_figure as draw
+
+    label2, unit2, scale2, _ = SECOND_MEASURES[second]
+    im = fplan.im
+    panels = []
+    for s in surfaces:
+        if not s["fit"].converged:
+            continue
+        x1, x2 = s["im1"] / im.display_scale, s["im2"] / scale2
+        g1 = np.geomspace(x1.min() * 0.8, x1.max() * 1.25, 120)
+        g2 = np.geomspace(x2.min() * 0.8, x2.max() * 1.25, 120)
+        p = s["fit"](g1[None, :] * im.display_scale, g2[:, None] * scale2)
+        at = np.percentile(x2, [16, 50, 84])
+        curves = [(f"{label2} = {v:.3g} {unit2}", s["fit"](g1 * im.display_scale, v * scale2)) for v in at]
+        a, b, c = s["fit"].coefficients
+        panels.append({"title": f"{s['state']}: P = Φ({a:.2f} + {b:.2f} ln {im.label} + {c:.2f} ln {label2})",
+                       "g1": g1, "g2": g2, "p": p, "x1": x1, "x2": x2, "y": s["outcome"], "curves": curves})
+    return draw(panels, xlabel=im.axis_label(), ylabel=f"{label2} [{unit2}]",
+                title=f"{fplan.plan.case.name}: {fplan.describe()}", size=size)
+
+
+def surface_lines(surfaces: list[dict], second: str) -> list[str]:
+    """The printout of `fit_surface`: one line per state."""
+    label = SECOND_MEASURES[second][0]
+    lines = []
+    for s in surfaces:
+        fit = s["fit"]
+        if not fit.converged:
+            lines.append(f"{s['state']} on two measures: {fit.note}")
+            continue
+        parts = []
+        for j, name in enumerate("abc"):
+            interval = "" if s["intervals"] is None else \
+                f" [{s['intervals'][0][j]:.3g}, {s['intervals'][1][j]:.3g}]"
+            parts.append(f"{name} {fit.coefficients[j]:.3g} ± {fit.standard_errors[j]:.2g}{interval}")
+        lines.append(f"{s['state']} on two measures: P = Phi(a + b ln IM + c ln {label}) (SI), " + ", ".join(parts))
+    return lines

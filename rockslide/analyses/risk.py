@@ -125,6 +125,29 @@ class HazardCurve:
 # --------------------------------------------------------------------------------------------------
 
 
+#: The fragility models `rockslide risk --model` takes from a fragility file.
+MODELS = ("lognormal", "isotonic", "empirical")
+
+
+def evidence(levels, fractions, isotonic=None) -> dict:
+    """What a fragility file's stripes say for `FragilityUsed`: ``first_exceedance`` (the lowest
+    level with a fraction above 0) and ``highest_tested`` [SI of the IM], and ``stripes``: the
+    isotonic curve as a `Tabulated` (``isotonic`` as stored; else pooled with equal weights, as a
+    file of an older version has no counts per level). Levels without runs (NaN) are left out."""
+    levels = np.asarray(levels, dtype=np.float64)
+    fractions = np.asarray(fractions, dtype=np.float64)
+    known = np.isfinite(fractions)
+    if not known.any():
+        return {"first_exceedance": None, "highest_tested": float(levels[-1]), "stripes": None}
+    if isotonic is None or not np.isfinite(np.asarray(isotonic, dtype=np.float64)[known]).all():
+        from .goodness import isotonic as pava
+        isotonic = pava(np.where(known, 1.0, 0.0), np.where(known, fractions, 0.0))
+    isotonic = np.asarray(isotonic, dtype=np.float64)
+    hit = np.flatnonzero(known & (fractions > 0))
+    return {"first_exceedance": float(levels[hit[0]]) if hit.size else None, "highest_tested": float(levels[-1]),
+            "stripes": Tabulated(levels[known], isotonic[known])}
+
+
 def beta_problem(beta) -> str:
     """Why ``beta`` [-] is not a lognormal fragility's logarithmic standard deviation that `rate`
     takes (not a number, or outside `BETA_RANGE`), or "" when it is."""
@@ -294,6 +317,65 @@ def rate(fragility, curve: HazardCurve) -> Rate:
                 below=float(p[0] * lam[0]))
 
 
+def rate_below(fragility, curve: HazardCurve, x: float) -> float:
+    """The part of ``lambda_F`` [1/yr] from motions with the IM below ``x`` [SI]: eq. (1) over the
+    hazard curve's levels up to ``x`` (``x`` is put among the levels, where the curve's log-log
+    interpolation is the curve itself). All of it from ``x`` above the last level (the tail is
+    counted at ``P(F | x_m)``, eq. (2)); 0 at or below the first."""
+    levels = curve.levels
+    if x <= levels[0]:
+        return 0.0
+    if x > levels[-1]:
+        return rate(fragility, curve).rate
+    cut = HazardCurve(curve.name, np.unique(np.r_[levels, x]), np.empty(0))
+    cut = HazardCurve(curve.name, cut.levels, curve.rate(cut.levels))
+    parts = rate(fragility, cut).contributions
+    return float(parts[:int(np.searchsorted(cut.levels, x))].sum())
+
+
+@dataclass(frozen=True)
+class RestsOn:
+    """What a rate rests on (`rests_on`): shares of ``lambda_F`` [-] from where no run supports it.
+
+    Attributes
+    ----------
+    below_first_exceedance : float
+        From intensities below the lowest level at which any run reached the state.
+    above_tested : float
+        From intensities above the highest level tested (with the tail above the hazard curve).
+    extrapolated : float
+        Their sum.
+    stripes_rate : float
+        [1/yr] the rate with the per-level fractions made monotone (isotonic), NaN when not known.
+    deviation : float
+        ``rate / stripes_rate - 1`` for a fitted curve (NaN otherwise).
+    """
+
+    below_first_exceedance: float
+    above_tested: float
+    extrapolated: float
+    stripes_rate: float = math.nan
+    deviation: float = math.nan
+
+
+#: A rate with more than this share from intensities where no run supports it draws a warning.
+EXTRAPOLATED_WARNING = 0.10
+
+
+def rests_on(fragility, curve: HazardCurve, total: float, *, first_exceedance: float | None,
+             highest_tested: float | None, stripes=None) -> RestsOn:
+    """The shares of ``total`` (the rate of ``fragility`` under ``curve``) from intensities below
+    ``first_exceedance`` and above ``highest_tested`` [SI], and the rate of ``stripes`` (a
+    `Tabulated` of the per-level fractions) to compare a fitted curve with."""
+    if not total > 0:
+        return RestsOn(math.nan, math.nan, math.nan)
+    below = 0.0 if first_exceedance is None else rate_below(fragility, curve, first_exceedance) / total
+    above = 0.0 if highest_tested is None else 1.0 - rate_below(fragility, curve, highest_tested) / total
+    other = rate(stripes, curve).rate if stripes is not None else math.nan
+    deviation = total / other - 1.0 if stripes is not None and other > 0 else math.nan
+    return RestsOn(below, max(above, 0.0), below + max(above, 0.0), other, deviation)
+
+
 def rate_range(fragilities, curve: HazardCurve, confidence: float | None = None) -> tuple[float, float]:
     """The range of ``lambda_F`` [1/yr] over ``fragilities``: with ``confidence``, its central
     percentile interval (the fragilities are samples, e.g. the fits of bootstrap resamples); without,
@@ -400,6 +482,15 @@ class FragilityUsed:
     along_block : bool
         Its intensity measure is of the motion along the block, from records of two horizontal
         components (the fragility file's suite says so).
+    first_exceedance, highest_tested : float or None
+        [SI of the IM] the lowest level at which any run reached the state and the highest level
+        run (`rests_on`); None: not known (a lognormal given).
+    stripes : Tabulated or None
+        The per-level fractions made monotone (isotonic), to compare a fitted curve's rate with.
+    rejection : str
+        The goodness-of-fit test's sentence when it rejected the lognormal used ("" otherwise).
+    vertical_note : str
+        The fragility's runs left out the case's vertical record ("" otherwise).
     """
 
     curve: object
@@ -412,6 +503,11 @@ class FragilityUsed:
     uncertainty: str = ""
     variants_level: float | None = None
     along_block: bool = False
+    first_exceedance: float | None = None
+    highest_tested: float | None = None
+    stripes: object = None
+    rejection: str = ""
+    vertical_note: str = ""
 
 
 @dataclass
@@ -438,6 +534,8 @@ class Analysis:
         Of the rejection of a hazard curve by the rock's survival.
     notes : list of str
         Conditions of the result printed once (`io.hazard.component_note`).
+    rests : list of RestsOn
+        Per curve, the shares of the rate where no run supports it (`rests_on`).
     """
 
     fragility: FragilityUsed
@@ -450,6 +548,7 @@ class Analysis:
     age: float | None
     confidence: float
     notes: list = field(default_factory=list)
+    rests: list = field(default_factory=list)
 
     @property
     def rates(self) -> np.ndarray:
@@ -467,9 +566,34 @@ def analyse(fragility: FragilityUsed, measure: dict, curves, about, *, life: flo
     results = [rate(fragility.curve, c) for c in curves]
     intervals = [rate_range(fragility.variants, c, fragility.variants_level) if fragility.variants
                  else (math.nan, math.nan) for c in curves]
+    rests = [rests_on(fragility.curve, c, r.rate, first_exceedance=fragility.first_exceedance,
+                      highest_tested=fragility.highest_tested,
+                      stripes=fragility.stripes if fragility.stripes is not fragility.curve else None)
+             for c, r in zip(curves, results, strict=True)]
+    notes = list(notes) + ([fragility.vertical_note] if fragility.vertical_note else [])
     return Analysis(fragility=fragility, measure=dict(measure), curves=list(curves), about=list(about),
                     results=results, intervals=intervals, life=life, age=age, confidence=confidence,
-                    notes=list(notes))
+                    notes=notes, rests=rests)
+
+
+def rests_text(r: RestsOn, fragility: FragilityUsed, show) -> str:
+    """``rests on: 21 % of the rate from below 0.45 g (no run reached the state there), 3 % from
+    above 0.75 g (beyond the levels run)``, with the per-level curve's rate for a fitted one; "" when
+    nothing is known."""
+    if fragility.first_exceedance is None and fragility.highest_tested is None or math.isnan(r.extrapolated):
+        return ""
+    parts = []
+    if fragility.first_exceedance is not None:
+        parts.append(f"{100 * r.below_first_exceedance:.3g} % of the rate from below {show(fragility.first_exceedance)}"
+                     " (no run reached the state there)")
+    if fragility.highest_tested is not None:
+        parts.append(f"{100 * r.above_tested:.3g} % from above {show(fragility.highest_tested)} (beyond the levels "
+                     "run)")
+    text = "rests on: " + ", ".join(parts)
+    if math.isfinite(r.stripes_rate):
+        text += (f"; the per-level fractions (isotonic) give {r.stripes_rate:.4g} /yr, this curve "
+                 f"{100 * r.deviation:+.3g} % from it")
+    return text
 
 
 INTEGRATION = ("lambda_F = integral of P(F|x) |d lambda(x)|, the hazard curve log-log interpolated between its "
@@ -541,6 +665,15 @@ def dataset(analysis: Analysis, command_line: str = "") -> tuple[list, dict, dic
                                {"units": "yr", "long_name": "OpenQuake's investigation time of the PoE (NaN: rates "
                                 "given)"}),
     }
+    if analysis.rests:
+        for name, text in (("below_first_exceedance", "share of the rate from intensities below the lowest level at "
+                            "which any run reached the state (NaN: not known)"),
+                           ("above_tested", "share of the rate from intensities above the highest level run"),
+                           ("extrapolated", "the two shares together")):
+            variables[f"share_{name}"] = (per_curve, np.array([getattr(r, name) for r in analysis.rests]),
+                                          {"units": "1", "long_name": text})
+        variables["isotonic_rate"] = (per_curve, np.array([r.stripes_rate for r in analysis.rests]), {
+            "units": rate_unit, "long_name": "rate with the per-level fractions made monotone (NaN: not computed)"})
     if analysis.age is not None:
         alive = analysis.survivals
         variables["survival"] = (per_curve, alive, {"units": "1", "long_name": f"probability of standing "
@@ -594,6 +727,13 @@ def json_summary(analysis: Analysis) -> dict:
                  "contributions": {"levels": [float(v) for v in c.levels], "rate": [float(v) for v in r.contributions]},
                  "levels_left_out": {"poe_1": [float(v) for v in analysis.about[i].get("dropped_low", ())],
                                      "poe_0": [float(v) for v in analysis.about[i].get("dropped_high", ())]}}
+        if analysis.rests:
+            rest = analysis.rests[i]
+            entry["rests_on"] = {"share_below_first_exceedance": number(rest.below_first_exceedance),
+                                 "share_above_tested": number(rest.above_tested),
+                                 "share_extrapolated": number(rest.extrapolated),
+                                 "warning": bool(rest.extrapolated > EXTRAPOLATED_WARNING),
+                                 "isotonic_rate": number(rest.stripes_rate), "deviation": number(rest.deviation)}
         if survivals is not None:
             entry.update({"survival": float(survivals[i]),
                           "survival_interval": [number(v) for v in survival(analysis.intervals[i][::-1], analysis.age)],
@@ -601,7 +741,11 @@ def json_summary(analysis: Analysis) -> dict:
         curves.append(entry)
     return {"damage_state": f.damage_state, "fragility": {"source": f.source, "form": f.form,
                                                           "median": number(f.median), "beta": number(f.beta),
-                                                          "uncertainty": f.uncertainty},
+                                                          "uncertainty": f.uncertainty,
+                                                          "first_exceedance": f.first_exceedance,
+                                                          "highest_tested": f.highest_tested,
+                                                          "rejected": f.rejection or None,
+                                                          "vertical_note": f.vertical_note or None},
             "intensity_measure": analysis.measure["name"],
             "units": {"rate": "1/yr", "levels": analysis.measure["units"], "return_period": "yr"},
             "service_life": analysis.life, "age": analysis.age,
@@ -639,6 +783,10 @@ def summary_lines(analysis: Analysis, show) -> list[str]:
                      f"{show(c.levels[top])} ... {show(c.levels[top + 1])}")
             parts.append(f"{where} {100 * r.contributions[top] / r.rate:.3g} %")
         lines.append("    most from " + ", ".join(parts))
+        if analysis.rests:
+            rests = rests_text(analysis.rests[i], f, show)
+            if rests:
+                lines.append(f"    {rests}")
     return lines
 
 
@@ -669,6 +817,14 @@ def warnings_of(analysis: Analysis, show) -> list[str]:
         note = below_note(r)
         if note:
             out.append(f"{c.name}: {note}")
+    for c, rest in zip(analysis.curves, analysis.rests, strict=False):
+        if rest.extrapolated > EXTRAPOLATED_WARNING:
+            out.append(f"{c.name}: {100 * rest.extrapolated:.3g} % of the rate comes from intensities where no run "
+                       f"supports the curve (below the first exceedance or above the levels run; more than "
+                       f"{100 * EXTRAPOLATED_WARNING:g} %): it rests on the curve's shape there, not on the runs")
+    if analysis.fragility.rejection:
+        out.append(f"the fragility's {analysis.fragility.rejection}: the rate rests on a curve its runs reject; "
+                   "compare --model isotonic")
     return out
 
 

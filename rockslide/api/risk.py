@@ -17,7 +17,8 @@ from .stored import read_result
 def risk(fragility: str | Path | None = None, hazard=None, *, damage: str = "overturn", stripes: bool = False,
          median: str | float | None = None, beta: float | None = None, im: str = "pga",
          life: str | float = 50.0, age: str | float | None = None, confidence: float = 0.95,
-         hazard_units: str | None = None, trim_poe: bool = False, drop_zero_poe: bool = False, outputs=None):
+         hazard_units: str | None = None, trim_poe: bool = False, drop_zero_poe: bool = False,
+         model: str | None = None, fragility_table: str | Path | None = None, outputs=None):
     """The annual rate of a damage state at a site: a fragility integrated over hazard curves, as
     ``rockslide risk`` (`analyses.risk`; docs/risk.md).
 
@@ -58,6 +59,17 @@ def risk(fragility: str | Path | None = None, hazard=None, *, damage: str = "ove
         is one between other values with it.
     drop_zero_poe : bool
         The same as ``trim_poe`` (its former name).
+    model : str, optional
+        The curve taken from a fragility file (default: the one its analysis chose, its attribute
+        ``fragility_model``, else the lognormal): ``"lognormal"`` (its maximum-likelihood fit),
+        ``"isotonic"`` (the monotone maximum-likelihood curve of its stripes) or ``"empirical"`` (the
+        fractions themselves, as ``stripes``); each linear in ln x between the levels.
+    fragility_table : str or Path, optional
+        Instead of a fragility file: a CSV of levels and probabilities with the measure and unit in
+        its header (``PGA [g], probability``; `io.hazard.read_fragility_table`).
+
+    outputs : outputs.OutputSet, optional
+        Also write ``NAME.risk.h5`` and its figure there (`risk_outputs`), as the command line does.
 
     Returns
     -------
@@ -71,20 +83,21 @@ def risk(fragility: str | Path | None = None, hazard=None, *, damage: str = "ove
     """
     return risk_study(fragility, hazard, damage=damage, stripes=stripes, median=median, beta=beta, im=im, life=life,
                       age=age, confidence=confidence, hazard_units=hazard_units, trim_poe=trim_poe or drop_zero_poe,
-                      outputs=outputs).to_xarray()
+                      model=model, fragility_table=fragility_table, outputs=outputs).to_xarray()
 
 
 def risk_outputs(fragility, *, out_dir=None, name: str | None = None, overwrite: bool = False, plot: bool = True,
-                 dpi=None, size=None):
+                 dpi=None, size=None, table=None):
     """The output set of `risk`: ``OUT/NAME.risk.h5`` and ``.png``, OUT ``out_dir`` (default: the
     fragility file's folder, else the current one), NAME ``name`` (a name, not a path; default: the
-    fragility file's name, else ``lognormal``)."""
+    fragility file's name, else the fragility ``table``'s, else ``lognormal``)."""
     from ..outputs import OutputSet, output_folder
 
     path = Path(fragility) if isinstance(fragility, (str, Path)) else None
     folder = output_folder(out_dir, default=path.parent if path is not None else Path("."))
     stem = name if name is not None else \
-        (path.name.removesuffix(".h5").removesuffix(".fragility") if path is not None else "lognormal")
+        (path.name.removesuffix(".h5").removesuffix(".fragility") if path is not None else
+         Path(table).stem if table is not None else "lognormal")
     return OutputSet(folder, stem, "risk", overwrite=overwrite, plot=plot, dpi=dpi, size=size)
 
 
@@ -122,11 +135,20 @@ def risk_study(fragility=None, hazard=None, *, outputs=None, command_line: str =
 
 def risk_analysis(fragility=None, hazard=None, *, damage: str = "overturn", stripes: bool = False, median=None,
                   beta=None, im: str = "pga", life=50.0, age=None, confidence: float = 0.95, hazard_units=None,
-                  trim_poe: bool = False):
+                  trim_poe: bool = False, model: str | None = None, fragility_table=None):
     """`risk`'s `analyses.risk.Analysis` (for the command's printout and figure); same arguments."""
     from ..analyses import risk as rk
 
-    used, measure = _risk_fragility(fragility, damage=damage, stripes=stripes, median=median, beta=beta, im=im)
+    if model is not None and model not in rk.MODELS:
+        raise CaseError(f"unknown model {model!r}; expected {', '.join(rk.MODELS)}", source="model")
+    if fragility_table is not None:
+        if fragility is not None or median is not None or beta is not None:
+            raise CaseError("give a fragility table, a fragility file or median and beta, one of them",
+                            source="fragility_table")
+        used, measure = _table_fragility(fragility_table, damage)
+    else:
+        used, measure = _risk_fragility(fragility, damage=damage, stripes=stripes or model == "empirical",
+                                        median=median, beta=beta, im=im, model=model)
     curves, about, notes = _hazard_curves(hazard, measure, hazard_units, trim_poe, along_block=used.along_block)
     if isinstance(confidence, bool) or not isinstance(confidence, (int, float)) or not 0.0 < float(confidence) < 1.0:
         raise CaseError(f"must be within 0 and 1 (e.g. 0.95), got {confidence!r}", source="confidence")
@@ -138,7 +160,21 @@ def risk_analysis(fragility=None, hazard=None, *, damage: str = "overturn", stri
                       notes=notes)
 
 
-def _risk_fragility(path, *, damage, stripes, median, beta, im):
+def _table_fragility(path, damage):
+    """The fragility of `risk --fragility-table` and its intensity measure."""
+    from ..analyses import fragility as fr
+    from ..analyses import risk as rk
+    from ..io import hazard as hz
+    from ..units import unit_factor
+
+    name, unit, levels, p = hz.read_fragility_table(path)
+    measure = fr.parse_im(name)
+    levels = levels * unit_factor(unit, measure.kind, source=str(path))
+    return rk.FragilityUsed(rk.Tabulated(levels, p), damage, str(path), "tabulated (linear in ln x between its "
+                            "levels, constant outside)", highest_tested=float(levels[-1])), measure
+
+
+def _risk_fragility(path, *, damage, stripes, median, beta, im, model=None):
     """The fragility of `risk` and its intensity measure."""
     from ..analyses import fragility as fr
     from ..analyses import risk as rk
@@ -170,15 +206,27 @@ def _risk_fragility(path, *, damage, stripes, median, beta, im):
     if damage not in states:
         raise CaseError(f"no damage state {damage!r} in the file; it has {', '.join(states)}", source="damage")
     at = ds.sel(damage_state=damage)
-    if stripes:
-        fraction = np.asarray(at["fraction_exceeded"].values, dtype=np.float64)
-        levels = np.asarray(ds["level"].values, dtype=np.float64)
-        known = np.isfinite(fraction)
-        if not known.any():
+    model = model or str(ds.attrs.get("fragility_model", "lognormal"))
+    stripes = stripes or model == "empirical"
+    fraction = np.asarray(at["fraction_exceeded"].values, dtype=np.float64)
+    levels = np.asarray(ds["level"].values, dtype=np.float64)
+    known = {**rk.evidence(levels, fraction, at["isotonic"].values if "isotonic" in at else None),
+             "vertical_note": str(ds.attrs.get("vertical_note", ""))}
+    if stripes or model == "isotonic":
+        if not np.isfinite(fraction).any():
             raise CaseError(f"no stripe has a run inside the model for {damage!r}", source=str(path))
-        return rk.FragilityUsed(rk.Tabulated(levels[known], fraction[known]), damage, str(path),
+        if model == "isotonic":
+            return rk.FragilityUsed(known["stripes"], damage, str(path), "isotonic curve of the stripes (monotone "
+                                    "maximum likelihood, linear in ln x between them, constant outside)",
+                                    along_block=along, **known), measure
+        kept = np.isfinite(fraction)
+        return rk.FragilityUsed(rk.Tabulated(levels[kept], fraction[kept]), damage, str(path),
                                 "empirical stripes (linear in ln x between them, constant outside)",
-                                variants=[], along_block=along), measure
+                                variants=[], along_block=along, **known), measure
+    if "gof_rejected" in at and int(at["gof_rejected"]) == 1:
+        known["rejection"] = (f"lognormal is REJECTED by its per-level fractions (deviance "
+                              f"{float(at['gof_deviance']):.3g} on {int(at['gof_dof'])} degrees of freedom, "
+                              f"p = {float(at['gof_p_value']):.2g})")
     theta, b = float(at["median"]), float(at["beta"])
     note = str(at["fit_note"].values)
     if not math.isfinite(theta) or (not math.isfinite(b) and note):
@@ -201,14 +249,15 @@ def _risk_fragility(path, *, damage, stripes, median, beta, im):
             uncertainty = (f"the {level:.0%} percentile interval of the rate over the fits of the {len(pairs)} "
                            f"bootstrap resamples of the records{left_out}")
             return rk.FragilityUsed(rk.Lognormal(theta, b), damage, path, "lognormal fit", theta, b,
-                                    [rk.Lognormal(m, s) for m, s in pairs], uncertainty, level, along), measure
+                                    [rk.Lognormal(m, s) for m, s in pairs], uncertainty, level, along,
+                                    **known), measure
     if all(math.isfinite(v) for v in bounds):
         variants = rk.lognormal_box(bounds[:2], bounds[2:])
         uncertainty = (f"the range of the rate over the {level:.0%} bootstrap intervals of the median "
                        f"({measure.show(bounds[0])} ... {measure.show(bounds[1])}) and of beta ({bounds[2]:.3g} ... "
                        f"{bounds[3]:.3g}), on a grid over their rectangle (marginal intervals: a wide range)")
     return rk.FragilityUsed(rk.Lognormal(theta, b), damage, str(path), "lognormal fit", theta, b, variants,
-                            uncertainty, along_block=along), measure
+                            uncertainty, along_block=along, **known), measure
 
 
 def _two_components(attrs) -> bool:

@@ -11,7 +11,7 @@ from pathlib import Path
 
 from ..case import Case
 from ..core.simulate import Result, Summary
-from ..errors import OutputError
+from ..errors import CaseError, OutputError
 from ._shared import as_case, callable_arg, check_where, path_arg, whole, with_scale
 
 #: A single run expected to take longer than this [s] says so before it starts (and shows a
@@ -124,9 +124,11 @@ def run(case: Case | Mapping | str | Path, *, records_dir: str | Path | None = N
         there, as the command line does: checked before the work, published together. A complete
         result of the same case (same text, records and ensemble) whose figure is missing gets its
         figure, and is returned as read back.
-    ensemble : int or True, optional
-        Also run this many neighbours of the case (`ensemble`; True: 200), in memory; their
-        summary is ``RunResult.ensemble`` (and is stored in the result file).
+    ensemble : int, True or str, optional
+        Also run this many neighbours of the case (`ensemble`; True: 200; ``"auto"`` or
+        ``"precision:W"``: until the 95 % interval of the probability of overturning is narrower
+        than 0.1 or W), in memory; their summary is ``RunResult.ensemble`` (and is stored in the
+        result file).
     seed : int
         Seed of the ensemble's Latin hypercube.
     device : {"cpu", "gpu", "auto"}
@@ -160,23 +162,36 @@ def run(case: Case | Mapping | str | Path, *, records_dir: str | Path | None = N
     whole(seed, "seed", 0)
     callable_arg(progress, "progress")
     callable_arg(report, "report")
-    if ensemble is not True and ensemble is not False:
-        whole(ensemble, "ensemble", 1, optional=True)
+    members, precision = _members(ensemble)
     say = report if report is not None else (lambda text: None)
     started = time.perf_counter()
     folder = records.records_dir(records_dir)
     prepared = engine.prepare(case, folder, history=history)          # input errors first
     eplan = None
-    if ensemble is not None and ensemble is not False:
+    if members is not None:        # (with a precision: its first round, which says what the ensemble is)
         from ..analyses import ensemble as ens
-        n = ens.DEFAULT_MEMBERS if ensemble is True else ensemble
-        eplan = ens.plan_ensemble(case, n, seed=seed, records_dir=folder, records=prepared.records)
+        eplan = ens.plan_ensemble(case, members, seed=seed, records_dir=folder, records=prepared.records)
+        eplan.precision = precision
     where = {"device": device, "workers": workers, "say": say, "bars": bars}
     if outputs is not None:
         return _run_into(outputs, prepared, eplan, started, progress=progress, **where)
     result = engine.simulate_prepared(prepared, progress=progress)
     summary = None if eplan is None else _neighbourhood(eplan, result, **where)[0]
     return _run_result(prepared, result, summary)
+
+
+def _members(ensemble) -> tuple[int | None, float | None]:
+    """``run``'s ``ensemble`` as (members, precision): the members of the first round with a precision."""
+    if ensemble is None or ensemble is False:
+        return None, None
+    from ..analyses import ensemble as ens
+
+    if ensemble is True:
+        return ens.DEFAULT_MEMBERS, None
+    if isinstance(ensemble, str):
+        members, precision = ens.parse_members(ensemble)
+        return (ens.PILOT_MEMBERS, precision) if precision is not None else (members, None)
+    return whole(ensemble, "ensemble", 1), None
 
 
 def _run_result(prepared, result, summary, **more) -> RunResult:
@@ -199,13 +214,19 @@ def _neighbourhood(eplan, result, *, device="cpu", workers=None, say=None, bars=
     from ..analyses import ensemble as ens
     from .studies import _no_bar
 
+    where = dict(device=device, workers=workers, report=say, what="ensemble", label=eplan.plan.case.name,
+                 unit="member")
+    if eplan.precision is not None:           # rounds until the interval is narrow enough
+        _, summary, members, variables = ens.to_precision(eplan.plan.case, eplan.precision, result.summary.overturned,
+                                                          seed=eplan.seed, records=eplan.records,
+                                                          progress=lambda cases: interrupts.check(), **where)
+        return summary, members, variables
     with (bars or _no_bar)(f"{eplan.plan.case.name}: neighbours", eplan.n, "member") as update:
         def tell(members: int) -> None:
             interrupts.check()
             update(members)
 
-        return ens.compute(eplan, result.summary.overturned, device=device, workers=workers, progress=tell,
-                           report=say, what="ensemble", label=eplan.plan.case.name, unit="member")
+        return ens.compute(eplan, result.summary.overturned, progress=tell, **where)
 
 
 def _run_into(outputs, prepared, eplan, started, *, say, progress, device, workers, bars) -> RunResult:
@@ -301,7 +322,9 @@ def _same_ensemble(text, eplan) -> bool:
     except (TypeError, ValueError):
         return False
     quantities = {name: d.spec() for name, d in eplan.distributions.items()}
-    return stored.get("n") == eplan.n and stored.get("seed") == eplan.seed and stored.get("quantities") == quantities
+    precision = eplan.precision
+    same_n = stored.get("precision") == precision if precision is not None else stored.get("n") == eplan.n
+    return same_n and stored.get("seed") == eplan.seed and stored.get("quantities") == quantities
 
 
 def _compile_note(say) -> None:
@@ -349,10 +372,10 @@ def _ensemble_figure(summary: dict, variables: dict, nominal, name: str, prepare
                            caption=_run_about(prepared, step)["caption"])
 
 
-def ensemble(case: Case | Mapping | str | Path, n: int = 200, *, seed: int = 1,
+def ensemble(case: Case | Mapping | str | Path, n: int | str = 200, *, seed: int = 1,
              records_dir: str | Path | None = None, device: str = "cpu", workers: int | None = None,
              scheduler=None, wait_workers: float | None = None, store=None,
-             progress: Callable[[int], None] | None = None):
+             progress: Callable[[int], None] | None = None, precision: float | None = None):
     """A verdict's neighbourhood: ``n`` cases drawn around ``case`` over what is uncertain, as
     ``rockslide run --ensemble n`` computes them (`analyses.ensemble`).
 
@@ -361,10 +384,14 @@ def ensemble(case: Case | Mapping | str | Path, n: int = 200, *, seed: int = 1,
     case : Case, mapping or path
         Its ``uncertain`` section says what varies (intensity, restitution, friction, size,
         slenderness); without one, the stated defaults (`analyses.ensemble.DEFAULTS`).
-    n : int
-        Members.
+    n : int or str
+        Members; or ``"auto"`` / ``"precision:W"`` as ``precision`` (0.1 / W).
     seed : int
         Seed of the Latin hypercube (the same seed gives the same members).
+    precision : float, optional
+        Add members until the 95 % interval of the probability of overturning is at most this wide
+        (`analyses.ensemble.to_precision`); the summary's ``n`` says how many it took and ``rounds``
+        the members of each round.
     records_dir, device, workers, scheduler, wait_workers, store, progress
         As in `sweep`.
 
@@ -386,12 +413,21 @@ def ensemble(case: Case | Mapping | str | Path, n: int = 200, *, seed: int = 1,
     callable_arg(progress, "progress")
     scheduler = check_where(workers=workers, scheduler=scheduler, device=device, wait_workers=wait_workers)
     folder = records.records_dir(path_arg(records_dir, "records_dir"))
+    if isinstance(n, str):
+        n, precision = ens.parse_members(n) if precision is None else (None, precision)
     prepared = engine.prepare(case, folder, history=False)
-    eplan = ens.plan_ensemble(case, n, seed=seed, records_dir=folder, records=prepared.records)
     nominal = engine.simulate_prepared(prepared)
-    summary, members, variables = ens.compute(eplan, nominal.summary.overturned, store=store, workers=workers,
-                                              scheduler=scheduler, device=device, progress=progress,
-                                              wait_workers=wait_workers)
+    where = {"store": store, "workers": workers, "scheduler": scheduler, "device": device, "progress": progress,
+             "wait_workers": wait_workers}
+    if precision is not None:
+        if isinstance(precision, bool) or not isinstance(precision, (int, float)) or not 0.0 < precision < 1.0:
+            raise CaseError(f"expected a width within 0 and 1, got {precision!r}", source="precision")
+        _, summary, members, variables = ens.to_precision(case, float(precision), nominal.summary.overturned,
+                                                          seed=seed, records_dir=folder, records=prepared.records,
+                                                          **where)
+    else:
+        eplan = ens.plan_ensemble(case, n, seed=seed, records_dir=folder, records=prepared.records)
+        summary, members, variables = ens.compute(eplan, nominal.summary.overturned, **where)
     attrs = {"name": case.name, "nominal_verdict": nominal.summary.verdict, "p_overturn": summary["p_overturn"],
              "interval_low": summary["interval"][0], "interval_high": summary["interval"][1],
              "flips": summary["flips"], "robust": int(summary["robust"]), "seed": seed,

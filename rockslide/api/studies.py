@@ -6,6 +6,7 @@ store), then its statistics made and, when asked, written as an output set (`out
 from __future__ import annotations
 
 import contextlib
+import json
 import math
 import time
 from collections.abc import Callable, Mapping, Sequence
@@ -344,7 +345,8 @@ def fragility(case: Case | Mapping | str | Path, suite: str | Path, *, im: str =
               azimuth: str | None = None, records_dir: str | Path | None = None,
               device: str = "cpu", workers: int | None = None, scheduler=None, wait_workers: float | None = None,
               chunk_size: int | None = None, store=None, progress: Callable[[int], None] | None = None,
-              outputs=None, shard=None, export: tuple | None = None, export_family: str = "lognormal"):
+              outputs=None, shard=None, export: tuple | None = None, export_family: str = "lognormal",
+              model: str = "lognormal"):
     """Fragility curves of the case's block over a record suite, as ``rockslide fragility``.
 
     Parameters
@@ -354,7 +356,8 @@ def fragility(case: Case | Mapping | str | Path, suite: str | Path, *, im: str =
     suite : str or Path
         A suite file (YAML), a folder of horizontal records, or a glob of them.
     im : str
-        The intensity measure: ``pga``, ``pgv``, ``pga_rocking`` or ``sa(T)`` (e.g. ``"sa(0.5s)"``);
+        The intensity measure the records are scaled to: ``pga``, ``pgv``, ``pga_rocking`` or ``sa(T)``
+        (e.g. ``"sa(0.5s)"``); with a second one (``"pga,pgv"``, ``"pga,pgv/pga"``) a surface too;
         for a suite of two horizontal components also ``rotd50_`` or ``rotd100_`` of ``pga``, ``pgv``
         or ``sa(T)`` (``"rotd50_sa(1s)"``; the others are then of the motion along the block); or
         ``pfa``, ``pfv`` of the motion the block stands on (the floor's, with the case's
@@ -385,7 +388,14 @@ def fragility(case: Case | Mapping | str | Path, suite: str | Path, *, im: str =
         As in `sweep`.
     export : (str, str), optional
         With ``outputs``: ``("pelicun", ID)`` also writes the fragility as a row of pelicun's
-        fragility CSV and its JSON (`export_pelicun`), of ``export_family``.
+        fragility CSV and its JSON (`export_pelicun`), of ``export_family`` (the multilinear CDF of
+        the curve chosen when ``model`` is not the lognormal).
+    model : str
+        The curve offered to `risk` (its default) and `export_pelicun`: ``"lognormal"``,
+        ``"isotonic"`` or ``"empirical"`` (attribute ``fragility_model``). Every curve is in the
+        dataset whichever is chosen, with the goodness of fit (``gof_*``). With two measures
+        (``im="pga,pgv"`` or ``"pga,pgv/pga"``: scaled on the first), the probit surface
+        ``P = Phi(a + b ln IM1 + c ln IM2)`` is fitted too (the attribute ``surface``, JSON).
 
     Returns
     -------
@@ -398,14 +408,14 @@ def fragility(case: Case | Mapping | str | Path, suite: str | Path, *, im: str =
                            case_vertical=case_vertical, samples=samples, seed=seed, azimuth=azimuth,
                            records_dir=records_dir, device=device, workers=workers, scheduler=scheduler,
                            wait_workers=wait_workers, chunk_size=chunk_size, store=store, progress=progress,
-                           outputs=outputs, shard=shard, export=export, export_family=export_family)
+                           outputs=outputs, shard=shard, export=export, export_family=export_family, model=model)
     return None if done is None else done.to_xarray()
 
 
 def fragility_study(case, suite, *, im="pga", levels, damage=(), units=None, resamples=1000, case_vertical=False,
                     samples=0, seed=1, azimuth=None, records_dir=None, device="cpu", workers=None, scheduler=None,
                     tls=None, wait_workers=None, chunk_size=None, store=None, progress=None, outputs=None, shard=None,
-                    export=None, export_family="lognormal", report=None, bars=_no_bar,
+                    export=None, export_family="lognormal", model="lognormal", report=None, bars=_no_bar,
                     command_line: str = "") -> StudyResult | None:
     """`fragility`, conducted (the arguments as in `sweep_study`). Returns None for a shard."""
     from ..analyses import fragility as fr
@@ -421,6 +431,7 @@ def fragility_study(case, suite, *, im="pga", levels, damage=(), units=None, res
     whole(resamples, "resamples", 0, 100_000)
     whole(samples, "samples", 0, 100_000)
     whole(seed, "seed", 0)
+    im, second = fr.split_measures(im)       # "pga,pgv": scaled on pga, fitted on both
     measure = fr.parse_im(im)
     parsed = fr.parse_levels(axis_text(axis_values(levels, "levels"), measure.kind), measure)
     states = fr.damage_states([damage] if isinstance(damage, str) else _texts(damage, "damage"))
@@ -438,12 +449,21 @@ def fragility_study(case, suite, *, im="pga", levels, damage=(), units=None, res
                         shard=shard, progress=progress, bars=bars, say=say)
         if done is None:
             return None
-        analysis = fr.analyse(fplan, done.states, states, resamples=resamples)
+        analysis = fr.analyse(fplan, done.states, states, resamples=resamples, model=model)
+        if model != "lognormal" and export_family == "lognormal":
+            export_family = "multilinear_CDF"           # the curve chosen, not the fit
         result = StudyResult("fragility", case.name, *fr.dataset(fplan, analysis, command_line), done.computed,
                              done.seconds, summary=fr.json_summary(fplan, analysis))
+        surfaces = None if second is None else fr.fit_surface(fplan, analysis, second, resamples=min(resamples, 200))
+        if surfaces is not None:
+            result.summary["surface"] = fr.surface_json(surfaces, second)
+            result.attrs["surface"] = json.dumps(result.summary["surface"])
         left_out = []
         if outputs is not None:
-            def pelicun(staging):
+            def more(staging):
+                if surfaces is not None and outputs.plot:
+                    outputs.save_figure(fr.surface_figure(fplan, surfaces, second, size=outputs.size), staging,
+                                        outputs.png.with_suffix(".surface.png"))
                 if export_path is not None:
                     from ..io import pelicun
                     dataset = datasets.study_dataset(result.coords, result.variables, result.attrs)
@@ -452,9 +472,10 @@ def fragility_study(case, suite, *, im="pga", levels, damage=(), units=None, res
 
             per_run = [name for name, _, _ in result.coords if name not in ("damage_state", "resample")]
             _write(result, outputs, figure=lambda: fr.figure(fplan, analysis, size=outputs.size),
-                   table=lambda: (datasets.study_dataset(result.coords, result.variables), per_run), more=pelicun)
+                   table=lambda: (datasets.study_dataset(result.coords, result.variables), per_run), more=more)
             done.store.remove()
-        result.lines = _fragility_lines(fplan, analysis, done, measure, export, export_path, export_family, left_out)
+        result.lines = _fragility_lines(fplan, analysis, done, measure, export, export_path, export_family, left_out,
+                                        model, surfaces, second)
         return result
 
 
@@ -484,7 +505,8 @@ def _check_outputs(outputs, held, measure, export, shard: bool):
     return export_path
 
 
-def _fragility_lines(fplan, analysis, done, measure, export, export_path, family, left_out) -> list[str]:
+def _fragility_lines(fplan, analysis, done, measure, export, export_path, family, left_out, model, surfaces,
+                     second) -> list[str]:
     from ..analyses import fragility as fr
 
     outside = int((analysis.variables["status"][0] != 0).sum())
@@ -496,10 +518,14 @@ def _fragility_lines(fplan, analysis, done, measure, export, export_path, family
                      "not overturned (give the case a ground.tail for their free motion)")
     for i, (state, fit) in enumerate(zip(analysis.states, analysis.fits, strict=True)):
         lines.append("  " + fr.describe_fit(state, fit, measure))
+        lines += [f"    {line}" for line in fr.goodness_lines(fit)]
+        if model != "lognormal":
+            lines.append(f"    {fr.isotonic_line(fit, fplan.levels.values, measure)}")
         lines += [f"    warning: {caveat}" for caveat in fr.caveats(fit, measure)]
         if analysis.nominal_fits:
             lines.append("    without parameter uncertainty (the case's values): "
                          + fr.describe_fit(state, analysis.nominal_fits[i], measure).split(": ", 1)[1])
+    lines += [f"  {line}" for line in ([] if surfaces is None else fr.surface_lines(surfaces, second))]
     if export_path is not None:
         lines.append(f"  pelicun: {export_path} and {export_path.with_suffix('.json').name} ({family}, "
                      f"ID {export[1]})" + (f"; not exported: {'; '.join(left_out)}" if left_out else ""))

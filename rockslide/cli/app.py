@@ -132,7 +132,8 @@ FLAGS = {name: "--" + name.replace("_", "-") for name in (
     "shard", "tls_ca_file", "confidence", "life", "age", "median", "beta", "hazard", "damage", "im", "levels",
     "units", "suite", "samples", "case_vertical", "export", "export_family", "records_dir", "size", "out_dir",
     "name", "seed", "dpi", "time_shift", "crop", "height", "width", "ah_max", "mu_max", "hazard_units", "configs")}
-FLAGS.update({"n": "--ensemble", "member": "--ensemble", "level": "--levels", "record": "--suite",
+FLAGS.update({"n": "--ensemble", "member": "--ensemble", "ensemble": "--ensemble", "model": "--model",
+              "fragility_table": "--fragility-table", "level": "--levels", "record": "--suite",
               "sample": "--samples", "tls_client_cert": "--tls-cert", "tls_client_key": "--tls-key",
               "resamples": "--bootstrap", "zoom": "--window", "vertical": "--av",
               "fragility": "FRAGILITY"})

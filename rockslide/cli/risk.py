@@ -22,6 +22,13 @@ from .console import command_line
               help="The fragility file's damage state (e.g. 'rotation>0.5alpha').")
 @click.option("--stripes", is_flag=True, help="Use the fragility file's empirical fractions per stripe (linear "
               "in ln x between them) instead of its lognormal fit.")
+@click.option("--model", type=click.Choice(["lognormal", "isotonic", "empirical"]), default=None,
+              help="The fragility file's curve (default: the one 'rockslide fragility --model' chose, else the "
+              "lognormal): its lognormal fit, the isotonic (monotone maximum-likelihood) curve of its stripes, or "
+              "the stripes' fractions (= --stripes).")
+@click.option("--fragility-table", type=click.Path(path_type=Path), default=None, metavar="FILE",
+              help="Instead of a fragility file: a CSV of levels and probabilities, its header naming the measure "
+              "and unit ('PGA [g], probability').")
 @click.option("--median", default=None, metavar="LEVEL", help="Without a fragility file: the median of a "
               "lognormal fragility, with its unit (0.5g).")
 @click.option("--beta", type=float, default=None, help="Without a fragility file: its logarithmic standard "
@@ -50,8 +57,8 @@ from .console import command_line
 @click.option("--json", "as_json", is_flag=True, help="Print the result as one JSON object on stdout.")
 @dpi_option("PNG figure")
 @size_option
-def risk(fragility_file, hazard_files, damage, stripes, median, beta, im_text, life, age, confidence, hazard_units,
-         trim_poe, out_dir, name, overwrite, no_plot, as_json, dpi, size):
+def risk(fragility_file, hazard_files, damage, stripes, model, fragility_table, median, beta, im_text, life, age,
+         confidence, hazard_units, trim_poe, out_dir, name, overwrite, no_plot, as_json, dpi, size):
     """Annual rate of a damage state at a site: a fragility integrated over hazard curves,
     FRAGILITY_FILE (NAME.fragility.h5) or --median/--beta -> OUT/NAME.risk.h5 and OUT/NAME.risk.png.
 
@@ -71,10 +78,11 @@ def risk(fragility_file, hazard_files, damage, stripes, median, beta, im_text, l
     """
     ctx = click.get_current_context()
     outputs = api.risk_outputs(fragility_file, out_dir=out_dir, name=name, overwrite=overwrite, plot=not no_plot,
-                               dpi=dpi, size=size)
+                               dpi=dpi, size=size, table=fragility_table)
     result = api.risk_study(fragility_file, list(hazard_files), damage=damage, stripes=stripes, median=median,
                             beta=beta, im=im_text, life=life, age=age, confidence=confidence,
-                            hazard_units=hazard_units, trim_poe=trim_poe, outputs=outputs,
+                            hazard_units=hazard_units, trim_poe=trim_poe, model=model, fragility_table=fragility_table,
+                            outputs=outputs,
                             command_line=command_line(ctx, fragility_file if fragility_file is not None else "")
                             .replace(" '' ", " ", 1))
     show_warnings()

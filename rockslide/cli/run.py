@@ -39,10 +39,11 @@ def scale_options(command):
 @click.option("--overwrite", is_flag=True, help="Replace existing results of this case.")
 @click.option("--no-plot", is_flag=True, help="Do not draw the PNG figure (with --overwrite, an earlier "
               "figure of this case is removed: it showed the result replaced).")
-@click.option("--ensemble", "members", type=int, default=None, metavar="N",
+@click.option("--ensemble", "members", default=None, metavar="N|auto|precision:W",
               help="Also run N neighbours of the case, drawn over what is uncertain (the case's uncertain "
                    "section, or intensity +-5 %, restitution +-0.05, friction +-5 %, size and slenderness "
-                   "+-2 %), and report the probability of overturning with its 95 % interval.")
+                   "+-2 %), and report the probability of overturning with its 95 % interval; 'auto' (or "
+                   "precision:W) adds neighbours until that interval is narrower than 0.1 (or W).")
 @click.option("--seed", type=click.IntRange(0, 2**63 - 1), default=1, show_default=True,
               help="Seed of the ensemble's Latin hypercube.")
 @click.option("--robustness", is_flag=True,

@@ -212,6 +212,9 @@ def sweep(case_file, mu_kinetic_ratio, records_dir, out_dir, overwrite, no_plot,
                    "list, e.g. 0:180:5) for a suite of two horizontal components: every record at every "
                    "orientation, the fits over them all (the orientation unknown, uniform); one value states "
                    "it (default: the case's block.orientation).")
+@click.option("--model", type=click.Choice(["lognormal", "isotonic", "empirical"]), default="lognormal",
+              show_default=True, help="The curve offered to 'rockslide risk' and the pelicun export: the lognormal "
+              "fit, the isotonic (monotone maximum-likelihood) curve, or the per-level fractions.")
 @click.option("--json", "as_json", is_flag=True, help="Print the fits as one JSON object on stdout.")
 @click.option("--export", "export", type=(click.Choice(["pelicun"]), str), default=(None, None),
               metavar="pelicun ID",
@@ -223,7 +226,7 @@ def sweep(case_file, mu_kinetic_ratio, records_dir, out_dir, overwrite, no_plot,
 @records_dir_option
 @where_options("fragility analysis", "run")
 def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, resamples, case_vertical, samples,
-              seed, azimuth, as_json, export, export_family, records_dir, out_dir, overwrite, no_plot, workers,
+              seed, azimuth, model, as_json, export, export_family, records_dir, out_dir, overwrite, no_plot, workers,
               scheduler, tls_ca_file, tls_cert, tls_key, device, chunk_size, no_progress, dpi, size, as_csv, shard,
               wait_workers):
     """Fragility curves of a block over a record suite scaled to levels of an intensity measure:
@@ -255,7 +258,7 @@ def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, 
         case_vertical=case_vertical, samples=samples, seed=seed, azimuth=azimuth, records_dir=records_dir,
         device=device, workers=workers, scheduler=scheduler, tls=_tls_files(tls_ca_file, tls_cert, tls_key),
         wait_workers=wait_workers, chunk_size=chunk_size, outputs=outputs, shard=shard,
-        export=export if export[0] else None, export_family=export_family, report=reporter(err=as_json),
+        export=export if export[0] else None, export_family=export_family, model=model, report=reporter(err=as_json),
         bars=bars(no_progress=no_progress), command_line=command_line(ctx, case_file))
     if result is None:
         return

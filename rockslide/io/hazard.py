@@ -443,3 +443,64 @@ def _rockslide_name(measure: Measure, rotd: int | None = None) -> str:
     """``--im`` of ``measure`` (of its RotD50 when the fragility's is a RotD: a hazard curve's is)."""
     name = f"sa({measure.period:g}s)" if measure.name == "sa" else measure.name
     return f"'rotd50_{name}'" if rotd is not None else f"'{name}'" if measure.name == "sa" else name
+
+
+def read_fragility_table(path) -> tuple[str, str, np.ndarray, np.ndarray]:
+    """A tabulated fragility (``rockslide risk --fragility-table``): a plain table as a hazard curve
+    is written, two columns, the IM level and the probability of reaching the damage state, with a
+    header naming the measure and the levels' unit (``PGA [g], probability``; ``pgv (cm/s);
+    probability``; ``sa(0.3s) [g] probability``).
+
+    Returns
+    -------
+    measure, unit : str
+        As the header gives them (``PGA``, ``g``).
+    levels : numpy.ndarray
+        As written (in ``unit``), not decreasing (a level given twice is a jump).
+    probabilities : numpy.ndarray
+        Within 0 ... 1, not decreasing.
+
+    Raises
+    ------
+    CaseError
+        Naming the file and the line: no header with a measure and a unit, not two columns, not
+        numbers, levels that are not positive or fall, probabilities outside 0 ... 1 or falling.
+    """
+    source = str(path)
+    try:
+        with open_regular(path, what="fragility table", error=CaseError, limit=MAX_BYTES) as handle:
+            text = handle.read(MAX_BYTES).decode("utf-8-sig")
+    except UnicodeDecodeError:
+        raise CaseError("not a text file (expected a CSV of level and probability)", source=source) from None
+    except OSError as exc:
+        raise CaseError(f"cannot read the file: {exc.strerror or exc}", source=source) from None
+    rows, header = [], None
+    for line_number, line in enumerate(text.replace("\r\n", "\n").replace("\r", "\n").split("\n"), 1):
+        cells_text = line.split("#", 1)[0].strip()
+        if not cells_text:
+            continue
+        cells = _cells(cells_text)
+        if len(cells) != 2:
+            raise CaseError(f"{len(cells)} values; a fragility table has two columns: the IM level and the "
+                            "probability of reaching the state", source=source, field=f"line {line_number}")
+        try:
+            rows.append((float(cells[0]), float(cells[1])))
+        except ValueError:
+            if rows or header is not None:
+                raise CaseError(f"not numbers: {cells_text[:60]!r}", source=source,
+                                field=f"line {line_number}") from None
+            header = cells
+    name, unit = _header_cell(header[0]) if header is not None else ("", None)
+    if not _is_measure(name) or not unit:
+        raise CaseError("expected a header naming the measure and the levels' unit, e.g. 'PGA [g], probability'",
+                        source=source, field="line 1")
+    table = np.array(rows, dtype=np.float64).reshape(-1, 2)
+    levels, p = table[:, 0], table[:, 1]
+    if levels.size < 2:
+        raise CaseError("expected two levels or more", source=source)
+    if not (np.isfinite(levels).all() and (levels > 0).all() and (np.diff(levels) >= 0).all()):
+        raise CaseError("the levels must be positive and not decreasing", source=source)
+    if not (np.isfinite(p).all() and (p >= 0).all() and (p <= 1).all() and (np.diff(p) >= 0).all()):
+        raise CaseError("the probabilities must be within 0 and 1 and not decreasing (a fragility does not fall: "
+                        "make it monotone first, e.g. rockslide fragility's isotonic curve)", source=source)
+    return name, unit, levels, p

@@ -22,11 +22,24 @@ assigns the highest one reached, so the states are written in the order of their
   times pelicun's non-directional multiplier.
 - **Families.** ``lognormal``: ``Theta_0`` the median (in the demand unit), ``Theta_1`` the
   logarithmic standard deviation beta, from the maximum-likelihood fit. ``multilinear_CDF``: the
-  empirical stripes themselves, ``Theta_0 = "x1,...,xn|p1,...,pn"``, which pelicun requires to
-  rise strictly from 0 to 1: the fractions are made non-decreasing by pooling adjacent violators
-  (the least-squares monotone fit), then only the last level at 0, the first level at each
-  higher value and the first level at 1 are kept. A state whose stripes never reach 0 or 1
-  cannot be written so (one line naming the state and the levels to add).
+  isotonic curve of the stripes (the fragility file's ``isotonic``, the monotone maximum-likelihood
+  curve weighted by the runs; a file without it: the fractions pooled with equal weights),
+  ``Theta_0 = "x1,...,xn|p1,...,pn"``, written so that pelicun's CDF, linear in x between its
+  points, equals rockslide's curve, linear in ln x between the levels (`analyses.risk.Tabulated`,
+  what ``rockslide risk --model isotonic`` integrates), within `MULTILINEAR_TOLERANCE`
+  (`multilinear_points`: each interval cut at geometric points). pelicun requires the points to
+  rise strictly from 0 to 1: only the last level at 0 and the first at 1 are kept, and a level
+  where the curve is flat rises by `FLAT_STEP` over the one before. A state whose stripes never
+  reach 0 or 1 cannot be written so (one line naming the state and the levels to add).
+- **Sequential states.** pelicun takes the limit states as sequential: their capacities perfectly
+  correlated, LS2 reached only beyond LS1, so ``P(LS1 | x) >= P(LS2 | x)`` at every demand. Two
+  fitted lognormals of different beta always cross somewhere; where the higher state's curve
+  exceeds the lower's by more than `SEQUENTIAL_TOLERANCE` at some demand (e.g. two states crossing
+  at 0.215 g), the lognormal export is refused, naming the states and the crossing (export
+  ``multilinear_CDF`` instead). The multilinear curves are made sequential: each state's curve is
+  lowered, level by level, to the one before it where it is above (in the order of their medians;
+  for rockslide's states, nested by construction, the stripes never need it), and the metadata says
+  at how many levels.
 """
 
 from __future__ import annotations
@@ -43,9 +56,17 @@ from ..units import STANDARD_GRAVITY
 from .files import atomic_write, check_destination
 
 __all__ = ["FAMILIES", "COLUMNS", "check_export", "pelicun_row", "pelicun_metadata", "write_pelicun",
-           "monotone_stripes"]
+           "monotone_stripes", "multilinear_points", "lognormal_crossing"]
 
 FAMILIES = ("lognormal", "multilinear_CDF")
+#: Largest difference [-] between pelicun's multilinear CDF and rockslide's curve between its points.
+MULTILINEAR_TOLERANCE = 1e-5
+#: Rise [-] of a multilinear point over the one before where the curve is flat (pelicun refuses equal
+#: values, comparing with numpy's isclose: differences below 1e-8 count as equal).
+FLAT_STEP = 1e-6
+#: How far [-] a higher limit state's curve may rise above a lower one's before they cross (pelicun's
+#: states are sequential).
+SEQUENTIAL_TOLERANCE = 1e-3
 #: The fixed columns of pelicun's fragility CSV, before the limit states' four columns each.
 COLUMNS = ("ID", "Incomplete", "Demand-Type", "Demand-Unit", "Demand-Offset", "Demand-Directional")
 _LS_COLUMNS = ("Family", "Theta_0", "Theta_1", "DamageStateWeights")
@@ -125,12 +146,64 @@ def monotone_stripes(levels, fractions) -> tuple[np.ndarray, np.ndarray]:
     return x[chosen], fitted[chosen]
 
 
+def multilinear_points(levels, probabilities) -> tuple[np.ndarray, np.ndarray]:
+    """The points of pelicun's multilinear CDF (linear in x between them) of a non-decreasing curve
+    given at ``levels`` and linear in ln x between them (module notes).
+
+    Raises
+    ------
+    ValueError
+        The curve does not reach 0 at its lowest level or 1 at its highest.
+    """
+    x = np.asarray(levels, dtype=np.float64)
+    p = np.asarray(probabilities, dtype=np.float64)
+    keep = np.isfinite(p)
+    x, p = x[keep], p[keep]
+    if p.size == 0 or p[0] != 0.0 or p[-1] != 1.0:
+        raise ValueError("the curve does not rise from 0 to 1")
+    start, stop = int(np.flatnonzero(p == 0.0)[-1]), int(np.flatnonzero(p == 1.0)[0])
+    x, p = x[start:stop + 1], p[start:stop + 1].copy()
+    for i in range(1, p.size - 1):                   # flat stretches rise by FLAT_STEP (pelicun's strictness)
+        p[i] = max(p[i], p[i - 1] + FLAT_STEP)
+    xs, ps = [x[:1]], [p[:1]]
+    for (a, b), (pa, pb) in zip(zip(x[:-1], x[1:], strict=True), zip(p[:-1], p[1:], strict=True), strict=True):
+        pieces = 1
+        while pieces < 4096:
+            # the chord (linear in x) against the curve (linear in ln x) on one geometric piece
+            ratio = (b / a) ** (1.0 / pieces)
+            t = np.linspace(0.0, 1.0, 65)
+            gap = np.max(np.abs(np.log1p(t * (ratio - 1.0)) / math.log(ratio) - t)) if ratio > 1 else 0.0
+            if (pb - pa) / pieces * gap <= MULTILINEAR_TOLERANCE:
+                break
+            pieces *= 2
+        u = np.linspace(0.0, 1.0, pieces + 1)[1:]
+        xs.append(a * (b / a) ** u)
+        ps.append(pa + (pb - pa) * u)
+    return np.concatenate(xs), np.concatenate(ps)
+
+
+def lognormal_crossing(median_low: float, beta_low: float, median_high: float, beta_high: float):
+    """Where the lognormal of the higher state (larger median) rises above the lower state's:
+    ``(x, excess)``, the demand of the crossing [the medians' unit] and the largest ``P_high - P_low``
+    over all demands [-] (0 and None when it never does: equal betas)."""
+    from scipy.special import ndtr
+
+    if beta_low == beta_high:
+        return None, 0.0
+    ln_low, ln_high = math.log(median_low), math.log(median_high)
+    crossing = math.exp((beta_high * ln_low - beta_low * ln_high) / (beta_high - beta_low))
+    spread = 8.0 * max(beta_low, beta_high)
+    grid = np.exp(np.linspace(min(ln_low, ln_high) - spread, max(ln_low, ln_high) + spread, 4001))
+    excess = ndtr(np.log(grid / median_high) / beta_high) - ndtr(np.log(grid / median_low) / beta_low)
+    return crossing, float(max(excess.max(), 0.0))
+
+
 def _number(value: float) -> str:
     """Shortest text that reads back to the same float (Python's repr)."""
     return repr(float(value))
 
 
-def _limit_states(fragility, family: str, scale: float):
+def _limit_states(fragility, family: str, scale: float, unit: str = "g"):
     """``[(state name, definition, family, theta_0, theta_1)]`` in the order of their medians, and
     the states left out with why."""
     names = [str(s) for s in fragility["damage_state"].values]
@@ -140,26 +213,83 @@ def _limit_states(fragility, family: str, scale: float):
     levels = np.asarray(fragility["level"].values, dtype=np.float64) / scale
     fractions = np.asarray(fragility["fraction_exceeded"].transpose("damage_state", "level").values)
     states, left_out = [], []
-    for i, name in enumerate(names):
-        if family == "lognormal":
+    if family == "lognormal":
+        for i, name in enumerate(names):
             if not (math.isfinite(medians[i]) and math.isfinite(betas[i])):
                 note = str(fragility["fit_note"].values[i]) if "fit_note" in fragility else ""
                 left_out.append(f"{name}: {note or 'no fit'}")
                 continue
             states.append((medians[i], name, definitions[i], family, _number(medians[i] / scale),
                            _number(betas[i])))
-        else:
-            try:
-                x, p = monotone_stripes(levels, fractions[i])
-            except ValueError:
-                left_out.append(f"{name}: its stripes do not rise from 0 to 1 (add levels below the first "
-                                "exceedance and above the last survival)")
-                continue
-            theta = ",".join(_number(v) for v in x) + "|" + ",".join(_number(v) for v in p)
-            median = medians[i] if math.isfinite(medians[i]) else float(np.interp(0.5, p, x)) * scale
-            states.append((median, name, definitions[i], family, theta, ""))
-    states.sort(key=lambda s: s[0])
+        states.sort(key=lambda s: s[0])
+        _refuse_crossing(states, unit)
+        return [s[1:] for s in states], left_out
+    if "isotonic" in fragility:
+        curves = np.asarray(fragility["isotonic"].transpose("damage_state", "level").values, dtype=np.float64)
+    else:
+        curves = np.full(fractions.shape, np.nan)
+        for i in range(len(names)):
+            known = np.isfinite(fractions[i])
+            if known.any():
+                curves[i, known] = _pooled(fractions[i][known])
+    order = sorted(range(len(names)), key=lambda i: _middle(levels, curves[i], medians[i] / scale))
+    lowered, previous = {}, None
+    for i in order:
+        if previous is not None:
+            above = np.isfinite(curves[i]) & np.isfinite(previous) & (curves[i] > previous)
+            if above.any():
+                curves[i] = np.where(above, previous, curves[i])
+                lowered[names[i]] = int(above.sum())
+        if np.isfinite(curves[i]).any():
+            previous = curves[i]
+    for i in order:
+        name = names[i]
+        try:
+            x, p = multilinear_points(levels, curves[i])
+        except ValueError:
+            left_out.append(f"{name}: its stripes do not rise from 0 to 1 (add levels below the first "
+                            "exceedance and above the last survival)")
+            continue
+        theta = ",".join(_number(v) for v in x) + "|" + ",".join(_number(v) for v in p)
+        states.append((0.0, name, definitions[i], family, theta, ""))
+    for name, count in lowered.items():
+        left_out.append(f"{name}: exported lowered to the state before it at {count} level(s) (pelicun's states "
+                        "are sequential)")
     return [s[1:] for s in states], left_out
+
+
+def _pooled(fractions) -> np.ndarray:
+    """Pool adjacent violators with equal weights (`monotone_stripes`' pooling, all levels kept)."""
+    blocks: list[list[float]] = []
+    for value in fractions:
+        blocks.append([value, 1.0])
+        while len(blocks) > 1 and blocks[-2][0] / blocks[-2][1] > blocks[-1][0] / blocks[-1][1]:
+            total, count = blocks.pop()
+            blocks[-1][0] += total
+            blocks[-1][1] += count
+    return np.concatenate([np.full(int(count), total / count) for total, count in blocks])
+
+
+def _middle(levels, curve, median) -> float:
+    """Where a curve is 0.5 (its median if it has one, else interpolated), to order the states."""
+    if math.isfinite(median):
+        return float(median)
+    known = np.isfinite(curve)
+    if not known.any():
+        return math.inf
+    return float(np.interp(0.5, np.maximum.accumulate(curve[known]), levels[known]))
+
+
+def _refuse_crossing(states, unit: str) -> None:
+    """Refuse lognormal limit states (in the order of their medians) of which a higher one rises
+    above a lower one by more than `SEQUENTIAL_TOLERANCE` (module notes)."""
+    for low, high in zip(states[:-1], states[1:], strict=True):
+        at, excess = lognormal_crossing(float(low[4]), float(low[5]), float(high[4]), float(high[5]))
+        if excess > SEQUENTIAL_TOLERANCE:
+            raise CaseError(f"the lognormal fits of {low[1]} and {high[1]} cross at {at:.4g} {unit} ("
+                            f"{high[1]} up to {excess:.3g} more likely than {low[1]}); pelicun's limit states are "
+                            "sequential: export --export-family multilinear_CDF (made sequential)",
+                            source="export")
 
 
 def pelicun_row(fragility, component_id: str, *, family: str = "lognormal") -> tuple[dict, list[str]]:
@@ -192,7 +322,7 @@ def pelicun_row(fragility, component_id: str, *, family: str = "lognormal") -> t
     if family not in FAMILIES:
         raise CaseError(f"unknown family {family!r}; expected {' or '.join(FAMILIES)}", source="export_family")
     demand_type, unit, scale = _demand(str(fragility.attrs["intensity_measure"]))
-    states, left_out = _limit_states(fragility, family, scale)
+    states, left_out = _limit_states(fragility, family, scale, unit)
     if not states:
         raise CaseError("no damage state can be exported: " + "; ".join(left_out), source="export")
     row = {"ID": component_id, "Incomplete": "0", "Demand-Type": demand_type, "Demand-Unit": unit,
@@ -208,7 +338,7 @@ def pelicun_metadata(fragility, component_id: str, *, family: str = "lognormal",
     SuggestedComponentBlockSize, RoundUpToIntegerQuantity, LimitStates}}``."""
     _check_id(component_id)
     demand_type, unit, scale = _demand(str(fragility.attrs["intensity_measure"]))
-    states, left_out = _limit_states(fragility, family, scale)
+    states, left_out = _limit_states(fragility, family, scale, unit)
     source = fragility.attrs.get("title", "rockslide fragility")
     comments = (f"Computed by rockslide ({source}); fit: {fragility.attrs.get('fit_method', '')}. "
                 f"Demand: {demand_type} [{unit}] along the block's rocking axis (directional). "
