@@ -121,16 +121,16 @@ class _Client:
 def test_a_cluster_that_finishes_nothing_is_given_up_with_one_line(tmp_path, monkeypatch):
     """A study whose only worker was frozen (SIGSTOP) waited for ever; now, after ``stall`` seconds
     without a finished chunk, one line saying what it waited for and what is kept."""
-    from rockslide.engine import execute
+    from rockslide.engine import cluster
     from rockslide.engine.chunks import ChunkStore
 
-    monkeypatch.setattr(execute, "STALL_NOTE", 0.05)
+    monkeypatch.setattr(cluster, "STALL_NOTE", 0.05)
     said = []
     store = ChunkStore(tmp_path / "chunks", "0" * 64)
     futures = {_Pending(): (0, np.arange(3))}
     started = time.monotonic()
     with pytest.raises(CaseError, match="no chunk finished on the cluster") as caught:
-        execute._collect_futures(_Client(), futures, store, "tcp://sched:8786", None, stall=0.5, say=said.append)
+        cluster._collect_futures(_Client(), futures, store, "tcp://sched:8786", None, stall=0.5, say=said.append)
     assert 0.5 <= time.monotonic() - started < 10
     assert caught.value.source == "scheduler" and "resumes" in caught.value.message
     assert len(said) == 1 and "waiting for 1 chunks" in said[0]

@@ -18,7 +18,7 @@ case files (``"0.3 g"``, ``"50 mm"``); every number returned is SI, and datasets
 each variable's ``units`` attribute.
 
 Modules: `runs` (`run`, `ensemble`, `RunResult`), `studies` (`sweep`, `fragility` and their
-conductors `sweep_study`, `fragility_study`), `risk`, `stored` (`read_result`, `plot_results`,
+conductors `sweep_study`, `fragility_study`), `site` (`risk`), `stored` (`read_result`, `plot_results`,
 `export_pelicun`, `describe_file`, `redraw`), `tools` (records, Table 1, criteria maps, the example),
 `reports` (the printouts).
 """
@@ -33,7 +33,7 @@ _WHERE = {
     "Case": "..case", "case_with": "..case", "load_case": "..case", "Summary": "..core.simulate",
     "OutputSet": "..outputs", "check_name": "..outputs", "output_folder": "..outputs",
     "record_lines": ".reports", "run_lines": ".reports", "run_payload": ".reports", "stored_lines": ".reports",
-    "risk": ".risk", "risk_analysis": ".risk", "risk_outputs": ".risk", "risk_study": ".risk",
+    "risk": ".site", "risk_analysis": ".site", "risk_outputs": ".site", "risk_study": ".site",
     "KEEP_HISTORY_ROWS": ".runs", "LONG_RUN": ".runs", "RunResult": ".runs", "ensemble": ".runs", "run": ".runs",
     "describe_file": ".stored", "export_pelicun": ".stored", "plot_results": ".stored", "read_result": ".stored",
     "redraw": ".stored",

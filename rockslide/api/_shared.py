@@ -57,7 +57,7 @@ def check_where(*, workers=None, scheduler=None, device: str = "cpu", wait_worke
     scheduler found, or None."""
     from ..engine.execute import check_where as check
 
-    whole(workers, "workers", 1, optional=True)
+    whole(workers, "workers", optional=True)     # its range: `engine.execute.check_workers`
     real(wait_workers, "wait_workers", optional=True)
     if not isinstance(device, str):
         raise CaseError(f"expected 'cpu', 'gpu' or 'auto', got {type(device).__name__}", source="device")
