@@ -8,6 +8,7 @@ from pathlib import Path
 import click
 
 from .. import api
+from ..errors import CaseError
 from .app import dpi_option, json_line, main, show_warnings, size_option
 from .console import command_line
 
@@ -76,6 +77,9 @@ def risk(fragility_file, hazard_files, damage, stripes, model, fragility_table, 
         rockslide risk --median 0.5g --beta 0.4 --hazard example/hazard-example-PGA.csv --age 24ka
         rockslide risk --median 0.5g --beta 0.4 --hazard example/hazard-example-PGA.csv --name site --json
     """
+    if fragility_file is None and fragility_table is None and (median is None or beta is None):
+        raise CaseError("give a fragility file, or a lognormal with both --median and --beta (e.g. --median 0.5g "
+                        "--beta 0.4)", source="FRAGILITY")
     ctx = click.get_current_context()
     outputs = api.risk_outputs(fragility_file, out_dir=out_dir, name=name, overwrite=overwrite, plot=not no_plot,
                                dpi=dpi, size=size, table=fragility_table)
