@@ -38,6 +38,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import interrupts
 from ..errors import CaseError
 from ..inputs import open_regular
 from ..units import STANDARD_GRAVITY, unit_factor
@@ -49,13 +50,15 @@ PERIOD_TOLERANCE = 1e-6
 #: Largest hazard file read [bytes] (a national model's export for thousands of sites is < 100 MB).
 MAX_BYTES = 200 * 2**20
 
-_IMT = re.compile(r"^\s*(?P<name>pga|pgv|sa)\s*(?:\(\s*(?P<period>[^()]*?)\s*\))?\s*$", re.IGNORECASE)
-_FIELD = re.compile(r"(\w+)\s*=\s*('[^']*'|\"[^\"]*\"|[^,\s\"]+)")
-#: A header cell's trailing unit, in brackets or parentheses: ``PGA [g]``, ``pgv (cm/s)``.
-_HEADER_UNIT = re.compile(r"^\s*(?P<name>.*?)\s*(?:\[\s*(?P<bracket>[^\[\]]*?)\s*\]|\(\s*(?P<paren>[^()]*?)\s*\))\s*$")
+# Every pattern here matches in time linear in its text: possessive quantifiers (``*+``, ``++``)
+# never give back what they took, and a key starts a word (``(?<!\w)``), so that no text is scanned
+# again from each of its characters (a comment with an 80 000-character word, ``SA(`` and 20 000
+# spaces, a header cell padded with 80 000 spaces each took minutes).
+_IMT = re.compile(r"^\s*+(?P<name>pga|pgv|sa)\s*+(?:\((?P<period>[^()]*+)\))?+\s*+$", re.IGNORECASE)
+_FIELD = re.compile(r"(?<!\w)(\w++)\s*+=\s*+('[^']*+'|\"[^\"]*+\"|[^,\s\"]++)")
 #: A header cell in a white-space separated line: a word and the groups in brackets or parentheses
 #: that follow it (``sa (0.3 s) [g]`` is one cell).
-_SPACED_CELL = re.compile(r"[^\s,;\[\]()]+(?:\s*(?:\[[^\[\]]*\]|\([^()]*\)))*")
+_SPACED_CELL = re.compile(r"[^\s,;\[\]()]++(?:\s*+(?:\[[^\[\]]*+\]|\([^()]*+\)))*+")
 
 
 @dataclass(frozen=True)
@@ -260,6 +263,7 @@ def _read_openquake(lines: list[str], source: str, trim: bool) -> list[HazardTab
     display_unit, scale = OPENQUAKE_UNITS[measure.kind]
     curves = []
     for line_number, line in rest[1:]:
+        interrupts.check()                 # Ctrl-C ends the reading of a long file at once
         where = f"line {line_number}"
         cells = [c.strip() for c in line.split(",")]
         if len(cells) != len(columns):
@@ -298,6 +302,7 @@ def _read_openquake(lines: list[str], source: str, trim: bool) -> list[HazardTab
 def _read_plain(lines: list[str], source: str, units: str | None, trim: bool) -> list[HazardTable]:
     rows, header, header_line = [], None, 0
     for line_number, line in enumerate(lines, 1):
+        interrupts.check()
         text = line.split("#", 1)[0].strip()
         if not text:
             continue
@@ -348,10 +353,24 @@ def _is_measure(text: str) -> bool:
 def _header_cell(cell: str) -> tuple[str, str | None]:
     """A header cell's name and unit (None: not given): ``PGA [g]``, ``PGA (g)``, ``sa(0.3s) [g]``,
     ``sa(0.3s)`` (its parentheses are the period, not a unit), ``level (cm/s)``."""
-    match = _HEADER_UNIT.match(cell)
-    if match is None or (_is_measure(cell) and not _is_measure(match.group("name"))):
+    split = _trailing_unit(cell)
+    if split is None or (_is_measure(cell) and not _is_measure(split[0])):
         return cell.strip(), None
-    return match.group("name"), match.group("bracket") if match.group("bracket") is not None else match.group("paren")
+    return split
+
+
+def _trailing_unit(cell: str) -> tuple[str, str] | None:
+    """``(name, unit)`` of a cell that ends in a group in brackets or parentheses without brackets
+    of its kind inside (``PGA [g]``, ``level (cm/s)``), both stripped; None otherwise. String
+    searches from the end: linear in the cell."""
+    text = cell.strip()
+    pairs = {"]": "[", ")": "("}
+    if not text or text[-1] not in pairs:
+        return None
+    opening = text.rfind(pairs[text[-1]])
+    if opening < 0 or text[-1] in text[opening + 1:-1]:
+        return None
+    return text[:opening].strip(), text[opening + 1:-1].strip()
 
 
 def _plain_table(source: str, measure: Measure | None, levels, rates, unit: str | None,
