@@ -263,3 +263,30 @@ def test_values_of_a_cosmos_file_still_read(tmp_path):
 
     record = rec.load_record(_cosmos(tmp_path, lambda t: t))
     assert np.allclose(record.data, SAMPLES * 1e-2, rtol=0, atol=1e-12)
+
+
+# --------------------------------------------------------------------------------------------------
+# Control characters from files (item 13): escaped where the text is read
+# --------------------------------------------------------------------------------------------------
+
+TITLE = "\x1b]0;owned\x07"
+
+
+def test_a_cosmos_station_name_is_printed_with_its_escapes_escaped(tmp_path):
+    path = _cosmos(tmp_path, lambda t: t.replace("Los Angeles - 17-story", "Los Angeles" + TITLE + " - 17-story"))
+    assert rec.load_record(path).header["cosmos"]["station_name"].startswith("Los Angeles\\x1b]0;owned\\x07")
+    done = invoke("info", path)
+    assert done.exit_code == 0, done.output
+    assert "\x1b" not in done.output and "\x07" not in done.output and "\\x1b]0;owned" in done.output
+
+
+def test_an_openquake_kind_is_printed_with_its_escapes_escaped(tmp_path):
+    from test_risk import openquake_csv
+
+    levels = np.geomspace(0.1, 3.0, 20)
+    path = openquake_csv(tmp_path / "h.csv", levels, [-np.expm1(-1e-4 * levels ** -2.0 * 50.0)])
+    path.write_text(path.read_text().replace("kind='mean'", f"kind='mean{TITLE}'"))
+    assert "\\x1b" in hazard.read_hazard(path)[0].kind
+    done = invoke("risk", "--median", "0.5g", "--beta", "0.4", "--hazard", path, "--out-dir", tmp_path, "--no-plot")
+    assert done.exit_code == 0, done.output
+    assert "\x1b" not in done.output and "\x07" not in done.output and "\\x1b" in done.output

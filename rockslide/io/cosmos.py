@@ -39,6 +39,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .. import interrupts
+from ..inputs import printable
 
 __all__ = ["PHYSICAL_UNITS", "STRUCTURE_TYPES", "ORIENTATIONS", "Series", "looks_like_cosmos", "parse"]
 
@@ -231,6 +232,8 @@ def _value(values: list, k: int, unknown):
 
 
 def _metadata(lines: list[str], ints: list[int], unknown, comments: list[str]) -> dict:
+    lines = [printable(line) for line in lines[:13]]          # the text header, as it is printed
+    comments = [printable(line) for line in comments]
     station_line = lines[4][:MAX_LINE] if len(lines) > 4 else ""
     channel_line = lines[8][:MAX_LINE] if len(lines) > 8 else ""
     structure = _value(ints, _STRUCTURE, unknown)

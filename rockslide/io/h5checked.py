@@ -25,12 +25,12 @@ from __future__ import annotations
 
 import json
 import math
-import re
 
 import h5py
 import numpy as np
 
 from ..errors import OutputError
+from ..inputs import printable
 
 __all__ = ["MAX_ATTRIBUTE_BYTES", "MAX_READ_BYTES", "MAX_TEXT_ELEMENTS", "ATTRIBUTE_KINDS", "Budget", "Entries",
            "MissingEntry", "attribute_values", "read_dataset", "printable", "plain"]
@@ -45,17 +45,6 @@ MAX_ATTRIBUTE_ELEMENTS = 4096
 MAX_READ_BYTES = 1 << 29
 #: Most elements of a dataset of text (names of records, damage states, curves).
 MAX_TEXT_ELEMENTS = 100_000
-
-# Control characters (C0 but newline and tab, DEL, C1) and the bidirectional overrides, which
-# would drive the terminal that prints them (an escape sequence sets its title).
-_UNSAFE = re.compile("[\x00-\x08\x0b-\x1f\x7f-\x9f\u202a-\u202e\u2066-\u2069]")
-
-
-def printable(text: str) -> str:
-    """``text`` with its control characters written as escapes (``\\x1b``), newlines and tabs
-    kept: text read from a file, safe to print and draw."""
-    return _UNSAFE.sub(lambda m: m.group().encode("unicode_escape").decode("ascii"), text)
-
 
 class MissingEntry(OutputError, KeyError):
     """An attribute or dataset a file lacks (an `OutputError`, and a ``KeyError`` for code that

@@ -40,7 +40,7 @@ import numpy as np
 
 from .. import interrupts
 from ..errors import CaseError
-from ..inputs import open_regular
+from ..inputs import open_regular, printable
 from ..units import STANDARD_GRAVITY, unit_factor
 
 #: OpenQuake's units of intensity measure levels, by kind of measure [their size in SI].
@@ -228,7 +228,7 @@ def _kept(values: np.ndarray, infinite: float) -> slice:
 def _read_openquake(lines: list[str], source: str, trim: bool) -> list[HazardTable]:
     numbered = [(n, line) for n, line in enumerate(lines, 1) if line.strip()]
     (_, comment), rest = numbered[0], numbered[1:]
-    fields = {key: value.strip("'\"") for key, value in _FIELD.findall(comment)}
+    fields = {key: printable(value.strip("'\"")) for key, value in _FIELD.findall(comment)}
     for key in ("investigation_time", "imt"):
         if key not in fields:
             raise CaseError(f"the comment line has no {key}=... (OpenQuake's hazard curve export states it)",
