@@ -47,6 +47,10 @@ from ..units import STANDARD_GRAVITY, unit_factor
 OPENQUAKE_UNITS = {"acceleration": ("g", STANDARD_GRAVITY), "velocity": ("cm/s", 0.01)}
 #: Relative tolerance of two spectral periods that are the same period.
 PERIOD_TOLERANCE = 1e-6
+#: The range of intensity levels and rates a curve may hold (in its unit and in SI): the power laws
+#: between levels stay within floating point (a level near 1e308 overflowed, a denormal one gave
+#: the logarithm of zero).
+LEVEL_RANGE = (1e-100, 1e100)
 #: Largest hazard file read [bytes] (a national model's export for thousands of sites is < 100 MB).
 MAX_BYTES = 200 * 2**20
 
@@ -162,11 +166,14 @@ def curve_problem(levels, rates) -> str:
                 "between")
     if not (np.isfinite(levels).all() and (levels > 0).all()):
         return "the intensity levels must be positive numbers"
+    if not ((levels >= LEVEL_RANGE[0]) & (levels <= LEVEL_RANGE[1])).all():
+        return (f"the intensity levels must lie between {LEVEL_RANGE[0]:g} and {LEVEL_RANGE[1]:g} (got "
+                f"{levels.min():g} ... {levels.max():g}): their logarithms and powers stay finite")
     if not (np.diff(levels) > 0).all():
         i = int(np.argmax(np.diff(levels) <= 0))
         return f"the intensity levels must increase ({levels[i]:g} is followed by {levels[i + 1]:g})"
-    if not (np.isfinite(rates).all() and (rates > 0).all()):
-        i = int(np.argmax(~(np.isfinite(rates) & (rates > 0))))
+    if not (np.isfinite(rates).all() and (rates >= LEVEL_RANGE[0]) & (rates <= LEVEL_RANGE[1])).all():
+        i = int(np.argmax(~(np.isfinite(rates) & (rates >= LEVEL_RANGE[0]) & (rates <= LEVEL_RANGE[1]))))
         return (f"the rate at level {levels[i]:g} is {rates[i]:g}: rates must be positive and finite (a rate "
                 "of 0 has no logarithm to interpolate; leave out the levels where it is 0)")
     if (np.diff(rates) > 0).any():
@@ -431,6 +438,9 @@ def matching(table: HazardTable, im_name: str, period: float | None, kind: str, 
     unit = table.level_units or OPENQUAKE_UNITS[kind][0]
     scale = unit_factor(unit, kind, source=table.source, field="level unit")
     measure = table.measure or _from_fragility(base, period)
+    problem = curve_problem(table.levels * scale, table.rates)
+    if problem:
+        raise CaseError(f"in SI: {problem}", source=table.source)
     return replace(table, measure=measure, levels=table.levels * scale, level_units=None,
                    dropped_low=tuple(np.asarray(table.dropped_low) * scale),
                    dropped_high=tuple(np.asarray(table.dropped_high) * scale))
