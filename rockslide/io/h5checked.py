@@ -168,7 +168,8 @@ def attribute_values(obj, source: str, *, skip=()) -> Entries:
     source : str
         The file (for messages).
     skip : collection of str
-        Attributes not read (HDF5's dimension-scale bookkeeping).
+        Attributes not read (HDF5's dimension-scale bookkeeping, which h5py reads itself): only
+        their size is checked.
 
     Raises
     ------
@@ -179,8 +180,6 @@ def attribute_values(obj, source: str, *, skip=()) -> Entries:
     """
     out = Entries(source=source)
     for name in obj.attrs:
-        if name in skip:
-            continue
         try:
             attr = obj.attrs.get_id(name)
             size = attr.get_storage_size()
@@ -191,7 +190,11 @@ def attribute_values(obj, source: str, *, skip=()) -> Entries:
         if size > MAX_ATTRIBUTE_BYTES:
             raise OutputError(f"not read: {_where(obj, name)} holds {size} bytes; rockslide reads attributes of "
                               f"at most {MAX_ATTRIBUTE_BYTES} bytes", source=source)
-        count = int(np.prod(shape)) if shape else 1
+        count = int(np.prod(shape, dtype=object)) if shape else 1
+        if name in skip:              # HDF5's own bookkeeping (read by h5py itself): bounded all the same
+            if count > MAX_ATTRIBUTE_ELEMENTS:
+                raise OutputError(f"not read: {_where(obj, name)} has {count} elements", source=source)
+            continue
         text = h5py.check_string_dtype(dtype) is not None
         kind = kind_of(name)
         scalar = shape in ((), None)

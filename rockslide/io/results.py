@@ -1254,9 +1254,9 @@ def read_dataset(path, *, format: str) -> StoredDataset:
         _data_only(f, source)
         budget = h5checked.Budget(source)
         try:
-            scales = {name: ds for name, ds in f.items()
-                      if isinstance(ds, h5py.Dataset) and ds.is_scale}
             attributes = {name: _dataset_attrs(ds, source) for name, ds in f.items() if isinstance(ds, h5py.Dataset)}
+            scales = {name: ds for name, ds in f.items()        # is_scale reads CLASS, bounded above
+                      if isinstance(ds, h5py.Dataset) and ds.is_scale}
             order = sorted(scales, key=lambda n: attributes[n].get("_Netcdf4Dimid", 0))
             budget.check_total(ds for ds in f.values() if isinstance(ds, h5py.Dataset))
             _check_dataset_layout(f, scales, format)
