@@ -23,9 +23,10 @@ _UNSAFE = re.compile("[\x00-\x08\x0b-\x1f\x7f-\x9f\u202a-\u202e\u2066-\u2069]")
 
 
 def printable(text: str) -> str:
-    """``text`` with its control characters written as escapes (``\\x1b``), newlines and tabs
-    kept: text read from a file, made safe to print and draw where it is read (a station's name, a
-    hazard curve's kind, a result file's attributes)."""
+    """``text`` with its control characters written as escapes (``\\x1b``), newlines (``\\r\\n``
+    made ``\\n``) and tabs kept: text read from a file, made safe to print and draw where it is read
+    (a station's name, a hazard curve's kind, a result file's attributes)."""
+    text = text.replace("\r\n", "\n")          # a file written on Windows: its line ends, not a control
     return _UNSAFE.sub(lambda m: m.group().encode("unicode_escape").decode("ascii"), text)
 
 
