@@ -290,3 +290,19 @@ def test_an_openquake_kind_is_printed_with_its_escapes_escaped(tmp_path):
     done = invoke("risk", "--median", "0.5g", "--beta", "0.4", "--hazard", path, "--out-dir", tmp_path, "--no-plot")
     assert done.exit_code == 0, done.output
     assert "\x1b" not in done.output and "\x07" not in done.output and "\\x1b" in done.output
+
+
+@pytest.mark.parametrize("kind", ["columns", "cosmos"])
+def test_a_signal_ends_the_reading_of_a_record(tmp_path, kind):
+    """As for hazard files: the loops over lines look at the flag a handled signal sets."""
+    if kind == "cosmos":
+        path = _cosmos(tmp_path, lambda t: t)
+    else:
+        path = tmp_path / "r.txt"
+        path.write_text("Time (s) Acc (g)\n" + DATA)
+    interrupts._pending.append(15)
+    try:
+        with pytest.raises(interrupts.Interrupted):
+            rec.load_record(path, **({"units": "g"} if kind == "columns" else {}))
+    finally:
+        interrupts._pending.clear()
