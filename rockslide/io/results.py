@@ -1323,7 +1323,7 @@ REQUIRED = {
     SWEEP_FORMAT: ((), {name: (None, "number") for name in ("overturned", "status", "modes", "max_rotation",
                                                             "residual_slip", "overturn_time", "max_rotation_ratio")},
                    ()),
-    FRAGILITY_FORMAT: (("level", "damage_state"), {"exceeded": (("level", "damage_state"), "number"),
+    FRAGILITY_FORMAT: (("level", "damage_state"), {"exceeded": (("damage_state",), "number"),
                                                    "definition": (("damage_state",), "text")},
                        ("intensity_measure",)),
     RISK_FORMAT: (("curve", "point", "im"), {"rate": (("curve",), "number"), "density": (("curve", "im"), "number"),
