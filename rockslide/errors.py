@@ -7,6 +7,8 @@ into one line on stderr and exit code 2.
 
 from __future__ import annotations
 
+import contextlib
+
 
 class RockslideError(Exception):
     """A user error: a bad case file, record, option or output location.
@@ -48,3 +50,33 @@ def exception_text(exc: BaseException) -> str:
     """An exception's message on one line (its whitespace collapsed), or its type's name when it
     has none: how rockslide quotes a library's error inside its own."""
     return " ".join(str(exc).split()) or type(exc).__name__
+
+
+@contextlib.contextmanager
+def numbers_from(source: str, *, field: str | None = None, error: type[RockslideError] = CaseError,
+                 what: str = "its numbers"):
+    """The one place where numpy's floating-point warnings (overflow, division by zero, invalid
+    operation) become an error naming the input they came from: inside, they raise, and leave as
+    one ``error`` naming ``source`` and ``field``, never as a warning line per operation or an
+    infinity further on. Underflow (a denormal) stays quiet: its value is checked where it matters.
+    Code inside that expects such a case says so with its own ``np.errstate``.
+
+    Parameters
+    ----------
+    source : str
+        The file or option whose numbers are computed on (``hazard.csv``, ``--median``).
+    field : str, optional
+        The key or line.
+    error : type
+        The exception raised (`CaseError` unless the input is a record or a result).
+    what : str
+        What went out of range, for the message.
+    """
+    import numpy as np
+
+    with np.errstate(over="raise", divide="raise", invalid="raise", under="ignore"):
+        try:
+            yield
+        except (FloatingPointError, OverflowError, ZeroDivisionError) as exc:
+            raise error(f"{what} go beyond what floating-point numbers hold ({exception_text(exc)}); expected "
+                        "values of a physical size", source=source, field=field) from None

@@ -11,10 +11,23 @@ is then compared with the bound of its kind before a byte is read (`regular_size
 from __future__ import annotations
 
 import os
+import re
 import stat
 from pathlib import Path
 
-__all__ = ["regular_size", "open_regular", "kind_of"]
+__all__ = ["regular_size", "open_regular", "kind_of", "printable"]
+
+# Control characters (C0 but newline and tab, DEL, C1) and the bidirectional overrides, which
+# would drive the terminal that prints them (an escape sequence sets its title).
+_UNSAFE = re.compile("[\x00-\x08\x0b-\x1f\x7f-\x9f\u202a-\u202e\u2066-\u2069]")
+
+
+def printable(text: str) -> str:
+    """``text`` with its control characters written as escapes (``\\x1b``), newlines (``\\r\\n``
+    made ``\\n``) and tabs kept: text read from a file, made safe to print and draw where it is read
+    (a station's name, a hazard curve's kind, a result file's attributes)."""
+    text = text.replace("\r\n", "\n")          # a file written on Windows: its line ends, not a control
+    return _UNSAFE.sub(lambda m: m.group().encode("unicode_escape").decode("ascii"), text)
 
 
 def kind_of(mode: int) -> str:

@@ -37,6 +37,9 @@ import zlib
 from contextlib import contextmanager
 from pathlib import Path
 
+# isort: off
+from .io import matplotlib_home  # noqa: F401 - sets MPLCONFIGDIR where needed, before matplotlib loads
+# isort: on
 import matplotlib.artist
 import numpy as np
 from matplotlib import rcParams

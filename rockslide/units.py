@@ -44,7 +44,10 @@ UNIT_REQUIRED = frozenset({"acceleration"})
 #: The units a message proposes for a bare number, by kind.
 PROPOSED_UNITS = {"acceleration": (("g",), ("gal", "cm/s^2"), ("m/s^2",))}
 
-_QUANTITY = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([A-Za-z/^*0-9]*)\s*$")
+#: A number and its unit. Possessive quantifiers (``*+``, ``++``): each part is matched once, never
+#: split again in other ways, so that refusing ``1111...1!`` is linear in its length (backtracking
+#: made 2000 digits and a ``!`` take a minute).
+_QUANTITY = re.compile(r"^\s*+([-+]?+(?:\d++(?:\.\d*+)?+|\.\d++)(?:[eE][-+]?+\d++)?+)\s*+([A-Za-z/^*0-9]*+)\s*+$")
 
 
 def unit_factor(unit: str, kind: str, *, source: str | None = None, field: str | None = None) -> float:

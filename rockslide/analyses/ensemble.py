@@ -35,7 +35,7 @@ from ..core.simulate import Model, set_model
 from ..engine.execute import execute
 from ..engine.plan import MAX_POINTS, Plan, assemble, default_chunk_size
 from ..engine.prepare import RunWarning, coarse_step_warning
-from ..errors import CaseError
+from ..errors import CaseError, numbers_from
 from . import sweep as sw
 
 __all__ = ["DEFAULTS", "DEFAULT_MEMBERS", "distributions", "sample", "plan_ensemble", "compute", "summarise",
@@ -93,7 +93,10 @@ def sample(dists: dict[str, Distribution], n: int, seed: int = SEED) -> dict[str
         elif d.kind == "normal":
             out[name] = d.a + d.b * norm.ppf(q)
         else:
-            out[name] = d.a * np.exp(d.b * norm.ppf(q))
+            with numbers_from(f"uncertain.{name}", what="the lognormal's samples"):
+                out[name] = d.a * np.exp(d.b * norm.ppf(q))
+                if not (out[name] > 0).all():
+                    raise FloatingPointError("underflow to 0")
     return out
 
 

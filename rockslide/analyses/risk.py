@@ -59,7 +59,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.special import log_ndtr, ndtr
 
-from ..errors import CaseError
+from ..errors import CaseError, numbers_from
 
 #: Fraction of the rate below which the hazard curve's ends are of no consequence (no note).
 NEGLIGIBLE = 1e-3
@@ -563,9 +563,12 @@ def analyse(fragility: FragilityUsed, measure: dict, curves, about, *, life: flo
             confidence: float = 0.95, notes=()) -> Analysis:
     """The rate of ``fragility``'s damage state under each hazard curve, with its interval over the
     fragility's uncertainty (arguments as the attributes of `Analysis`)."""
-    results = [rate(fragility.curve, c) for c in curves]
-    intervals = [rate_range(fragility.variants, c, fragility.variants_level) if fragility.variants
-                 else (math.nan, math.nan) for c in curves]
+    results, intervals = [], []
+    for c, a in zip(curves, list(about) + [{}] * len(curves), strict=False):
+        with numbers_from(str(a.get("source") or c.name), what="the rates of this hazard curve"):
+            results.append(rate(fragility.curve, c))
+            intervals.append(rate_range(fragility.variants, c, fragility.variants_level) if fragility.variants
+                             else (math.nan, math.nan))
     rests = [rests_on(fragility.curve, c, r.rate, first_exceedance=fragility.first_exceedance,
                       highest_tested=fragility.highest_tested,
                       stripes=fragility.stripes if fragility.stripes is not fragility.curve else None)

@@ -130,7 +130,8 @@ class Axis:
 # Axes
 # --------------------------------------------------------------------------------------------------
 
-_PIECE = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([A-Za-z/^*0-9]*?)\s*$")
+#: A number and its unit, matched in linear time (possessive quantifiers, as `units.parse_quantity`).
+_PIECE = re.compile(r"^\s*+([-+]?+(?:\d++(?:\.\d*+)?+|\.\d++)(?:[eE][-+]?+\d++)?+)\s*+([A-Za-z/^*0-9]*+)\s*+$")
 
 
 def parse_axis(name: str, spec: str, kind: AxisKind | None = None) -> Axis:

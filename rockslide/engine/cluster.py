@@ -486,7 +486,7 @@ def identify_scheduler(address: str, timeout: float | None = None, *, security=N
     try:
         with ThreadPoolExecutor(1) as pool:         # its own event loop, even under a running one
             reply = pool.submit(asyncio.run, asyncio.wait_for(ask(), timeout)).result()
-    except (asyncio.TimeoutError, TimeoutError):
+    except TimeoutError:
         raise CaseError(f"no dask scheduler answered at {address} within {timeout:g} s (is something "
                         "else listening there?)", source="scheduler") from None
     except Exception as exc:  # noqa: BLE001 - refused, reset, closed, a bad handshake

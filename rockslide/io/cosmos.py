@@ -38,6 +38,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .. import interrupts
+from ..inputs import printable
+
 __all__ = ["PHYSICAL_UNITS", "STRUCTURE_TYPES", "ORIENTATIONS", "Series", "looks_like_cosmos", "parse"]
 
 #: Table 2: the unit of a series, by code -> rockslide's name of that unit (accelerations only).
@@ -55,14 +58,20 @@ ORIENTATIONS = {400: "up", 401: "down", 402: "vertical, sense not indicated", 50
                 601: "tangential (relative to structure)", 700: "H1 (horizontal, azimuth unknown)",
                 701: "H2 (horizontal, azimuth unknown)", 2000: "other (described in comments)"}
 
-_FORMAT_LINE = re.compile(r"\(Format v(?P<version>[\d.]+) with\s+(?P<lines>\d+) text lines\)", re.IGNORECASE)
-_COUNT_LINE = re.compile(r"^\s*(?P<count>\d+)\s+(?P<what>Integer|Real)-header values follow on\s+"
-                         r"(?P<lines>\d+) lines,\s*Format\s*=\s*\((?P<format>[^)]*)\)", re.IGNORECASE)
-_COMMENT_LINE = re.compile(r"^\s*(?P<count>\d+)\s+Comment line", re.IGNORECASE)
-_DATA_LINE = re.compile(r"^\s*(?P<count>\d+)\s+(?P<what>[A-Za-z]+)\s+pts,.*?units\s*=\s*(?P<unit>[^,(]*?)\s*"
-                        r"\((?P<code>\d+)\)\s*,\s*Format\s*=\s*\((?P<format>[^)]*)\)", re.IGNORECASE)
+# Numbers of at most 9 digits (a longer one is no count of lines or values, and int() of thousands of
+# digits raises); header lines are matched on their first `MAX_LINE` characters only.
+_FORMAT_LINE = re.compile(r"\(Format v(?P<version>[\d.]{1,20}) with\s+(?P<lines>\d{1,9}) text lines\)", re.IGNORECASE)
+_COUNT_LINE = re.compile(r"^\s*(?P<count>\d{1,9})\s+(?P<what>Integer|Real)-header values follow on\s+"
+                         r"(?P<lines>\d{1,9}) lines,\s*Format\s*=\s*\((?P<format>[^)]*)\)", re.IGNORECASE)
+_COMMENT_LINE = re.compile(r"^\s*(?P<count>\d{1,9})\s+Comment line", re.IGNORECASE)
+_DATA_LINE = re.compile(r"^\s*(?P<count>\d{1,9})\s+(?P<what>[A-Za-z]+)\s+pts,.*?units\s*=\s*(?P<unit>[^,(]*?)\s*"
+                        r"\((?P<code>\d{1,9})\)\s*,\s*Format\s*=\s*\((?P<format>[^)]*)\)", re.IGNORECASE)
 _STATION = re.compile(r"Code:\s*(\w{1,2})\s*-\s*(\S+)\s+(.*)$")
-_FORTRAN = re.compile(r"^\s*(?P<repeat>\d+)\s*(?P<kind>[IFEDG])\s*(?P<width>\d+)(?:\.\d+)?\s*$", re.IGNORECASE)
+_FORTRAN = re.compile(r"^\s*(?P<repeat>\d{1,9})\s*(?P<kind>[IFEDG])\s*(?P<width>\d{1,9})(?:\.\d+)?\s*$", re.IGNORECASE)
+#: Characters of a header line that are read (a COSMOS line has 80).
+MAX_LINE = 1000
+#: Most characters one line of a block may take (values per line times their width).
+MAX_LINE_WIDTH = 1000
 #: ``Int(k)`` and ``Real(k)`` used (1-based).
 _STAGE, _SERIES, _UNIT, _STRUCTURE, _ORIENTATION, _LOCATION = 1, 2, 3, 19, 54, 56
 _DT_MS, _LENGTH = 62, 63
@@ -98,7 +107,7 @@ class Series:
 
 def looks_like_cosmos(first_line: bytes) -> bool:
     """Whether a file's first line is a COSMOS text header's (``(Format v01.20 with 13 text lines)``)."""
-    return _FORMAT_LINE.search(first_line.decode("latin-1")) is not None
+    return _FORMAT_LINE.search(first_line[:MAX_LINE].decode("latin-1")) is not None
 
 
 def _fields(line: str, width: int, count: int) -> list[str]:
@@ -110,7 +119,12 @@ def _fortran(spec: str, fail, where: str) -> tuple[int, int]:
     match = _FORTRAN.match(spec)
     if match is None:
         raise fail(f"cannot read the Fortran format ({spec}); expected one such as 10I8 or 8F10.5", where)
-    return int(match.group("repeat")), int(match.group("width"))
+    repeat, width = int(match.group("repeat")), int(match.group("width"))
+    if not (repeat >= 1 and width >= 1 and repeat * width <= MAX_LINE_WIDTH):
+        raise fail(f"the Fortran format ({spec}) gives lines of {repeat} values of {width} characters; expected "
+                   f"at least one value of at least one character, at most {MAX_LINE_WIDTH} characters a line "
+                   "(COSMOS lines have 80)", where)
+    return repeat, width
 
 
 def _block(lines: list[str], start: int, count: int, spec: str, fail, what: str, convert):
@@ -123,6 +137,7 @@ def _block(lines: list[str], start: int, count: int, spec: str, fail, what: str,
                    f"line {len(lines)}")
     values, where = [], []
     for k in range(n_lines):
+        interrupts.check()
         line = lines[start + k].rstrip("\r\n")
         take = min(per_line, count - k * per_line)
         for text in _fields(line.ljust(per_line * width), width, take):
@@ -150,7 +165,7 @@ def parse(text: str, fail) -> Series:
     Series
     """
     lines = text.splitlines()
-    match = _FORMAT_LINE.search(lines[0]) if lines else None
+    match = _FORMAT_LINE.search(lines[0][:MAX_LINE]) if lines else None
     if match is None:
         raise fail("not a COSMOS file: line 1 does not say '(Format v01.20 with 13 text lines)'", "line 1")
     n_text = int(match.group("lines"))
@@ -160,13 +175,13 @@ def parse(text: str, fail) -> Series:
     unknown = _unknown(lines[min(12, n_text - 1)])
     ints, at = _header(lines, n_text, "Integer", fail, int)
     reals, at = _header(lines, at, "Real", fail, float)
-    comment = _COMMENT_LINE.match(lines[at]) if at < len(lines) else None
+    comment = _COMMENT_LINE.match(lines[at][:MAX_LINE]) if at < len(lines) else None
     if comment is None:
         raise fail("expected the comment count ('   1 Comment line(s) follow, each starting with a \"|\":')",
                    f"line {at + 1}")
     comments = [line.lstrip("|").strip() for line in lines[at + 1:at + 1 + int(comment.group("count"))]]
     at += 1 + int(comment.group("count"))
-    data = _DATA_LINE.match(lines[at]) if at < len(lines) else None
+    data = _DATA_LINE.match(lines[at][:MAX_LINE]) if at < len(lines) else None
     if data is None:
         raise fail("expected the data line ('   8000 acceleration pts, approx   40 secs, units=cm/sec2 (04), "
                    "Format=(8F10.5)')", f"line {at + 1}")
@@ -183,7 +198,7 @@ def parse(text: str, fail) -> Series:
                    f"line {n_text + 2}")
     count = int(data.group("count"))
     values, where, end = _block(lines, at + 1, count, data.group("format"), fail, "acceleration", float)
-    more = sum(1 for line in lines[end:] if _FORMAT_LINE.search(line) and "acceleration" in line.lower())
+    more = sum(1 for line in lines[end:] if _FORMAT_LINE.search(line[:MAX_LINE]) and "acceleration" in line.lower())
     if more:
         raise fail(f"the file holds {more + 1} channels; rockslide reads one channel per file (CESMD's .V2c "
                    "files): split it", f"line {end + 1}")
@@ -200,7 +215,7 @@ def _unknown(line: str) -> int | None:
 
 
 def _header(lines: list[str], at: int, what: str, fail, convert):
-    match = _COUNT_LINE.match(lines[at]) if at < len(lines) else None
+    match = _COUNT_LINE.match(lines[at][:MAX_LINE]) if at < len(lines) else None
     if match is None or match.group("what").lower() != what.lower():
         raise fail(f"expected the {what.lower()} header's count line ('  100 {what}-header values follow on "
                    f"  10 lines, Format= (...)')", f"line {at + 1}")
@@ -217,8 +232,10 @@ def _value(values: list, k: int, unknown):
 
 
 def _metadata(lines: list[str], ints: list[int], unknown, comments: list[str]) -> dict:
-    station_line = lines[4] if len(lines) > 4 else ""
-    channel_line = lines[8] if len(lines) > 8 else ""
+    lines = [printable(line) for line in lines[:13]]          # the text header, as it is printed
+    comments = [printable(line) for line in comments]
+    station_line = lines[4][:MAX_LINE] if len(lines) > 4 else ""
+    channel_line = lines[8][:MAX_LINE] if len(lines) > 8 else ""
     structure = _value(ints, _STRUCTURE, unknown)
     orientation = _value(ints, _ORIENTATION, unknown)
     location = _value(ints, _LOCATION, unknown)

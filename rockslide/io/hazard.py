@@ -38,24 +38,31 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import interrupts
 from ..errors import CaseError
-from ..inputs import open_regular
+from ..inputs import open_regular, printable
 from ..units import STANDARD_GRAVITY, unit_factor
 
 #: OpenQuake's units of intensity measure levels, by kind of measure [their size in SI].
 OPENQUAKE_UNITS = {"acceleration": ("g", STANDARD_GRAVITY), "velocity": ("cm/s", 0.01)}
 #: Relative tolerance of two spectral periods that are the same period.
 PERIOD_TOLERANCE = 1e-6
+#: The range of intensity levels and rates a curve may hold (in its unit and in SI): the power laws
+#: between levels stay within floating point (a level near 1e308 overflowed, a denormal one gave
+#: the logarithm of zero).
+LEVEL_RANGE = (1e-100, 1e100)
 #: Largest hazard file read [bytes] (a national model's export for thousands of sites is < 100 MB).
 MAX_BYTES = 200 * 2**20
 
-_IMT = re.compile(r"^\s*(?P<name>pga|pgv|sa)\s*(?:\(\s*(?P<period>[^()]*?)\s*\))?\s*$", re.IGNORECASE)
-_FIELD = re.compile(r"(\w+)\s*=\s*('[^']*'|\"[^\"]*\"|[^,\s\"]+)")
-#: A header cell's trailing unit, in brackets or parentheses: ``PGA [g]``, ``pgv (cm/s)``.
-_HEADER_UNIT = re.compile(r"^\s*(?P<name>.*?)\s*(?:\[\s*(?P<bracket>[^\[\]]*?)\s*\]|\(\s*(?P<paren>[^()]*?)\s*\))\s*$")
+# Every pattern here matches in time linear in its text: possessive quantifiers (``*+``, ``++``)
+# never give back what they took, and a key starts a word (``(?<!\w)``), so that no text is scanned
+# again from each of its characters (a comment with an 80 000-character word, ``SA(`` and 20 000
+# spaces, a header cell padded with 80 000 spaces each took minutes).
+_IMT = re.compile(r"^\s*+(?P<name>pga|pgv|sa)\s*+(?:\((?P<period>[^()]*+)\))?+\s*+$", re.IGNORECASE)
+_FIELD = re.compile(r"(?<!\w)(\w++)\s*+=\s*+('[^']*+'|\"[^\"]*+\"|[^,\s\"]++)")
 #: A header cell in a white-space separated line: a word and the groups in brackets or parentheses
 #: that follow it (``sa (0.3 s) [g]`` is one cell).
-_SPACED_CELL = re.compile(r"[^\s,;\[\]()]+(?:\s*(?:\[[^\[\]]*\]|\([^()]*\)))*")
+_SPACED_CELL = re.compile(r"[^\s,;\[\]()]++(?:\s*+(?:\[[^\[\]]*+\]|\([^()]*+\)))*+")
 
 
 @dataclass(frozen=True)
@@ -159,11 +166,14 @@ def curve_problem(levels, rates) -> str:
                 "between")
     if not (np.isfinite(levels).all() and (levels > 0).all()):
         return "the intensity levels must be positive numbers"
+    if not ((levels >= LEVEL_RANGE[0]) & (levels <= LEVEL_RANGE[1])).all():
+        return (f"the intensity levels must lie between {LEVEL_RANGE[0]:g} and {LEVEL_RANGE[1]:g} (got "
+                f"{levels.min():g} ... {levels.max():g}): their logarithms and powers stay finite")
     if not (np.diff(levels) > 0).all():
         i = int(np.argmax(np.diff(levels) <= 0))
         return f"the intensity levels must increase ({levels[i]:g} is followed by {levels[i + 1]:g})"
-    if not (np.isfinite(rates).all() and (rates > 0).all()):
-        i = int(np.argmax(~(np.isfinite(rates) & (rates > 0))))
+    if not (np.isfinite(rates).all() and (rates >= LEVEL_RANGE[0]) & (rates <= LEVEL_RANGE[1])).all():
+        i = int(np.argmax(~(np.isfinite(rates) & (rates >= LEVEL_RANGE[0]) & (rates <= LEVEL_RANGE[1]))))
         return (f"the rate at level {levels[i]:g} is {rates[i]:g}: rates must be positive and finite (a rate "
                 "of 0 has no logarithm to interpolate; leave out the levels where it is 0)")
     if (np.diff(rates) > 0).any():
@@ -225,7 +235,7 @@ def _kept(values: np.ndarray, infinite: float) -> slice:
 def _read_openquake(lines: list[str], source: str, trim: bool) -> list[HazardTable]:
     numbered = [(n, line) for n, line in enumerate(lines, 1) if line.strip()]
     (_, comment), rest = numbered[0], numbered[1:]
-    fields = {key: value.strip("'\"") for key, value in _FIELD.findall(comment)}
+    fields = {key: printable(value.strip("'\"")) for key, value in _FIELD.findall(comment)}
     for key in ("investigation_time", "imt"):
         if key not in fields:
             raise CaseError(f"the comment line has no {key}=... (OpenQuake's hazard curve export states it)",
@@ -260,6 +270,7 @@ def _read_openquake(lines: list[str], source: str, trim: bool) -> list[HazardTab
     display_unit, scale = OPENQUAKE_UNITS[measure.kind]
     curves = []
     for line_number, line in rest[1:]:
+        interrupts.check()                 # Ctrl-C ends the reading of a long file at once
         where = f"line {line_number}"
         cells = [c.strip() for c in line.split(",")]
         if len(cells) != len(columns):
@@ -298,6 +309,7 @@ def _read_openquake(lines: list[str], source: str, trim: bool) -> list[HazardTab
 def _read_plain(lines: list[str], source: str, units: str | None, trim: bool) -> list[HazardTable]:
     rows, header, header_line = [], None, 0
     for line_number, line in enumerate(lines, 1):
+        interrupts.check()
         text = line.split("#", 1)[0].strip()
         if not text:
             continue
@@ -348,10 +360,24 @@ def _is_measure(text: str) -> bool:
 def _header_cell(cell: str) -> tuple[str, str | None]:
     """A header cell's name and unit (None: not given): ``PGA [g]``, ``PGA (g)``, ``sa(0.3s) [g]``,
     ``sa(0.3s)`` (its parentheses are the period, not a unit), ``level (cm/s)``."""
-    match = _HEADER_UNIT.match(cell)
-    if match is None or (_is_measure(cell) and not _is_measure(match.group("name"))):
+    split = _trailing_unit(cell)
+    if split is None or (_is_measure(cell) and not _is_measure(split[0])):
         return cell.strip(), None
-    return match.group("name"), match.group("bracket") if match.group("bracket") is not None else match.group("paren")
+    return split
+
+
+def _trailing_unit(cell: str) -> tuple[str, str] | None:
+    """``(name, unit)`` of a cell that ends in a group in brackets or parentheses without brackets
+    of its kind inside (``PGA [g]``, ``level (cm/s)``), both stripped; None otherwise. String
+    searches from the end: linear in the cell."""
+    text = cell.strip()
+    pairs = {"]": "[", ")": "("}
+    if not text or text[-1] not in pairs:
+        return None
+    opening = text.rfind(pairs[text[-1]])
+    if opening < 0 or text[-1] in text[opening + 1:-1]:
+        return None
+    return text[:opening].strip(), text[opening + 1:-1].strip()
 
 
 def _plain_table(source: str, measure: Measure | None, levels, rates, unit: str | None,
@@ -412,6 +438,9 @@ def matching(table: HazardTable, im_name: str, period: float | None, kind: str, 
     unit = table.level_units or OPENQUAKE_UNITS[kind][0]
     scale = unit_factor(unit, kind, source=table.source, field="level unit")
     measure = table.measure or _from_fragility(base, period)
+    problem = curve_problem(table.levels * scale, table.rates)
+    if problem:
+        raise CaseError(f"in SI: {problem}", source=table.source)
     return replace(table, measure=measure, levels=table.levels * scale, level_units=None,
                    dropped_low=tuple(np.asarray(table.dropped_low) * scale),
                    dropped_high=tuple(np.asarray(table.dropped_high) * scale))

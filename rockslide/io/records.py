@@ -49,6 +49,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from .. import interrupts
 from ..errors import CaseError, RecordError
 from ..inputs import open_regular
 from ..units import STANDARD_GRAVITY, unit_factor
@@ -95,7 +96,9 @@ _UNITS_HINT = "g, gal, m/s^2"
 
 # A number as written in accelerograms, Fortran's .1234E-02 and 1.0D-02 included; nan and inf are
 # read too, so that they can be reported as such.
-_NUMBER_TEXT = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eEdD][-+]?\d+)?"
+# Possessive quantifiers: a token is matched once, in linear time (a token of thousands of digits
+# followed by something else was scanned again from each of its digits).
+_NUMBER_TEXT = r"[-+]?+(?:\d++(?:\.\d*+)?+|\.\d++)(?:[eEdD][-+]?+\d++)?+"
 _NUMBER = re.compile(rf"{_NUMBER_TEXT}|[-+]?(?:nan|inf|infinity)", re.IGNORECASE)
 _FIELD_SEPARATOR = re.compile(r"\s*[,;]\s*|\s+")
 _AT2_NPTS = re.compile(r"\bNPTS\s*=\s*(\d{1,12})\b", re.IGNORECASE)
@@ -592,6 +595,7 @@ def _content_lines(text: str, skip_lines: int = 0, first: int = 0):
     """
     start = max(skip_lines, first)
     for number, line in enumerate(text.splitlines()[start:], start=start + 1):
+        interrupts.check()                 # Ctrl-C ends the reading of a long file at once
         content = line.split("#", 1)[0].strip()
         if content.startswith(";"):
             continue
@@ -879,9 +883,34 @@ def _values_record(ctx: _Context, rows, options: _Options, stated, *, values=Non
 # Column text: header lines, names and units
 # --------------------------------------------------------------------------------------------------
 
-#: A unit written last in a column name, in brackets: ``Acceleration (g)``, ``acc [cm/s/s]``.
-_BRACKETED_UNIT = re.compile(r"[(\[{]\s*([^()\[\]{}]+?)\s*[)\]}]\s*$")
-_UNIT_TOKEN = re.compile(r"^[(\[{]?[^()\[\]{}\s]+[)\]}]?$")
+_UNIT_TOKEN = re.compile(r"^[(\[{]?+[^()\[\]{}\s]++[)\]}]?+$")
+_BRACKETS = "()[]{}"
+
+
+def _bracketed_unit(text: str) -> tuple[int, str] | None:
+    """A unit written last in a column name, in brackets (``Acceleration (g)``, ``acc [cm/s/s]``):
+    ``(where its opening bracket is, the unit stripped)``, or None. String searches from the end,
+    linear in the name (a regular expression took minutes on a name padded with 80 000 spaces)."""
+    text = text.rstrip()
+    if not text or text[-1] not in ")]}":
+        return None
+    opening = max(text.rfind(c) for c in "([{")
+    inside = text[opening + 1:-1]
+    if opening < 0 or not inside or any(c in inside for c in _BRACKETS):
+        return None
+    return opening, inside.strip() or inside
+
+
+def _without_unit(field: str) -> str:
+    """``field`` without its trailing unit in brackets, stripped (``Acc (g)`` -> ``Acc``)."""
+    found = _bracketed_unit(field)
+    return (field if found is None else field[:found[0]]).strip()
+
+
+def _unbracketed(field: str) -> str:
+    """``field`` with its trailing unit's brackets removed (``(g)`` -> ``g``)."""
+    found = _bracketed_unit(field)
+    return field if found is None else field[:found[0]] + found[1]
 
 
 def _header(ctx: _Context, text: str, header_rows, columns: int,
@@ -904,7 +933,7 @@ def _header(ctx: _Context, text: str, header_rows, columns: int,
         fields = _header_fields(lines[number - 1].split("#", 1)[0], columns)
         if len(fields) != columns:
             continue
-        words = [_unit_word(_BRACKETED_UNIT.sub(r"\1", field)) for field in fields]
+        words = [_unit_word(_unbracketed(field)) for field in fields]
         if unit_row is None and all(words) and all(_UNIT_TOKEN.match(f) for f in fields):
             unit_row = words
         elif names is None:
@@ -933,14 +962,15 @@ def _header_fields(line: str, columns: int) -> list[str]:
     else:
         fields = re.split(r"\s{2,}", line)
         if len(fields) != columns:
-            fields = []
+            fields, depth = [], 0        # depth: brackets the last field leaves open
             for word in line.split():
-                open_bracket = fields and sum(fields[-1].count(c) for c in "([{") > \
-                    sum(fields[-1].count(c) for c in ")]}")
-                if fields and (word[0] in "([{" or open_bracket):
-                    fields[-1] += " " + word
+                if fields and (word[0] in "([{" or depth > 0):
+                    fields[-1].append(word)
                 else:
-                    fields.append(word)
+                    fields.append([word])
+                    depth = 0
+                depth += sum(word.count(c) for c in "([{") - sum(word.count(c) for c in ")]}")
+            fields = [" ".join(words) for words in fields]
     return [field.strip().strip("\"'").strip() for field in fields]
 
 
@@ -965,9 +995,9 @@ def _unit_word(word: str) -> tuple[str, str] | None:
 def _stated_unit(name: str) -> tuple[str, str] | None:
     """The unit a column name states: in brackets at its end, else its last word
     (``Acceleration g's``, ``acc_gal``); None when it states none."""
-    bracketed = _BRACKETED_UNIT.search(name)
+    bracketed = _bracketed_unit(name)
     if bracketed:
-        return _unit_word(bracketed.group(1))
+        return _unit_word(bracketed[1])
     words = re.split(r"[\s_]+", name.strip())
     return _unit_word(words[-1]) if len(words) > 1 else None
 
@@ -1037,7 +1067,7 @@ def _column_index(ctx: _Context, spec, what: str, header, columns: int) -> int:
             raise ctx.error(f"{what} {spec!r} is a name but the file has no header row; give a "
                             f"column number from 1 to {columns} ({option})", what)
         wanted = spec.strip()
-        bare = [_BRACKETED_UNIT.sub("", name).strip() for name in header]
+        bare = [_without_unit(name) for name in header]
         for candidates, fold in ((header, False), (bare, False), (header, True), (bare, True)):
             found = [i for i, name in enumerate(candidates)
                      if (name.casefold() == wanted.casefold() if fold else name == wanted)]

@@ -98,7 +98,7 @@ import signal
 import sys
 import threading
 from dataclasses import dataclass
-from datetime import datetime, timezone
+from datetime import UTC, datetime
 from pathlib import Path
 
 import h5py
@@ -111,6 +111,7 @@ from ..core.layout import HISTORY_COLUMNS, STATE_NAMES
 from ..core.simulate import EVENT_DTYPE, Result, Summary
 from ..errors import OutputError
 from ..inputs import regular_size
+from . import h5checked
 from .files import Staging, check_destination, open_new, publish, remove_quietly, temporary_path
 
 FORMAT = "rockslide-result"
@@ -482,7 +483,7 @@ def _write_body(f: h5py.File, result: Result, *, name, case_text, case, records,
     attrs["integration_step"] = float(result.step)
     attrs["format"] = FORMAT
     attrs["format_version"] = FORMAT_VERSION
-    attrs["created"] = datetime.now(timezone.utc).isoformat(timespec="seconds")
+    attrs["created"] = datetime.now(UTC).isoformat(timespec="seconds")
     for key, value in versions().items():
         attrs[key] = value
     for key, value in (extra_attrs or {}).items():
@@ -811,42 +812,39 @@ def read_result(path) -> StoredResult:
         reason = "not an HDF5 file" if "signature" in str(exc) or "file format" in str(exc) else _reason(exc)
         raise OutputError(f"cannot read as a rockslide result ({reason})", source=source) from None
     with f:
-        _check_attributes(f, source)
-        if _plain(f.attrs.get("format")) != FORMAT:
+        attrs = h5checked.attribute_values(f, source)
+        if attrs.get("format") != FORMAT:
             raise OutputError(f"not a rockslide result (an HDF5 file without format = {FORMAT!r})",
                               source=source)
         _data_only(f, source)
-        version = _plain(f.attrs.get("format_version"))
+        version = attrs.get("format_version")
         if version != FORMAT_VERSION:
             raise OutputError(f"result format version {version!r} is not supported "
                               f"(this rockslide reads version {FORMAT_VERSION})", source=source)
         try:
+            budget = h5checked.Budget(source)
             _check_result_layout(f)
-            stored = _read_body(f)
+            budget.check_total(_result_datasets(f))
+            stored = _read_body(f, attrs, budget)
             _check_result_values(stored)
             return stored
+        except OutputError:
+            raise
         except (KeyError, ValueError, TypeError, OverflowError, IndexError, OSError) as exc:
             raise OutputError(f"damaged rockslide result ({_reason(exc)})", source=source) from None
 
 
-#: Largest attribute read from a file rockslide is given [bytes], checked before it is read (the
-#: case text, at most 64 KiB, is the largest rockslide writes).
-MAX_ATTRIBUTE_BYTES = 1 << 20
+#: Largest attribute read from a file rockslide is given [bytes] (`h5checked.MAX_ATTRIBUTE_BYTES`).
+MAX_ATTRIBUTE_BYTES = h5checked.MAX_ATTRIBUTE_BYTES
 #: Most rows of a result's time history or ground motion read back (the bound of a run's history).
 MAX_RESULT_ROWS = 10**8
 
 
-def _check_attributes(f: h5py.File, source: str) -> None:
-    """Refuse an attribute of the root, ``/case`` or ``/records/*`` larger than
-    `MAX_ATTRIBUTE_BYTES` before reading it (its stored size, from the dataspace and type)."""
-    groups = [f] + [f[name] for name in ("case", "records") if isinstance(f.get(name, getlink=True), h5py.HardLink)]
-    for group in groups:
-        for name in group.attrs:
-            size = group.attrs.get_id(name).get_storage_size()
-            if size > MAX_ATTRIBUTE_BYTES:
-                raise OutputError(f"not read: attribute {name!r} of {group.name} holds {size} bytes; "
-                                  f"rockslide reads attributes of at most {MAX_ATTRIBUTE_BYTES} bytes",
-                                  source=source)
+def _result_datasets(f: h5py.File) -> list:
+    """The datasets `read_result` reads (after `_check_result_layout`)."""
+    groups = [("time_history", HISTORY_COLUMNS), ("ground", tuple(GROUND_UNITS))]
+    groups += [("base", tuple(GROUND_UNITS))] if "base" in f else []
+    return [f["events"]] + [f[group][name] for group, names in groups for name in names]
 
 
 def _check_result_layout(f: h5py.File) -> None:
@@ -854,6 +852,9 @@ def _check_result_layout(f: h5py.File) -> None:
     `MAX_RESULT_ROWS` rows, with stored data: checked on the shapes, before anything is read
     (a small file declaring 1e12 rows is refused at once). ValueError says what is wrong."""
     groups = [("time_history", HISTORY_COLUMNS), ("ground", tuple(GROUND_UNITS))]
+    events = f["events"]
+    if not isinstance(events, h5py.Dataset) or events.ndim != 1 or events.dtype.names is None:
+        raise ValueError("/events is not a table of events")
     if "base" in f:                            # a block on a floor: the ground under the building
         groups.append(("base", tuple(GROUND_UNITS)))
     for group, names in groups:
@@ -907,43 +908,48 @@ def _data_only(f: h5py.File, source: str) -> None:
         raise OutputError(f"not read: {problems[0]}; a rockslide file holds all its data itself", source=source)
 
 
-def _read_body(f: h5py.File) -> StoredResult:
-    attrs = {key: _plain(value) for key, value in f.attrs.items()}
-    history = {}
-    for name in HISTORY_COLUMNS:
-        values = f["time_history"][name][()]
-        history[name] = values.astype(np.int8) if name == "state" else values.astype(np.float64)
-    ground = f["ground"]
-    events = _events_from_file(f["events"][()])
+def _read_body(f: h5py.File, attrs: dict, budget: h5checked.Budget) -> StoredResult:
+    def column(group, name, dtype):
+        return h5checked.read_dataset(f[group][name], budget).astype(dtype, copy=False)
+
+    history = {name: column("time_history", name, np.int8 if name == "state" else np.float64)
+               for name in HISTORY_COLUMNS}
+    events = _events_from_file(h5checked.read_dataset(f["events"], budget, kinds="V"))
     result = Result(
         history=history,
         events=events,
         summary=_summary_from_attrs(attrs),
         step=float(attrs["integration_step"]),
-        ground_time=ground["time"][()].astype(np.float64),
-        ground_horizontal=ground["horizontal"][()].astype(np.float64),
-        ground_vertical=ground["vertical"][()].astype(np.float64),
+        ground_time=column("ground", "time", np.float64),
+        ground_horizontal=column("ground", "horizontal", np.float64),
+        ground_vertical=column("ground", "vertical", np.float64),
     )
     case_text, case = "", {}
     if "case" in f:
-        case_attrs = {key: _plain(value) for key, value in f["case"].attrs.items()}
+        case_attrs = dict(h5checked.attribute_values(_group(f, "case"), budget.source))
         case_text = case_attrs.pop("yaml", "")
         case = _unflatten(case_attrs)
     records = []
     if "records" in f:
         for role in RECORD_ROLES:
-            if role in f["records"]:
-                group = f["records"][role]
-                records.append({key: _none_if_empty(_plain(group.attrs.get(key, "")))
-                                for key in RECORD_KEYS})
+            if role in _group(f, "records"):
+                group = h5checked.attribute_values(_group(f, f"records/{role}"), budget.source)
+                records.append({key: _none_if_empty(group.get(key, "")) for key in RECORD_KEYS})
     ground = {key: None if math.isnan(attrs[f"ground_{key}"]) else float(attrs[f"ground_{key}"])
               for key in GROUND_KEYS if f"ground_{key}" in attrs}
     if "ground_orientation" in attrs:
         ground["components"] = {key: float(attrs[f"ground_{key}"]) for key in COMPONENT_KEYS}
-    base = {key: f["base"][key][()].astype(np.float64) for key in ("time", "horizontal", "vertical")} \
+    base = {key: column("base", key, np.float64) for key in ("time", "horizontal", "vertical")} \
         if "base" in f else {}
     return StoredResult(name=str(attrs.get("name", "")), result=result, case_text=case_text,
                         case=case, records=records, attrs=attrs, ground=ground, base=base)
+
+
+def _group(f: h5py.File, name: str) -> h5py.Group:
+    group = f[name]
+    if not isinstance(group, h5py.Group):
+        raise ValueError(f"/{name} is not a group")
+    return group
 
 
 def _summary_from_attrs(attrs: dict) -> Summary:
@@ -979,15 +985,7 @@ def _summary_from_attrs(attrs: dict) -> Summary:
     )
 
 
-def _plain(value):
-    """An attribute value as a plain Python value (numpy scalars -> Python, bytes -> str)."""
-    if isinstance(value, bytes):
-        return value.decode("utf-8", "replace")
-    if isinstance(value, np.ndarray):
-        return value.tolist() if value.dtype.kind != "S" else [v.decode() for v in value.tolist()]
-    if isinstance(value, np.generic):
-        return value.item()
-    return value
+_plain = h5checked.plain
 
 
 def _none_if_empty(value):
@@ -1157,7 +1155,7 @@ def write_dataset(path, coords, variables, *, format: str, attrs: dict | None = 
             root = f.attrs
             root["format"] = format
             root["format_version"] = FORMATS[format]
-            root["created"] = datetime.now(timezone.utc).isoformat(timespec="seconds")
+            root["created"] = datetime.now(UTC).isoformat(timespec="seconds")
             for key, value in {**versions(), **(attrs or {})}.items():
                 root[key] = _attr_value(value)
             _write_labelled(f, coords, variables)
@@ -1246,26 +1244,43 @@ def read_dataset(path, *, format: str) -> StoredDataset:
     except OSError as exc:
         raise OutputError(f"cannot read as a rockslide {short} ({_reason(exc)})", source=source) from None
     with f:
-        _check_attributes(f, source)
-        if _plain(f.attrs.get("format")) != format:
+        attrs = h5checked.attribute_values(f, source)
+        if attrs.get("format") != format:
             raise OutputError(f"not a rockslide {short} (format is not {format!r})", source=source)
-        if _plain(f.attrs.get("format_version")) != FORMATS[format]:
-            raise OutputError(f"{short} format version {_plain(f.attrs.get('format_version'))!r} is "
+        if attrs.get("format_version") != FORMATS[format]:
+            raise OutputError(f"{short} format version {attrs.get('format_version')!r} is "
                               f"not supported (this rockslide reads {FORMATS[format]})",
                               source=source)
         _data_only(f, source)
-        scales = {name: ds for name, ds in f.items()
-                  if isinstance(ds, h5py.Dataset) and ds.is_scale}
-        order = sorted(scales, key=lambda n: int(scales[n].attrs.get("_Netcdf4Dimid", 0)))
-        coords = [(name, _values(scales[name]), _dataset_attrs(scales[name])) for name in order]
+        budget = h5checked.Budget(source)
         try:
+            attributes = {name: _dataset_attrs(ds, source) for name, ds in f.items() if isinstance(ds, h5py.Dataset)}
+            scales = {name: ds for name, ds in f.items()        # is_scale reads CLASS, bounded above
+                      if isinstance(ds, h5py.Dataset) and ds.is_scale}
+            order = sorted(scales, key=lambda n: attributes[n].get("_Netcdf4Dimid", 0))
+            budget.check_total(ds for ds in f.values() if isinstance(ds, h5py.Dataset))
             _check_dataset_layout(f, scales, format)
-            variables = {name: (tuple(_dim_name(dim) for dim in ds.dims), _values(ds), _dataset_attrs(ds))
-                         for name, ds in f.items() if isinstance(ds, h5py.Dataset) and name not in scales}
-        except (KeyError, ValueError, TypeError, IndexError, OSError) as exc:
+            coords = [(name, _coordinate(scales[name], budget), attributes[name]) for name in order]
+            variables = h5checked.Entries(
+                {name: (tuple(_dim_name(dim) for dim in ds.dims),
+                        h5checked.read_dataset(ds, budget, ndim=None, text=True), attributes[name])
+                 for name, ds in f.items() if isinstance(ds, h5py.Dataset) and name not in scales},
+                source=source, what="variable")
+        except OutputError:
+            raise
+        except (KeyError, ValueError, TypeError, IndexError, OSError, RuntimeError) as exc:
             raise OutputError(f"damaged rockslide {short} ({_reason(exc)})", source=source) from None
-        attrs = {key: _plain(value) for key, value in f.attrs.items()}
+    for _, _, a in coords:
+        a.pop("_Netcdf4Dimid", None)
     return StoredDataset(coords=coords, variables=variables, attrs=attrs)
+
+
+def _coordinate(ds, budget: h5checked.Budget) -> np.ndarray:
+    """A dimension's values: 1-D text, or finite numbers (a figure's axis)."""
+    values = h5checked.read_dataset(ds, budget, text=True)
+    if values.dtype.kind in "iuf" and not np.isfinite(values).all():
+        raise ValueError(f"the dimension {ds.name.lstrip('/')!r} holds values that are not finite numbers")
+    return values
 
 
 #: Root attributes that say when and how a file was written, not what it holds (`same_results`).
@@ -1301,24 +1316,52 @@ def _attrs_equal(a: dict, b: dict) -> bool:
     return a.keys() == b.keys() and all(np.array_equal(np.asarray(a[k]), np.asarray(b[k])) for k in a)
 
 
-#: What each kind of file must hold to be drawn and read: (dimensions, variables).
-REQUIRED = {SWEEP_FORMAT: ((), ("overturned", "status", "modes", "max_rotation", "residual_slip")),
-            FRAGILITY_FORMAT: (("level", "damage_state"), ("exceeded", "definition"))}
+#: What each kind of file must hold to be drawn, printed and read: (dimensions, variables, root
+#: attributes); a variable's last dimensions, where given (None: any), and its values, numbers
+#: (``"number"``) or text (``"text"``). The attributes' kinds are `h5checked.ATTRIBUTE_KINDS`.
+REQUIRED = {
+    SWEEP_FORMAT: ((), {name: (None, "number") for name in ("overturned", "status", "modes", "max_rotation",
+                                                            "residual_slip", "overturn_time", "max_rotation_ratio")},
+                   ()),
+    FRAGILITY_FORMAT: (("level", "damage_state"), {"exceeded": (("damage_state",), "number"),
+                                                   "definition": (("damage_state",), "text")},
+                       ("intensity_measure",)),
+    RISK_FORMAT: (("curve", "point", "im"), {"rate": (("curve",), "number"), "density": (("curve", "im"), "number"),
+                                            "hazard_level": (("curve", "point"), "number"),
+                                            "hazard_rate": (("curve", "point"), "number"),
+                                            "fragility": (("im",), "number")},
+                  ("intensity_measure", "intensity_measure_display_scale", "intensity_measure_display_unit",
+                   "intensity_measure_label", "damage_state", "fragility_form", "fragility_source")),
+}
 
 
 def _check_dataset_layout(f: h5py.File, scales: dict, format: str) -> None:
     """The dimensions and variables a file of ``format`` needs (`REQUIRED`), every coordinate
     one-dimensional and every variable shaped by its dimensions, at most `MAX_RESULT_ROWS` values
     each: checked on the shapes before anything is read. ValueError says what is wrong."""
-    dims, names = REQUIRED.get(format, ((), ()))
+    dims, names, attributes = REQUIRED.get(format, ((), {}, ()))
     if not scales:
         raise ValueError("no dimensions")
     for name in dims:
         if name not in scales:
             raise ValueError(f"no dimension {name!r}")
-    for name in names:
+    for name in attributes:
+        if name not in f.attrs:
+            raise ValueError(f"no attribute {name!r}")
+    for name, (last, kind) in names.items():
         if not isinstance(f.get(name, getlink=True), h5py.HardLink) or not isinstance(f[name], h5py.Dataset):
             raise ValueError(f"no variable {name!r}")
+        ds = f[name]
+        text = h5py.check_string_dtype(ds.dtype) is not None
+        if (kind == "text") != text or (kind == "number" and ds.dtype.kind not in "biuf"):
+            raise ValueError(f"the variable {name!r} is {ds.dtype}; expected {kind}")
+        dims_of = tuple(_dim_name(dim) for dim in ds.dims)
+        if last is not None and dims_of[len(dims_of) - len(last):] != last:
+            raise ValueError(f"the variable {name!r} has dimensions ({', '.join(dims_of)}); expected them to end "
+                             f"with ({', '.join(last)})")
+        if format == SWEEP_FORMAT and set(dims_of) != set(scales):
+            raise ValueError(f"the variable {name!r} has dimensions ({', '.join(dims_of)}); expected every axis "
+                             f"({', '.join(scales)})")
     lengths = {}
     for name, ds in scales.items():
         if ds.ndim != 1:
@@ -1336,20 +1379,15 @@ def _check_dataset_layout(f: h5py.File, scales: dict, format: str) -> None:
                              f"({', '.join(dims_of) or 'none'}) give {expected}")
 
 
-def _values(ds) -> np.ndarray:
-    """A dataset's values; strings as ``str``."""
-    if h5py.check_string_dtype(ds.dtype) is not None:
-        return ds.asstr()[()]
-    return ds[()]
-
-
 def _dim_name(dim) -> str:
     return dim[0].name.rsplit("/", 1)[-1] if len(dim) else ""
 
 
-def _dataset_attrs(ds) -> dict:
-    skip = {"CLASS", "NAME", "REFERENCE_LIST", "DIMENSION_LIST", "_Netcdf4Dimid"}
-    return {key: _plain(value) for key, value in ds.attrs.items() if key not in skip}
+def _dataset_attrs(ds, source: str) -> dict:
+    """A dataset's attributes (bounded and checked, `h5checked.attribute_values`), less HDF5's
+    dimension-scale bookkeeping; ``_Netcdf4Dimid`` kept as a count for the order of dimensions."""
+    skip = {"CLASS", "NAME", "REFERENCE_LIST", "DIMENSION_LIST"}
+    return dict(h5checked.attribute_values(ds, source, skip=skip))
 
 
 # --------------------------------------------------------------------------------------------------
