@@ -58,7 +58,7 @@ from .. import interrupts
 from ..case import Case, case_with
 from ..core import kernel as K
 from ..core.physics import OVERTURNED
-from ..core.simulate import ground_array, initial_state, may_still_overturn, parameters
+from ..core.simulate import ground_array, initial_state, may_still_overturn_params, parameters
 from ..engine.plan import MAX_GRID_POINTS, MAX_POINTS, Plan, check_memory, default_chunk_size, definition_key
 from ..engine.prepare import (
     ABSURD_ACCELERATION_IN_G,
@@ -797,7 +797,7 @@ def sweep_variables(plan: Plan, states: np.ndarray) -> dict:
     moving = np.flatnonzero(st[:, K.S_MODE] != K.REST)                   # a block at rest stands
     for i, row in zip(moving, moving if plan.rows is None else plan.rows[moving], strict=True):
         p = plan.params[row]
-        undecided[i] = may_still_overturn(st[i], p[K.P_R], p[K.P_ALPHA], p[K.P_G], p[K.P_NU], p[K.P_TAN_ALPHA])
+        undecided[i] = may_still_overturn_params(st[i], p)
 
     def grid(values, dtype):
         return np.asarray(values, dtype=dtype).reshape(shape)
