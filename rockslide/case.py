@@ -88,6 +88,8 @@ class Block:
         Azimuth of the base width [rad], clockwise from north: the direction across the rocking
         axis, along which the ground motion of two horizontal components drives the block
         (`Ground.horizontal_2`). None: along the first component.
+    centre_of_mass_height : float, optional
+        ``h`` [m] of a body given by `half_widths` (then ``height = 2 h``); None for a rectangle.
     half_widths : tuple of float, optional
         ``(b1, b2)`` [m]: the base corners' distances from the vertical through the centre of mass,
         ``b1`` the corner a positive ground acceleration tips the body over (pivot 1). None: a
@@ -101,6 +103,7 @@ class Block:
     width: float
     mass: float
     orientation: float | None = None
+    centre_of_mass_height: float | None = None
     half_widths: tuple[float, float] | None = None
     radius_of_gyration: float | None = None
 
@@ -635,6 +638,11 @@ CASE_KEYS: dict[str, dict] = {
     "block": _key("mapping", "the rectangular rigid block", required=True, keys={
         "height": _key("length", "full height 2h (or centre_of_mass_height)", bounds=[(">", 0.0)]),
         "width": _key("length", "full base width 2b (or half_widths)", bounds=[(">", 0.0)]),
+        "mass": _key("mass", "mass", required=True, bounds=[(">", 0.0)]),
+        "orientation": _key("angle", "azimuth of the base width (across the rocking axis), clockwise "
+                            "from north, with two horizontal components, e.g. '30 deg' (default: "
+                            "along ground.horizontal_1)", bounds=[(">=", -2.0 * math.pi), ("<=", 2.0 * math.pi)],
+                            needs_unit=True),
         "centre_of_mass_height": _key("length", "height h of the centre of mass above the base, of a body "
                                       "given by half_widths (instead of height)", bounds=[(">", 0.0)]),
         "half_widths": _key("length_pair", "[b1, b2]: distances of the base corners from the vertical through "
@@ -643,11 +651,6 @@ CASE_KEYS: dict[str, dict] = {
         "radius_of_gyration": _key("length", "sqrt(I/M) about the centre of mass (default: the uniform "
                                    "rectangle's, sqrt((bm^2 + h^2)/3), bm = (b1 + b2)/2), at most "
                                    "sqrt(max(b1, b2)^2 + h^2)"),
-        "mass": _key("mass", "mass", required=True, bounds=[(">", 0.0)]),
-        "orientation": _key("angle", "azimuth of the base width (across the rocking axis), clockwise "
-                            "from north, with two horizontal components, e.g. '30 deg' (default: "
-                            "along ground.horizontal_1)", bounds=[(">=", -2.0 * math.pi), ("<=", 2.0 * math.pi)],
-                            needs_unit=True),
     }),
     "contact": _key("mapping", "block-foundation contact", required=True, keys={
         "mu_static": _key("dimensionless", "static friction coefficient", required=True,
@@ -1409,7 +1412,8 @@ def _block_checks(raw: dict, ctx: _Ctx) -> None:
             ctx.fail(f"block.{body}", f"and block.{plain} are exclusive: give block.{plain} (a rectangle) or "
                      f"block.{body}")
         if block[plain] is None and block[body] is None:
-            ctx.fail(f"block.{plain}", f"missing: give block.{plain} (or block.{body})")
+            spec = CASE_KEYS["block"]["keys"][plain]
+            ctx.fail(f"block.{plain}", f"missing required key ({spec['doc']} [m])")
     if block["centre_of_mass_height"] is not None:
         block["height"] = 2.0 * block["centre_of_mass_height"]
     if block["half_widths"] is not None:
@@ -1432,7 +1436,6 @@ def _block_checks(raw: dict, ctx: _Ctx) -> None:
         if e is not None and e > e_max:
             ctx.fail("contact.restitution", f"must be at most e_max = {e_max:.10g} for this body (beyond it an "
                      f"impact of a sliding base could add energy; docs/asymmetric.md), got {_num(e)}")
-    block.pop("centre_of_mass_height")
 
 
 def _cross_checks(raw: dict, ctx: _Ctx) -> None:
@@ -1640,8 +1643,9 @@ def _block_dict(block: Block) -> dict:
     """The block's keys as a case file gives them: a body (``half_widths``) by its centre of mass's
     height and half widths, not by the bounding rectangle its `Block` also holds."""
     out = {f.name: getattr(block, f.name) for f in dataclasses.fields(block) if getattr(block, f.name) is not None}
+    if block.centre_of_mass_height is not None:
+        out.pop("height")
     if block.half_widths is not None:
-        out["centre_of_mass_height"] = out.pop("height") / 2.0
         out.pop("width")
         out["half_widths"] = list(block.half_widths)
     return out
