@@ -26,6 +26,12 @@ interval, local time ``tau`` runs from 0 to ``dt_record``.
 - After any transition, the tests of the new state apply at once (model.md: 'REST (then REST's
   tests apply at once)').
 
+The block may be an asymmetric planar body (docs/model-asymmetric.md): every equation is taken about
+the present pivot ``lam`` with that pivot's constants (`pivot`; ``P_R2``... for ``lam = -1``), liftoff
+from rest compares ``ah > 0`` with pivot 1's ``tan(alpha_1)`` and ``ah < 0`` with pivot 2's, and
+``P_ASYM`` selects the body's impact law (`physics.impact_body`). A symmetric block stores the
+rectangle's expressions in the per-pivot slots, so its numbers are those of the rectangle to the bit.
+
 The code allocates nothing and keeps its scratch values in tuples, so that the same source compiles
 for a GPU (numba-cuda) as well as for the CPU. A case reads its record from a shared array of
 unscaled records (``P_FIRST``) and scales it as it goes (``P_KH``, ``P_KV``): a batch of cases
