@@ -73,26 +73,68 @@ __all__ = [
 
 @dataclass(frozen=True)
 class Block:
-    """A rectangular rigid block standing on its base.
+    """A rigid block standing on its base: a rectangle, or a planar body whose centre of mass is not
+    above the middle of its base (docs/asymmetric.md, docs/model-asymmetric.md).
 
     Parameters
     ----------
     height : float
-        Full height 2h [m].
+        Full height 2h [m] (an asymmetric body: twice its centre of mass's height).
     width : float
-        Full base width 2b [m].
+        Full base width 2b [m] (an asymmetric body: ``b1 + b2``).
     mass : float
         Mass [kg].
     orientation : float, optional
         Azimuth of the base width [rad], clockwise from north: the direction across the rocking
         axis, along which the ground motion of two horizontal components drives the block
         (`Ground.horizontal_2`). None: along the first component.
+    centre_of_mass_height : float, optional
+        ``h`` [m] of a body given by `half_widths` (then ``height = 2 h``); None for a rectangle.
+    half_widths : tuple of float, optional
+        ``(b1, b2)`` [m]: the base corners' distances from the vertical through the centre of mass,
+        ``b1`` the corner a positive ground acceleration tips the body over (pivot 1). None: a
+        rectangle, ``b1 = b2 = width / 2``.
+    radius_of_gyration : float, optional
+        ``sqrt(I_cm / M)`` [m] about the centre of mass. None: the uniform rectangle's,
+        ``sqrt((bm^2 + h^2) / 3)``, ``bm = (b1 + b2) / 2``.
     """
 
     height: float
     width: float
     mass: float
     orientation: float | None = None
+    centre_of_mass_height: float | None = None
+    half_widths: tuple[float, float] | None = None
+    radius_of_gyration: float | None = None
+
+    @property
+    def asymmetric(self) -> bool:
+        """Whether the body is not the uniform symmetric rectangle (`half_widths` differ or an
+        inertia is given): its model runs the generic body's expressions."""
+        return (self.half_widths is not None and self.half_widths[0] != self.half_widths[1]) \
+            or self.radius_of_gyration is not None
+
+    @property
+    def corners(self) -> tuple[float, float]:
+        """``(b1, b2)`` [m] (``(b, b)`` for a rectangle)."""
+        return self.half_widths if self.half_widths is not None else (self.width / 2.0, self.width / 2.0)
+
+    @property
+    def tipping_angles(self) -> tuple[float, float]:
+        """``(alpha_1, alpha_2) = (atan(b1/h), atan(b2/h))`` [rad]."""
+        b1, b2 = self.corners
+        return math.atan2(b1, self.height / 2.0), math.atan2(b2, self.height / 2.0)
+
+    def describe(self) -> str:
+        """One line: the size, mass and tipping angle(s)."""
+        if not self.asymmetric and self.half_widths is None:
+            return (f"block width × height {self.width:.4g} × {self.height:.4g} m, {self.mass:.4g} kg, "
+                    f"α = {math.atan2(self.width, self.height):.4g} rad")
+        b1, b2 = self.corners
+        a1, a2 = self.tipping_angles
+        gyration = "" if self.radius_of_gyration is None else f", radius of gyration {self.radius_of_gyration:.4g} m"
+        return (f"body: centre of mass {self.height / 2.0:.4g} m high, corners b1 = {b1:.4g} m, b2 = {b2:.4g} m"
+                f"{gyration}, {self.mass:.4g} kg, α1 = {a1:.4g} rad (tips over at ah > 0), α2 = {a2:.4g} rad")
 
     @property
     def half_width(self) -> float:
@@ -594,13 +636,21 @@ CASE_KEYS: dict[str, dict] = {
     "gravity": _key("acceleration", "gravitational acceleration", default=STANDARD_GRAVITY,
                     bounds=[(">", 0.0)]),
     "block": _key("mapping", "the rectangular rigid block", required=True, keys={
-        "height": _key("length", "full height 2h", required=True, bounds=[(">", 0.0)]),
-        "width": _key("length", "full base width 2b", required=True, bounds=[(">", 0.0)]),
+        "height": _key("length", "full height 2h (or centre_of_mass_height)", bounds=[(">", 0.0)]),
+        "width": _key("length", "full base width 2b (or half_widths)", bounds=[(">", 0.0)]),
         "mass": _key("mass", "mass", required=True, bounds=[(">", 0.0)]),
         "orientation": _key("angle", "azimuth of the base width (across the rocking axis), clockwise "
                             "from north, with two horizontal components, e.g. '30 deg' (default: "
                             "along ground.horizontal_1)", bounds=[(">=", -2.0 * math.pi), ("<=", 2.0 * math.pi)],
                             needs_unit=True),
+        "centre_of_mass_height": _key("length", "height h of the centre of mass above the base, of a body "
+                                      "given by half_widths (instead of height)", bounds=[(">", 0.0)]),
+        "half_widths": _key("length_pair", "[b1, b2]: distances of the base corners from the vertical through "
+                            "the centre of mass, b1 the corner a positive ground acceleration tips the body "
+                            "over (instead of width), e.g. '[0.044 m, 0.129 m]'"),
+        "radius_of_gyration": _key("length", "sqrt(I/M) about the centre of mass (default: the uniform "
+                                   "rectangle's, sqrt((bm^2 + h^2)/3), bm = (b1 + b2)/2), at most "
+                                   "sqrt(max(b1, b2)^2 + h^2)"),
     }),
     "contact": _key("mapping", "block-foundation contact", required=True, keys={
         "mu_static": _key("dimensionless", "static friction coefficient", required=True,
@@ -1147,6 +1197,11 @@ def _read_value(value, spec: dict, path: str, ctx: _Ctx):
         return _read_mapping(value, spec["keys"], path, ctx, "a file name or a mapping with file and azimuth")
     if kind == "modes":
         return _read_modes(value, spec, path, ctx)
+    if kind == "length_pair":
+        if not isinstance(value, list | tuple) or len(value) != 2:
+            ctx.fail(path, f"expected two lengths [b1, b2], e.g. [0.044 m, 0.129 m], got {_show(value)}")
+        one = {"type": "length", "unit": "m", "bounds": ((">", 0.0),)}
+        return tuple(_read_quantity(v, one, f"{path}[{i}]", ctx) for i, v in enumerate(value))
     if kind in UNITS:
         return _read_quantity(value, spec, path, ctx)
     if kind == "name":
@@ -1369,8 +1424,47 @@ def _limit_text(limit: float, spec: dict) -> str:
     return _with_unit(limit, spec.get("unit", ""))
 
 
+def _block_checks(raw: dict, ctx: _Ctx) -> None:
+    """A block is a rectangle (``height``, ``width``) or a body (``centre_of_mass_height``,
+    ``half_widths``), not both; ``radius_of_gyration`` fits a body of that size; the restitution is
+    at most ``e_max`` (docs/model-asymmetric.md section 4.2). The body's form is stored with
+    ``height = 2 h`` and ``width = b1 + b2``."""
+    block = raw["block"]
+    pairs = (("height", "centre_of_mass_height"), ("width", "half_widths"))
+    for plain, body in pairs:
+        if block[plain] is not None and block[body] is not None:
+            ctx.fail(f"block.{body}", f"and block.{plain} are exclusive: give block.{plain} (a rectangle) or "
+                     f"block.{body}")
+        if block[plain] is None and block[body] is None:
+            spec = CASE_KEYS["block"]["keys"][plain]
+            ctx.fail(f"block.{plain}", f"missing required key ({spec['doc']} [m])")
+    if block["centre_of_mass_height"] is not None:
+        block["height"] = 2.0 * block["centre_of_mass_height"]
+    if block["half_widths"] is not None:
+        block["width"] = block["half_widths"][0] + block["half_widths"][1]
+    b1, b2 = block["half_widths"] if block["half_widths"] is not None else (block["width"] / 2.0,) * 2
+    h = block["height"] / 2.0
+    k = block["radius_of_gyration"]
+    if k is not None:
+        # Any body inside the bounding box [-b1, b2] x [0, 2h] with its centre of mass at (0, h) has
+        # 0 < I/M <= max over the box of the squared distance from the centre of mass, b_max^2 + h^2.
+        k_max = math.sqrt(max(b1, b2) ** 2 + h * h)
+        if not 0.0 < k <= k_max:
+            ctx.fail("block.radius_of_gyration", f"expected within (0, {k_max:.6g} m], the largest a body of "
+                     f"that size can have (sqrt(max(b1, b2)^2 + h^2)), got {_with_unit(k, 'm')}")
+    e = raw["contact"]["restitution"]
+    if (block["half_widths"] is not None and b1 != b2) or k is not None:
+        k2 = k * k if k is not None else ((0.5 * (b1 + b2)) ** 2 + h * h) / 3.0
+        rho1, rho2 = math.sqrt(k2 + b1 * b1 + h * h), math.sqrt(k2 + b2 * b2 + h * h)
+        e_max = (h * h + math.sqrt((k2 + b1 * b1) * (k2 + b2 * b2))) / (rho1 * rho2)
+        if e is not None and e > e_max:
+            ctx.fail("contact.restitution", f"must be at most e_max = {e_max:.10g} for this body (beyond it an "
+                     f"impact of a sliding base could add energy; docs/asymmetric.md), got {_num(e)}")
+
+
 def _cross_checks(raw: dict, ctx: _Ctx) -> None:
     """Checks that involve more than one key; ``raw`` is the converted nested dict."""
+    _block_checks(raw, ctx)
     contact = raw["contact"]
     if contact["mu_kinetic"] is None:
         contact["mu_kinetic"] = contact["mu_static"]
@@ -1545,7 +1639,7 @@ def case_to_dict(case: Case, *, case_file: bool = True) -> dict:
     out = {
         "name": case.name,
         "gravity": case.gravity,
-        "block": plain(case.block),
+        "block": _block_dict(case.block),
         "contact": plain(case.contact),
         "ground": ground,
         "initial": plain(case.initial),
@@ -1566,6 +1660,18 @@ def case_to_dict(case: Case, *, case_file: bool = True) -> dict:
                 node[leaf] = _with_si_units(node[leaf], SI_UNIT[spec["quantity"]])
             elif needs_unit and isinstance(node, dict) and node.get(leaf) is not None:
                 node[leaf] = f"{node[leaf]!r} {SI_UNIT[spec['type']]}"
+    return out
+
+
+def _block_dict(block: Block) -> dict:
+    """The block's keys as a case file gives them: a body (``half_widths``) by its centre of mass's
+    height and half widths, not by the bounding rectangle its `Block` also holds."""
+    out = {f.name: getattr(block, f.name) for f in dataclasses.fields(block) if getattr(block, f.name) is not None}
+    if block.centre_of_mass_height is not None:
+        out.pop("height")
+    if block.half_widths is not None:
+        out.pop("width")
+        out["half_widths"] = list(block.half_widths)
     return out
 
 

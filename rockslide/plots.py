@@ -285,8 +285,11 @@ def case_caption(case_text: str = "", *, records=None, step: float | None = None
         b = case.block
         alpha = math.atan2(b.width, b.height)
         mark = " (base)" if "height_to_width" in varied else ""
-        parts.append(f"block width × height {b.width:.4g} × {b.height:.4g} m{mark}, {b.mass:.4g} kg, "
-                     f"α = {alpha:.4g} rad")
+        if b.half_widths is not None or b.radius_of_gyration is not None:
+            parts.append(b.describe() + mark)
+        else:
+            parts.append(f"block width × height {b.width:.4g} × {b.height:.4g} m{mark}, {b.mass:.4g} kg, "
+                         f"α = {alpha:.4g} rad")
         mark = " (base)" if "mu" in varied else ""
         parts.append(f"μ = {case.contact.mu_static:.4g}{mark} (kinetic {case.contact.mu_kinetic:.4g})")
         mark = " (base)" if "restitution" in varied else ""

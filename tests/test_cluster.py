@@ -173,7 +173,7 @@ def test_no_worker_in_time_is_one_line(scheduler, tmp_path):
 
 def test_wait_workers_needs_a_scheduler(tmp_path):
     one_line_error(invoke(*sweep_args(tmp_path, *AXES, extra=["--wait-workers", "5"])), "--wait-workers",
-                   "--scheduler")
+                   "scheduler")
 
 
 @posix

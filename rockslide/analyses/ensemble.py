@@ -197,9 +197,19 @@ def member_parameters(case: Case, params: np.ndarray, values: dict) -> tuple[np.
     mu, nu = case.contact.mu_static * friction, case.contact.mu_kinetic * friction
     restitution = (np.clip(values["restitution"], 0.0, 1.0) if "restitution" in values
                    else np.full(n, case.contact.restitution))
+    body = case.block.half_widths is not None or case.block.radius_of_gyration is not None
     for i in range(n):
-        set_model(params[i], Model.from_block(float(width[i]), float(height[i]), float(mu[i]), float(nu[i]),
-                                              float(restitution[i]), case.gravity, case.block.mass))
+        if body:      # an asymmetric body (docs/asymmetric.md): its corners scale as the width
+            b1, b2 = case.block.corners
+            k = case.block.radius_of_gyration
+            model = Model(b1 * float(size[i] * slender[i]), 0.5 * float(height[i]), float(mu[i]), float(nu[i]),
+                          float(restitution[i]), case.gravity, case.block.mass,
+                          half_width_2=b2 * float(size[i] * slender[i]),
+                          radius_of_gyration=None if k is None else k * float(size[i]))
+        else:
+            model = Model.from_block(float(width[i]), float(height[i]), float(mu[i]), float(nu[i]),
+                                     float(restitution[i]), case.gravity, case.block.mass)
+        set_model(params[i], model)
     return params, restitution
 
 

@@ -101,6 +101,11 @@ def warm_up_case():
     driver, or loads it from numba's cache, at almost no cost."""
     p = np.zeros((1, K.N_PARAMS))
     p[0, K.P_R], p[0, K.P_ALPHA], p[0, K.P_TAN_ALPHA] = 0.1, 0.5, np.tan(0.5)
+    p[0, K.P_R2], p[0, K.P_ALPHA2], p[0, K.P_TAN_ALPHA2] = 0.1, 0.5, np.tan(0.5)
+    p[0, K.P_KR1] = p[0, K.P_KR2] = 7.5
+    p[0, K.P_Q1] = p[0, K.P_Q2] = 4.0 / 3.0
+    p[0, K.P_M1] = p[0, K.P_M2] = 2.0 / 300.0
+    p[0, K.P_P2_1] = p[0, K.P_P2_2] = 0.75 * 9.80665 / 0.1
     p[0, K.P_G], p[0, K.P_MU], p[0, K.P_NU], p[0, K.P_E] = 9.80665, 0.5, 0.5, 0.8
     p[0, K.P_STEP], p[0, K.P_DT_REC], p[0, K.P_N_SUB], p[0, K.P_LOCATED] = 0.01, 0.01, 1.0, 1.0
     states = K.new_state()[None, :]

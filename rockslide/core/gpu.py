@@ -155,7 +155,9 @@ def launch_order(params, base, first, count, kh):
     count = np.broadcast_to(np.asarray(count, dtype=np.int64), params.shape[:1])
     records, which = np.unique(np.stack([first, count]), axis=1, return_inverse=True)
     peak = np.array([np.abs(base[:2, f:f + c]).max(initial=0.0) for f, c in records.T])[which.ravel()]
-    threshold = np.minimum(params[:, K.P_MU], params[:, K.P_TAN_ALPHA]) * params[:, K.P_G]
+    tan_alpha = np.where(params[:, K.P_ASYM] != 0.0, np.minimum(params[:, K.P_TAN_ALPHA], params[:, K.P_TAN_ALPHA2]),
+                         params[:, K.P_TAN_ALPHA])        # the weaker pivot of an asymmetric body
+    threshold = np.minimum(params[:, K.P_MU], tan_alpha) * params[:, K.P_G]
     intensity = np.abs(np.broadcast_to(kh, params.shape[:1])) * peak / threshold
     steps = np.where(intensity >= 1.0, count * params[:, K.P_N_SUB], count / K.REST_BLOCK)
     return np.lexsort((-intensity, -steps)).astype(np.int64)

@@ -26,6 +26,12 @@ interval, local time ``tau`` runs from 0 to ``dt_record``.
 - After any transition, the tests of the new state apply at once (model.md: 'REST (then REST's
   tests apply at once)').
 
+The block may be an asymmetric planar body (docs/model-asymmetric.md): every equation is taken about
+the present pivot ``lam`` with that pivot's constants (`pivot`; ``P_R2``... for ``lam = -1``), liftoff
+from rest compares ``ah > 0`` with pivot 1's ``tan(alpha_1)`` and ``ah < 0`` with pivot 2's, and
+``P_ASYM`` selects the body's impact law (`physics.impact_body`). A symmetric block stores the
+rectangle's expressions in the per-pivot slots, so its numbers are those of the rectangle to the bit.
+
 The code allocates nothing and keeps its scratch values in tuples, so that the same source compiles
 for a GPU (numba-cuda) as well as for the CPU. A case reads its record from a shared array of
 unscaled records (``P_FIRST``) and scales it as it goes (``P_KH``, ``P_KV``): a batch of cases
@@ -68,21 +74,36 @@ from .layout import (  # noqa: F401  (the array layout, re-exported: `kernel.S_M
     N_STATE,
     OVERTURNED,
     P_ALPHA,
+    P_ALPHA2,
+    P_ASYM,
+    P_B1,
+    P_B2,
     P_DT_REC,
     P_E,
     P_ENERGY,
     P_FIRST,
     P_G,
+    P_H,
     P_KH,
+    P_KR1,
+    P_KR2,
     P_KV,
     P_LOCATED,
+    P_M1,
+    P_M2,
     P_MU,
     P_N_SUB,
     P_NU,
+    P_P2_1,
+    P_P2_2,
+    P_Q1,
+    P_Q2,
     P_R,
+    P_R2,
     P_STEP,
     P_T0,
     P_TAN_ALPHA,
+    P_TAN_ALPHA2,
     REST,
     ROCK,
     ROCKSLIP,
@@ -131,16 +152,15 @@ from .layout import (  # noqa: F401  (the array layout, re-exported: `kernel.S_M
     new_state,
 )
 from .physics import (
-    contact_forces,
     contact_forces_sc,
     impact,
-    kinetic_energy,
+    impact_body,
+    kinetic_energy_m,
     liftoff_margin,
     potential_energy,
-    rock_acceleration,
-    rock_acceleration_sc,
-    rockslip_accelerations_sc,
-    rockslip_determinant,
+    rock_acceleration_k,
+    rockslip_accelerations_q,
+    rockslip_determinant_q,
     rockslip_determinant_rate,
     slip_acceleration,
     slip_liftoff_margin,
@@ -169,21 +189,40 @@ REST_SAFETY = 1e-9            # a block is skipped only with this relative margi
 # ============================================================================================
 
 @njit(cache=True, inline='always')
+def pivot(p, lam):
+    """The constants of the pivot ``lam`` (model-asymmetric.md section 1; `layout`'s ``P_*``):
+    ``(R_i, alpha_i, kr_i, q_i, m_i)``, pivot 1 for ``lam = +1``, pivot 2 for ``lam = -1`` (equal
+    for a symmetric block)."""
+    if lam > 0.0:
+        return p[P_R], p[P_ALPHA], p[P_KR1], p[P_Q1], p[P_M1]
+    return p[P_R2], p[P_ALPHA2], p[P_KR2], p[P_Q2], p[P_M2]
+
+
+@njit(cache=True, inline='always')
+def pivot_alpha(p, lam):
+    """``alpha_i`` [rad] of the pivot ``lam``."""
+    return p[P_ALPHA] if lam > 0.0 else p[P_ALPHA2]
+
+
+@njit(cache=True, inline='always')
 def accelerations_sc(mode, lam, sigma, s, c, thetadot, ah, G, p):
-    """``(thetaddot, xddot, D)`` of a state (eqs. 3, 9, 15-16 with 22); ``D = 1`` unless ROCKSLIP."""
+    """``(thetaddot, xddot, D)`` of a state (eqs. 3, 9, 15-16 with 22) about the pivot ``lam``;
+    ``D = 1`` unless ROCKSLIP."""
     if mode == ROCK:
-        return rock_acceleration_sc(s, c, ah, G, lam, p[P_R]), 0.0, 1.0
+        _, _, kr, _, _ = pivot(p, lam)
+        return rock_acceleration_k(s, c, ah, G, lam, kr), 0.0, 1.0
     if mode == SLIP:
         return 0.0, slip_acceleration(ah, G, p[P_NU], sigma), 1.0
     if mode == ROCKSLIP:
-        return rockslip_accelerations_sc(s, c, thetadot, ah, G, lam, sigma, p[P_NU], p[P_R])
+        R, _, _, q, _ = pivot(p, lam)
+        return rockslip_accelerations_q(s, c, thetadot, ah, G, lam, sigma, p[P_NU], R, q)
     return 0.0, 0.0, 1.0
 
 
 @njit(cache=True)
 def accelerations(mode, lam, sigma, theta, thetadot, ah, G, p):
     """``(thetaddot, xddot)`` of a state at angle ``theta``."""
-    s, c = tilt(theta, p[P_ALPHA])
+    s, c = tilt(theta, pivot_alpha(p, lam))
     thdd, xdd, _ = accelerations_sc(mode, lam, sigma, s, c, thetadot, ah, G, p)
     return thdd, xdd
 
@@ -212,12 +251,12 @@ def evaluate(mode, energy, lam, sigma, th, thd, xd, t, a0, sa, v0, sv, p):
         if energy:
             return 0.0, xdd, -ah * xd, -p[P_NU] * G * (sigma * xd), 0.0, 0.0, 1.0, ah, G
         return 0.0, xdd, 0.0, 0.0, 0.0, 0.0, 1.0, ah, G
-    s, c = tilt(th, p[P_ALPHA])
+    R, alpha, _, _, _ = pivot(p, lam)
+    s, c = tilt(th, alpha)
     thdd, xdd, D = accelerations_sc(mode, lam, sigma, s, c, thd, ah, G, p)
     pg = 0.0
     pf = 0.0
     if energy and mode != REST:
-        R = p[P_R]
         pg = -ah * (xd - lam * R * c * thd) - av * R * s * thd
         if mode == ROCKSLIP:
             _, N = contact_forces_sc(s, c, thd, thdd, ah, G, lam, R)
@@ -316,9 +355,10 @@ def rk4_from(mode, lam, sigma, y, k1, tau, hh, a0, sa, v0, sv, p):
 def time_to_painleve(lam, sigma, theta, thetadot, p):
     """In ROCKSLIP, the time [s] the determinant ``D`` would take to reach 0 at its present rate
     ``dD/dtheta thetadot`` (``inf`` while it does not fall; 0 at or past the Painleve point)."""
-    s, c = tilt(theta, p[P_ALPHA])
-    D = rockslip_determinant(s, c, lam, sigma, p[P_NU], p[P_R])
-    rate = rockslip_determinant_rate(s, c, lam, sigma, p[P_NU], p[P_R]) * thetadot
+    R, alpha, _, q, _ = pivot(p, lam)
+    s, c = tilt(theta, alpha)
+    D = rockslip_determinant_q(s, c, lam, sigma, p[P_NU], R, q)
+    rate = rockslip_determinant_rate(s, c, lam, sigma, p[P_NU], R) * thetadot
     if D <= 0.0:
         return 0.0
     if rate >= 0.0:
@@ -342,17 +382,26 @@ def event_functions(mode, lam, sigma, th, thd, xd, ah, G, s, c, thdd, D, p):
     of `EVENT_KINDS` (unused slots ``inf``). ``s``, ``c``, ``thdd``, ``D`` are `evaluate`'s at the
     same instant."""
     inf = math.inf
-    if mode == SLIP:
-        s0, c0 = tilt(0.0, p[P_ALPHA])
-        return G, sigma * xd, slip_liftoff_margin(s0, c0, ah, G, sigma, p[P_NU], p[P_TAN_ALPHA]), inf, inf
+    if mode == SLIP:      # eq. 23 about the pivot lam = -sigma
+        if sigma < 0.0:
+            s0, c0 = tilt(0.0, p[P_ALPHA])
+            ta = p[P_TAN_ALPHA]
+        else:
+            s0, c0 = tilt(0.0, p[P_ALPHA2])
+            ta = p[P_TAN_ALPHA2]
+        return G, sigma * xd, slip_liftoff_margin(s0, c0, ah, G, sigma, p[P_NU], ta), inf, inf
     if mode == ROCK:
-        Rx, N = contact_forces_sc(s, c, thd, thdd, ah, G, lam, p[P_R])
+        R = p[P_R] if lam > 0.0 else p[P_R2]
+        Rx, N = contact_forces_sc(s, c, thd, thdd, ah, G, lam, R)
         return N, slip_margin(p[P_MU], N, Rx), th, HALF_PI - th, inf                   # eq. 21
     if mode == ROCKSLIP:
-        _, N = contact_forces_sc(s, c, thd, thdd, ah, G, lam, p[P_R])
+        R = p[P_R] if lam > 0.0 else p[P_R2]
+        _, N = contact_forces_sc(s, c, thd, thdd, ah, G, lam, R)
         return N, D, sigma * xd, th, HALF_PI - th
-    if mode == REST:      # N = G and Rx = ah at rest; both edges, both directions (eqs. 11 and 6)
-        return G, slip_margin(p[P_MU], G, ah), liftoff_margin(p[P_TAN_ALPHA], G, ah), inf, inf
+    if mode == REST:      # N = G and Rx = ah at rest; both edges, both directions (eqs. 11 and 6):
+        # ah > 0 lifts pivot 1's side off (tan(alpha_1)), ah < 0 pivot 2's (tan(alpha_2))
+        ta = p[P_TAN_ALPHA] if ah > 0.0 else p[P_TAN_ALPHA2]
+        return G, slip_margin(p[P_MU], G, ah), liftoff_margin(ta, G, ah), inf, inf
     return inf, inf, inf, inf, inf
 
 
@@ -360,7 +409,7 @@ def event_functions(mode, lam, sigma, th, thd, xd, ah, G, s, c, thdd, D, p):
 def event_values(mode, lam, sigma, th, thd, xd, ah, G, p):
     """`event_functions` of ``mode`` at the state ``(th, thd, xd)`` (a 5-tuple; the state's own are
     the first ``N_EVENTS[mode]``, their kinds ``EVENT_KINDS[mode]``)."""
-    s, c = tilt(th, p[P_ALPHA])
+    s, c = tilt(th, pivot_alpha(p, lam))
     thdd, _, D = accelerations_sc(mode, lam, sigma, s, c, thd, ah, G, p)
     return event_functions(mode, lam, sigma, th, thd, xd, ah, G, s, c, thdd, D, p)
 
@@ -459,8 +508,11 @@ def finished(st):
 
 @njit(cache=True)
 def mechanical_energy(st, p):
-    return (kinetic_energy(st[S_THETA], st[S_THETADOT], st[S_XDOT], st[S_LAM], p[P_R], p[P_ALPHA])
-            + potential_energy(st[S_THETA], p[P_G], p[P_R], p[P_ALPHA]))
+    """Kinetic and potential energy [J/kg] about the present pivot (``V_i`` is 0 upright about
+    either pivot: continuous at impacts)."""
+    R, alpha, _, _, m = pivot(p, st[S_LAM])
+    return (kinetic_energy_m(st[S_THETA], st[S_THETADOT], st[S_XDOT], st[S_LAM], R, alpha, m)
+            + potential_energy(st[S_THETA], p[P_G], R, alpha))
 
 
 @njit(cache=True)
@@ -485,8 +537,7 @@ def apply_event(kind, st, p, t, ah, G, events):
     fmode = float(mode)
     lam = st[S_LAM]
     sigma = st[S_SIGMA]
-    R = p[P_R]
-    alpha = p[P_ALPHA]
+    R, alpha, kr, _, _ = pivot(p, lam)
     mu = p[P_MU]
 
     if kind == K_FLIGHT:
@@ -515,8 +566,9 @@ def apply_event(kind, st, p, t, ah, G, events):
             st[S_MODE] = SLIP
             log_event(st, events, t, float(REST), float(SLIP), float(C_SLIP_START), 0.0, 0.0)
         else:                                              # ROCK, eq. 21: sigma = -sign(Rx)
-            thdd = rock_acceleration(st[S_THETA], ah, G, lam, R, alpha)
-            Rx, _ = contact_forces(st[S_THETA], st[S_THETADOT], thdd, ah, G, lam, R, alpha)
+            s, c = tilt(st[S_THETA], alpha)
+            thdd = rock_acceleration_k(s, c, ah, G, lam, kr)
+            Rx, _ = contact_forces_sc(s, c, st[S_THETADOT], thdd, ah, G, lam, R)
             st[S_SIGMA] = -1.0 if Rx > 0.0 else 1.0
             st[S_XDOT] = 0.0
             st[S_MODE] = ROCKSLIP
@@ -539,8 +591,9 @@ def apply_event(kind, st, p, t, ah, G, events):
         if mode == SLIP:
             Rx, N, stuck = ah, G, REST
         else:
-            thdd = rock_acceleration(st[S_THETA], ah, G, lam, R, alpha)
-            Rx, N = contact_forces(st[S_THETA], st[S_THETADOT], thdd, ah, G, lam, R, alpha)
+            s, c = tilt(st[S_THETA], alpha)
+            thdd = rock_acceleration_k(s, c, ah, G, lam, kr)
+            Rx, N = contact_forces_sc(s, c, st[S_THETADOT], thdd, ah, G, lam, R)
             stuck = ROCK
         if slip_margin(mu, N, Rx) >= 0.0:
             st[S_MODE] = stuck
@@ -557,13 +610,21 @@ def impact_of_the_landing_edge(st, p, t, mode, ah, G, events):
     """The impact at ``theta = 0``, ``thetadot < 0`` (model.md decisions 2 and 3): the law of
     `physics.impact`, the end of liftoff when the rebound is too small to matter, the energy lost."""
     lam = st[S_LAM]
-    R = p[P_R]
-    alpha = p[P_ALPHA]
+    R, alpha, _, _, _ = pivot(p, lam)              # the old pivot's
+    R_n, alpha_n, _, _, _ = pivot(p, -lam)         # the landing corner's
     st[S_IMPACTS] += 1.0
     st[S_THETA] = 0.0
     st[S_FALL_CANDIDATE] = math.nan
     energy_before = mechanical_energy(st, p)
-    branch, w, xi_plus = impact(abs(st[S_THETADOT]), lam * st[S_XDOT], p[P_E], p[P_MU], p[P_NU], R, alpha)
+    if p[P_ASYM] != 0.0:       # model-asymmetric.md section 4.3, e the energy coefficient
+        if lam > 0.0:
+            b_o, b_n, rho_o2, rho_n2 = p[P_B1], p[P_B2], 2.0 * p[P_M1], 2.0 * p[P_M2]
+        else:
+            b_o, b_n, rho_o2, rho_n2 = p[P_B2], p[P_B1], 2.0 * p[P_M2], 2.0 * p[P_M1]
+        branch, w, xi_plus = impact_body(abs(st[S_THETADOT]), lam * st[S_XDOT], p[P_E], p[P_MU], p[P_NU], p[P_H],
+                                         b_o, b_n, rho_o2, rho_n2)
+    else:
+        branch, w, xi_plus = impact(abs(st[S_THETADOT]), lam * st[S_XDOT], p[P_E], p[P_MU], p[P_NU], R, alpha)
     if branch == IMPACT_PAINLEVE:
         st[S_STATUS] = STATUS_PAINLEVE
         log_event(st, events, t, float(mode), float(mode), float(C_PAINLEVE), float(branch), 0.0)
@@ -571,7 +632,7 @@ def impact_of_the_landing_edge(st, p, t, mode, ah, G, events):
         return
     st[S_LAM] = -lam                       # the landing edge pivots from now on
     cause = C_IMPACT
-    w_z = zeno_rate(THETA_END, 0.75 * p[P_G] / R, alpha)
+    w_z = zeno_rate(THETA_END, p[P_P2_2] if lam > 0.0 else p[P_P2_1], alpha_n)     # about the new pivot
     thetadot, xdot = w, (lam * xi_plus if xi_plus != 0.0 else 0.0)     # a stopped slip is +0, not -0
     if branch != IMPACT_FLAT:
         new_mode = ROCK if branch == IMPACT_STICK else ROCKSLIP
@@ -597,7 +658,7 @@ def impact_of_the_landing_edge(st, p, t, mode, ah, G, events):
         # Upright after the impact (a flat landing, or a dropped rebound): a slip velocity on the
         # scale of a negligible rebound, |xdot| <= R w_z, goes too (decision 3). Otherwise a block with
         # nu > tan(alpha) chatters: it slips, lifts off from SLIP at once (eq. 23), falls back, lands.
-        if abs(xdot) <= R * w_z:
+        if abs(xdot) <= R_n * w_z:
             xdot = 0.0
         st[S_MODE] = REST if xdot == 0.0 else SLIP
     st[S_THETADOT] = thetadot
@@ -656,12 +717,13 @@ def rest_exit(tau, tau_end, a0, sa, v0, sv, p, step_end, h):
     """
     g0 = p[P_G] + v0
     mu = p[P_MU]
-    ta = p[P_TAN_ALPHA]
+    ta = p[P_TAN_ALPHA]        # ah > 0 lifts off about pivot 1
+    tb = p[P_TAN_ALPHA2]       # ah < 0 about pivot 2
     t_flight = first_negative(g0, sv, tau, tau_end)
     t_slip = min(first_negative(mu * g0 - a0, mu * sv - sa, tau, tau_end),
                  first_negative(mu * g0 + a0, mu * sv + sa, tau, tau_end))
     t_lift = min(first_negative(ta * g0 - a0, ta * sv - sa, tau, tau_end),
-                 first_negative(ta * g0 + a0, ta * sv + sa, tau, tau_end))
+                 first_negative(tb * g0 + a0, tb * sv + sa, tau, tau_end))
     best = min(t_flight, min(t_slip, t_lift))
     if best == math.inf:
         return best, -1
@@ -718,7 +780,7 @@ def rest_block_holds(p, bounds, block):
         return False
     if amax == 0.0:
         return True
-    m = min(p[P_MU], p[P_TAN_ALPHA]) * g_low
+    m = min(p[P_MU], min(p[P_TAN_ALPHA], p[P_TAN_ALPHA2])) * g_low
     return m - amax > REST_SAFETY * (m + amax)
 
 
@@ -893,10 +955,9 @@ def land_on_the_ground(st, p, G):
     th = st[S_THETA]
     if th >= 0.0:
         return
-    R = p[P_R]
-    alpha = p[P_ALPHA]
+    R, alpha, _, _, m = pivot(p, st[S_LAM])
     rise = G * R * (math.cos(alpha) - math.cos(alpha - th))        # > 0 for th < 0
-    w2 = st[S_THETADOT] * st[S_THETADOT] - rise / ((2.0 / 3.0) * R * R)
+    w2 = st[S_THETADOT] * st[S_THETADOT] - rise / m
     st[S_THETADOT] = -math.sqrt(w2) if w2 > 0.0 else 0.0
 
 
@@ -944,7 +1005,8 @@ def accept(st, th, thd, x, xd, wg, wf, mode, tau_a, tau_b, tk, p, peaks_inside):
     # single step after an event is not worth a version per state)
     (st[S_MAX_THETA], st[S_THETA_MAX_TIME], st[S_MAX_X], st[S_FALL_CANDIDATE]) = track(
         ROCKSLIP, st[S_THETA], st[S_THETADOT], st[S_X], st[S_XDOT], th, thd, x, xd, tau_b - tau_a, tk + tau_a,
-        p[P_ALPHA], st[S_MAX_THETA], st[S_THETA_MAX_TIME], st[S_MAX_X], st[S_FALL_CANDIDATE], peaks_inside)
+        pivot_alpha(p, st[S_LAM]), st[S_MAX_THETA], st[S_THETA_MAX_TIME], st[S_MAX_X], st[S_FALL_CANDIDATE],
+        peaks_inside)
     st[S_THETA] = th
     st[S_THETADOT] = thd
     st[S_X] = x
@@ -967,7 +1029,7 @@ def glide(st, p, mode, energy, j, n_sub, h, dt_rec, tk, a0, sa, v0, sv, history,
     th, thd, x, xd = st[S_THETA], st[S_THETADOT], st[S_X], st[S_XDOT]
     wg, wf = st[S_W_GROUND], st[S_W_FRICTION]
     max_th, max_th_time, max_x, fall = st[S_MAX_THETA], st[S_THETA_MAX_TIME], st[S_MAX_X], st[S_FALL_CANDIDATE]
-    alpha = p[P_ALPHA]
+    alpha = pivot_alpha(p, lam)
     tau_a = (j - 1) * h
     if st[S_K1_VALID] != 0.0:
         a1, b1, pg1, pf1 = st[S_K1_THDD], st[S_K1_XDD], st[S_K1_PG], st[S_K1_PF]
@@ -1062,7 +1124,8 @@ def run(p, ground, bounds, st, history, every, offset, events, k_end):
     # The constants as a tuple of scalars: unlike an array, it cannot alias the state arrays, so
     # the compiler keeps them in registers instead of reloading them after every store.
     p = (p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], p[12], p[13], p[14],
-         p[15])
+         p[15], p[16], p[17], p[18], p[19], p[20], p[21], p[22], p[23], p[24], p[25], p[26], p[27], p[28],
+         p[29], p[30], p[31])
     n_sub = int(p[P_N_SUB])
     h = p[P_STEP]
     dt_rec = p[P_DT_REC]

@@ -23,10 +23,20 @@ IMPACT_BRANCHES = ("", "stick", "slip", "flat", "painleve")
 
 # --- parameter vector ``p`` (``P_STEP``: the integration step, h in docs/model.md's 'Integration';
 # not the block's half height) ---------------------------------------------------------------
+# ``P_R``, ``P_ALPHA``, ``P_TAN_ALPHA`` are pivot 1's (``lam = +1``, the left corner; the only pivot
+# of a symmetric block), ``P_*2`` pivot 2's (``lam = -1``), equal to pivot 1's for a symmetric block
+# (docs/model-asymmetric.md). Per pivot: ``P_KR*`` the rocking coefficient ``R_i / rho_i^2`` (eq. 3),
+# ``P_Q*`` = ``rho_i^2 / R_i^2`` (ROCKSLIP), ``P_M*`` = ``rho_i^2 / 2`` (kinetic energy), ``P_P2_*`` =
+# ``p_i^2 = g R_i / rho_i^2``. A symmetric block stores today's expressions there (``0.75 / R``,
+# ``4/3``, ``(2/3) R R``, ``0.75 g / R``), so that the generic formulas give its numbers to the bit.
+# ``P_ASYM`` = 1 selects the impact law of the asymmetric body (model-asymmetric.md section 4), which
+# needs ``P_H`` (CM height), ``P_B1``, ``P_B2`` (the corners' distances) and ``P_K2`` (``I_cm / M``).
 (P_R, P_ALPHA, P_TAN_ALPHA, P_G, P_MU, P_NU, P_E, P_STEP, P_DT_REC, P_N_SUB, P_LOCATED, P_T0,
  P_ENERGY,
- P_FIRST, P_KH, P_KV) = range(16)   # the case's record: its first column of ``ground``, scale factors
-N_PARAMS = 16   # `kernel.run` unpacks p into a 16-tuple: keep the two in step
+ P_FIRST, P_KH, P_KV,   # the case's record: its first column of ``ground``, scale factors
+ P_R2, P_ALPHA2, P_TAN_ALPHA2, P_KR1, P_KR2, P_Q1, P_Q2, P_M1, P_M2, P_P2_1, P_P2_2,
+ P_ASYM, P_H, P_B1, P_B2, P_K2) = range(32)
+N_PARAMS = 32   # `kernel.run` unpacks p into a 32-tuple: keep the two in step
 
 # --- state vector ``st`` ----------------------------------------------------------------------
 (S_MODE, S_LAM, S_SIGMA, S_THETA, S_THETADOT, S_X, S_XDOT,   # the mechanical state

@@ -37,6 +37,7 @@ ENTRY_POINTS = (
     ("finished", "kernel", f"b1({_VECTOR})"),
     ("block_constants", "physics", "UniTuple(f8, 3)(f8, f8, f8)"),
     ("kinetic_energy", "physics", "f8(f8, f8, f8, f8, f8, f8)"),
+    ("kinetic_energy_m", "physics", "f8(f8, f8, f8, f8, f8, f8, f8)"),
     ("potential_energy", "physics", "f8(f8, f8, f8, f8)"),
     ("tilt", "physics", "UniTuple(f8, 2)(f8, f8)"),
     ("slip_liftoff_margin", "physics", "f8(f8, f8, f8, f8, f8, f8, f8)"),

@@ -77,6 +77,13 @@ def rock_acceleration_sc(s, c, ah, G, lam, R):
 
 
 @njit(cache=True)
+def rock_acceleration_k(s, c, ah, G, lam, kr):
+    """Eq. 3 about pivot ``i`` of any body (model-asymmetric.md section 2): ``thetaddot = kr_i (-G s_i +
+    lam ah c_i)`` with ``kr_i = R_i / rho_i^2`` [1/m]; ``kr = 0.75 / R`` is `rock_acceleration_sc` to the bit."""
+    return kr * (-G * s + lam * ah * c)
+
+
+@njit(cache=True)
 def rock_acceleration(theta, ah, G, lam, R, alpha):
     """Angular acceleration of liftoff without slip, eq. 3 (eq. 29 in compact form).
 
@@ -102,7 +109,14 @@ def slip_acceleration(ah, G, nu, sigma):
 def rockslip_determinant(s, c, lam, sigma, nu, R):
     """The determinant of the ROCKSLIP system (eqs. 15, 16 with 22), ``D = R (4/3 - c^2 + lam nu
     sigma s c)`` [m] with ``s``, ``c`` from `tilt`. ``D <= 0`` is the Painleve case."""
-    return R * (4.0 / 3.0 - c * c + lam * nu * sigma * s * c)
+    return rockslip_determinant_q(s, c, lam, sigma, nu, R, 4.0 / 3.0)
+
+
+@njit(cache=True)
+def rockslip_determinant_q(s, c, lam, sigma, nu, R, q):
+    """`rockslip_determinant` of pivot ``i`` of any body: ``D = R_i (q_i - c^2 + lam nu sigma s c)`` with
+    ``q_i = rho_i^2 / R_i^2`` (4/3 for a rectangle; model-asymmetric.md section 2) [m]."""
+    return R * (q - c * c + lam * nu * sigma * s * c)
 
 
 @njit(cache=True)
@@ -126,13 +140,21 @@ def rockslip_loads(s, c, thetadot, ah, G, lam, sigma, nu, R):
 @njit(cache=True)
 def rockslip_accelerations_sc(s, c, thetadot, ah, G, lam, sigma, nu, R):
     """Eqs. 15, 16 and 22 with ``s``, ``c`` from `tilt`; see `rockslip_accelerations`."""
+    return rockslip_accelerations_q(s, c, thetadot, ah, G, lam, sigma, nu, R, 4.0 / 3.0)
+
+
+@njit(cache=True)
+def rockslip_accelerations_q(s, c, thetadot, ah, G, lam, sigma, nu, R, q):
+    """`rockslip_accelerations_sc` about pivot ``i`` of any body, ``q = rho_i^2 / R_i^2`` (4/3 for a
+    rectangle): the first row's ``(4/3) R`` becomes ``rho_i^2 / R_i = q R_i`` (model-asymmetric.md
+    section 2)."""
     b1, b2 = rockslip_loads(s, c, thetadot, ah, G, lam, sigma, nu, R)
     a21 = R * (nu * sigma * s - lam * c)
-    D = rockslip_determinant(s, c, lam, sigma, nu, R)
+    D = rockslip_determinant_q(s, c, lam, sigma, nu, R, q)
     if D <= 0.0:
         return 0.0, 0.0, D
     thetaddot = (b1 + lam * c * b2) / D
-    xddot = ((4.0 / 3.0) * R * b2 - a21 * b1) / D
+    xddot = (q * R * b2 - a21 * b1) / D
     return thetaddot, xddot, D
 
 
@@ -322,5 +344,70 @@ def potential_energy(theta, gravity, R, alpha):
 def kinetic_energy(theta, thetadot, xdot, lam, R, alpha):
     """Kinetic energy per unit mass relative to the foundation [J/kg], from the Lagrangian (eq. 13):
     ``xdot^2/2 - lam R cos(alpha - theta) xdot thetadot + (2/3) R^2 thetadot^2``."""
+    return kinetic_energy_m(theta, thetadot, xdot, lam, R, alpha, (2.0 / 3.0) * R * R)
+
+
+@njit(cache=True)
+def kinetic_energy_m(theta, thetadot, xdot, lam, R, alpha, m):
+    """`kinetic_energy` about pivot ``i`` of any body [J/kg]: ``xdot^2/2 - lam R_i c_i xdot thetadot +
+    m thetadot^2`` with ``m = rho_i^2 / 2`` (``(2/3) R^2`` for a rectangle; model-asymmetric.md section 2)."""
     return (0.5 * xdot * xdot - lam * R * math.cos(alpha - theta) * xdot * thetadot
-            + (2.0 / 3.0) * R * R * thetadot * thetadot)
+            + m * thetadot * thetadot)
+
+
+@njit(cache=True)
+def impact_body(u, xi, restitution, mu, nu, h, b_o, b_n, rho_o2, rho_n2):
+    """The impact law of a body with corners at ``b_o`` (old pivot) and ``b_n`` (landing corner) from the
+    vertical through its centre of mass (model-asymmetric.md section 4.3; `impact` is the rectangle's).
+
+    ``e`` is the energy coefficient: a sticking impact without slip gives ``thetadot+ = e (rho_o /
+    rho_n) |thetadot-|``, ``T+/T- = e^2`` (section 4.2). Worked in the old pivot's frame as `impact`;
+    with ``D_n = rho_n^2 - h^2`` (``k2 + b_n^2``), the first branch that holds:
+
+    - *stick*: ``w = e (rho_o/rho_n) u + (h / rho_n^2) xi``; holds if ``w > 0`` and
+      ``|h (u - w) + xi| <= mu (b_o u + b_n w)``; within the cone with ``w <= 0``: a flat landing (as
+      `impact`).
+    - *slip*: ``sig = sign(xi + h u rho_n (rho_n - e rho_o) / D_n)``, ``den = D_n - sig nu h b_n``
+      (``<= 0``: Painleve); ``w = u (e rho_o rho_n - h^2 + sig nu h b_o) / den``,
+      ``xi+ = xi + h (u - w) - sig nu (b_o u + b_n w)``; holds if ``w > 0`` and ``sig xi+ > 0``.
+    - *flat landing*: ``q = xi + h u``; stops if ``|q| <= mu b_o u``, else slides on at
+      ``sign(q) (|q| - nu b_o u)``.
+
+    Parameters
+    ----------
+    u, xi : float
+        ``|thetadot-|`` [rad/s] and ``lam xdot-`` [m/s], as in `impact`.
+    restitution, mu, nu : float
+        ``e``, ``mu``, ``nu`` [-].
+    h, b_o, b_n : float
+        [m]: the centre of mass's height, the old and the new pivot's distance from its vertical.
+    rho_o2, rho_n2 : float
+        [m^2]: ``rho_i^2 = k2 + R_i^2`` of the old and the new pivot.
+
+    Returns
+    -------
+    branch, w, xi_plus
+        As `impact`.
+    """
+    e = restitution
+    rho_o = math.sqrt(rho_o2)
+    rho_n = math.sqrt(rho_n2)
+    D_n = rho_n2 - h * h
+    if u > 0.0:
+        w = e * (rho_o / rho_n) * u + h / rho_n2 * xi
+        edge_holds = abs(h * (u - w) + xi) <= mu * (b_o * u + b_n * max(w, 0.0))
+        if edge_holds and w > 0.0:
+            return IMPACT_STICK, w, 0.0
+        if not edge_holds:
+            sig = 1.0 if xi + h * u * rho_n * (rho_n - e * rho_o) / D_n >= 0.0 else -1.0
+            den = D_n - sig * nu * h * b_n
+            if den <= 0.0:
+                return IMPACT_PAINLEVE, 0.0, xi
+            w = u * (e * rho_o * rho_n - h * h + sig * nu * h * b_o) / den
+            xi_plus = xi + h * (u - w) - sig * nu * (b_o * u + b_n * w)
+            if w > 0.0 and sig * xi_plus > 0.0:
+                return IMPACT_SLIP, w, xi_plus
+    q = xi + h * u
+    if abs(q) <= mu * b_o * u:
+        return IMPACT_FLAT, 0.0, 0.0
+    return IMPACT_FLAT, 0.0, math.copysign(abs(q) - nu * b_o * u, q)

@@ -27,12 +27,15 @@ EVENT_DTYPE = np.dtype([("time", "f8"), ("from", "S10"), ("to", "S10"), ("cause"
 
 @dataclass(frozen=True)
 class Model:
-    """The block and its contact (docs/model.md, 'Scene and assumptions').
+    """The block and its contact (docs/model.md, 'Scene and assumptions'; an asymmetric body:
+    docs/model-asymmetric.md).
 
     Attributes
     ----------
     half_width, half_height : float
-        ``b`` and ``h`` [m]: half the block's width and height.
+        ``b`` and ``h`` [m]: half the block's width and height. For an asymmetric body ``half_width``
+        is ``b1``, the distance of pivot 1 (the corner a positive ``ah`` tips it over, ``lam = +1``)
+        from the vertical through the centre of mass, and ``half_height`` the centre of mass's height.
     mu_static, mu_kinetic : float
         ``mu`` and ``nu`` [-]: static and kinetic friction coefficients (``nu <= mu``).
     restitution : float
@@ -41,6 +44,14 @@ class Model:
         ``g`` [m/s^2].
     mass : float
         ``M`` [kg]; scales energies only.
+    half_width_2 : float or None
+        ``b2`` [m]: pivot 2's distance (``lam = -1``); None: ``b1`` (symmetric).
+    radius_of_gyration : float or None
+        ``sqrt(I_cm / M)`` [m] about the centre of mass; None: the uniform rectangle's,
+        ``sqrt((bm^2 + h^2) / 3)`` with ``bm = (b1 + b2) / 2``. With ``b2`` None or ``b1`` and no
+        radius of gyration the kernel runs the rectangle's expressions (bit for bit as ever,
+        model-asymmetric.md section 7); given, the generic ones. ``e`` is then the energy coefficient
+        (section 4.2).
     """
 
     half_width: float
@@ -50,6 +61,63 @@ class Model:
     restitution: float
     gravity: float = 9.80665
     mass: float = 1.0
+    half_width_2: float | None = None
+    radius_of_gyration: float | None = None
+
+    @property
+    def asymmetric(self) -> bool:
+        """Whether the generic body's expressions run: ``b2 != b1`` or an inertia given."""
+        return (self.half_width_2 is not None and self.half_width_2 != self.half_width) \
+            or self.radius_of_gyration is not None
+
+    @property
+    def half_widths(self) -> tuple[float, float]:
+        """``(b1, b2)`` [m]."""
+        return self.half_width, self.half_width if self.half_width_2 is None else self.half_width_2
+
+    @property
+    def k2(self) -> float:
+        """``I_cm / M`` [m^2] (model-asymmetric.md section 1)."""
+        if self.radius_of_gyration is not None:
+            return self.radius_of_gyration ** 2
+        b1, b2 = self.half_widths
+        bm = 0.5 * (b1 + b2)
+        return (bm * bm + self.half_height ** 2) / 3.0
+
+    @property
+    def pivots(self) -> tuple[dict, dict]:
+        """The constants of pivot 1 (``lam = +1``) and pivot 2 (``lam = -1``), model-asymmetric.md
+        section 1: ``R`` [m], ``alpha`` [rad], ``tan_alpha`` (``b_i / h``), ``rho2`` (``k2 + R_i^2``)
+        [m^2], ``kr`` (``R_i / rho_i^2``) [1/m], ``p2`` (``g R_i / rho_i^2``) [1/s^2], ``b`` [m]."""
+        h, k2, g = self.half_height, self.k2, self.gravity
+        out = []
+        for b in self.half_widths:
+            R = math.sqrt(b * b + h * h)
+            rho2 = k2 + R * R
+            out.append({"R": R, "alpha": math.atan2(b, h), "tan_alpha": b / h, "rho2": rho2, "kr": R / rho2,
+                        "p2": g * R / rho2, "b": b})
+        return out[0], out[1]
+
+    @property
+    def tipping_angles(self) -> tuple[float, float]:
+        """``(alpha_1, alpha_2)`` [rad]: the static tipping angles about pivots 1 and 2."""
+        if not self.asymmetric:
+            alpha = self.constants[1]
+            return alpha, alpha
+        one, two = self.pivots
+        return one["alpha"], two["alpha"]
+
+    @property
+    def restitution_max(self) -> float:
+        """``e_max = (h^2 + sqrt(D_1 D_2)) / (rho_1 rho_2)`` [-], with ``D_i = k2 + b_i^2``: the largest
+        energy coefficient whose impacts never add energy (model-asymmetric.md section 4.2; 1 for a
+        symmetric block)."""
+        if not self.asymmetric:
+            return 1.0
+        one, two = self.pivots
+        h2, k2 = self.half_height ** 2, self.k2
+        D1, D2 = k2 + one["b"] ** 2, k2 + two["b"] ** 2
+        return (h2 + math.sqrt(D1 * D2)) / math.sqrt(one["rho2"] * two["rho2"])
 
     @classmethod
     def from_block(cls, width, height, mu_static, mu_kinetic, restitution, gravity=9.80665, mass=1.0):
@@ -167,12 +235,37 @@ def substeps(dt_record: float, dt: float) -> int:
 
 def set_model(p: np.ndarray, model: Model) -> np.ndarray:
     """Write ``model`` into the kernel's parameter vector ``p`` (in place; returned): the block's
-    ``R``, ``alpha`` and ``tan(alpha) = b/h``, gravity and the contact. The one place a `Model` becomes
+    ``R``, ``alpha`` and ``tan(alpha) = b/h`` of each pivot and their derived constants (`layout`),
+    gravity and the contact. The one place a `Model` becomes
     kernel parameters (`parameters`, and the members of an ensemble)."""
-    R, alpha, _ = model.constants
-    p[L.P_R] = R
-    p[L.P_ALPHA] = alpha
-    p[L.P_TAN_ALPHA] = model.half_width / model.half_height
+    if model.asymmetric:
+        for lam, pv in zip((1, 2), model.pivots, strict=True):
+            R, alpha, tan_alpha, kr, q, m, p2 = (pv["R"], pv["alpha"], pv["tan_alpha"], pv["kr"],
+                                                 pv["rho2"] / (pv["R"] * pv["R"]), 0.5 * pv["rho2"], pv["p2"])
+            if lam == 1:
+                p[L.P_R], p[L.P_ALPHA], p[L.P_TAN_ALPHA], p[L.P_KR1], p[L.P_Q1], p[L.P_M1], p[L.P_P2_1] = (
+                    R, alpha, tan_alpha, kr, q, m, p2)
+            else:
+                p[L.P_R2], p[L.P_ALPHA2], p[L.P_TAN_ALPHA2], p[L.P_KR2], p[L.P_Q2], p[L.P_M2], p[L.P_P2_2] = (
+                    R, alpha, tan_alpha, kr, q, m, p2)
+        p[L.P_ASYM] = 1.0
+        p[L.P_H] = model.half_height
+        p[L.P_B1], p[L.P_B2] = model.half_widths
+        p[L.P_K2] = model.k2
+    else:
+        # the rectangle's expressions, so that the generic formulas give today's numbers to the bit
+        R, alpha, _ = model.constants
+        p[L.P_R] = p[L.P_R2] = R
+        p[L.P_ALPHA] = p[L.P_ALPHA2] = alpha
+        p[L.P_TAN_ALPHA] = p[L.P_TAN_ALPHA2] = model.half_width / model.half_height
+        p[L.P_KR1] = p[L.P_KR2] = 0.75 / R
+        p[L.P_Q1] = p[L.P_Q2] = 4.0 / 3.0
+        p[L.P_M1] = p[L.P_M2] = (2.0 / 3.0) * R * R
+        p[L.P_P2_1] = p[L.P_P2_2] = 0.75 * model.gravity / R
+        p[L.P_ASYM] = 0.0
+        p[L.P_H] = model.half_height
+        p[L.P_B1] = p[L.P_B2] = model.half_width
+        p[L.P_K2] = R * R / 3.0
     p[L.P_G] = model.gravity
     p[L.P_MU] = model.mu_static
     p[L.P_NU] = model.mu_kinetic
@@ -418,6 +511,11 @@ def summarise(st: np.ndarray, model: Model, record_end: float) -> Summary:
     quantities from many state vectors at once: a change here is a change there
     (tests/test_sweep.py compares sweep points with runs)."""
     R, alpha, _ = model.constants
+    p = set_model(np.zeros(L.N_PARAMS), model)
+    if model.asymmetric:          # the present pivot's constants
+        lam = st[L.S_LAM]
+        R, alpha = (p[L.P_R], p[L.P_ALPHA]) if lam > 0 else (p[L.P_R2], p[L.P_ALPHA2])
+    m = p[L.P_M1] if st[L.S_LAM] > 0 else p[L.P_M2]
     time_in = {"REST": st[L.S_T_REST], "SLIP": st[L.S_T_SLIP], "ROCK": st[L.S_T_ROCK],
                "ROCKSLIP": st[L.S_T_ROCKSLIP]}
     overturned = st[L.S_MODE] == OVERTURNED
@@ -427,7 +525,7 @@ def summarise(st: np.ndarray, model: Model, record_end: float) -> Summary:
     end_time = st[L.S_END_TIME] if not math.isnan(st[L.S_END_TIME]) else record_end
     M = model.mass
     core = native.entry_points()
-    kinetic = M * core.kinetic_energy(st[L.S_THETA], st[L.S_THETADOT], st[L.S_XDOT], st[L.S_LAM], R, alpha)
+    kinetic = M * core.kinetic_energy_m(st[L.S_THETA], st[L.S_THETADOT], st[L.S_XDOT], st[L.S_LAM], R, alpha, m)
     potential = M * core.potential_energy(st[L.S_THETA], model.gravity, R, alpha)
     ground, friction, impact = M * st[L.S_W_GROUND], M * st[L.S_W_FRICTION], M * st[L.S_W_IMPACT]
     energy = {
@@ -438,8 +536,7 @@ def summarise(st: np.ndarray, model: Model, record_end: float) -> Summary:
     }
     fall = st[L.S_FALL_START]
     return Summary(
-        undecided=may_still_overturn(st, R, alpha, model.gravity, model.mu_kinetic,
-                                     model.half_width / model.half_height),
+        undecided=may_still_overturn_params(st, p),
         overturned=bool(overturned),
         overturn_time=float(st[L.S_OVERTURN_TIME]) if overturned else None,
         direction=int(st[L.S_DIRECTION]) if overturned else None,
@@ -454,9 +551,36 @@ def summarise(st: np.ndarray, model: Model, record_end: float) -> Summary:
         status=L.STATUS_NAMES[int(st[L.S_STATUS])],
         end_time=float(end_time),
         energy={k: float(v) for k, v in energy.items()},
-        alpha=float(alpha),
-        max_rotation_ratio=float(st[L.S_MAX_THETA]) / alpha,
+        alpha=float(p[L.P_ALPHA]),
+        max_rotation_ratio=float(st[L.S_MAX_THETA]) / float(p[L.P_ALPHA]),
     )
+
+
+def may_still_overturn_params(st: np.ndarray, p: np.ndarray) -> bool:
+    """`may_still_overturn` from a kernel parameter vector ``p``. For an asymmetric body (``P_ASYM``)
+    the present pivot's rotation past its ``alpha``, a slip that can lift off about ``lam = -sigma``,
+    or an energy at least the lower of the two barriers ``g (R_i - h)`` (a rebound may carry it over
+    the other corner)."""
+    if p[L.P_ASYM] == 0.0:
+        return may_still_overturn(st, p[L.P_R], p[L.P_ALPHA], p[L.P_G], p[L.P_NU], p[L.P_TAN_ALPHA])
+    mode = st[L.S_MODE]
+    if st[L.S_STATUS] != L.STATUS_OK or mode == REST or mode == OVERTURNED:
+        return False
+    lam, theta, g = st[L.S_LAM], st[L.S_THETA], p[L.P_G]
+    R, alpha, m = (p[L.P_R], p[L.P_ALPHA], p[L.P_M1]) if lam > 0 else (p[L.P_R2], p[L.P_ALPHA2], p[L.P_M2])
+    if theta >= alpha:
+        return True
+    core = native.entry_points()
+    if mode == SLIP:
+        alpha_l, ta = (p[L.P_ALPHA], p[L.P_TAN_ALPHA]) if st[L.S_SIGMA] < 0 else (p[L.P_ALPHA2], p[L.P_TAN_ALPHA2])
+        s, c = core.tilt(0.0, alpha_l)
+        if core.slip_liftoff_margin(s, c, 0.0, g, st[L.S_SIGMA], p[L.P_NU], ta) >= 0.0:
+            return False
+    energy = (core.kinetic_energy_m(theta, st[L.S_THETADOT], st[L.S_XDOT], lam, R, alpha, m)
+              + core.potential_energy(theta, g, R, alpha))
+    barrier = min(core.potential_energy(p[L.P_ALPHA], g, p[L.P_R], p[L.P_ALPHA]),
+                  core.potential_energy(p[L.P_ALPHA2], g, p[L.P_R2], p[L.P_ALPHA2]))
+    return bool(energy >= barrier)
 
 
 def may_still_overturn(st: np.ndarray, R: float, alpha: float, gravity: float, nu: float,
@@ -491,5 +615,5 @@ def may_still_overturn(st: np.ndarray, R: float, alpha: float, gravity: float, n
 
 
 __all__ = ["Model", "Settings", "Summary", "Result", "simulate", "substeps", "parameters", "ground_array",
-           "ground_series", "may_still_overturn", "tail_samples", "interval_count",
+           "ground_series", "may_still_overturn", "may_still_overturn_params", "tail_samples", "interval_count",
            "REST", "SLIP", "ROCK", "ROCKSLIP", "OVERTURNED"]

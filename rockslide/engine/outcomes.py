@@ -8,7 +8,7 @@ import numpy as np
 
 from ..core import kernel as K
 from ..core.physics import OVERTURNED
-from ..core.simulate import may_still_overturn
+from ..core.simulate import may_still_overturn_params
 from .plan import Plan
 
 #: Bits of the ``modes`` variable.
@@ -42,7 +42,7 @@ def sweep_variables(plan: Plan, states: np.ndarray) -> dict:
     moving = np.flatnonzero(st[:, K.S_MODE] != K.REST)                   # a block at rest stands
     for i, row in zip(moving, moving if plan.rows is None else plan.rows[moving], strict=True):
         p = plan.params[row]
-        undecided[i] = may_still_overturn(st[i], p[K.P_R], p[K.P_ALPHA], p[K.P_G], p[K.P_NU], p[K.P_TAN_ALPHA])
+        undecided[i] = may_still_overturn_params(st[i], p)
 
     def grid(values, dtype):
         return np.asarray(values, dtype=dtype).reshape(shape)

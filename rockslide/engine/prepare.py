@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from ..case import Case, floor_text
-from ..core.layout import P_G, P_R, P_STEP
+from ..core.layout import P_P2_1, P_P2_2, P_STEP
 from ..core.simulate import Model, Result, Settings, interval_count, parameters, simulate, substeps, tail_samples
 from ..errors import CaseError
 from ..io import records as rec
@@ -73,9 +73,14 @@ def base_motion(prepared: Prepared) -> dict | None:
 
 
 def model_for(case: Case) -> Model:
-    return Model.from_block(case.block.width, case.block.height, case.contact.mu_static,
-                            case.contact.mu_kinetic, case.contact.restitution, case.gravity,
-                            case.block.mass)
+    block = case.block
+    if block.half_widths is None and block.radius_of_gyration is None:
+        return Model.from_block(block.width, block.height, case.contact.mu_static,
+                                case.contact.mu_kinetic, case.contact.restitution, case.gravity,
+                                block.mass)
+    b1, b2 = block.corners        # an asymmetric body (docs/model-asymmetric.md)
+    return Model(b1, block.height / 2.0, case.contact.mu_static, case.contact.mu_kinetic, case.contact.restitution,
+                 case.gravity, block.mass, half_width_2=b2, radius_of_gyration=block.radius_of_gyration)
 
 
 def settings_for(case: Case, *, history: bool = True, energy: bool = True) -> Settings:
@@ -305,7 +310,7 @@ def coarse_step_warning(source: str, params: np.ndarray, where=None) -> str | No
     case ``i`` in the message (``[at --mu 0.5, --pga 800gal]``). The one check of the step behind
     runs, sweeps and fragility analyses."""
     params = np.atleast_2d(params)
-    p2 = 0.75 * params[:, P_G] / params[:, P_R]            # p^2 = 3 g / (4 R), model.md
+    p2 = np.maximum(params[:, P_P2_1], params[:, P_P2_2])    # p^2 = 3 g / (4 R), model.md; per pivot
     i = int(np.argmax(p2))
     warning = step_warning(source, math.sqrt(p2[i]), float(params[i, P_STEP]))
     if warning and where is not None:
