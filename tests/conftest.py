@@ -138,3 +138,20 @@ def dask_processes(scheduler_options=(), worker_options=()):
             if p.poll() is None:
                 p.kill()
                 p.wait()
+
+
+#: Test modules that are slow as a whole (`make test-fast` leaves them out; `make test` runs them):
+#: each test starts processes (dask schedulers and workers, `python -m rockslide` killed by
+#: signals) or builds the documentation site, 5 to 90 s a test on 2 cores.
+SLOW_MODULES = {
+    "test_cluster.py": "dask clusters of worker processes",
+    "test_cluster_access.py": "dask clusters over TLS, with certificates made for the test",
+    "test_faults.py": "signals, killed processes, full disks and locks, in subprocesses",
+    "test_docs_build.py": "the Sphinx site built from docs/",
+}
+
+
+def pytest_collection_modifyitems(config, items):
+    for item in items:
+        if item.path.name in SLOW_MODULES:
+            item.add_marker(pytest.mark.slow)
