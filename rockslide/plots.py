@@ -1178,8 +1178,8 @@ def _legend_handles(result, *, ground: bool = True, alpha: bool = True, horizont
     handles = [Line2D([], [], color=ROTATION_COLOUR, lw=1.5, label="liftoff angle φ"),
                Line2D([], [], color=SLIP_COLOUR, lw=1.5, label="slip x")]
     if alpha and math.isfinite(result.summary.alpha):
-        handles.append(Line2D([], [], color=ALPHA_COLOUR, ls="--", lw=0.9,
-                              label="±α (past it gravity no longer pulls back)"))
+        # not "tips over past it": a block may pass alpha and be rocked back by the ground
+        handles.append(Line2D([], [], color=ALPHA_COLOUR, ls="--", lw=0.9, label="±α (restoring limit)"))
     if ground:
         support = "floor" if floor else "ground"
         handles += [Line2D([], [], color=GROUND_COLOURS[key], lw=1.0,
