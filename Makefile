@@ -13,7 +13,10 @@ export ROCKSLIDE_RECORDS := $(abspath $(RECORDS))
 help:
 	@echo "make install   install rockslide with its test tools (pip install -e '.[test]')"
 	@echo "make test      the whole test suite"
-	@echo "make test-fast the suite without tests marked slow"
+	@echo "make test-fast the inner loop: the suite without the tests marked slow (dask clusters, signals and"
+	@echo "               killed subprocesses, full disks, the docs build, the CUDA simulator, hypothesis"
+	@echo "               fuzzers: tests/conftest.py SLOW_MODULES, SLOW_TESTS, @pytest.mark.slow);"
+	@echo "               make test runs them all"
 	@echo "make check     lint, import contracts, then the tests"
 	@echo "make bench     speed and accuracy benchmarks -> results/bench.md, bench_kernel.md, bench_sweep.md, bench_fragility.md, bench_startup.md, bench_large.md, work_precision.png"
 	@echo "make table1    the paper's Table 1 and Figures 5-10 -> results/ (needs the paper's records)"

@@ -1184,7 +1184,8 @@ def _legend_handles(result, *, ground: bool = True, alpha: bool = True, horizont
     handles = [Line2D([], [], color=ROTATION_COLOUR, lw=1.5, label="liftoff angle φ"),
                Line2D([], [], color=SLIP_COLOUR, lw=1.5, label="slip x")]
     if alpha and math.isfinite(result.summary.alpha):
-        handles.append(Line2D([], [], color=ALPHA_COLOUR, ls="--", lw=0.9, label="±α (tips over past it)"))
+        # not "tips over past it": a block may pass alpha and be rocked back by the ground
+        handles.append(Line2D([], [], color=ALPHA_COLOUR, ls="--", lw=0.9, label="±α (restoring limit)"))
     if ground:
         support = "floor" if floor else "ground"
         handles += [Line2D([], [], color=GROUND_COLOURS[key], lw=1.0,
@@ -1250,10 +1251,14 @@ def _envelope(t: np.ndarray, y: np.ndarray, max_points: int = MAX_LINE_POINTS):
 
 #: The categories of a sweep's overturning map, codes 0 to 5 (`sweep_category`).
 SWEEP_CATEGORIES = ("rest", "slip", "liftoff", "liftoff-slip", "overturned", "outside the model")
-SWEEP_COLOURS = ("#ffffff", "#f5c07a", "#9fd39a", "#c3a6e0", "#3a3a3a", "#d9534f")
+# "outside the model" in magenta: no colour map of the sweep's figure uses it (red is the slip map's)
+SWEEP_COLOURS = ("#ffffff", "#f5c07a", "#9fd39a", "#c3a6e0", "#3a3a3a", "#e7298a")
 #: A map's third axis is shown in at most this many rows.
 SWEEP_MAX_ROWS = 4
 NO_DATA_COLOUR = "#e6e6e6"
+#: [mm] Residual slip below this everywhere on a sweep's slip map: the map says so in words (its
+#: colour scale would stretch rounding to full red, or show an empty panel).
+SWEEP_SLIP_SHOWN = 1e-3
 
 
 def sweep_category(overturned, status, modes) -> np.ndarray:
@@ -1298,10 +1303,12 @@ def sweep_figure(axes, category, max_rotation, residual_slip, *, title: str = ""
         one row of maps for each of up to `SWEEP_MAX_ROWS` of its values (spread evenly, ends
         included); further axes are held at their first value. What is shown is said under the
         title. Overturned points are outlined on every map; the rotation map is logarithmic and
-        leaves points that never lifted off grey; the residual slip map leaves overturned points
-        and points outside the model grey.
+        leaves points that never lifted off grey (the legend says so); the residual slip map shows
+        its size, ``|residual slip|``, of the standing blocks, and paints overturned points and
+        points outside the model in their categories' colours; a map with nothing to show says so
+        in its middle. No colour means two things.
     """
-    from matplotlib.colors import BoundaryNorm, ListedColormap, TwoSlopeNorm
+    from matplotlib.colors import BoundaryNorm, ListedColormap, Normalize
 
     category = np.asarray(category)
     rotation = np.asarray(max_rotation, dtype=float)
@@ -1315,11 +1322,12 @@ def sweep_figure(axes, category, max_rotation, residual_slip, *, title: str = ""
     rot_norm = _rotation_norm(rotation)
     slip_shown = np.abs(slip_mm[standing]) if standing.any() else np.zeros(0)
     limit = max(float(slip_shown.max()) if slip_shown.size else 0.0, 1e-3)
-    slip_norm = TwoSlopeNorm(vcenter=0.0, vmin=-limit, vmax=limit)
+    slip_norm = Normalize(vmin=0.0, vmax=limit)
     rot_cmap = _with_bad("viridis")
-    slip_cmap = _with_bad("RdBu_r")
+    slip_cmap = _with_bad("Reds")       # red: slip, as in a run's figure
     legend = [Patch(facecolor=c, edgecolor="0.4", label=n) for n, c in zip(SWEEP_CATEGORIES, SWEEP_COLOURS,
                                                                            strict=True)]
+    legend.append(Patch(facecolor=NO_DATA_COLOUR, edgecolor="0.4", label="no liftoff (max rotation)"))
 
     if category.ndim == 1:
         label, x = axes[0]
@@ -1337,6 +1345,9 @@ def sweep_figure(axes, category, max_rotation, residual_slip, *, title: str = ""
             mid.axhline(0.5 * math.pi, color="0.5", lw=0.8, ls="--")
             mid.set_ylabel("max rotation [rad]")
             low.plot(x, np.where(standing, slip_mm, np.nan), "o-", color=SLIP_COLOUR, ms=3)
+            if not standing.any():
+                low.text(0.5, 0.5, "no block stands", transform=low.transAxes, ha="center", va="center",
+                         fontsize=_pt(10), color="0.2")
             low.axhline(0.0, color="0.5", lw=0.8)
             low.set_ylabel("residual slip [mm]\n(standing)" if figsize[0] < 6 else "residual slip [mm] (standing)")
             low.set_xlabel(label)
@@ -1372,13 +1383,22 @@ def sweep_figure(axes, category, max_rotation, residual_slip, *, title: str = ""
                 (cat, dict(cmap=cmap_cat, norm=norm_cat), "overturning and modes", None),
                 (np.ma.masked_where(~(rot > 0), rot), dict(cmap=rot_cmap, norm=rot_norm), "max rotation",
                  "max rotation [rad]"),
-                (np.ma.masked_where(~sorted_2d(standing, index), sorted_2d(slip_mm, index)),
-                 dict(cmap=slip_cmap, norm=slip_norm), "residual slip (standing blocks)",
-                 "residual slip [mm]"),
+                (np.ma.masked_where(~sorted_2d(standing, index), np.abs(sorted_2d(slip_mm, index))),
+                 dict(cmap=slip_cmap, norm=slip_norm), "residual slip of the standing blocks",
+                 "|residual slip| [mm]"),
             )
             for c, (values, style, name, bar) in enumerate(panels):
                 ax = grid[3 * r + c, 0] if stacked else grid[r, c]
                 mesh = ax.pcolormesh(x_edges, y_edges, values, shading="flat", **style)
+                # what a map does not show, in its category's colour (not the map's grey)
+                others = cat == 5 if c == 1 else cat >= 4 if c == 2 else np.zeros(cat.shape, dtype=bool)
+                if others.any():
+                    ax.pcolormesh(x_edges, y_edges, np.ma.masked_where(~others, cat), cmap=cmap_cat, norm=norm_cat,
+                                  shading="flat")
+                if c == 2 and not (values.count() and float(values.max()) >= SWEEP_SLIP_SHOWN):
+                    ax.text(0.5, 0.5, f"residual slip below {SWEEP_SLIP_SHOWN:g} mm everywhere" if values.count()
+                            else "no block stands", transform=ax.transAxes, ha="center", va="center",
+                            fontsize=_pt(10), color="0.2", bbox=dict(facecolor="white", edgecolor="0.6"))
                 _outline(ax, x_edges, y_edges, cat == 4)
                 if bar:
                     fig.colorbar(mesh, ax=ax, label=bar)
@@ -1612,12 +1632,11 @@ def fragility_figure(levels, grid, curves, *, xlabel: str, confidence: float, ti
         ax.set_ylabel("probability of reaching the state" if figsize[0] < 5.0
                       else "probability of reaching the damage state")
         ax.grid(True, color="0.9")
+        # below the axes, never over them: a curve of a weak block rises in the corner a legend would take
         longest = max((len(label) for label in labels), default=0) * 0.55 * _pt(8) / 72.0     # [in]
-        if figsize[0] < 6.0 or longest > 0.45 * figsize[0]:     # the legend below the axes, not over the curves
-            labels = [_wrap(label, figsize[0] - 0.5, _pt(8)) for label in labels]
-            fig.legend(handles, labels, loc="outside lower center", ncols=1, frameon=False, fontsize=_pt(8))
-        else:
-            ax.legend(handles, labels, loc="upper left", fontsize=_pt(8), frameon=False)
+        columns = 2 if figsize[0] >= 6.0 and longest < 0.45 * figsize[0] else 1
+        labels = [_wrap(label, figsize[0] / columns - 0.5, _pt(8)) for label in labels]
+        fig.legend(handles, labels, loc="outside lower center", ncols=columns, frameon=False, fontsize=_pt(8))
         _headline(fig, title, caption)
         _freeze_ticks(fig)
     return fig
@@ -1904,7 +1923,8 @@ def _ensemble_figure(ratios, overturned, nominal_ratio, *, summary_text, title, 
     if overturned.any():
         ax.axhspan(standing.size / n, 1.0, color="#d62728", alpha=0.15, lw=0,
                    label=f"members overturned ({overturned.sum()} of {n})")
-    ax.axvline(1.0, color="0.4", lw=1.0, ls=":", label="α: past it gravity tips the block over")
+    # a standing member may have passed alpha and rocked back: alpha is where gravity stops restoring
+    ax.axvline(1.0, color="0.4", lw=1.0, ls=":", label="α: past it gravity no longer pulls the block back")
     if np.isfinite(nominal_ratio):
         ax.axvline(min(nominal_ratio, top), color="k", lw=1.5, ls="--", label=f"nominal run: {nominal_ratio:.3g}")
     else:
@@ -1914,11 +1934,11 @@ def _ensemble_figure(ratios, overturned, nominal_ratio, *, summary_text, title, 
     ax.set_xlabel("largest rotation / α")
     ax.set_ylabel("fraction of the members")
     ax.grid(True, alpha=0.3)
-    if figsize[0] < 6.0:       # narrow: below the axes, not over the curve
-        fig.legend(*ax.get_legend_handles_labels(), loc="outside lower center", fontsize=_pt(8), title=summary_text,
-                   title_fontsize=_pt(8), frameon=False)
-    else:
-        ax.legend(loc="lower right", fontsize=_pt(8), title=summary_text, title_fontsize=_pt(8))
+    handles, labels = ax.get_legend_handles_labels()
+    # below the axes: the curve may run through any corner of them
+    fig.legend(handles, [_wrap(label, figsize[0] - 0.5, _pt(8)) for label in labels], loc="outside lower center",
+               ncols=1 if figsize[0] < 6.0 else 2, fontsize=_pt(8), title=summary_text, title_fontsize=_pt(8),
+               frameon=False)
     _headline(fig, title, caption)
     _freeze_ticks(fig)
     return fig
@@ -1932,7 +1952,8 @@ def _ensemble_figure(ratios, overturned, nominal_ratio, *, summary_text, title, 
 RISK_MAX_CURVES = len(FRAGILITY_COLOURS)
 
 
-def risk_figure(curves, grid, fragility, *, xlabel: str, state: str, title: str = "", size=None) -> Figure:
+def risk_figure(curves, grid, fragility, *, xlabel: str, state: str, title: str = "", size=None,
+                caption: str = "") -> Figure:
     """Hazard curves, the fragility and the integrand of the rate on one intensity axis.
 
     Parameters
@@ -1949,16 +1970,18 @@ def risk_figure(curves, grid, fragility, *, xlabel: str, state: str, title: str 
         The intensity measure and its unit.
     state : str
         The damage state, for the labels.
-    title : str
+    title, caption : str
+        What is drawn, and the fragility it was computed with, under it.
     size : None, "column", "page", "slide", "WxH" or (width, height)
         The figure's size [in] (`figure_size`; default 9 x 7.5 in); fonts follow its width.
     """
     figsize = figure_size(size, (9.0, 7.5), column=4.6, page=6.5)
     with _style(figsize[0]):
-        return _risk_figure(curves, grid, fragility, xlabel=xlabel, state=state, title=title, figsize=figsize)
+        return _risk_figure(curves, grid, fragility, xlabel=xlabel, state=state, title=title, figsize=figsize,
+                            caption=caption)
 
 
-def _risk_figure(curves, grid, fragility, *, xlabel, state, title, figsize) -> Figure:
+def _risk_figure(curves, grid, fragility, *, xlabel, state, title, figsize, caption="") -> Figure:
     fig = Figure(figsize=figsize, dpi=DPI, layout="constrained")
     top, bottom = fig.subplots(2, 1, sharex=True, height_ratios=(3, 2))
     right = top.twinx()
@@ -1978,7 +2001,9 @@ def _risk_figure(curves, grid, fragility, *, xlabel, state, title, figsize) -> F
     if len(curves) > RISK_MAX_CURVES:
         handles.append(Line2D([], [], color="none"))
         labels.append(f"and {len(curves) - RISK_MAX_CURVES} more curves (in the file)")
-    top.legend(handles, labels, loc="lower left", fontsize=_pt(8), frameon=True, framealpha=0.9)
+    # below the panels: the hazard curves and the fragility cross every corner of the top one
+    fig.legend(handles, [_wrap(label, figsize[0] - 0.5, _pt(8)) for label in labels], loc="outside lower center",
+               ncols=1 if figsize[0] < 6.0 else 2, fontsize=_pt(8), frameon=False)
     top.set_ylabel("annual rate of exceedance λ(x) [1/yr]")
     top.grid(True, which="both", color="0.92")
     bottom.set_ylabel("share of the rate per decade of x\n" r"$P(F|x)\,|d\lambda/d\log_{10}x|\,/\,\lambda_F$",
@@ -1987,8 +2012,7 @@ def _risk_figure(curves, grid, fragility, *, xlabel, state, title, figsize) -> F
     bottom.set_xlabel(xlabel)
     bottom.grid(True, which="both", color="0.92")
     top.set_xlim(float(grid[0]), float(grid[-1]))
-    if title:
-        top.set_title(title, fontsize=_pt(11))
+    _headline(fig, title, caption)
     _freeze_ticks(fig)
     return fig
 

@@ -138,3 +138,40 @@ def dask_processes(scheduler_options=(), worker_options=()):
             if p.poll() is None:
                 p.kill()
                 p.wait()
+
+
+#: Test modules that are slow as a whole (`make test-fast` leaves them out; `make test` runs them):
+#: each test starts processes (dask schedulers and workers, `python -m rockslide` killed by
+#: signals) or builds the documentation site, 5 to 90 s a test on 2 cores.
+SLOW_MODULES = {
+    "test_cluster.py": "dask clusters of worker processes",
+    "test_cluster_access.py": "dask clusters over TLS, with certificates made for the test",
+    "test_faults.py": "signals, killed processes, full disks and locks, in subprocesses",
+    "test_docs_build.py": "the Sphinx site built from docs/",
+}
+
+
+#: Single tests (node ids without their parameters, or with one) that `make test-fast` leaves out:
+#: each takes 10 to 35 s on a loaded 2-core machine (`--durations` of 2026-11-28) and checks what
+#: the inner loop of a change to the physics or the files does not need every time.
+SLOW_TESTS = {
+    "test_gpu.py": "the GPU path on numba's CUDA simulator (a sweep, a fragility, a subprocess)",
+    "test_docs_python.py::test_the_python_page_runs": "every example of docs/python.md",
+    "test_engine.py::test_the_device_gets_many_chunks_per_launch": "the CUDA simulator again",
+    "test_hard_cases.py::test_stick_slip_is_consistent_across_steps_modes_and_the_reference[slow]":
+        "the reference integrator on the long case (the [fast] case stays)",
+    "test_cli.py::test_criteria_takes_the_block_of_a_case_file": "four criteria maps drawn",
+    "test_case.py::test_random_mutations": "hypothesis: mutated case files",
+    "test_case.py::test_random_case_with": "hypothesis: random case files",
+    "test_bad_input.py::test_random_record_bytes_through_info_give_a_summary_or_a_clean_error": "hypothesis",
+    "test_bad_input.py::test_random_case_files_give_a_result_or_a_clean_error": "hypothesis",
+}
+
+
+def pytest_collection_modifyitems(config, items):
+    for item in items:
+        name = item.path.name
+        test = f"{name}::{item.name}"
+        if name in SLOW_MODULES or name in SLOW_TESTS or test in SLOW_TESTS or \
+                f"{name}::{item.originalname}" in SLOW_TESTS:
+            item.add_marker(pytest.mark.slow)

@@ -647,6 +647,7 @@ def test_existing_result_is_kept_without_overwrite_and_replaced_with_it(ws):
     assert listing(ws / "out") == ["example.h5"]
 
 
+@pytest.mark.slow      # a run and eight figures drawn, 14 s on 2 cores
 def test_plot_redraws_its_own_figure_and_replaces_another_file_only_with_overwrite(ws):
     """`plot` always redraws the result's own figure; with -o it does not replace another file (the
     review's case: a run's figure drawn over its sweep's maps) unless --overwrite; a window or crop
@@ -828,6 +829,7 @@ def _default_sigint():
     signal.signal(signal.SIGINT, signal.SIG_DFL)   # a background job may have inherited SIG_IGN
 
 
+@pytest.mark.slow      # a subprocess of `python -m rockslide`
 @posix_signals
 @pytest.mark.parametrize("previous", [False, True], ids=["no-previous-result", "previous-result"])
 def test_sigkill_midway_leaves_the_previous_result_or_none(ws, previous):
@@ -865,6 +867,7 @@ def test_sigkill_midway_leaves_the_previous_result_or_none(ws, previous):
 @pytest.mark.parametrize("signum, code, word", [(signal.SIGINT, 130, "interrupted"),
                                                 (signal.SIGTERM, 143, "terminated")],
                          ids=["ctrl-c", "sigterm"])
+@pytest.mark.slow      # a subprocess of `python -m rockslide`
 def test_interrupted_run_exits_cleanly_without_any_file(ws, signum, code, word):
     """Deterministic: the signal goes as soon as the run's temporary file exists (the run is then
     computing, for a minute), and whenever it lands it is acted on at the next kernel chunk."""
@@ -1014,6 +1017,7 @@ def test_bad_environment_and_options_are_one_line(ws, args, env, expected):
     assert done.stderr.splitlines() == [expected]
 
 
+@pytest.mark.slow      # a subprocess of `python -m rockslide`
 def test_a_matplotlib_backend_in_the_environment_does_not_stop_a_run(ws):
     """MPLBACKEND=nonsense made matplotlib's import fail (exit 1, internal error): rockslide draws on
     Agg whatever the environment names."""

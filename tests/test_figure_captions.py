@@ -201,7 +201,7 @@ def test_coinciding_fragility_curves_both_show_and_the_legend_says_so():
     under, over = fits
     assert under.get_linewidth() > over.get_linewidth() and over.get_linestyle() != "-"
     assert under.get_color() != over.get_color()            # the dashes show on the wider line
-    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    labels = [" ".join(t.get_text().split()) for legend in fig.legends for t in legend.get_texts()]
     assert any("the same as overturn" in label for label in labels)
     # two curves of one colour (an overlay's file): the dashes over it are white, not its own colour
     fig = plots.fragility_figure([0.5, 1.0, 1.5], grid, [{**same, "label": "a: x", "colour": "#123456"},
@@ -284,3 +284,87 @@ def test_a_height_to_width_sweep_marks_the_block_as_the_base_case():
     text = (REPO / "configs" / "example.yaml").read_text()
     assert "0.2 m (base)" in case_caption(text, varied=("height_to_width", "mu"))
     assert "0.2 m (base)" not in case_caption(text, varied=("mu",))
+
+
+# --------------------------------------------------------------------------------------------------
+# What a reviewer sends back: legends over the data, a colour with two meanings, an empty panel
+# --------------------------------------------------------------------------------------------------
+
+def legends_clear_of_the_data(fig) -> None:
+    """No legend inside an axes, and every legend of the figure outside every axes' box (drawn at
+    the figure's final size, as its PNG is)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    FigureCanvasAgg(fig).draw()
+    renderer = fig.canvas.get_renderer()
+    assert [ax for ax in fig.axes if ax.get_legend() is not None] == []
+    assert fig.legends
+    for legend in fig.legends:
+        box = legend.get_window_extent(renderer)
+        for ax in fig.axes:
+            assert not box.overlaps(ax.get_window_extent(renderer)), (legend, ax)
+
+
+@pytest.mark.parametrize("size", [None, "column", "page"])
+def test_the_ensemble_legend_is_off_the_curve_and_says_what_alpha_is(size):
+    # standing members past alpha (1.28 alpha, as a statue on Kobe reaches): a legend that says
+    # members "tip past alpha" would contradict them
+    ratios = np.array([0.1, 0.4, 0.9, 1.05, 1.28] * 4 + [np.nan] * 5)
+    overturned = np.isnan(ratios)
+    fig = plots.ensemble_figure(np.nan_to_num(ratios), overturned, 1.28, summary_text="overturns in 20 % [8, 41] of 25",
+                                title="t", caption="c", size=size)
+    legends_clear_of_the_data(fig)
+    labels = [" ".join(t.get_text().split()) for t in fig.legends[0].get_texts()]
+    alpha = [label for label in labels if label.startswith("α")]
+    assert len(alpha) == 1 and "tip" not in alpha[0] and "no longer pulls the block back" in alpha[0]
+
+
+@pytest.mark.parametrize("size", [None, "column"])
+def test_the_fragility_legend_is_below_the_curves(size):
+    grid = np.linspace(0.0, 1.5, 61)
+    curve = {"label": "overturn: median 0.3 g", "fraction": np.array([0.5, 0.9, 1.0]),
+             "fitted": np.clip(grid / 0.6, 0, 1),
+             "band": np.array([np.clip(grid / 0.7, 0, 1), np.clip(grid / 0.5, 0, 1)]),
+             "moments": np.clip(grid / 0.55, 0, 1)}
+    legends_clear_of_the_data(plots.fragility_figure([0.25, 0.5, 1.0], grid, [curve], xlabel="PGA [g]",
+                                                     confidence=0.95, size=size))
+
+
+def sweep_maps(fig):
+    """The three map axes of a one-row sweep figure (titled; not the colour bars)."""
+    return [ax for ax in fig.axes if ax.get_title(loc="left")]
+
+
+def test_sweep_maps_give_each_colour_one_meaning():
+    from matplotlib.colors import to_rgb
+
+    category = np.array([[0, 1, 2], [3, 4, 5]])
+    slip = np.array([[0.0, 0.02, -0.03], [0.01, 0.5, 0.0]])         # [m]: an overturned one slid far
+    rotation = np.array([[0.0, 0.0, 0.1], [0.2, 1.5, 0.0]])
+    fig = plots.sweep_figure([("mu", np.array([0.3, 0.5])), ("pga [g]", np.array([0.1, 0.2, 0.3]))],
+                             category, rotation, slip, title="t", caption="c")
+    legends_clear_of_the_data(fig)
+    modes, rotated, slipped = sweep_maps(fig)
+    legend = {" ".join(t.get_text().split()): to_rgb(h.get_facecolor())
+              for t, h in zip(fig.legends[0].get_texts(), fig.legends[0].legend_handles, strict=True)}
+    assert legend["no liftoff (max rotation)"] == to_rgb(plots.NO_DATA_COLOUR)
+    # the slip map's colours are none of the legend's, from a tenth of its scale up (below: near white)
+    mesh = slipped.collections[0]
+    shades = mesh.cmap(np.linspace(0.1, 1.0, 231))[:, :3]
+    for name, colour in legend.items():
+        assert np.min(np.linalg.norm(shades - np.array(colour), axis=1)) > 0.1, name
+    # the overturned point and the one outside the model are painted in their legend colours there
+    painted = slipped.collections[1]
+    assert sorted(painted.get_array().compressed().tolist()) == [4, 5]
+    assert {tuple(np.round(c[:3], 6)) for c in painted.get_facecolors()} >= {
+        tuple(np.round(legend["overturned"], 6)), tuple(np.round(legend["outside the model"], 6))}
+    assert not slipped.texts                      # something slid: no note
+    shown = mesh.get_array()
+    assert shown.max() == pytest.approx(30.0)      # |residual slip| [mm] of the standing blocks only
+
+
+def test_a_sweep_where_nothing_slid_says_so_instead_of_an_empty_map():
+    category = np.array([[0, 2], [4, 4]])
+    fig = plots.sweep_figure([("mu", np.array([0.3, 0.5])), ("pga [g]", np.array([0.1, 0.2]))], category,
+                             np.array([[0.0, 0.1], [1.5, 1.5]]), np.zeros((2, 2)), title="t")
+    assert [t.get_text() for t in sweep_maps(fig)[2].texts] == ["residual slip below 0.001 mm everywhere"]

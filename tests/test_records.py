@@ -362,6 +362,81 @@ class TestColumnText:
         np.testing.assert_allclose(trace.data, np.array([1, 2, 3]) * G, rtol=1e-15)
 
 
+class TestCommentHeader:
+    """A unit stated in a comment header line (PEER's and SLAMMER's CSV exports:
+    ``# Time (s),Acceleration (g's)``) is read as a named header's is."""
+
+    SLAMMER = "# Time Series: Kobe, Japan 1995 - TAK-090\n# Time (s),Acceleration (g's)\n"
+
+    def test_slammer_layout_needs_no_units(self, tmp_path):
+        text = self.SLAMMER + "0.0,1.36409E-4\n0.01,7.44843E-5\n0.02,-0.5\n"
+        trace = read_record(write(tmp_path, "k.csv", text))
+        np.testing.assert_allclose(trace.data, np.array([1.36409e-4, 7.44843e-5, -0.5]) * G, rtol=1e-15)
+        assert trace.stats.rockslide.units == "g"
+        assert trace.stats.delta == pytest.approx(0.01, rel=1e-12)
+
+    def test_byte_order_mark_and_trailing_comma(self, tmp_path):
+        text = "\ufeff# Time Series: Northridge 1994 - VSP-360,\n# Time (s),Acceleration (cm/s/s)\n0,3\n0.005,-4\n"
+        trace = read_record(write(tmp_path, "v.csv", text))
+        np.testing.assert_allclose(trace.data, np.array([3.0, -4.0]) * GAL, rtol=1e-15)
+
+    def test_time_in_milliseconds_from_the_comment(self, tmp_path):
+        text = "# t [ms]\tacc [gal]\n0\t1\n10\t2\n20\t3\n"
+        trace = read_record(write(tmp_path, "ms.txt", text))
+        assert trace.stats.delta == pytest.approx(0.01, rel=1e-12)
+        np.testing.assert_allclose(trace.data, np.array([1.0, 2.0, 3.0]) * GAL, rtol=1e-15)
+
+    def test_values_record_with_a_commented_name(self, tmp_path):
+        text = "# Acceleration (g)\n0.1\n-0.2\n0.3\n"
+        trace = read_record(write(tmp_path, "v.txt", text), dt=0.01)
+        np.testing.assert_allclose(trace.data, np.array([0.1, -0.2, 0.3]) * G, rtol=1e-15)
+
+    def test_prose_in_a_comment_states_no_unit(self, tmp_path):
+        # "0.5 g" in a sentence is not a header: the unit is still asked for.
+        path = write(tmp_path, "p.csv", "# peak about 0.5 g, recorded 1995\n0,0.1\n0.01,0.2\n")
+        with pytest.raises(RecordError, match="give `units:`"):
+            read_record(path)
+
+    def test_comments_after_the_first_number_are_not_a_header(self, tmp_path):
+        path = write(tmp_path, "late.csv", "0,0.1\n# Time (s),Acceleration (g)\n0.01,0.2\n")
+        with pytest.raises(RecordError, match="give `units:`"):
+            read_record(path)
+
+    def test_two_comment_lines_that_disagree_ask_for_units_in_one_line(self, tmp_path):
+        text = "# Time (s),Acceleration (g)\n# Time (s),Acceleration (gal)\n0,0.1\n0.01,0.2\n"
+        path = write(tmp_path, "amb.csv", text)
+        with pytest.raises(RecordError) as caught:
+            read_record(path)
+        message = str(caught.value)
+        assert "\n" not in message and "amb.csv" in message and "give `units:`" in message
+        assert "ambiguous" in message and "line 1" in message and "line 2" in message
+        trace = read_record(path, units="gal")       # the unit given settles it
+        np.testing.assert_allclose(trace.data, np.array([0.1, 0.2]) * GAL, rtol=1e-15)
+
+    def test_given_units_that_disagree_with_the_comment_warn(self, tmp_path):
+        path = write(tmp_path, "w.csv", self.SLAMMER + "0,0.1\n0.01,0.2\n")
+        with pytest.warns(RecordWarning, match="states 'g'"):
+            trace = read_record(path, units="gal")
+        np.testing.assert_allclose(trace.data, np.array([0.1, 0.2]) * GAL, rtol=1e-15)
+
+    SUITE = ("Cape_Mendocino_1992_PET-090", "Chi-Chi_1999_TCU068-090", "Coalinga_1983_PVB-045",
+             "Coyote_Lake_1979_G02-050", "Duzce_1999_375-090", "Imperial_Valley_1979_BCR-230",
+             "Kobe_1995_TAK-090", "Kocaeli_1999_ATS-090", "Landers_1992_LCN-345", "Loma_Prieta_1989_HSP-000",
+             "Mammoth_Lakes-1_1980_CVK-090", "Mammoth_Lakes-2_1980_CVK-090", "Morgan_Hill_1984_CYC-285",
+             "N_Palm_Springs_1986_WWT-180", "Nahanni_1985_NS1-280", "Nisqually_2001_UNR-058",
+             "Northridge_1994_PAC-175", "Northridge_1994_VSP-360")
+
+    @pytest.mark.parametrize("name", SUITE)
+    def test_the_shared_suite_reads_in_g_without_units(self, name):
+        path = real_record(f"suite-slammer/{name}.csv")
+        trace = read_record(path)
+        # an independent reading of the same file: numpy's, the unit taken from the header by eye
+        table = np.loadtxt(path, delimiter=",", comments="#", encoding="utf-8-sig")
+        assert trace.stats.rockslide.units == "g"
+        np.testing.assert_allclose(trace.data, table[:, 1] * G, rtol=1e-15)
+        assert trace.stats.delta == pytest.approx(table[-1, 0] / (len(table) - 1), rel=1e-9)
+
+
 class TestValuesText:
     def test_jma_layout(self, tmp_path):
         text = (";Recorded at somewhere, dt=0.02, acc. in cm/s/s\n"

@@ -409,6 +409,12 @@ def test_command_writes_file_figure_and_json(tmp_path):
     assert rockslide.plot_results([tmp_path / "block.risk.h5"]).axes
     two = invoke("plot", tmp_path / "block.risk.h5", tmp_path / "block.risk.h5", "-o", tmp_path / "two.png")
     one_line_error(two, "drawn one at a time")
+    # the figure says what it draws; the fragility by its file's name, not its folder
+    fig = rockslide.plot_results([tmp_path / "block.risk.h5"])
+    title = fig._suptitle.get_text().replace("\n", " ")
+    assert title.startswith("Annual rate of 'overturn': 2 hazard curves") and "block.fragility.h5" in title
+    assert str(tmp_path) not in title and "/" not in title
+    assert [ax for ax in fig.axes if ax.get_legend()] == [] and fig.legends      # the legend off the curves
     described = invoke("info", tmp_path / "block.risk.h5", "--json")
     assert described.exit_code == 0
     assert [c["rate"] for c in json.loads(described.stdout)["rates"].values()] == pytest.approx(rates, rel=1e-12)

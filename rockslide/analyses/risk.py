@@ -55,6 +55,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 from scipy.special import log_ndtr, ndtr
@@ -880,5 +881,23 @@ def stored_figure(coords, variables, attrs, *, size=None):
                        "rates": value["hazard_rate"][i][kept], "share": share})
     state = str(attrs["damage_state"])
     return risk_figure(curves, grid / scale, value["fragility"], xlabel=f"{attrs['intensity_measure_label']}"
-                       + (f" [{unit}]" if unit else ""), state=state,
-                       title=f"{state}: {attrs['fragility_form']} ({attrs['fragility_source']})", size=size)
+                       + (f" [{unit}]" if unit else ""), state=state, title=_figure_title(state, len(names)),
+                       caption=_figure_caption(attrs, scale, unit), size=size)
+
+
+def _figure_title(state: str, count: int) -> str:
+    """What a risk figure draws, in words."""
+    curves = "a hazard curve" if count == 1 else f"{count} hazard curves"
+    return f"Annual rate of '{state}': {curves} and the fragility (top); where the rate comes from (bottom)"
+
+
+def _figure_caption(attrs, scale: float, unit: str) -> str:
+    """The fragility a risk figure integrates: its form, its file's name (not its path: the folder
+    says nothing a reader of the figure needs) and its median and beta."""
+    source = str(attrs["fragility_source"])
+    name = Path(source).name if source.endswith(".h5") else source
+    text = f"fragility: {attrs['fragility_form']} ({name})"
+    median, beta = float(attrs["fragility_median"]), float(attrs["fragility_beta"])
+    if math.isfinite(median) and math.isfinite(beta):
+        text += f", median {median / scale:.3g}{' ' + unit if unit else ''}, β {beta:.2f}"
+    return text

@@ -822,6 +822,12 @@ def _read_text(ctx: _Context, text: str, options: _Options, *, values_only: bool
                         f"line {header_rows[0][0]}")
     columns = len(rows[0][1])
     names, units = _header(ctx, text, header_rows, columns, rows[0][0])
+    ambiguous = None
+    if all(unit is None for unit in units):
+        names, units, ambiguous = _comment_header(text, options.skip_lines, rows[0][0], columns, names, units)
+    if ambiguous is not None and options.units is None:
+        raise ctx.error(f"give `units:` ({_UNITS_HINT}) for this record (rockslide info: --units); its comment "
+                        f"header is ambiguous: {ambiguous}", "units")
     if columns == 1:
         return _values_record(ctx, rows, options, units[0]), "values"
     quick = _quick_values(rows) if all(len(tokens) == columns for _, tokens in rows) else None
@@ -948,6 +954,47 @@ def _header(ctx: _Context, text: str, header_rows, columns: int,
     if unit_row is not None:
         return names, unit_row
     return names, [_stated_unit(name) for name in names] if names else [None] * columns
+
+
+def _comment_header(text: str, skip_lines: int, first_data: int, columns: int,
+                    names, units) -> tuple[list[str] | None, list, str | None]:
+    """Names and units from the comment lines before the first line of numbers, for a file whose
+    header lines state no unit (``# Time (s),Acceleration (g's)``, as PEER's and SLAMMER's CSV
+    exports write it).
+
+    A comment line counts when it splits into one field per column (`_header_fields`) and a field
+    ends in a bracketed unit (`_BRACKETED_UNIT`): prose in a comment ("peak 0.5 g") states none.
+    Comment lines that state different units make the header ambiguous: no unit is taken, and the
+    third value says which lines disagree (the caller asks for ``units``).
+
+    Returns
+    -------
+    names, units
+        As `_header`: ``names`` kept when the header lines gave them.
+    ambiguous : str or None
+        The disagreement, in words, or None.
+    """
+    stated_lines = []
+    for number, line in enumerate(text.splitlines()[skip_lines:first_data - 1], start=skip_lines + 1):
+        content = line.strip().lstrip("\ufeff").strip()
+        if not content.startswith("#"):
+            continue
+        fields = _header_fields(content.lstrip("#").split("#", 1)[0], columns)
+        if len(fields) != columns:
+            continue
+        brackets = [_BRACKETED_UNIT.search(field) for field in fields]
+        stated = [_unit_word(match.group(1)) if match else None for match in brackets]
+        if any(stated):
+            stated_lines.append((number, fields, stated))
+    if not stated_lines:
+        return names, units, None
+    first, *others = stated_lines
+    for other in others:
+        if other[2] != first[2]:
+            def said(entry):
+                return " ".join(unit[1] if unit else "-" for unit in entry[2]) + f" (line {entry[0]})"
+            return names, units, f"{said(first)} and {said(other)}"
+    return names if names is not None else first[1], first[2], None
 
 
 def _header_fields(line: str, columns: int) -> list[str]:
