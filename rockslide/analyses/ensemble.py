@@ -35,6 +35,7 @@ from ..core.simulate import Model, set_model
 from ..engine.execute import execute
 from ..engine.plan import MAX_POINTS, Plan, default_chunk_size, definition_key
 from ..engine.prepare import RunWarning, coarse_step_warning
+from ..engine.step import keep_resolved
 from ..errors import CaseError
 from . import sweep as sw
 
@@ -155,6 +156,8 @@ def plan_ensemble(case: Case, n: int = DEFAULT_MEMBERS, *, seed: int = SEED, rec
         nominal = sw.plan_sweep(case, axes, records_dir=records_dir, chunk_size=1)
     n = int(n)
     params, restitution = member_parameters(case, nominal.case_params(rows), values)
+    if case.solver.auto:            # the nominal case's step, each member's block resolved
+        keep_resolved(params)
     intensity = values.get("intensity", np.ones(n))
     if coarse_step_warning(case.source, nominal.params) is None:
         warning = coarse_step_warning(case.source, params, lambda i: f"ensemble member {i}: the smallest block")
@@ -165,8 +168,9 @@ def plan_ensemble(case: Case, n: int = DEFAULT_MEMBERS, *, seed: int = SEED, rec
     plan = Plan(case=case, axes=[axis], mu_kinetic_ratio=None, params=params, states=nominal.case_states(rows),
                 factor_h=nominal.factor_h[rows] * intensity, factor_v=nominal.factor_v[rows] * intensity,
                 base=nominal.base, first=nominal.first[rows], count=nominal.count[rows],
-                record_end=nominal.record_end[rows], step=nominal.step, records=nominal.records,
-                chunk_size=default_chunk_size(n) if chunk_size is None else int(chunk_size))
+                record_end=nominal.record_end[rows], step=float(params[:, K.P_STEP].min()), records=nominal.records,
+                chunk_size=default_chunk_size(n) if chunk_size is None else int(chunk_size),
+                step_study=nominal.step_study)
     plan.key = definition_key(plan)
     stored = dict(values)
     stored["restitution"] = restitution

@@ -73,10 +73,13 @@ from ..engine.prepare import (
     floor_ground,
     ground_along,
     is_pulse_case,
+    load_ground,
     model_for,
     pulse_ground,
     read_records,
     settings_for,
+    still_step,
+    study_step,
     unit_pulses,
 )
 from ..errors import CaseError
@@ -431,14 +434,23 @@ def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = N
             raise CaseError("a floor's motion is computed from record files; this case's ground is an analytic "
                             "pulse: write the pulse as a record, or remove ground.floor and --floor-period",
                             source=case.source, field="ground.floor")
-        return _plan_pulses(case, axes, ratio, chunk_size, n, progress)
+        plan = _plan_pulses(case, axes, ratio, chunk_size, n, progress)
+    else:
+        plan = _plan_records(case, axes, ratio, chunk_size, n, names, records_dir, progress)
+    # one pilot, of the case file's own case, stands for every point (docs/performance.md)
+    study_step(plan, [(slice(None), case, floor_ground(case, load_ground(case, records_dir)))],
+               "the case file's own case")
+    return plan
 
+
+def _plan_records(case: Case, axes, ratio, chunk_size: int, n: int, names, records_dir, progress) -> Plan:
+    """`plan_sweep` for a case of record files."""
     records, entries = _read_records(case, records_dir)
     # what the block stands on, unscaled: the record (with two horizontal components, the motion
     # along the block's orientation), or each floor's motion from it; one per distinct orientation
     # and floor of the grid (--azimuth, --floor-period), laid end to end in the kernel's input
     read = None if case.ground.two_components else rec.combine(records["horizontal"], records["vertical"],
-                                                              source=case.source, still_dt=case.solver.dt)
+                                                              source=case.source, still_dt=still_step(case))
     grid = _Grid(axes, RECORD_SCALE_AXES)                    # the scale axes planned apart
     n_other = grid.size(grid.other)
     supports: dict = {}                           # (orientation, floor) -> (ground, first column, columns)
@@ -487,7 +499,7 @@ def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = N
                 else:
                     scaled = rec.combine(records["horizontal"], records["vertical"], pga_horizontal=scale[0],
                                          factor=scale[1], pga_vertical=scale[2], vertical_factor=scale[3],
-                                         source=case.source, still_dt=case.solver.dt)
+                                         source=case.source, still_dt=still_step(case))
                 grounds[(scale, floor)] = floor_ground(point, scaled)
             ground = grounds[(scale, floor)]
             try:

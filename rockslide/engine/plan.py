@@ -95,6 +95,8 @@ class Plan:
         Cases per chunk.
     key : str
         `definition_key` of the sweep.
+    step_study : step.StudyStep, optional
+        The pilots of ``solver.dt: auto`` (`prepare.study_step`): the step taken or what it would save.
     rows : int64[n], optional
         Each point's row of ``params`` and ``states`` (a 1000 x 1000 ``--mu`` x ``--pga`` grid has
         1000 distinct rows: 16 MB instead of 400). None: row i is point i.
@@ -116,6 +118,7 @@ class Plan:
     chunk_size: int
     key: str = ""
     rows: np.ndarray | None = None
+    step_study: object = None       # step.StudyStep: the step auto took or would take, and its estimate
 
     @property
     def shape(self) -> tuple:

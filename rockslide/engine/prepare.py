@@ -24,6 +24,7 @@ from ..errors import CaseError, RecordError
 from ..io import records as rec
 from ..pulses import Pulse
 from ..units import STANDARD_GRAVITY
+from .step import AUTO_STILL_STEP, StepChoice, choose_step
 
 
 @dataclass(frozen=True)
@@ -38,6 +39,7 @@ class Prepared:
     settings: Settings
     components: Components | None = None
     base: rec.GroundMotion | None = None
+    step_choice: StepChoice | None = None       # with solver.dt: auto, the step chosen and its error
 
 
 @dataclass(frozen=True)
@@ -107,7 +109,7 @@ def load_ground(case: Case, records_dir: Path | None = None) -> rec.GroundMotion
         return rec.combine(records["horizontal"], records["vertical"], pga_horizontal=scale.pga_horizontal,
                            factor=scale.factor, pga_vertical=scale.pga_vertical,
                            vertical_factor=scale.vertical_factor, source=case.source,
-                           still_dt=case.solver.dt)
+                           still_dt=still_step(case))
     except RecordError as exc:
         if exc.field is None:
             raise
@@ -326,18 +328,27 @@ def pulse_ground(case: Case, unit: pulses.Sampled | None = None) -> rec.GroundMo
                             horizontal_factor=factors[0], vertical_factor=factors[1], files=())
 
 
+def still_step(case: Case) -> float:
+    """[s] The sampling step of the still ground (a case without records): ``solver.dt``, or with
+    ``solver.dt: auto`` `step.AUTO_STILL_STEP`, which leaves the step free."""
+    return AUTO_STILL_STEP if case.solver.auto else case.solver.dt
+
+
 def model_for(case: Case) -> Model:
     return Model.from_block(case.block.width, case.block.height, case.contact.mu_static,
                             case.contact.mu_kinetic, case.contact.restitution, case.gravity,
                             case.block.mass)
 
 
-def settings_for(case: Case, *, history: bool = True, energy: bool = True) -> Settings:
+def settings_for(case: Case, *, history: bool = True, energy: bool = True, step: float | None = None) -> Settings:
+    """The core's settings for ``case``; ``step`` [s] instead of ``solver.dt`` (the step `auto` chose:
+    ``output.interval`` is then rounded to a whole number of steps)."""
+    dt = case.solver.dt if step is None else step
     every = 0
     if history:
         interval = case.output.interval
-        every = 1 if interval is None else max(1, round(interval / case.solver.dt))
-    return Settings(dt=case.solver.dt, events=case.solver.events,
+        every = 1 if interval is None else max(1, round(interval / dt))
+    return Settings(dt=dt, events=case.solver.events,
                     tail=0.0 if floor_carries_tail(case) else case.ground.tail,
                     rotation=case.initial.rotation, rotation_rate=case.initial.rotation_rate,
                     slip_rate=case.initial.slip_rate, history_every=every, energy=energy)
@@ -447,7 +458,7 @@ class RunWarning(UserWarning):
 def check_step(case: Case, ground: rec.GroundMotion) -> None:
     """The case's ``solver.dt`` is not coarser than the record's sampling step (a pulse is sampled
     at most ``solver.dt`` apart, `pulses.sample`)."""
-    if case.solver.dt > ground.dt * (1.0 + 1e-9) and not is_pulse_case(case):
+    if case.solver.dt > ground.dt * (1.0 + 1e-9) and not is_pulse_case(case) and not case.solver.auto:
         raise CaseError(f"dt = {case.solver.dt:g} s is larger than the record's sampling step "
                         f"{ground.dt:g} s; expected dt <= {ground.dt:g} s",
                         source=case.source, field="solver.dt")
@@ -583,10 +594,47 @@ def prepare(case: Case, records_dir: Path | None = None, *, history: bool = True
     check_size(case, ground, history=history)
     model = model_for(case)
     settings = settings_for(case, history=history)
+    choice = None
+    if case.solver.auto and case.solver.method == "kernel":
+        choice = auto_step(case, model, ground, settings)
+        settings = settings_for(case, history=history, step=choice.step)
     warning = coarse_step_warning(case.source, parameters(model, ground.dt, settings))
     if warning:
         warnings.warn(warning, RunWarning, stacklevel=2)
-    return Prepared(case, ground, model, settings, components, base=base if ground is not base else None)
+    return Prepared(case, ground, model, settings, components, base=base if ground is not base else None,
+                    step_choice=choice)
+
+
+def study_step(plan, pilots, sample: str):
+    """The one step of a study: ``pilots`` are ``(rows, case, ground)`` (the rows of ``plan.params``
+    a pilot stands for, the case piloted and its scaled ground motion); each is piloted (`auto_step`)
+    and, with ``solver.dt: auto``, its rows take the step it chose (`step.apply_step`; the plan's
+    ``step`` and ``key`` follow). ``sample`` says what was piloted, for the note. Sets and returns
+    ``plan.step_study`` (`step.StudyStep`)."""
+    from .plan import definition_key
+    from .step import StudyStep, apply_step
+
+    choices = []
+    for rows, case, ground in pilots:
+        settings = settings_for(case, history=False, energy=False)
+        choice = auto_step(case, model_for(case), ground, settings)
+        choices.append(choice)
+        if plan.case.solver.auto:
+            apply_step(plan.params, choice.step, rows)
+    default = choices[0].default_step if choices else plan.case.solver.dt
+    plan.step_study = StudyStep(plan.case.solver.auto, tuple(choices), sample, default)
+    if plan.case.solver.auto and choices:
+        plan.step = float(plan.params[:, P_STEP].min())
+        plan.key = definition_key(plan)
+    return plan.step_study
+
+
+def auto_step(case: Case, model: Model, ground: rec.GroundMotion, settings: Settings) -> StepChoice:
+    """`step.choose_step` for ``case`` on ``ground`` (scaled, what the block stands on) with the
+    case's ``solver.tolerance``: the one call behind runs, sweeps, ensembles and fragility analyses."""
+    return choose_step(model, ground.dt, ground.horizontal, ground.vertical, settings,
+                       tolerance_time=case.solver.tolerance_time, tolerance_rotation=case.solver.tolerance_rotation,
+                       start=ground.start + case.ground.time_shift)
 
 
 def start_time(prepared: Prepared) -> float:
@@ -636,8 +684,8 @@ __all__ = ["Prepared", "Components", "component_azimuths", "ground_along",
            "load_ground", "floor_ground", "floor_text", "floor_peaks", "floor_peaks_text", "base_motion",
            "is_pulse_case", "unit_pulses", "pulse_ground", "model_for", "settings_for", "check_parameters",
            "check_against_ground", "check_step", "check_size", "prepare", "simulate_prepared", "run_case",
-           "applied_ground", "record_entries", "start_time", "verdict_robustness", "work", "Work", "step_warning",
-           "RunWarning"]
+           "applied_ground", "record_entries", "auto_step", "still_step", "study_step", "start_time",
+           "verdict_robustness", "work", "Work", "step_warning", "RunWarning"]
 
 
 ROBUSTNESS_VARIANTS = (("dt/2", 0.5, 1.0), ("mu-1%", 1.0, 0.99), ("mu+1%", 1.0, 1.01))
