@@ -271,6 +271,8 @@ def summarise(eplan: EnsemblePlan, variables: dict, nominal_overturned: bool) ->
         "rotation_ratio": {"median": float(quantiles[0]), "p05": float(quantiles[1]), "p95": float(quantiles[2])},
         "sensitivity": sensitivity, "most_sensitive": most,
         "nominal_overturned": bool(nominal_overturned), "flips": flips, "robust": flips == 0 and n_ok == eplan.n,
+        "integration_step": eplan.plan.step,
+        "step": {} if eplan.plan.step_study is None else eplan.plan.step_study.attributes(),
     }
 
 
@@ -293,6 +295,9 @@ def describe(summary: dict, nominal_verdict: str) -> list[str]:
                  f"95 % Wilson interval")
     r = summary["rotation_ratio"]
     lines.append(f"  max rotation / alpha: median {r['median']:.2f}, 5-95 % {r['p05']:.2f} to {r['p95']:.2f}")
+    note = summary.get("step", {}).get("step_note")
+    if note:
+        lines.append(f"  {note}")
     outside = n - summary["n_within_model"]
     if outside:
         lines.append(f"  {outside} of {n} neighbours left the model (flight or painleve): not counted")

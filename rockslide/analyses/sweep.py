@@ -440,6 +440,7 @@ def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = N
     # one pilot, of the case file's own case, stands for every point (docs/performance.md)
     study_step(plan, [(slice(None), case, floor_ground(case, load_ground(case, records_dir)))],
                "the case file's own case")
+    plan.key = definition_key(plan)
     return plan
 
 
@@ -915,6 +916,8 @@ def root_attributes(plan: Plan, command_line: str) -> dict:
         "mu_kinetic_ratio": math.nan if plan.mu_kinetic_ratio is None else plan.mu_kinetic_ratio,
         "chunk_size": plan.chunk_size,
     }
+    if plan.step_study is not None:          # the step auto took or would take, and its estimate
+        attrs.update(plan.step_study.attributes())
     for entry in plan.records:
         attrs[f"record_{entry['role']}"] = entry["path"]
         attrs[f"record_{entry['role']}_sha256"] = entry["sha256"]

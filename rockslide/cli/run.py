@@ -58,6 +58,7 @@ def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, members, s
     """
     from ..case import case_to_dict, load_case
     from ..engine import prepare as runner
+    from ..engine.step import choice_attributes
     from ..io import files, records, results
 
     started = time.perf_counter()
@@ -67,6 +68,8 @@ def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, members, s
     h5_path = folder / f"{case.name}.h5"
     png_path = folder / f"{case.name}.png"
     prepared = runner.prepare(case, records.records_dir(records_dir))     # input errors first
+    if prepared.step_choice is not None:
+        click.echo(f"  note: solver.dt: {prepared.step_choice.describe()}", err=as_json)
     ens = eplan = None
     if members is not None or robustness:       # the ensemble's modules (numba's JIT) only when asked
         from ..analyses import ensemble as ens
@@ -103,7 +106,8 @@ def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, members, s
                                                                   progress=lambda cases: interrupts.check())
                 writer.finish(result, name=case.name, case_text=case.text, case=case_to_dict(case, case_file=False),
                               records=runner.record_entries(prepared), ground=ground,
-                              extra_attrs={} if neighbourhood is None else ens.attributes(neighbourhood),
+                              extra_attrs={**({} if neighbourhood is None else ens.attributes(neighbourhood)),
+                                           **choice_attributes(prepared.step_choice)},
                               extra_groups={**(runner.base_motion(prepared) or {}),
                                             **({} if group is None else {"ensemble": (dimension, group)})} or None)
             ensemble_png = folder / f"{case.name}.ensemble.png"
@@ -140,6 +144,7 @@ def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, members, s
                    "ground": ground, "floor": None if floor_peaks is None else
                    {"description": runner.floor_text(case), **floor_peaks},
                    "ensemble": results.json_ready(neighbourhood),
+                   "integration": results.json_ready(runner.step_report(prepared, result.step)),
                    "files": {"hdf5": str(h5_path), "png": None if no_plot else str(png_path)},
                    "elapsed_s": round(elapsed, 3)}
         click.echo(json.dumps(payload, allow_nan=False, default=_json_default))

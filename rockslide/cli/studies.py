@@ -201,6 +201,8 @@ def sweep(case_file, mu_kinetic_ratio, records_dir, out_dir, overwrite, no_plot,
                       started=started, dpi=dpi, size=size)
         return
     files.remove_stale_temporaries([h5_path, png_path])
+    if plan.step_study is not None and plan.step_study.note():
+        click.echo(f"  note: {plan.step_study.note()}", err=True)
     done = _compute(ctx, plan, h5_path, what="sweep", description=plan.describe(), label=case.name, unit="case",
                     workers=workers, scheduler=scheduler, device=device, no_progress=no_progress, shard=shard,
                     wait_workers=wait_workers)
@@ -337,6 +339,8 @@ def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, 
     plan = fplan.plan
     if fplan.vertical_note:
         click.echo(f"  note: {fplan.vertical_note}", err=as_json)
+    if plan.step_study is not None and plan.step_study.note():
+        click.echo(f"  note: {plan.step_study.note()}", err=as_json)
     done = _compute(ctx, plan, h5_path, what="fragility", description=fplan.describe(), label=case.name,
                     unit="run", workers=workers, scheduler=scheduler, device=device, no_progress=no_progress,
                     err=as_json, shard=shard, wait_workers=wait_workers)

@@ -609,9 +609,8 @@ def study_step(plan, pilots, sample: str):
     """The one step of a study: ``pilots`` are ``(rows, case, ground)`` (the rows of ``plan.params``
     a pilot stands for, the case piloted and its scaled ground motion); each is piloted (`auto_step`)
     and, with ``solver.dt: auto``, its rows take the step it chose (`step.apply_step`; the plan's
-    ``step`` and ``key`` follow). ``sample`` says what was piloted, for the note. Sets and returns
-    ``plan.step_study`` (`step.StudyStep`)."""
-    from .plan import definition_key
+    ``step`` follows; the caller computes its ``key`` after). ``sample`` says what was piloted, for
+    the note. Sets and returns ``plan.step_study`` (`step.StudyStep`)."""
     from .step import StudyStep, apply_step
 
     choices = []
@@ -625,8 +624,16 @@ def study_step(plan, pilots, sample: str):
     plan.step_study = StudyStep(plan.case.solver.auto, tuple(choices), sample, default)
     if plan.case.solver.auto and choices:
         plan.step = float(plan.params[:, P_STEP].min())
-        plan.key = definition_key(plan)
     return plan.step_study
+
+
+def step_report(prepared: Prepared, step: float) -> dict:
+    """The step a run used, for ``rockslide run --json`` and its result file: ``step`` [s], ``mode``
+    (``auto`` or ``fixed``) and, with ``auto``, the estimate (`step.StepChoice.as_dict`: errors
+    [s] and [rad], tolerance, ``met``)."""
+    choice = prepared.step_choice
+    return {"step": float(step), "mode": "fixed" if choice is None else "auto",
+            **({} if choice is None else choice.as_dict()), "note": "" if choice is None else choice.describe()}
 
 
 def auto_step(case: Case, model: Model, ground: rec.GroundMotion, settings: Settings) -> StepChoice:
@@ -684,7 +691,7 @@ __all__ = ["Prepared", "Components", "component_azimuths", "ground_along",
            "load_ground", "floor_ground", "floor_text", "floor_peaks", "floor_peaks_text", "base_motion",
            "is_pulse_case", "unit_pulses", "pulse_ground", "model_for", "settings_for", "check_parameters",
            "check_against_ground", "check_step", "check_size", "prepare", "simulate_prepared", "run_case",
-           "applied_ground", "record_entries", "auto_step", "still_step", "study_step", "start_time",
+           "applied_ground", "record_entries", "auto_step", "still_step", "study_step", "step_report", "start_time",
            "verdict_robustness", "work", "Work", "step_warning", "RunWarning"]
 
 
