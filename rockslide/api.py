@@ -132,6 +132,34 @@ def run(case: Case | Mapping | str | Path, *, records_dir: str | Path | None = N
                      records=engine.record_entries(prepared), case=case, case_text=case.text)
 
 
+def work_precision(case: Case | Mapping | str | Path, *, records_dir: str | Path | None = None,
+                   reference: str = "auto", modes=("located",)):
+    """Error against CPU time on one case, at a few steps (`analyses.precision.work_precision`).
+
+    Parameters
+    ----------
+    case : Case, mapping or path
+    records_dir : str or Path, optional
+    reference : {"auto", "solver", "finest"}
+        Errors against the reference solver (DOP853), the kernel's finest step halved, or the
+        solver when the case is short.
+    modes : sequence of str
+        Event schemes: ``located`` and/or ``step-end``.
+
+    Returns
+    -------
+    analyses.precision.PrecisionTable
+        ``rows`` (step [s], CPU [s], errors of the event times [s] and the largest rotation [rad],
+        verdict), ``text()`` the printout.
+    """
+    from .analyses import precision
+    from .engine import prepare as engine
+    from .io import records
+
+    prepared = engine.prepare(_case(case), records.records_dir(records_dir), history=False)
+    return precision.work_precision(prepared, reference=reference, modes=tuple(modes))
+
+
 def sweep(case: Case | Mapping | str | Path, *, mu_kinetic_ratio: float | None = None,
           records_dir: str | Path | None = None, device: str = "cpu", workers: int | None = None,
           scheduler=None, wait_workers: float | None = None, chunk_size: int | None = None, store=None,

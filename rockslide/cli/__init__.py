@@ -8,7 +8,7 @@
 - `risk`: ``rockslide risk``.
 """
 
-from . import risk, run, studies, tools  # noqa: F401  (each registers its commands on `main`)
+from . import precision, risk, run, studies, tools  # noqa: F401  (each registers its commands on `main`)
 from .app import entry, main
 
 __all__ = ["entry", "main"]
