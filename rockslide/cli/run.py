@@ -69,7 +69,7 @@ def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, members, s
     png_path = folder / f"{case.name}.png"
     prepared = runner.prepare(case, records.records_dir(records_dir))     # input errors first
     if prepared.step_choice is not None:
-        click.echo(f"  note: solver.dt: {prepared.step_choice.describe()}", err=as_json)
+        click.echo(f"  note: solver.dt: {prepared.step_choice.describe()}", err=True)
     ens = eplan = None
     if members is not None or robustness:       # the ensemble's modules (numba's JIT) only when asked
         from ..analyses import ensemble as ens

@@ -340,7 +340,7 @@ def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, 
     if fplan.vertical_note:
         click.echo(f"  note: {fplan.vertical_note}", err=as_json)
     if plan.step_study is not None and plan.step_study.note():
-        click.echo(f"  note: {plan.step_study.note()}", err=as_json)
+        click.echo(f"  note: {plan.step_study.note()}", err=True)
     done = _compute(ctx, plan, h5_path, what="fragility", description=fplan.describe(), label=case.name,
                     unit="run", workers=workers, scheduler=scheduler, device=device, no_progress=no_progress,
                     err=as_json, shard=shard, wait_workers=wait_workers)

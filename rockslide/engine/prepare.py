@@ -24,7 +24,7 @@ from ..errors import CaseError, RecordError
 from ..io import records as rec
 from ..pulses import Pulse
 from ..units import STANDARD_GRAVITY
-from .step import AUTO_STILL_STEP, StepChoice, choose_step
+from .step import AUTO_STILL_STEP, MAX_P_DT, StepChoice, choose_step
 
 
 @dataclass(frozen=True)
@@ -506,8 +506,7 @@ def check_size(case: Case, ground: rec.GroundMotion, *, history: bool = True) ->
 #: per second (compressed HDF5).
 STEPS_PER_SECOND = 9e6
 ROWS_PER_SECOND = 1e6
-#: Largest ``p dt`` without a warning (`step_warning`).
-MAX_P_DT = 0.1
+# MAX_P_DT, the largest ``p dt`` without a warning (`step_warning`), lives in `step` (auto's coarsest step)
 
 
 @dataclass(frozen=True)

@@ -12,7 +12,7 @@ for ``y`` each event time and the largest rotation. The first ``n`` whose estima
 :data:`SAFETY` times both tolerances is taken (the largest step of the series that does), with its
 estimate. The estimate is infinite when the two runs do not pass through the same sequence of events
 (then the step does not resolve the case yet). ``n0`` is the smallest ``n`` with ``p h <=
-prepare.MAX_P_DT`` (a coarser step is not resolved, `prepare.step_warning`); the series stops at the
+MAX_P_DT`` (a coarser step is not resolved, `prepare.step_warning`); the series stops at the
 default step (0.1 ms): when even that does not meet the tolerance (a chaotic trajectory, where per-
 trajectory error is not the measure: docs/performance.md), the default step is kept and ``met`` is
 False.
@@ -29,6 +29,10 @@ from ..core.simulate import Model, Settings, simulate, substeps
 
 #: [s] The default step, ``solver.dt``'s default (the paper's 0.1 ms).
 DEFAULT_STEP = 1e-4
+
+#: Largest ``p dt`` without a warning (`prepare.step_warning`), and the coarsest step auto tries: RK4
+#: resolves rocking (``exp(+-p t)``) to 1e-5 of its time scale there.
+MAX_P_DT = 0.1
 
 #: Share of the tolerance the estimate must stay within: Richardson's estimate is itself an estimate
 #: (on free rocking it was 1-10 % below the exact error), so half the tolerance keeps the error within it.
@@ -160,8 +164,6 @@ def choose_step(model: Model, dt_record: float, horizontal, vertical, settings: 
     StepChoice
         The step and its error estimate (the module's docstring gives the method).
     """
-    from .prepare import MAX_P_DT
-
     _, _, p2 = model.constants
     n = max(1, math.ceil(dt_record * math.sqrt(p2) / MAX_P_DT * (1.0 - 1e-9)))
     n_default = substeps(dt_record, default_step)
@@ -190,9 +192,8 @@ def choose_step(model: Model, dt_record: float, horizontal, vertical, settings: 
 
 
 def stable_substeps(params: np.ndarray) -> np.ndarray:
-    """Each row's fewest steps per record interval with ``p h <= prepare.MAX_P_DT``."""
+    """Each row's fewest steps per record interval with ``p h <= MAX_P_DT``."""
     from ..core import layout as L
-    from .prepare import MAX_P_DT
 
     p = np.sqrt(0.75 * params[:, L.P_G] / params[:, L.P_R])
     return np.maximum(1, np.ceil(params[:, L.P_DT_REC] * p / MAX_P_DT * (1.0 - 1e-9)))
@@ -283,4 +284,5 @@ def choice_attributes(choice: StepChoice | None) -> dict:
 
 
 __all__ = ["StepChoice", "StudyStep", "apply_step", "keep_resolved", "stable_substeps", "choice_attributes",
-           "choose_step", "step_errors", "richardson_factor", "DEFAULT_STEP", "AUTO_STILL_STEP", "SAFETY"]
+           "choose_step", "step_errors", "richardson_factor", "DEFAULT_STEP", "AUTO_STILL_STEP", "SAFETY",
+           "MAX_P_DT"]
