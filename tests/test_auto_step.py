@@ -141,3 +141,34 @@ def test_a_sweep_at_auto_takes_its_pilots_step_and_says_so():
     verdicts = {name: sw.sweep_variables(p, execute(p, None, workers=1).states)["overturned"][0]
                 for name, p in plans.items()}
     np.testing.assert_array_equal(verdicts["auto"], verdicts["fixed"])
+
+
+def test_the_device_launch_order_counts_each_cases_steps():
+    """With ``auto`` the cases of one study may take different steps: the device's launch order
+    (`gpu.launch_order`, by expected work) puts the case of more steps per interval first, the
+    record, block and intensity being the same."""
+    from rockslide.core import gpu
+
+    params = np.zeros((3, L.N_PARAMS))
+    params[:, L.P_G], params[:, L.P_MU], params[:, L.P_TAN_ALPHA] = 9.81, 0.5, 0.5
+    params[:, L.P_N_SUB] = (1, 100, 8)
+    base = np.full((4, 50), 9.81)                     # 1 g: above every REST threshold
+    order = gpu.launch_order(params, base, np.zeros(3, np.int64), np.full(3, 50), np.ones(3))
+    assert list(order) == [1, 2, 0]
+
+
+def test_bench_gpu_writes_its_file_from_what_it_measured(tmp_path):
+    """``bench_gpu.py --cpu-only`` (no GPU here) measures a tiny grid at auto and writes
+    results/bench_gpu.md with its numbers; the device's columns say 'not measured'."""
+    import subprocess
+    import sys
+
+    from conftest import REPO
+
+    done = subprocess.run([sys.executable, str(REPO / "benchmarks" / "bench_gpu.py"), "--cpu-only", "--grid",
+                           "rocking", "--cases", "4", "--auto", "--out", str(tmp_path)],
+                          capture_output=True, text=True, timeout=600, cwd=REPO)
+    assert done.returncode == 0, done.stderr[-2000:]
+    text = (tmp_path / "bench_gpu.md").read_text()
+    assert "| GPU | not measured |" in text and "4 cases at " in text and "(auto)" in text
+    assert "--cpu-only" in text
