@@ -82,7 +82,7 @@ from ..engine.prepare import (
     study_step,
     unit_pulses,
 )
-from ..errors import CaseError
+from ..errors import CaseError, RecordError
 from ..io import records as rec
 from ..io.results import RECORD_ROLES
 from ..pulses import Pulse, linear_overturning_ratio
@@ -437,9 +437,15 @@ def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = N
         plan = _plan_pulses(case, axes, ratio, chunk_size, n, progress)
     else:
         plan = _plan_records(case, axes, ratio, chunk_size, n, names, records_dir, progress)
-    # one pilot, of the case file's own case, stands for every point (docs/performance.md)
-    study_step(plan, [(slice(None), case, floor_ground(case, load_ground(case, records_dir)))],
-               "the case file's own case")
+    # one pilot, of the case file's own case, stands for every point (docs/performance.md); at the
+    # default step it only says what auto would take, and a case file that cannot run alone says nothing
+    try:
+        pilot = floor_ground(case, load_ground(case, records_dir))
+    except (CaseError, RecordError):
+        if case.solver.auto:
+            raise
+        pilot = None
+    study_step(plan, [] if pilot is None else [(slice(None), case, pilot)], "the case file's own case")
     plan.key = definition_key(plan)
     return plan
 
