@@ -68,8 +68,6 @@ def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, members, s
     h5_path = folder / f"{case.name}.h5"
     png_path = folder / f"{case.name}.png"
     prepared = runner.prepare(case, records.records_dir(records_dir))     # input errors first
-    if prepared.step_choice is not None:
-        click.echo(f"  note: solver.dt: {prepared.step_choice.describe()}", err=True)
     ens = eplan = None
     if members is not None or robustness:       # the ensemble's modules (numba's JIT) only when asked
         from ..analyses import ensemble as ens
@@ -150,6 +148,8 @@ def run(case_file, records_dir, out_dir, as_json, overwrite, no_plot, members, s
         click.echo(json.dumps(payload, allow_nan=False, default=_json_default))
     else:
         click.echo(run_text(case.name, summary, neighbourhood, ground=ground, units=case.units))
+        if prepared.step_choice is not None:
+            click.echo(f"  solver.dt: {prepared.step_choice.describe()}")
         floor = runner.floor_text(case)
         if floor:
             click.echo(f"  {floor}")

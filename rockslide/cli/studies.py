@@ -201,8 +201,6 @@ def sweep(case_file, mu_kinetic_ratio, records_dir, out_dir, overwrite, no_plot,
                       started=started, dpi=dpi, size=size)
         return
     files.remove_stale_temporaries([h5_path, png_path])
-    if plan.step_study is not None and plan.step_study.note():
-        click.echo(f"  note: {plan.step_study.note()}", err=True)
     done = _compute(ctx, plan, h5_path, what="sweep", description=plan.describe(), label=case.name, unit="case",
                     workers=workers, scheduler=scheduler, device=device, no_progress=no_progress, shard=shard,
                     wait_workers=wait_workers)
@@ -231,6 +229,7 @@ def sweep(case_file, mu_kinetic_ratio, records_dir, out_dir, overwrite, no_plot,
     if undecided:
         click.echo(f"  {undecided} undecided: still moving at the end with the energy to overturn "
                    "(give the case a ground.tail for their free motion)")
+    _step_note(plan)
     click.echo(f"  wrote {_written(h5_path, png_path, no_plot, as_csv)} in {time.perf_counter() - started:.1f} s")
 
 
@@ -339,8 +338,6 @@ def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, 
     plan = fplan.plan
     if fplan.vertical_note:
         click.echo(f"  note: {fplan.vertical_note}", err=as_json)
-    if plan.step_study is not None and plan.step_study.note():
-        click.echo(f"  note: {plan.step_study.note()}", err=True)
     done = _compute(ctx, plan, h5_path, what="fragility", description=fplan.describe(), label=case.name,
                     unit="run", workers=workers, scheduler=scheduler, device=device, no_progress=no_progress,
                     err=as_json, shard=shard, wait_workers=wait_workers)
@@ -387,7 +384,14 @@ def fragility(case_file, suite_spec, im_text, levels_text, damage_texts, units, 
     if export_path is not None:
         click.echo(f"  pelicun: {export_path} and {export_path.with_suffix('.json').name} ({export_family}, "
                    f"ID {export[1]})" + (f"; not exported: {'; '.join(left_out)}" if left_out else ""))
+    _step_note(plan)
     click.echo(f"  wrote {_written(h5_path, png_path, no_plot, as_csv)} in {elapsed:.1f} s")
+
+
+def _step_note(plan) -> None:
+    """The step the study took, and what ``solver.dt: auto`` takes or would take (`step.StudyStep.note`)."""
+    if plan.step_study is not None and plan.step_study.note():
+        click.echo(f"  {plan.step_study.note()}")
 
 
 def _stale_figure(h5_path: Path, png_path: Path, staging, *, no_plot: bool, format: str) -> list[Path]:
