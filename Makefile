@@ -18,7 +18,7 @@ help:
 	@echo "               fuzzers: tests/conftest.py SLOW_MODULES, SLOW_TESTS, @pytest.mark.slow);"
 	@echo "               make test runs them all"
 	@echo "make check     lint, import contracts, then the tests"
-	@echo "make bench     speed and accuracy benchmarks -> results/bench.md, bench_kernel.md, bench_sweep.md, bench_fragility.md, bench_startup.md, bench_large.md, work_precision.png"
+	@echo "make bench     speed and accuracy benchmarks -> results/bench.md, bench_kernel.md, bench_sweep.md, bench_fragility.md, bench_startup.md, bench_large.md, bench_auto_step.md, work_precision.png"
 	@echo "make table1    the paper's Table 1 and Figures 5-10 -> results/ (needs the paper's records)"
 	@echo "make example   run configs/example.yaml"
 	@echo "make spectrum  an overturning spectrum under one-sine pulses -> results/spectrum.png"
@@ -45,6 +45,7 @@ bench:
 	$(PYTHON) benchmarks/bench_sweep.py > results/bench_sweep.md
 	$(PYTHON) benchmarks/bench_fragility.py > results/bench_fragility.md
 	$(PYTHON) benchmarks/bench_large.py --out results
+	$(PYTHON) benchmarks/bench_auto_step.py --out results
 	$(PYTHON) benchmarks/bench_startup.py --cold >> results/bench.md
 	$(PYTHON) benchmarks/bench_startup.py > results/bench_startup.md
 

@@ -20,14 +20,13 @@ from pathlib import Path
 
 import numpy as np
 from baseline import plain_rk4_rocking
-from matplotlib.figure import Figure
-from matplotlib.ticker import NullFormatter
 from scipy.integrate import quad
 
 from rockslide.core.reference import simulate_reference
 from rockslide.core.simulate import Model, Settings, ground_array, simulate
 from rockslide.io import records as rec
 from rockslide.io.synthetic import kanai_tajimi
+from rockslide.plots import work_precision_figure
 
 REPO = Path(__file__).resolve().parents[1]
 DTS = (1e-3, 5e-4, 2e-4, 1e-4, 5e-5, 2e-5)
@@ -218,32 +217,10 @@ def work_precision(quick: bool):
     return table
 
 
-def figure(table) -> Figure:
-    cases = list(dict.fromkeys(row["case"] for row in table))
-    fig = Figure(figsize=(15, 9), dpi=110, layout="constrained")
-    axes = fig.subplots(2, 3).ravel()
-    axes[-1].set_visible(len(cases) > 5)
-    markers = {"located": "o-", "step-end": "s--"}
-    for ax, case in zip(axes, cases, strict=False):
-        rows = [r for r in table if r["case"] == case]
-        quantities = list(rows[0]["errors"])
-        for q in quantities:
-            for mode in MODES:
-                pts = [(r["cpu"], r["errors"][q]) for r in rows if r["mode"] == mode]
-                if all(p[1] <= 1e-16 for p in pts):
-                    continue          # exact at every dt (e.g. max rotation = pi/2 of an overturned block)
-                x = [p[0] for p in pts]
-                y = [max(p[1], 1e-16) for p in pts]
-                ax.loglog(x, y, markers[mode], label=f"{q}, {mode}", ms=4)
-        ax.xaxis.set_minor_formatter(NullFormatter())
-        ax.set_title(case, fontsize=9)
-        ax.set_xlabel("CPU time per run [s]")
-        ax.set_ylabel("absolute error")
-        ax.grid(True, which="both", color="0.9")
-        ax.legend(fontsize=7)
-    fig.suptitle("Work-precision: dt = 1, 0.5, 0.2, 0.1, 0.05, 0.02 ms (left to right), "
-                 "located events vs step-end switching")
-    return fig
+def figure(table):
+    """`rockslide.plots.work_precision_figure`, the library's (also `rockslide work-precision`'s)."""
+    return work_precision_figure(table, title="Work-precision: dt = 1, 0.5, 0.2, 0.1, 0.05, 0.02 ms (left to "
+                                              "right), located events vs step-end switching", size=(15, 9))
 
 
 def markdown(speeds, full, table) -> str:

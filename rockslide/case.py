@@ -347,16 +347,27 @@ class Solver:
     Parameters
     ----------
     dt : float
-        Time step [s], ``0 < dt <= 0.01``.
+        Time step [s], ``0 < dt <= 0.01``; with ``auto``, the default step (0.1 ms) that ``auto``
+        is compared with, and the sampling step of pulses.
     events : str
         ``"located"`` (state changes located within the step) or ``"step-end"`` (at step ends).
     method : str
         ``"kernel"`` (the fast integrator) or ``"reference"`` (the slow, plain one).
+    auto : bool
+        ``solver.dt: auto``: the step is chosen per case from the tolerance
+        (`rockslide.engine.step.choose_step`; docs/performance.md, 'Choosing the step').
+    tolerance_time : float
+        [s] ``solver.tolerance.time``: the error allowed on every event time with ``auto``.
+    tolerance_rotation : float
+        [rad] ``solver.tolerance.rotation``: the error allowed on the largest rotation with ``auto``.
     """
 
     dt: float = 1e-4
     events: str = "located"
     method: str = "kernel"
+    auto: bool = False
+    tolerance_time: float = 1e-6
+    tolerance_rotation: float = 1e-4
 
 
 @dataclass(frozen=True)
@@ -705,12 +716,19 @@ CASE_KEYS: dict[str, dict] = {
         "slip_rate": _key("velocity", "initial sliding velocity, signed", default=0.0),
     }),
     "solver": _key("mapping", "time integration", keys={
-        "dt": _key("time", "time step", default=1e-4, bounds=[(">", 0.0), ("<=", 0.01)]),
+        "dt": _key("time", "time step, or 'auto': the largest whole divisor of the record's step "
+                   "that meets solver.tolerance (docs/performance.md)", default=1e-4,
+                   bounds=[(">", 0.0), ("<=", 0.01)], choices=["auto"]),
         "events": _key("choice", "where state changes happen: located within the step, or at "
                        "step ends", default="located", choices=["located", "step-end"]),
         "method": _key("choice", "integrator: kernel (compiled, fixed step) or reference (adaptive "
                        "DOP853 with located events; slow, for short inputs)", default="kernel",
                        choices=["kernel", "reference"]),
+        "tolerance": _key("mapping", "with dt: auto, the error allowed on the results", keys={
+            "time": _key("time", "on every event time", default=1e-6, bounds=[(">", 0.0), ("<=", 1.0)]),
+            "rotation": _key("angle", "on the largest rotation", default=1e-4,
+                             bounds=[(">", 0.0), ("<=", 1.0)]),
+        }),
     }),
     "output": _key("mapping", "results", keys={
         "dir": _key("string", "output folder", default="out"),
@@ -1203,6 +1221,8 @@ def _read_value(value, spec: dict, path: str, ctx: _Ctx):
         one = {"type": "length", "unit": "m", "bounds": ((">", 0.0),)}
         return tuple(_read_quantity(v, one, f"{path}[{i}]", ctx) for i, v in enumerate(value))
     if kind in UNITS:
+        if isinstance(value, str) and value.strip() in spec.get("choices", ()):
+            return value.strip()       # a word a quantity key also takes (solver.dt: auto)
         return _read_quantity(value, spec, path, ctx)
     if kind == "name":
         if not isinstance(value, str) or not _NAME_RE.fullmatch(value):
@@ -1506,6 +1526,8 @@ def _cross_checks(raw: dict, ctx: _Ctx) -> None:
                      "there is no ground.vertical record to scale")
 
     dt = raw["solver"]["dt"]
+    if dt == "auto":            # the step is chosen with the ground motion; rows every `interval` rounded
+        dt = Solver.dt
     interval = raw["output"]["interval"]
     if interval is not None:
         ratio = interval / dt
@@ -1579,6 +1601,11 @@ def _build(data, *, source: str, base_dir: Path | None, text: str, si_numbers: b
     ground = raw["ground"]
     records = {k: None if ground[k] is None else (Pulse if "pulse" in ground[k] else RecordSpec)(**ground[k])
                for k in ("horizontal", "vertical", "horizontal_2")}
+    solver = raw["solver"]
+    tolerance = solver.pop("tolerance")
+    auto = solver["dt"] == "auto"
+    solver.update(dt=Solver.dt if auto else solver["dt"], auto=auto, tolerance_time=tolerance["time"],
+                  tolerance_rotation=tolerance["rotation"])
     sections = {path: cls(**_at(raw, path)) for path, cls in _SECTIONS.items()}
     return Case(
         name=raw["name"], gravity=raw["gravity"], block=sections["block"],
@@ -1643,7 +1670,7 @@ def case_to_dict(case: Case, *, case_file: bool = True) -> dict:
         "contact": plain(case.contact),
         "ground": ground,
         "initial": plain(case.initial),
-        "solver": plain(case.solver),
+        "solver": solver_dict(case.solver),
         "output": plain(case.output),
     }
     uncertain = {name: d.spec() for name, d in case.uncertain.given().items()}
@@ -1673,6 +1700,12 @@ def _block_dict(block: Block) -> dict:
         out.pop("width")
         out["half_widths"] = list(block.half_widths)
     return out
+
+
+def solver_dict(solver: Solver) -> dict:
+    """The solver section as the case file writes it (``dt: auto``, ``tolerance: {time, rotation}``)."""
+    return {"dt": "auto" if solver.auto else solver.dt, "events": solver.events, "method": solver.method,
+            "tolerance": {"time": solver.tolerance_time, "rotation": solver.tolerance_rotation}}
 
 
 def _with_si_units(value, unit: str):

@@ -1945,6 +1945,60 @@ def _ensemble_figure(ratios, overturned, nominal_ratio, *, summary_text, title, 
 
 
 # --------------------------------------------------------------------------------------------------
+# Work-precision: error against CPU time (benchmarks/bench.py and `rockslide work-precision`)
+# --------------------------------------------------------------------------------------------------
+
+def work_precision_figure(table, *, title: str = "", size=None) -> Figure:
+    """Error against CPU time, a panel per case, a line per quantity and event scheme.
+
+    Parameters
+    ----------
+    table : list of dict
+        One per run: ``case`` (the panel's title), ``mode`` (``located`` or ``step-end``), ``cpu``
+        [s] and ``errors`` (quantity -> absolute error, in the quantity's SI unit; NaN: not
+        comparable, e.g. another event sequence, left out).
+    title : str
+    size : None, "column", "page", "slide", "WxH" or (width, height)
+        The figure's size [in] (default 5 x 4 in per panel, up to 3 panels a row).
+    """
+    cases = list(dict.fromkeys(row["case"] for row in table))
+    columns = min(3, len(cases))
+    rows = math.ceil(len(cases) / columns)
+    figsize = figure_size(size, (5.0 * columns, 4.0 * rows + 0.6), column=4.6, page=6.5)
+    with _style(figsize[0]):
+        return _work_precision_figure(table, cases, rows, columns, title=title, figsize=figsize)
+
+
+def _work_precision_figure(table, cases, rows, columns, *, title, figsize) -> Figure:
+    from matplotlib.ticker import NullFormatter
+
+    fig = Figure(figsize=figsize, dpi=DPI, layout="constrained")
+    axes = np.atleast_1d(fig.subplots(rows, columns)).ravel()
+    for ax in axes[len(cases):]:
+        ax.set_visible(False)
+    markers = {"located": "o-", "step-end": "s--"}
+    for ax, case in zip(axes, cases, strict=False):
+        runs = [r for r in table if r["case"] == case]
+        for q in runs[0]["errors"]:
+            for mode in markers:
+                pts = [(r["cpu"], r["errors"][q]) for r in runs if r["mode"] == mode and math.isfinite(r["errors"][q])]
+                if not pts or all(p[1] <= 1e-16 for p in pts):
+                    continue          # exact at every step (e.g. max rotation = pi/2 of an overturned block)
+                ax.loglog([p[0] for p in pts], [max(p[1], 1e-16) for p in pts], markers[mode],
+                          label=f"{q}, {mode}", ms=4)
+        ax.xaxis.set_minor_formatter(NullFormatter())
+        ax.set_title(case, fontsize=_pt(9))
+        ax.set_xlabel("CPU time per run [s]")
+        ax.set_ylabel("absolute error")
+        ax.grid(True, which="both", color="0.9")
+        if ax.get_legend_handles_labels()[0]:
+            ax.legend(fontsize=_pt(7))
+    if title:
+        fig.suptitle(title, fontsize=_pt(10))
+    return fig
+
+
+# --------------------------------------------------------------------------------------------------
 # Risk: a fragility over hazard curves
 # --------------------------------------------------------------------------------------------------
 

@@ -246,6 +246,10 @@ class TestSchema:
             for part in section.split("."):
                 keys = keys[part]["keys"]
             defaults = {f.name: f.default for f in dataclasses.fields(cls)}
+            if cls is Solver:       # dt: auto is the field auto; tolerance: {time, rotation} two fields
+                assert defaults.pop("auto") is False
+                keys = {**{k: v for k, v in keys.items() if k != "tolerance"},
+                        **{f"tolerance_{k}": v for k, v in keys["tolerance"]["keys"].items()}}
             assert set(defaults) == set(keys)
             for name, spec in keys.items():
                 assert spec["default"] == defaults[name], f"{section}.{name}"
@@ -395,7 +399,7 @@ BAD = [
     ("unknown-initial", variant({"initial.rotaton": 0.1}),
      ["initial.rotaton: unknown key (did you mean 'rotation'?)"]),
     ("unknown-solver", variant({"solver.step": 0.1}),
-     ["solver.step: unknown key (expected one of: dt, events, method)"]),
+     ["solver.step: unknown key (expected one of: dt, events, method, tolerance)"]),
     ("unknown-output", variant({"output.folder": "x"}), ["output.folder: unknown key"]),
     # required keys
     ("missing-name", variant(drop=("name",)), ["case.yaml: name: missing required key"]),

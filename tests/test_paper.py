@@ -36,6 +36,28 @@ def test_every_verdict_and_description_matches_with_the_papers_gravity(table):
         assert check["description_ok"], f"{row.figure} mu={row.mu}: expected {check['claim']}"
 
 
+@pytest.fixture(scope="module")
+def table_auto():
+    for name in table1.required_records(CONFIGS):
+        real_record(name)
+    records = real_record(table1.required_records(CONFIGS)[0]).parent
+    rows, _ = table1.run_table(CONFIGS, records, gravities=(table1.PAPER_G,), auto=True)
+    return rows
+
+
+def test_every_verdict_and_description_matches_at_auto_step(table_auto):
+    """``solver.dt: auto`` with its default tolerance (1e-6 s, 1e-4 rad): the 15 rows still match
+    the paper, each at a step coarser than the case files' 0.1 ms (whole divisors of the records'
+    10 and 20 ms)."""
+    for check in table1.row_checks(table_auto, table1.PAPER_G):
+        row = check["row"]
+        assert check["verdict_ok"], f"{row.figure} mu={row.mu} at auto: paper overturned={row.paper_overturned}"
+        assert check["description_ok"], f"{row.figure} mu={row.mu} at auto: expected {check['claim']}"
+    for row in table_auto:
+        run = row.runs[table1.PAPER_G]
+        assert run["step_choice"] is not None and run["step"] > 1e-4, row.name
+
+
 def test_with_standard_gravity_only_gravity_sensitive_rows_differ(table):
     """With g = 9.80665 a row may differ from the paper only if g itself decides its verdict."""
     rows = table["rows"]

@@ -35,6 +35,7 @@ from ..core.simulate import Model, set_model
 from ..engine.execute import execute
 from ..engine.plan import MAX_POINTS, Plan, assemble, default_chunk_size
 from ..engine.prepare import RunWarning, coarse_step_warning
+from ..engine.step import keep_resolved
 from ..errors import CaseError, numbers_from
 from . import sweep as sw
 
@@ -165,6 +166,8 @@ def plan_ensemble(case: Case, n: int = DEFAULT_MEMBERS, *, seed: int = SEED, rec
         nominal = sw.plan_sweep(case, axes, records_dir=records_dir, chunk_size=1, records=records)
     n = int(n)
     params, restitution = member_parameters(case, nominal.case_params(rows), values)
+    if case.solver.auto:            # the nominal case's step, each member's block resolved
+        keep_resolved(params)
     intensity = values.get("intensity", np.ones(n))
     if coarse_step_warning(case.source, nominal.params) is None:
         warning = coarse_step_warning(case.source, params, lambda i: f"ensemble member {i}: the smallest block")
@@ -175,7 +178,7 @@ def plan_ensemble(case: Case, n: int = DEFAULT_MEMBERS, *, seed: int = SEED, rec
     plan = assemble(case, [axis], params=params, states=nominal.case_states(rows),
                     factor_h=nominal.factor_h[rows] * intensity, factor_v=nominal.factor_v[rows] * intensity,
                     base=nominal.base, first=nominal.first[rows], count=nominal.count[rows],
-                    record_end=nominal.record_end[rows], step=nominal.step, records=nominal.records,
+                    record_end=nominal.record_end[rows], records=nominal.records, step_study=nominal.step_study,
                     chunk_size=default_chunk_size(n) if chunk_size is None else int(chunk_size))
     stored = dict(values)
     stored["restitution"] = restitution
@@ -286,6 +289,8 @@ def summarise(eplan: EnsemblePlan, variables: dict, nominal_overturned: bool) ->
         "rotation_ratio": {"median": float(quantiles[0]), "p05": float(quantiles[1]), "p95": float(quantiles[2])},
         "sensitivity": sensitivity, "most_sensitive": most,
         "nominal_overturned": bool(nominal_overturned), "flips": flips, "robust": flips == 0 and n_ok == eplan.n,
+        "integration_step": eplan.plan.step,
+        "step": {} if eplan.plan.step_study is None else eplan.plan.step_study.attributes(),
     }
 
 
@@ -308,6 +313,9 @@ def describe(summary: dict, nominal_verdict: str) -> list[str]:
                  f"95 % Wilson interval")
     r = summary["rotation_ratio"]
     lines.append(f"  max rotation / alpha: median {r['median']:.2f}, 5-95 % {r['p05']:.2f} to {r['p95']:.2f}")
+    note = summary.get("step", {}).get("step_note")
+    if note:
+        lines.append(f"  {note}")
     outside = n - summary["n_within_model"]
     if outside:
         lines.append(f"  {outside} of {n} neighbours left the model (flight or painleve): not counted")

@@ -52,6 +52,7 @@ import re
 import warnings
 from dataclasses import dataclass, field, replace
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 from scipy.special import log_ndtr, ndtr, ndtri
@@ -75,7 +76,10 @@ from ..engine.prepare import (
     floor_ground,
     ground_along,
     settings_for,
+    still_step,
+    study_step,
 )
+from ..engine.step import keep_resolved
 from ..errors import CaseError, RecordError
 from ..io import records as rec
 from ..units import STANDARD_GRAVITY, parse_quantity, unit_factor
@@ -609,8 +613,10 @@ def plan_fragility(case: Case, suite: Suite, im: IntensityMeasure, levels: sw.Ax
     flights = []                          # (warning of the first flying run of a record, its runs that fly)
     already_read: dict = {}               # records already read, by file and options
     rotd: dict = {}                       # RotD of a pair (the same at every orientation of --azimuth)
+    records_of = []                       # each record's `records` (for the pilots of the step)
     for r, entry in enumerate(suite.entries):
         records, specs, found = _read_entry(suite, r, entry, folder, already_read)
+        records_of.append(records)
         if case_record is not None:
             records["vertical"], specs["vertical"] = case_record
             found["vertical"], found["vertical_sha256"] = Path(case_record[0].path).name, case_record[0].sha256
@@ -697,6 +703,16 @@ def plan_fragility(case: Case, suite: Suite, im: IntensityMeasure, levels: sw.Ax
         record_end[rows] = start + base.shape[1] * dt
         bases.append(base)
         offset += base.shape[1]
+    pilots = []
+    for r, record_case in enumerate(record_cases if case.solver.auto else record_cases[:1]):
+        middle = r * n_levels + n_levels // 2
+        level_case, level_ground = _at_level(record_case, records_of[r], factor_h[middle])
+        pilots.append((slice(r * n_levels, (r + 1) * n_levels), level_case, level_ground))
+    middle_level = levels.texts[n_levels // 2]
+    sample = (f"each record at the middle level {middle_level}" if case.solver.auto else
+              f"the first record ({suite.entries[0].name}) at the middle level {middle_level}")
+    step_plan = SimpleNamespace(case=case, params=params, step=0.0, key="", step_study=None)
+    study_step(step_plan, pilots, sample)
     warning = coarse_step_warning(case.source, params, lambda i: f"record {suite.entries[i // n_levels].name}")
     if warning:
         warnings.warn(warning, RunWarning, stacklevel=2)
@@ -709,7 +725,7 @@ def plan_fragility(case: Case, suite: Suite, im: IntensityMeasure, levels: sw.Ax
                           tuple(e.name for e in suite.entries), suite.source, record_kind)
     plan = assemble(case, [record_axis, levels], params=params, states=states, factor_h=factor_h, factor_v=factor_v,
                     base=np.ascontiguousarray(np.concatenate(bases, axis=1)), first=first, count=count,
-                    record_end=record_end, records=entries, chunk_size=chunk_size)
+                    record_end=record_end, records=entries, chunk_size=chunk_size, step_study=step_plan.step_study)
     fplan = FragilityPlan(plan=plan, suite=suite, im=im, levels=levels, record_cases=record_cases,
                           measures=measures, files=files, vertical_factor=vertical_factor, vertical=vertical,
                           vertical_note=vertical_note)
@@ -767,6 +783,8 @@ def with_parameter_samples(fplan: FragilityPlan, samples: int, seed: int, chunk_
     record, draw = row // n_levels, np.tile(np.arange(width), plan.n_cases)
     params, restitution = ens.member_parameters(case, plan.case_params(row),
                                                 {name: v[record, draw] for name, v in values.items()})
+    if case.solver.auto:          # each record's step, each drawn block resolved
+        keep_resolved(params)
     if "restitution" in values:
         values["restitution"] = restitution[np.arange(n_records)[:, None] * n_levels * width + np.arange(width)]
     kind = sw.AxisKind("sample", "sample", "dimensionless", "", "parameter sample (0: the case's own values)",
@@ -776,7 +794,7 @@ def with_parameter_samples(fplan: FragilityPlan, samples: int, seed: int, chunk_
     expanded = assemble(case, [*plan.axes, axis], params=params, states=plan.case_states(row),
                         factor_h=plan.factor_h[row], factor_v=plan.factor_v[row], base=plan.base,
                         first=plan.first[row], count=plan.count[row], record_end=plan.record_end[row],
-                        records=plan.records,
+                        records=plan.records, step_study=plan.step_study,
                         chunk_size=default_chunk_size(n) if chunk_size is None else int(chunk_size))
     return replace(fplan, plan=expanded, samples=int(samples), parameter_values=values, distributions=dists,
                    seed=int(seed))
@@ -791,7 +809,7 @@ def _at_level(record_case: Case, records: dict, factor: float):
     scale = level_case.ground.scale
     ground = rec.combine(records["horizontal"], records["vertical"], factor=scale.factor,
                          vertical_factor=scale.vertical_factor, source=record_case.source,
-                         still_dt=record_case.solver.dt)
+                         still_dt=still_step(record_case))
     return level_case, floor_ground(level_case, ground)
 
 

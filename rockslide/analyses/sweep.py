@@ -77,6 +77,7 @@ from ..engine.plan import (
     check_bytes,
     check_memory,
     default_chunk_size,
+    definition_key,
 )
 from ..engine.prepare import (
     ABSURD_ACCELERATION_IN_G,
@@ -91,13 +92,16 @@ from ..engine.prepare import (
     floor_ground,
     ground_along,
     is_pulse_case,
+    load_ground,
     model_for,
     pulse_ground,
     read_records,
     settings_for,
+    still_step,
+    study_step,
     unit_pulses,
 )
-from ..errors import CaseError
+from ..errors import CaseError, RecordError
 from ..io import records as rec
 from ..io.results import RECORD_ROLES
 from ..pulses import Pulse, linear_overturning_ratio
@@ -229,15 +233,31 @@ def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = N
             raise CaseError("a floor's motion is computed from record files; this case's ground is an analytic "
                             "pulse: write the pulse as a record, or remove ground.floor and --floor-period",
                             source=case.source, field="ground.floor")
-        return _plan_pulses(case, axes, ratio, chunk_size, n, progress)
+        plan = _plan_pulses(case, axes, ratio, chunk_size, n, progress)
+    else:
+        plan = _plan_records(case, axes, ratio, chunk_size, records_dir, records, progress)
+    # one pilot, of the case file's own case, stands for every point (docs/performance.md); at the
+    # default step it only says what auto would take, and a case file that cannot run alone says nothing
+    try:
+        pilot = floor_ground(case, load_ground(case, records_dir, records=records))
+    except (CaseError, RecordError):
+        if case.solver.auto:
+            raise
+        pilot = None
+    study_step(plan, [] if pilot is None else [(slice(None), case, pilot)], "the case file's own case")
+    plan.key = definition_key(plan)
+    return plan
 
+
+def _plan_records(case: Case, axes, ratio, chunk_size: int, records_dir, records, progress) -> Plan:
+    """`plan_sweep` for a case of record files (its key made by the caller)."""
     records, entries = _read_records(case, records_dir, records)
     _check_supports(case, axes, records)
     # what the block stands on, unscaled: the record (with two horizontal components, the motion
     # along the block's orientation), or each floor's motion from it; one per distinct orientation
     # and floor of the grid (--azimuth, --floor-period), laid end to end in the kernel's input
     read = None if case.ground.two_components else rec.combine(records["horizontal"], records["vertical"],
-                                                              source=case.source, still_dt=case.solver.dt)
+                                                              source=case.source, still_dt=still_step(case))
     grid = _Grid(axes, RECORD_SCALE_AXES)                    # the scale axes planned apart
     n_other = grid.size(grid.other)
     supports, grounds_of = Supports(), {}        # (orientation, floor) -> the ground the block stands on
@@ -282,7 +302,7 @@ def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = N
                 else:
                     scaled = rec.combine(records["horizontal"], records["vertical"], pga_horizontal=scale[0],
                                          factor=scale[1], pga_vertical=scale[2], vertical_factor=scale[3],
-                                         source=case.source, still_dt=case.solver.dt)
+                                         source=case.source, still_dt=still_step(case))
                 grounds[(scale, floor)] = floor_ground(point, scaled)
             ground = grounds[(scale, floor)]
             try:
@@ -304,7 +324,7 @@ def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = N
     return assemble(case, axes, mu_kinetic_ratio=ratio, params=params, states=states,
                     factor_h=factors[0][scale, context], factor_v=factors[1][scale, context], base=supports.base(),
                     first=first[other], count=count[other], record_end=record_end[other], records=entries,
-                    chunk_size=chunk_size, rows=other)
+                    chunk_size=chunk_size, rows=other, keyed=False)
 
 
 def _check_supports(case: Case, axes, records: dict) -> None:
@@ -512,7 +532,8 @@ def _plan_pulses(case: Case, axes, ratio, chunk_size: int, n: int, progress=None
     _warn_coarse_step(case, grid.other_axes, params)
     return assemble(case, axes, mu_kinetic_ratio=ratio, params=params, states=states, factor_h=amplitudes[scale],
                     factor_v=factor_v[other], base=np.concatenate(supports.pieces, axis=1), first=first[other],
-                    count=count[other], record_end=record_end[other], records=[], chunk_size=chunk_size, rows=other)
+                    count=count[other], record_end=record_end[other], records=[], chunk_size=chunk_size, rows=other,
+                    keyed=False)
 
 
 def _warn_coarse_step(case: Case, axes, params: np.ndarray) -> None:
@@ -606,6 +627,8 @@ def root_attributes(plan: Plan, command_line: str) -> dict:
         "mu_kinetic_ratio": math.nan if plan.mu_kinetic_ratio is None else plan.mu_kinetic_ratio,
         "chunk_size": plan.chunk_size,
     }
+    if plan.step_study is not None:          # the step auto took or would take, and its estimate
+        attrs.update(plan.step_study.attributes())
     for entry in plan.records:
         attrs[f"record_{entry['role']}"] = entry["path"]
         attrs[f"record_{entry['role']}_sha256"] = entry["sha256"]

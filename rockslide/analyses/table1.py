@@ -136,13 +136,17 @@ def check_records(configs: Path, records_dir: Path) -> None:
                               "ROCKSLIDE_RECORDS at its folder")
 
 
-def run_table(configs: Path, records_dir: Path, gravities=(None, PAPER_G)) -> tuple[list[Row], dict]:
-    """Run every row; ``None`` in ``gravities`` is the case file's own gravity."""
+def run_table(configs: Path, records_dir: Path, gravities=(None, PAPER_G), *,
+              auto: bool = False) -> tuple[list[Row], dict]:
+    """Run every row; ``None`` in ``gravities`` is the case file's own gravity; ``auto``: with
+    ``solver.dt: auto`` and its default tolerance instead of the case files' 0.1 ms."""
     check_records(configs, records_dir)
     rows = [Row(*entry) for entry in PAPER_TABLE]
     results = {}
     for row in rows:
         base_case = load_case(configs / f"{row.name}.yaml")
+        if auto:
+            base_case = case_with(base_case, {"solver.dt": "auto"})
         for gravity in gravities:
             case = base_case if gravity is None else case_with(base_case, {"gravity": gravity})
             prepared = runner.prepare(case, records_dir, history=gravity is None)
@@ -160,6 +164,7 @@ def run_table(configs: Path, records_dir: Path, gravities=(None, PAPER_G)) -> tu
                 "pga_h": float(np.max(np.abs(prepared.ground.horizontal))) / 0.01,
                 "time_shift": case.ground.time_shift,
                 "impact_branches": Counter(b.decode() for b in result.events["impact"] if b),
+                "step": result.step, "step_choice": prepared.step_choice,
                 "least_impact_loss": float(result.events["energy_loss"][result.events["impact"] != b""].min(
                     initial=math.inf)),
             }

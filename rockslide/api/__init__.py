@@ -32,7 +32,8 @@ import importlib
 _WHERE = {
     "Case": "..case", "case_with": "..case", "load_case": "..case", "Summary": "..core.simulate",
     "OutputSet": "..outputs", "check_name": "..outputs", "output_folder": "..outputs",
-    "record_lines": ".reports", "run_lines": ".reports", "run_payload": ".reports", "stored_lines": ".reports",
+    "record_lines": ".reports", "json_ready": ".reports", "run_lines": ".reports", "run_payload": ".reports",
+    "stored_lines": ".reports",
     "risk": ".site", "risk_analysis": ".site", "risk_outputs": ".site", "risk_study": ".site",
     "KEEP_HISTORY_ROWS": ".runs", "LONG_RUN": ".runs", "RunResult": ".runs", "ensemble": ".runs", "run": ".runs",
     "describe_file": ".stored", "export_pelicun": ".stored", "plot_results": ".stored", "read_result": ".stored",
@@ -40,7 +41,7 @@ _WHERE = {
     "StudyResult": ".studies", "fragility": ".studies", "fragility_study": ".studies", "retired_axis": ".studies",
     "sweep": ".studies", "sweep_study": ".studies",
     "criteria_map": ".tools", "describe_record": ".tools", "is_result_file": ".tools", "table1": ".tools",
-    "write_example": ".tools",
+    "write_example": ".tools", "work_precision": ".tools",
 }
 
 __all__ = sorted(_WHERE)

@@ -99,6 +99,8 @@ def run_lines(result, *, units=None) -> list[str]:
     """The printout of `run` (`rockslide run`): its summary, ensemble and floor (without the files)."""
     lines = run_text(result.name, result.summary, result.ensemble, ground=result.ground or None,
                      units=units).split("\n")
+    if (result.integration or {}).get("mode") == "auto":
+        lines.append(f"  solver.dt: {result.integration['note']}")
     if result.floor is not None:
         from ..engine.prepare import floor_peaks_text
         if "description" in result.floor:
@@ -113,7 +115,8 @@ def run_payload(result) -> dict:
 
     floor = result.floor
     return {"name": result.name, **results.summary_to_json_dict(result.summary, result.events),
-            "ground": result.ground, "floor": floor, "ensemble": results.json_ready(result.ensemble)}
+            "ground": result.ground, "floor": floor, "ensemble": results.json_ready(result.ensemble),
+            "integration": results.json_ready(result.integration)}
 
 
 def record_lines(record, details: dict) -> list[str]:
@@ -149,3 +152,11 @@ def stored_lines(path, details: dict) -> list[str]:
     lines += [f"  {curve}: " + ", ".join(f"{key} {value:.4g}" for key, value in numbers.items() if value is not None)
               for curve, numbers in details.get("rates", {}).items()]
     return lines
+
+
+def json_ready(value):
+    """``value`` with numpy numbers and arrays as plain numbers and lists, NaN as None
+    (`io.results.json_ready`): what a JSON printout holds."""
+    from ..io.results import json_ready as ready
+
+    return ready(value)

@@ -54,6 +54,9 @@ class RunResult:
     floor : dict or None
         For a case on a floor: ``description`` and the peaks of the floor's motion (``pfa``
         [m/s^2], ``pfv`` [m/s], and of the ground under the building).
+    integration : dict or None
+        The step the run took (``step`` [s], ``mode`` fixed or auto and, with ``solver.dt: auto``,
+        its error estimates: `engine.prepare.step_report`), as ``rockslide run --json`` gives it.
     files : outputs.OutputSet or None
         The files written (``run(..., outputs=...)``).
     written : str
@@ -71,6 +74,7 @@ class RunResult:
     attrs: dict = field(default_factory=dict)
     ensemble: dict | None = None
     floor: dict | None = None
+    integration: dict | None = None
     files: object = None
     written: str = ""
     base: dict | None = None
@@ -204,7 +208,7 @@ def _run_result(prepared, result, summary, **more) -> RunResult:
                  **engine.floor_peaks(result.ground_time, result.ground_horizontal, prepared.base.horizontal)}
     return RunResult(name=case.name, result=result, ground=engine.applied_ground(prepared),
                      records=engine.record_entries(prepared), case=case, case_text=case.text, ensemble=summary,
-                     floor=floor, **more)
+                     floor=floor, integration=engine.step_report(prepared, result.step), **more)
 
 
 def _neighbourhood(eplan, result, *, device="cpu", workers=None, say=None, bars=None):
@@ -279,11 +283,12 @@ def _stored_run(case, prepared, summary, group) -> dict:
     dimension and member variables)."""
     from ..case import case_to_dict
     from ..engine import prepare as engine
+    from ..engine.step import choice_attributes
 
-    attrs = {}
+    attrs = dict(choice_attributes(prepared.step_choice))
     if summary is not None:
         from ..analyses import ensemble as ens
-        attrs = ens.attributes(summary)
+        attrs = {**ens.attributes(summary), **attrs}
     return dict(name=case.name, case_text=case.text, case=case_to_dict(case, case_file=False),
                 records=engine.record_entries(prepared), ground=engine.applied_ground(prepared), extra_attrs=attrs,
                 extra_groups={**(engine.base_motion(prepared) or {}),

@@ -181,7 +181,7 @@ def sweep_study(case, axes: Sequence[tuple], *, mu_kinetic_ratio=None, records_d
         done.states = None                      # 288 bytes a case: not held while the file is written
         result = StudyResult("sweep", case.name, sw.coordinates(plan), variables,
                              sw.root_attributes(plan, command_line), done.computed, done.seconds,
-                             lines=_sweep_lines(plan, variables, done))
+                             lines=_sweep_lines(plan, variables, done) + _step_note(plan))
         if outputs is not None:
             _write(result, outputs, figure=lambda: sw.figure(plan, variables, size=outputs.size),
                    table=lambda: (datasets.sweep_dataset(sw.table_coordinates(result.coords), variables),
@@ -295,6 +295,12 @@ def _rate(done, unit: str) -> str:
     """``1517 cases in 1.2 s (1264 cases/s)``."""
     rate = f" ({done.computed / done.seconds:.0f} {unit}/s)" if done.computed and done.seconds > 0 else ""
     return f"{done.computed} {unit} in {done.seconds:.1f} s{rate}"
+
+
+def _step_note(plan) -> list[str]:
+    """The step the study took, and what ``solver.dt: auto`` takes or would take (`step.StudyStep.note`)."""
+    note = plan.step_study.note() if plan.step_study is not None else ""
+    return [f"  {note}"] if note else []
 
 
 def _sweep_lines(plan, variables, done) -> list[str]:
@@ -475,7 +481,7 @@ def fragility_study(case, suite, *, im="pga", levels, damage=(), units=None, res
                    table=lambda: (datasets.study_dataset(result.coords, result.variables), per_run), more=more)
             done.store.remove()
         result.lines = _fragility_lines(fplan, analysis, done, measure, export, export_path, export_family, left_out,
-                                        model, surfaces, second)
+                                        model, surfaces, second) + _step_note(fplan.plan)
         return result
 
 

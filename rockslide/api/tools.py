@@ -106,3 +106,50 @@ def write_example(folder: str | Path = "example", *, overwrite: bool = False) ->
     from ..io.example import write_example as write
 
     return write(folder, overwrite=overwrite)
+
+
+def work_precision(case, *, records_dir=None, reference: str = "auto", modes=("located",), path=None,
+                   overwrite: bool = True, dpi=None, size=None):
+    """Error against CPU time on one case, at a few steps (`analyses.precision.work_precision`), as
+    ``rockslide work-precision``.
+
+    Parameters
+    ----------
+    case : Case, mapping or path
+    records_dir : str or Path, optional
+    reference : {"auto", "solver", "finest"}
+        Errors against the reference solver (DOP853), the kernel's finest step halved, or the
+        solver when the case is short.
+    modes : sequence of str
+        Event schemes: ``located`` and/or ``step-end``.
+    path : str or Path, optional
+        Also draw the figure there (``"default"``: ``OUT/NAME.work-precision.png``, OUT the case's
+        ``output.dir``).
+    overwrite, dpi, size
+        Of the figure.
+
+    Returns
+    -------
+    analyses.precision.PrecisionTable
+        ``rows`` (step [s], CPU [s], errors of the event times [s] and the largest rotation [rad],
+        verdict), ``text()`` the printout, ``figure_path`` the figure written (or None).
+    """
+    from ..analyses import precision
+    from ..engine import prepare as engine
+    from ..io import records
+    from ._shared import as_case
+
+    case = as_case(case)
+    if reference not in ("auto", "solver", "finest"):
+        raise CaseError(f"expected auto, solver or finest, got {reference!r}", source="reference")
+    prepared = engine.prepare(case, records.records_dir(records_dir), history=False)
+    table = precision.work_precision(prepared, reference=reference, modes=tuple(modes))
+    if path is not None:
+        from ..outputs import output_folder
+        from ..plots import save_figure
+
+        if str(path) == "default":
+            path = output_folder(None, case) / f"{case.name}.work-precision.png"
+        save_figure(precision.figure(table, size=size), path, overwrite=overwrite, dpi=dpi)
+        table.figure_path = Path(path)
+    return table

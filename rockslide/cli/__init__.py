@@ -13,7 +13,7 @@ set, `outputs.OutputSet`) and prints what it returns. It imports neither `core`,
 - `risk`: ``rockslide risk``.
 """
 
-from . import risk, run, studies, tools  # noqa: F401  (each registers its commands on `main`)
+from . import precision, risk, run, studies, tools  # noqa: F401  (each registers its commands on `main`)
 from .app import entry, main
 
 __all__ = ["entry", "main"]

@@ -93,7 +93,7 @@ def load_ground(case: Case, records_dir: Path | None = None, *, records: dict | 
         return rec.combine(records["horizontal"], records["vertical"], pga_horizontal=scale.pga_horizontal,
                            factor=scale.factor, pga_vertical=scale.pga_vertical,
                            vertical_factor=scale.vertical_factor, source=case.source,
-                           still_dt=case.solver.dt)
+                           still_dt=still_step(case))
     except RecordError as exc:
         if exc.field is None:
             raise
@@ -253,6 +253,14 @@ def floor_peaks_text(peaks: dict) -> str:
     """`floor_peaks` in one line [g, cm/s]."""
     return (f"on a floor: PFA {peaks['pfa'] / STANDARD_GRAVITY:.3g} g, PFV {peaks['pfv'] * 100:.3g} cm/s; the "
             f"ground under the building: PGA {peaks['pga_base'] / STANDARD_GRAVITY:.3g} g")
+
+
+def still_step(case: Case) -> float:
+    """[s] The sampling step of the still ground (a case without records): ``solver.dt``, or with
+    ``solver.dt: auto`` `step.AUTO_STILL_STEP`, which leaves the step free."""
+    from .step import AUTO_STILL_STEP
+
+    return AUTO_STILL_STEP if case.solver.auto else case.solver.dt
 
 
 def is_pulse_case(case: Case) -> bool:

@@ -95,6 +95,8 @@ class Plan:
         Cases per chunk.
     key : str
         `definition_key` of the sweep.
+    step_study : step.StudyStep, optional
+        The pilots of ``solver.dt: auto`` (`prepare.study_step`): the step taken or what it would save.
     rows : int64[n], optional
         Each point's row of ``params`` and ``states`` (a 1000 x 1000 ``--mu`` x ``--pga`` grid has
         1000 distinct rows: 16 MB instead of 400). None: row i is point i.
@@ -116,6 +118,7 @@ class Plan:
     chunk_size: int
     key: str = ""
     rows: np.ndarray | None = None
+    step_study: object = None       # step.StudyStep: the step auto took or would take, and its estimate
 
     @property
     def shape(self) -> tuple:
@@ -197,14 +200,17 @@ class Supports:
 
 
 def assemble(case: Case, axes, *, params, states, factor_h, factor_v, base, first, count, record_end, records,
-             chunk_size: int, rows=None, mu_kinetic_ratio=None, step: float | None = None) -> Plan:
+             chunk_size: int, rows=None, mu_kinetic_ratio=None, step: float | None = None, step_study=None,
+             keyed: bool = True) -> Plan:
     """The one assembler of a `Plan` from its cases' kernel inputs (the fields of `Plan`; ``step``
-    defaults to the smallest of the cases'), with its `definition_key`."""
+    defaults to the smallest of the cases'), with its `definition_key` (unless not ``keyed``: the
+    caller then sets it after changing the steps, `prepare.study_step`)."""
     plan = Plan(case=case, axes=list(axes), mu_kinetic_ratio=mu_kinetic_ratio, params=params, states=states,
                 factor_h=factor_h, factor_v=factor_v, base=base, first=first, count=count, record_end=record_end,
                 step=float(params[:, K.P_STEP].min()) if step is None else step, records=records,
-                chunk_size=chunk_size, rows=rows)
-    plan.key = definition_key(plan)
+                chunk_size=chunk_size, rows=rows, step_study=step_study)
+    if keyed:
+        plan.key = definition_key(plan)
     return plan
 
 

@@ -36,8 +36,10 @@ from .ground import (  # noqa: F401  (the ground motion's functions, used here a
     load_ground,
     pulse_ground,
     read_records,
+    still_step,
     unit_pulses,
 )
+from .step import MAX_P_DT, StepChoice, choose_step
 
 
 @dataclass(frozen=True)
@@ -53,6 +55,7 @@ class Prepared:
     components: Components | None = None
     base: rec.GroundMotion | None = None
     records: dict | None = None
+    step_choice: StepChoice | None = None       # with solver.dt: auto, the step chosen and its error
 
 
 def base_motion(prepared: Prepared) -> dict | None:
@@ -83,12 +86,15 @@ def model_for(case: Case) -> Model:
                  case.gravity, block.mass, half_width_2=b2, radius_of_gyration=block.radius_of_gyration)
 
 
-def settings_for(case: Case, *, history: bool = True, energy: bool = True) -> Settings:
+def settings_for(case: Case, *, history: bool = True, energy: bool = True, step: float | None = None) -> Settings:
+    """The core's settings for ``case``; ``step`` [s] instead of ``solver.dt`` (the step `auto` chose:
+    ``output.interval`` is then rounded to a whole number of steps)."""
+    dt = case.solver.dt if step is None else step
     every = 0
     if history:
         interval = case.output.interval
-        every = 1 if interval is None else max(1, round(interval / case.solver.dt))
-    return Settings(dt=case.solver.dt, events=case.solver.events,
+        every = 1 if interval is None else max(1, round(interval / dt))
+    return Settings(dt=dt, events=case.solver.events,
                     tail=0.0 if floor_carries_tail(case) else case.ground.tail,
                     rotation=case.initial.rotation, rotation_rate=case.initial.rotation_rate,
                     slip_rate=case.initial.slip_rate, history_every=every, energy=energy)
@@ -198,7 +204,7 @@ class RunWarning(UserWarning):
 def check_step(case: Case, ground: rec.GroundMotion) -> None:
     """The case's ``solver.dt`` is not coarser than the record's sampling step (a pulse is sampled
     at most ``solver.dt`` apart, `pulses.sample`)."""
-    if case.solver.dt > ground.dt * (1.0 + 1e-9) and not is_pulse_case(case):
+    if case.solver.dt > ground.dt * (1.0 + 1e-9) and not is_pulse_case(case) and not case.solver.auto:
         raise CaseError(f"dt = {case.solver.dt:g} s is larger than the record's sampling step "
                         f"{ground.dt:g} s; expected dt <= {ground.dt:g} s",
                         source=case.source, field="solver.dt")
@@ -245,8 +251,7 @@ def check_size(case: Case, ground: rec.GroundMotion, *, history: bool = True) ->
 #: per second (compressed HDF5).
 STEPS_PER_SECOND = 9e6
 ROWS_PER_SECOND = 1e6
-#: Largest ``p dt`` without a warning (`step_warning`).
-MAX_P_DT = 0.1
+# MAX_P_DT, the largest ``p dt`` without a warning (`step_warning`), lives in `step` (auto's coarsest step)
 
 
 @dataclass(frozen=True)
@@ -334,11 +339,54 @@ def prepare(case: Case, records_dir: Path | None = None, *, history: bool = True
     check_size(case, ground, history=history)
     model = model_for(case)
     settings = settings_for(case, history=history)
+    choice = None
+    if case.solver.auto and case.solver.method == "kernel":
+        choice = auto_step(case, model, ground, settings)
+        settings = settings_for(case, history=history, step=choice.step)
     warning = coarse_step_warning(case.source, parameters(model, ground.dt, settings))
     if warning:
         warnings.warn(warning, RunWarning, stacklevel=2)
     return Prepared(case, ground, model, settings, components, base=base if ground is not base else None,
-                    records=records)
+                    records=records, step_choice=choice)
+
+
+def study_step(plan, pilots, sample: str):
+    """The one step of a study: ``pilots`` are ``(rows, case, ground)`` (the rows of ``plan.params``
+    a pilot stands for, the case piloted and its scaled ground motion); each is piloted (`auto_step`)
+    and, with ``solver.dt: auto``, its rows take the step it chose (`step.apply_step`; the plan's
+    ``step`` follows; the caller computes its ``key`` after). ``sample`` says what was piloted, for
+    the note. Sets and returns ``plan.step_study`` (`step.StudyStep`)."""
+    from .step import StudyStep, apply_step
+
+    choices = []
+    for rows, case, ground in pilots:
+        settings = settings_for(case, history=False, energy=False)
+        choice = auto_step(case, model_for(case), ground, settings)
+        choices.append(choice)
+        if plan.case.solver.auto:
+            apply_step(plan.params, choice.step, rows)
+    default = choices[0].default_step if choices else plan.case.solver.dt
+    plan.step_study = StudyStep(plan.case.solver.auto, tuple(choices), sample, default)
+    if plan.case.solver.auto and choices:
+        plan.step = float(plan.params[:, P_STEP].min())
+    return plan.step_study
+
+
+def step_report(prepared: Prepared, step: float) -> dict:
+    """The step a run used, for ``rockslide run --json`` and its result file: ``step`` [s], ``mode``
+    (``auto`` or ``fixed``) and, with ``auto``, the estimate (`step.StepChoice.as_dict`: errors
+    [s] and [rad], tolerance, ``met``)."""
+    choice = prepared.step_choice
+    return {"step": float(step), "mode": "fixed" if choice is None else "auto",
+            **({} if choice is None else choice.as_dict()), "note": "" if choice is None else choice.describe()}
+
+
+def auto_step(case: Case, model: Model, ground: rec.GroundMotion, settings: Settings) -> StepChoice:
+    """`step.choose_step` for ``case`` on ``ground`` (scaled, what the block stands on) with the
+    case's ``solver.tolerance``: the one call behind runs, sweeps, ensembles and fragility analyses."""
+    return choose_step(model, ground.dt, ground.horizontal, ground.vertical, settings,
+                       tolerance_time=case.solver.tolerance_time, tolerance_rotation=case.solver.tolerance_rotation,
+                       start=ground.start + case.ground.time_shift)
 
 
 def start_time(prepared: Prepared) -> float:
@@ -388,8 +436,8 @@ __all__ = ["Prepared", "Components", "component_azimuths", "ground_along",
            "load_ground", "floor_ground", "floor_text", "floor_peaks", "floor_peaks_text", "base_motion",
            "is_pulse_case", "unit_pulses", "pulse_ground", "model_for", "settings_for", "check_parameters",
            "check_against_ground", "check_step", "check_size", "prepare", "simulate_prepared", "run_case",
-           "applied_ground", "record_entries", "start_time", "verdict_robustness", "work", "Work", "step_warning",
-           "RunWarning"]
+           "applied_ground", "record_entries", "auto_step", "still_step", "study_step", "step_report", "start_time",
+           "verdict_robustness", "work", "Work", "step_warning", "RunWarning"]
 
 
 ROBUSTNESS_VARIANTS = (("dt/2", 0.5, 1.0), ("mu-1%", 1.0, 0.99), ("mu+1%", 1.0, 1.01))

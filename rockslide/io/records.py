@@ -963,7 +963,7 @@ def _comment_header(text: str, skip_lines: int, first_data: int, columns: int,
     exports write it).
 
     A comment line counts when it splits into one field per column (`_header_fields`) and a field
-    ends in a bracketed unit (`_BRACKETED_UNIT`): prose in a comment ("peak 0.5 g") states none.
+    ends in a bracketed unit (`_bracketed_unit`): prose in a comment ("peak 0.5 g") states none.
     Comment lines that state different units make the header ambiguous: no unit is taken, and the
     third value says which lines disagree (the caller asks for ``units``).
 
@@ -982,8 +982,8 @@ def _comment_header(text: str, skip_lines: int, first_data: int, columns: int,
         fields = _header_fields(content.lstrip("#").split("#", 1)[0], columns)
         if len(fields) != columns:
             continue
-        brackets = [_BRACKETED_UNIT.search(field) for field in fields]
-        stated = [_unit_word(match.group(1)) if match else None for match in brackets]
+        brackets = [_bracketed_unit(field) for field in fields]
+        stated = [_unit_word(found[1]) if found else None for found in brackets]
         if any(stated):
             stated_lines.append((number, fields, stated))
     if not stated_lines:
