@@ -41,7 +41,7 @@ _WHERE = {
     "StudyResult": ".studies", "fragility": ".studies", "fragility_study": ".studies", "retired_axis": ".studies",
     "sweep": ".studies", "sweep_study": ".studies",
     "criteria_map": ".tools", "describe_record": ".tools", "is_result_file": ".tools", "table1": ".tools",
-    "write_example": ".tools", "work_precision": ".tools",
+    "write_example": ".tools", "work_precision": ".tools", "describe_mesh": ".tools", "is_mesh_file": ".tools",
 }
 
 __all__ = sorted(_WHERE)

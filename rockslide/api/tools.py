@@ -153,3 +153,84 @@ def work_precision(case, *, records_dir=None, reference: str = "auto", modes=("l
         save_figure(precision.figure(table, size=size), path, overwrite=overwrite, dpi=dpi)
         table.figure_path = Path(path)
     return table
+
+
+#: The file endings read as meshes (`io.mesh`) by `describe_mesh` and ``rockslide info``.
+MESH_ENDINGS = (".obj", ".stl", ".ply")
+
+
+def is_mesh_file(path) -> bool:
+    """Whether ``path`` names a mesh (OBJ, STL, PLY) by its ending."""
+    return str(path).lower().endswith(MESH_ENDINGS)
+
+
+def describe_mesh(path: str | Path, *, units: str | None, azimuth=None, density=None, mass=None,
+                  figure: str | Path | None = None, overwrite: bool = False, dpi=None, size=None) -> dict:
+    """A scanned object's planar bodies along ``azimuth`` and across it (`io.mesh.planar_bodies`;
+    docs/meshes.md), as ``rockslide info rock.obj`` prints them, with the case-file keys of each.
+
+    Parameters
+    ----------
+    path : str or Path
+        A closed triangle mesh (OBJ, STL, PLY).
+    units : str
+        Its length unit (``m``, ``cm``, ``mm``, ``in``, ``ft``): a mesh file does not say.
+    azimuth : str or float, optional
+        The shaking direction, clockwise from north (``"30 deg"``; SI numbers in rad); default 90
+        deg, along the mesh's x axis (east).
+    density, mass : str or float, optional
+        ``"2650 kg/m^3"`` (or SI), or the mass [kg]: the body's mass.
+    figure : str or Path, optional
+        Also draw its outline, support, centre of mass and tipping angles there (`plots.body_figure`).
+
+    Returns
+    -------
+    dict
+        ``lines`` (the printout), ``bodies`` (per plane: ``b1``, ``b2``, ``h`` [m], ``k2`` [m^2],
+        ``mass`` [kg], ``azimuth`` [rad], and ``block``, the case file's keys of that body).
+    """
+    from ..io import mesh
+    from ..units import parse_quantity
+
+    if units is None:
+        raise CaseError("give the mesh's length unit (m, cm, mm, in or ft): a mesh file does not state it",
+                        source="units")
+    az = math.pi / 2 if azimuth is None else parse_quantity(azimuth, "angle", source="azimuth", si_numbers=True)
+    rho = None
+    if density is not None:
+        rho = _density(density)
+    kg = None if mass is None else parse_quantity(mass, "mass", source="mass")
+    bodies = mesh.planar_bodies(mesh.read_mesh(path, units=units), azimuth=az, density=rho, mass=kg)
+    out = {"file": str(path), "lines": mesh.describe(bodies), "bodies": []}
+    for body in bodies:
+        block = {"centre_of_mass_height": f"{body.h:.6g} m",
+                 "half_widths": [f"{body.b1:.6g} m", f"{body.b2:.6g} m"],
+                 "radius_of_gyration": f"{body.radius_of_gyration:.6g} m"}
+        if body.mass is not None:
+            block["mass"] = f"{body.mass:.6g} kg"
+        out["bodies"].append({"plane": body.plane, "azimuth": body.azimuth, "b1": body.b1, "b2": body.b2,
+                              "h": body.h, "k2": body.k2, "mass": body.mass, "block": block})
+        out["lines"].append(f"case file, along {math.degrees(body.azimuth) % 360:g} deg: block: "
+                            "{" + ", ".join(f"{k}: {v}" if not isinstance(v, list) else f"{k}: [{v[0]}, {v[1]}]"
+                                            for k, v in block.items()) + "}")
+    if figure is not None:
+        from ..plots import body_figure, save_figure
+        save_figure(body_figure(bodies, title=Path(path).name, size=size), figure, overwrite=overwrite, dpi=dpi)
+        out["figure"] = str(figure)
+    return out
+
+
+def _density(value) -> float:
+    """A density [kg/m^3] from ``"2650 kg/m^3"``, ``"2.65 g/cm^3"`` or a number (SI)."""
+    text = str(value).strip().replace(" ", "")
+    for unit, factor in (("kg/m^3", 1.0), ("kg/m3", 1.0), ("g/cm^3", 1000.0), ("g/cm3", 1000.0), ("", 1.0)):
+        if text.endswith(unit) and (unit or text.replace(".", "", 1).replace("e", "", 1).lstrip("+-").isdigit()):
+            try:
+                number = float(text[:len(text) - len(unit)] if unit else text) * factor
+            except ValueError:
+                break
+            if math.isfinite(number) and number > 0:
+                return number
+            break
+    raise CaseError(f"expected a positive density such as '2650 kg/m^3' or '2.65 g/cm^3', got {value!r}",
+                    source="density")

@@ -29,16 +29,28 @@ from .app import dpi_option, json_line, main, records_dir_option, size_option
 @click.option("--skip-lines", type=int, default=0,
               help="Lines to skip before the data (header lines of names are recognised without it).")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object.")
-def info(record, fmt, units, time_column, column, dt, skip_lines, as_json):
-    """Describe an accelerogram (format, dt, duration, units and peaks), or what a result, sweep,
-    fragility or risk file of rockslide holds (its summary, read back: nothing is computed again).
+@click.option("--azimuth", default=None, metavar="ANGLE",
+              help="A mesh (OBJ, STL, PLY): the shaking direction, clockwise from north (default 90 deg, its x axis).")
+@click.option("--density", default=None, metavar="DENSITY", help="A mesh: its density (2650 kg/m^3), for its mass.")
+@click.option("-o", "--output", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              help="A mesh: also draw its planar bodies (outline, support, centre of mass, tipping angles) there.")
+def info(record, fmt, units, time_column, column, dt, skip_lines, as_json, azimuth, density, output):
+    """Describe an accelerogram (format, dt, duration, units and peaks), what a result, sweep,
+    fragility or risk file of rockslide holds (its summary, read back: nothing is computed again), or
+    the planar bodies of a scanned object's mesh (OBJ, STL, PLY; --units gives its length unit) with
+    the case-file keys of each (docs/meshes.md).
 
     \b
     Example:
         rockslide info example/synthetic_kt_h.at2
         rockslide info out/example.h5 --json
+        rockslide info example/rock.obj --units m --density 2650kg/m^3
     """
-    if api.is_result_file(record):
+    if api.is_mesh_file(record):
+        details = api.describe_mesh(record, units=units, azimuth=azimuth, density=density, figure=output,
+                                    overwrite=True)
+        lines = details["lines"]
+    elif api.is_result_file(record):
         details = api.describe_file(record)
         lines = api.stored_lines(record, details)
     else:

@@ -61,9 +61,30 @@ def write_suite_records(folder, staging=None) -> list[Path]:
     return paths
 
 
+#: A rock-like body as a mesh (``rockslide info example/rock.obj --units m``; docs/meshes.md).
+ROCK_FILE = "rock.obj"
+
+
+def rock_obj(b1: float = 0.044, b2: float = 0.129, h: float = 0.294, depth: float = 0.2) -> str:
+    """A closed OBJ mesh [m] whose planar body along x (east) is model-asymmetric.md's rock: a prism
+    of parallelogram section leaning toward -x, its base ``b1 + b2`` wide and its centre of mass
+    ``h`` above the base, ``b1`` from the base's -x edge (pivot 1) and ``b2`` from its +x edge."""
+    width, height = b1 + b2, 2.0 * h
+    lean = 2.0 * b1 - width                       # the top's shift: the centre of mass at x = b1
+    corners = [(0, 0, 0), (width, 0, 0), (width, depth, 0), (0, depth, 0),
+               (lean, 0, height), (width + lean, 0, height), (width + lean, depth, height), (lean, depth, height)]
+    faces = [(1, 3, 2), (1, 4, 3), (5, 6, 7), (5, 7, 8), (1, 2, 6), (1, 6, 5), (4, 7, 3), (4, 8, 7),
+             (1, 5, 8), (1, 8, 4), (2, 3, 7), (2, 7, 6)]          # each counter-clockwise seen from outside
+    lines = ["# rockslide's example rock: the planar body of docs/asymmetric.md along x (units: m)"]
+    lines += [f"v {x:.6g} {y:.6g} {z:.6g}" for x, y, z in corners]
+    lines += [f"f {a} {b} {c}" for a, b, c in faces]
+    return "\n".join(lines) + "\n"
+
+
 def write_example(folder, *, overwrite: bool = False) -> list[Path]:
     """Write ``folder/example.yaml`` and its records, ``folder/suite-synthetic.yaml`` and its
-    records, ``folder/spectrum-one-sine.yaml`` and ``folder/hazard-example-PGA.csv``, published
+    records, ``folder/spectrum-one-sine.yaml``, ``folder/hazard-example-PGA.csv`` and
+    ``folder/rock.obj`` (`rock_obj`), published
     together (`files.Staging`): nothing is written if one of them exists and ``overwrite`` is
     false, and after Ctrl-C or an error the folders this made are removed again.
 
@@ -74,7 +95,7 @@ def write_example(folder, *, overwrite: bool = False) -> list[Path]:
     """
     folder = Path(folder)
     texts = (CASE_FILE, SUITE_FILE, SPECTRUM_FILE, HAZARD_FILE)
-    names = [*texts, *(name for name, _, _ in RECORDS), *suite_record_names()]
+    names = [*texts, ROCK_FILE, *(name for name, _, _ in RECORDS), *suite_record_names()]
     made = [path for path in (*reversed(folder.parents), folder, folder / "suite-synthetic") if not path.exists()]
     try:
         for name in names:
@@ -84,7 +105,10 @@ def write_example(folder, *, overwrite: bool = False) -> list[Path]:
                 with atomic_write(folder / name, overwrite=overwrite, mode="w", what="case file",
                                   staging=staging) as handle:
                     handle.write(case_text(name))
-            paths = ([folder / name for name in texts] + write_records(folder, staging)
+            with atomic_write(folder / ROCK_FILE, overwrite=overwrite, mode="w", what="mesh",
+                              staging=staging) as handle:
+                handle.write(rock_obj())
+            paths = ([folder / name for name in texts] + [folder / ROCK_FILE] + write_records(folder, staging)
                      + write_suite_records(folder, staging))
             staging.publish()
     except BaseException:
