@@ -9,15 +9,22 @@ naming the file.
 from __future__ import annotations
 
 import contextlib
+import copy
+import hashlib
+import math
 import os
 import shutil
+import signal
 import subprocess
 import sys
 import threading
 from pathlib import Path
 from types import SimpleNamespace
 
+import numpy as np
 import pytest
+import yaml
+from rocking_reference import time_to_angle_under_constant_push
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -67,12 +74,13 @@ def example():
     return load_case(REPO / "configs" / "example.yaml")
 
 
-def invoke(*args):
-    """``rockslide ARGS`` in this process (click's runner); each argument as a string."""
+def invoke(*args, **kwargs):
+    """``rockslide ARGS`` in this process (click's runner); each argument as a string: the one way
+    the tests call the command line in process."""
     from click.testing import CliRunner
 
     from rockslide.cli import main
-    return CliRunner().invoke(main, [str(a) for a in args])
+    return CliRunner().invoke(main, [str(a) for a in args], **kwargs)
 
 
 def one_line_error(result, *parts):
@@ -175,3 +183,168 @@ def pytest_collection_modifyitems(config, items):
         if name in SLOW_MODULES or name in SLOW_TESTS or test in SLOW_TESTS or \
                 f"{name}::{item.originalname}" in SLOW_TESTS:
             item.add_marker(pytest.mark.slow)
+
+
+# --------------------------------------------------------------------------------------------------
+# Shared by several test files (tests import this module, never each other)
+# --------------------------------------------------------------------------------------------------
+
+G0 = 9.80665
+
+
+def critical_duration(A, alpha, R):
+    """Housner (1963), exact (no small-angle approximation): a rectangular pulse ``A > g tan(alpha)``
+    lifts the block at once and pushes it up monotonically; after the pulse the motion is free, so
+    the block overturns without impact exactly when the energy at the pulse's end reaches the
+    barrier at ``theta = alpha``:
+    ``(3 / (2 R)) [A (sin(alpha) - sin(alpha - theta1)) - g (cos(alpha - theta1) - cos(alpha))]
+    = (3 g / (2 R)) (1 - cos(alpha - theta1))``, whose root is
+    ``sin(alpha - theta1) = sin(alpha) - (g / A) (1 - cos(alpha))``. The critical duration is the
+    time to reach that ``theta1`` under the pulse (`rocking_reference`'s quadrature)."""
+    theta1 = alpha - math.asin(math.sin(alpha) - G0 / A * (1.0 - math.cos(alpha)))
+    return time_to_angle_under_constant_push(theta1, A / G0, alpha, 0.75 * G0 / R)
+
+
+def sweep_args(out: Path, *axes, extra=()):
+    """``rockslide sweep`` of the shipped example over ``axes`` into ``out`` (its records, no progress bar)."""
+    return ["sweep", REPO / "configs" / "example.yaml", *axes, "--records-dir", REPO / "records", "--out-dir", out,
+            "--no-progress", *extra]
+
+
+def variables_equal(a: Path, b: Path) -> None:
+    """Two sweep files hold the same grid and exactly the same values."""
+    from rockslide.io import results
+
+    x, y = results.read_sweep(a), results.read_sweep(b)
+    assert [(n, v.tolist()) for n, v, _ in x.coords] == [(n, v.tolist()) for n, v, _ in y.coords]
+    assert x.variables.keys() == y.variables.keys()
+    for name, (values, attrs) in x.variables.items():
+        other, other_attrs = y.variables[name]
+        assert values.dtype == other.dtype, name
+        assert np.array_equal(values, other, equal_nan=values.dtype.kind == "f"), name
+        assert attrs == other_attrs
+
+
+#: A small cluster grid (4 x 6 = 24 cases in 5 chunks), shared by the cluster tests.
+CLUSTER_AXES = ("--mu", "0.4:0.7:0.1", "--pga", "400gal:900gal:100gal")
+CLUSTER_CHUNKS = ("--chunk-size", "5")
+
+
+# cases, files and processes of the command line (test_bad_input, test_faults)
+
+# the shipped example names its records relative to configs/; here they are copied beside the case
+EXAMPLE_TEXT = (REPO / "configs" / "example.yaml").read_text(encoding="utf-8").replace("../records/", "")
+EXAMPLE = yaml.safe_load(EXAMPLE_TEXT)
+
+
+DROP = object()   # a change that removes the key
+
+
+def case_text(changes: dict | None = None) -> str:
+    """The shipped example with dotted keys changed (value DROP removes the key), as YAML."""
+    data = copy.deepcopy(EXAMPLE)
+    for dotted, value in (changes or {}).items():
+        *parents, leaf = dotted.split(".")
+        node = data
+        for part in parents:
+            child = node.get(part)
+            if not isinstance(child, dict):
+                if value is DROP:
+                    break                       # nothing to remove
+                child = node[part] = {}
+            node = child
+        else:
+            if value is DROP:
+                node.pop(leaf, None)
+            else:
+                node[leaf] = value
+    return yaml.safe_dump(data, sort_keys=False, allow_unicode=True)
+
+
+def horizontal_only(spec, **changes) -> str:
+    """A case whose only record is ``spec`` (a file name or a record mapping)."""
+    return case_text({"ground.horizontal": spec, "ground.vertical": DROP, **changes})
+
+
+def listing(folder: Path) -> list[str]:
+    """Every file below ``folder`` (hidden temporary files included), relative, sorted."""
+    return sorted(str(p.relative_to(folder)) for p in folder.rglob("*") if p.is_file())
+
+
+def sha256(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def cli_subprocess(args, cwd: Path, **kwargs):
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(REPO), os.environ.get("PYTHONPATH", "")])}
+    env.pop("ROCKSLIDE_RECORDS", None)
+    return subprocess.Popen([sys.executable, "-m", "rockslide.cli", *map(str, args)], cwd=cwd, env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, **kwargs)
+
+
+def _default_sigint():
+    signal.signal(signal.SIGINT, signal.SIG_DFL)   # a background job may have inherited SIG_IGN
+
+
+QUICK = {"solver.dt": "1 ms", "ground.tail": "0 s"}   # a valid case that runs in a fraction of a second
+
+
+# hazard curves, fragility files and hostile cases (test_risk, test_hostile_*)
+
+G = 9.80665
+
+
+def openquake_csv(path, levels_g, poes, *, imt="PGA", years=50.0, kind="mean", sites=None):
+    """A hazard-curve CSV as OpenQuake's ``export_hcurves_csv`` writes it (levels with 7 decimals,
+    PoEs as %.6E, site coordinates with 5)."""
+    sites = sites or [(0.0, 0.0)] * len(poes)
+    comment = (f'#,,,,,"generated_by=\'OpenQuake engine 3.18.0\', start_date=\'2023-10-03T06:09:08\', '
+               f"checksum=2107362341, kind='{kind}', investigation_time={years}, imt='{imt}'\"")
+    header = "lon,lat,depth," + ",".join(f"poe-{v:.7f}" for v in levels_g)
+    rows = [f"{lon:.5f},{lat:.5f},-0.10000," + ",".join(f"{p:.6E}" for p in row)
+            for (lon, lat), row in zip(sites, poes, strict=True)]
+    path.write_text("\n".join([comment, header, *rows]) + "\n")
+    return path
+
+
+def fragility_file(path, *, median=0.5 * G, beta=0.4, interval=True, im="pga", bootstrap=None, suite_text=None):
+    """A fragility file with the variables `rockslide fragility` writes that `risk` reads
+    (``bootstrap``: ``(medians, betas)`` of resamples, for the first state)."""
+    levels = np.array([0.2, 0.4, 0.6, 0.8, 1.0]) * G
+    fraction = np.array([[0.0, 0.3, 0.7, 0.9, 1.0], [0.2, 0.6, 0.9, 1.0, 1.0]])
+    per_state = ("damage_state",)
+    bounds = (0.8, 1.25) if interval else (math.nan, math.nan)
+    exceeded = (np.random.default_rng(1).random((3, levels.size, 2)) < fraction.T).astype(np.int8)   # 3 records
+    variables = {"exceeded": (("record", "level", "damage_state"), exceeded, {}),
+                 "definition": (per_state, np.array(["overturn", "rotation>0.5alpha"], dtype=object), {}),
+                 "fraction_exceeded": (("damage_state", "level"), fraction, {"units": "1"}),
+                 "median": (per_state, np.array([median, median / 2]), {"units": "m/s^2"}),
+                 "beta": (per_state, np.array([beta, beta]), {"units": "1"}),
+                 "fit_note": (per_state, np.array(["", ""], dtype=object), {})}
+    for name, value in (("median", median), ("beta", beta)):
+        for side, factor in zip(("lower", "upper"), bounds, strict=True):
+            variables[f"{name}_{side}"] = (per_state, np.array([value * factor] * 2), {})
+    coords = [("record", np.array(["r1", "r2", "r3"], dtype=object), {}), ("level", levels, {"units": "m/s^2"}),
+              ("damage_state", np.array(["overturn", "rotation>0.5alpha"], dtype=object), {})]
+    if bootstrap is not None:
+        n = len(bootstrap[0])
+        coords.append(("resample", np.arange(n, dtype=np.float64), {}))
+        for name, values in zip(("median", "beta"), bootstrap, strict=True):
+            variables[f"bootstrap_{name}"] = (("damage_state", "resample"), np.array([values, [np.nan] * n]), {})
+    attrs = {"intensity_measure": im, "confidence_level": 0.95}
+    if suite_text is not None:
+        attrs["suite_text"] = suite_text
+    from rockslide.io import results
+
+    results.write_dataset(path, coords, variables, format=results.FRAGILITY_FORMAT, attrs=attrs)
+    return path
+
+
+def _case(folder):
+    data = yaml.safe_load((REPO / "configs" / "example.yaml").read_text().replace("../records/", ""))
+    data["ground"]["tail"] = "0 s"
+    data["solver"]["dt"] = "1 ms"
+    data["output"] = {"dir": str(folder / "out"), "interval": "10 ms"}
+    (folder / "case.yaml").write_text(yaml.safe_dump(data))
+    for name in SHIPPED:
+        shutil.copy(REPO / "records" / name, folder / name)

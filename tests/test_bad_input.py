@@ -17,8 +17,6 @@ written by the tests.
 
 from __future__ import annotations
 
-import copy
-import hashlib
 import os
 import pickle
 import shutil
@@ -33,51 +31,33 @@ import h5py
 import numpy as np
 import pytest
 import yaml
-from click.testing import CliRunner
-from conftest import REPO, SHIPPED
+from conftest import (
+    DROP,
+    EXAMPLE,
+    EXAMPLE_TEXT,
+    QUICK,
+    REPO,
+    SHIPPED,
+    _default_sigint,
+    case_text,
+    cli_subprocess,
+    horizontal_only,
+    listing,
+    sha256,
+)
+from conftest import invoke as shared_invoke
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from rockslide.cli import main
 from rockslide.engine import prepare as runner
 from rockslide.io import results
 from rockslide.io.records import read_record, write_at2
 
-# the shipped example names its records relative to configs/; here they are copied beside the case
-EXAMPLE_TEXT = (REPO / "configs" / "example.yaml").read_text(encoding="utf-8").replace("../records/", "")
-EXAMPLE = yaml.safe_load(EXAMPLE_TEXT)
 SOLVER_LINE = 1 + next(i for i, line in enumerate(EXAMPLE_TEXT.splitlines()) if line.startswith("solver:"))
-DROP = object()   # a change that removes the key
-
 # ------------------------------------------------------------------------------------------------
 # Helpers: cases, records, the command line
 # ------------------------------------------------------------------------------------------------
 
-
-def case_text(changes: dict | None = None) -> str:
-    """The shipped example with dotted keys changed (value DROP removes the key), as YAML."""
-    data = copy.deepcopy(EXAMPLE)
-    for dotted, value in (changes or {}).items():
-        *parents, leaf = dotted.split(".")
-        node = data
-        for part in parents:
-            child = node.get(part)
-            if not isinstance(child, dict):
-                if value is DROP:
-                    break                       # nothing to remove
-                child = node[part] = {}
-            node = child
-        else:
-            if value is DROP:
-                node.pop(leaf, None)
-            else:
-                node[leaf] = value
-    return yaml.safe_dump(data, sort_keys=False, allow_unicode=True)
-
-
-def horizontal_only(spec, **changes) -> str:
-    """A case whose only record is ``spec`` (a file name or a record mapping)."""
-    return case_text({"ground.horizontal": spec, "ground.vertical": DROP, **changes})
 
 
 PULSE = {"pulse": "rectangular", "amplitude": "0.5 g", "duration": "0.2 s"}
@@ -134,13 +114,9 @@ class _Evil:
         return (os.system, ("touch pwned",))
 
 
-def listing(folder: Path) -> list[str]:
-    """Every file below ``folder`` (hidden temporary files included), relative, sorted."""
-    return sorted(str(p.relative_to(folder)) for p in folder.rglob("*") if p.is_file())
-
-
 def invoke(args, **kwargs):
-    return CliRunner().invoke(main, [str(a) for a in args], **kwargs)
+    """``rockslide ARGS`` (a list) in this process: `conftest.invoke`."""
+    return shared_invoke(*args, **kwargs)
 
 
 def assert_clean_error(result, expected=()):
@@ -174,7 +150,6 @@ def write_files(folder: Path, files: dict) -> None:
 # ------------------------------------------------------------------------------------------------
 
 RUN = ("run", "case.yaml")
-QUICK = {"solver.dt": "1 ms", "ground.tail": "0 s"}   # a valid case that runs in a fraction of a second
 
 
 def bad_case(id_, text, expected, args=RUN, files=None):
@@ -628,9 +603,6 @@ def test_absurd_peak_is_a_warning_and_the_run_continues(ws):
 # ------------------------------------------------------------------------------------------------
 
 
-def sha256(path: Path) -> str:
-    return hashlib.sha256(path.read_bytes()).hexdigest()
-
 
 def test_existing_result_is_kept_without_overwrite_and_replaced_with_it(ws):
     (ws / "case.yaml").write_text(case_text(QUICK))
@@ -736,12 +708,6 @@ def test_input_errors_are_reported_before_an_existing_result(ws):
 # ------------------------------------------------------------------------------------------------
 
 
-def cli_subprocess(args, cwd: Path, **kwargs):
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(REPO), os.environ.get("PYTHONPATH", "")])}
-    env.pop("ROCKSLIDE_RECORDS", None)
-    return subprocess.Popen([sys.executable, "-m", "rockslide.cli", *map(str, args)], cwd=cwd, env=env,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, **kwargs)
-
 
 def test_debug_shows_the_traceback_of_a_user_error(ws):
     (ws / "case.yaml").write_text(case_text({"contact.restitution": 1.5}))
@@ -824,9 +790,6 @@ def wait_for_temporary_file(proc, folder: Path, name: str, timeout: float = 120.
 
 posix_signals = pytest.mark.skipif(os.name != "posix", reason="POSIX signals (SIGKILL, SIGTERM, SIGINT)")
 
-
-def _default_sigint():
-    signal.signal(signal.SIGINT, signal.SIG_DFL)   # a background job may have inherited SIG_IGN
 
 
 @pytest.mark.slow      # a subprocess of `python -m rockslide`

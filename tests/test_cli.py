@@ -23,8 +23,7 @@ import h5py
 import numpy as np
 import pytest
 import yaml
-from click.testing import CliRunner
-from conftest import one_line_error
+from conftest import invoke, one_line_error
 from rocking_reference import free_rocking_impacts
 
 from rockslide.case import case_to_dict, load_case
@@ -39,8 +38,6 @@ RECORDS = REPO / "records"
 EXAMPLE = REPO / "configs" / "example.yaml"
 
 
-def invoke(*args, **kwargs):
-    return CliRunner().invoke(main, [str(a) for a in args], **kwargs)
 
 
 @pytest.fixture(scope="module")

@@ -16,16 +16,17 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import REPO, invoke, one_line_error
-from test_sweep import EXAMPLE, RECORDS, sweep_args, variables_equal
+from conftest import CLUSTER_AXES as AXES
+from conftest import CLUSTER_CHUNKS as CHUNKS
+from conftest import REPO, invoke, one_line_error, sweep_args, variables_equal
 
 from rockslide.engine.execute import check_workers_match, local_identity, parse_shard
 from rockslide.errors import CaseError
 
 posix = pytest.mark.skipif(os.name != "posix", reason="POSIX processes and signals")
 
-AXES = ("--mu", "0.4:0.7:0.1", "--pga", "400gal:900gal:100gal")     # 4 x 6 = 24 cases
-CHUNKS = ("--chunk-size", "5")                                       # 5 chunks
+EXAMPLE = REPO / "configs" / "example.yaml"
+RECORDS = REPO / "records"
 
 
 # --------------------------------------------------------------------------------------------------

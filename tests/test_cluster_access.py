@@ -21,14 +21,16 @@ import time
 from pathlib import Path
 
 import pytest
-from conftest import REPO, dask_processes, invoke, one_line_error
-from test_cluster import AXES, CHUNKS
-from test_sweep import EXAMPLE, RECORDS, sweep_args, variables_equal
+from conftest import CLUSTER_AXES as AXES
+from conftest import CLUSTER_CHUNKS as CHUNKS
+from conftest import REPO, dask_processes, invoke, one_line_error, sweep_args, variables_equal
 
 import rockslide
 from rockslide.errors import CaseError
 
 distributed = pytest.importorskip("distributed")
+EXAMPLE = REPO / "configs" / "example.yaml"
+RECORDS = REPO / "records"
 posix = pytest.mark.skipif(os.name != "posix", reason="POSIX processes and signals")
 
 #: The API's form of `test_cluster.AXES` and `CHUNKS` (4 x 6 = 24 cases in 5 chunks).
@@ -122,7 +124,7 @@ def datasets_equal(a, b) -> None:
      ["--tls-cert: cannot load this client's certificate", "--tls-key"]),
     ("tcp://127.0.0.1:1", ["--tls-ca-file", "ca", "--tls-cert", "cert", "--tls-key", "key"],
      ["--tls-ca-file: is for a TLS scheduler", "tcp://127.0.0.1:1 is plain TCP", "tls://HOST:PORT"]),
-    (None, ["--tls-cert", "cert"], ["--tls-cert: is for a TLS dask scheduler", "--scheduler tls://"]),
+    (None, ["--tls-cert", "cert"], ["--tls-cert: is for a TLS dask scheduler", "scheduler tls://"]),
 ], ids=["no-certificate", "missing-ca", "missing-key", "key-as-ca", "key-of-another", "tls-files-with-tcp",
         "tls-files-without-scheduler"])
 def test_bad_tls_input_is_one_line_before_any_connection(tmp_path, certificates, monkeypatch, where, extra,

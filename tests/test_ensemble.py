@@ -10,9 +10,8 @@ import h5py
 import numpy as np
 import pytest
 import yaml
-from conftest import REPO, SHIPPED, invoke
+from conftest import G0, REPO, SHIPPED, critical_duration, invoke
 from scipy.stats import norm
-from test_pulse_closed_forms import G0, critical_duration
 
 import rockslide
 from rockslide.analyses import ensemble as ens

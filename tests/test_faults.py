@@ -40,12 +40,21 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import REPO, SHIPPED
+from conftest import (
+    QUICK,
+    REPO,
+    SHIPPED,
+    _default_sigint,
+    case_text,
+    cli_subprocess,
+    horizontal_only,
+    invoke,
+    listing,
+    sha256,
+)
+from conftest import one_line_error as one_error_line
 from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
-from test_bad_input import QUICK, _default_sigint, case_text, cli_subprocess, horizontal_only, listing, sha256
-from test_sweep import invoke
-from test_sweep import one_line_error as one_error_line
 
 from rockslide import interrupts
 from rockslide.analyses import sweep as sw
@@ -407,7 +416,9 @@ def test_http_server_as_scheduler_is_one_bounded_attempt(ws, monkeypatch):
     """An HTTP server on 127.0.0.1 as --scheduler hung for 200 s and more: now one attempt bounded
     by SCHEDULER_TIMEOUT (1 s here), one line, exit 2."""
     pytest.importorskip("distributed")
-    monkeypatch.setattr(ex, "SCHEDULER_TIMEOUT", 1.0)
+    from rockslide.engine import cluster
+
+    monkeypatch.setattr(cluster, "SCHEDULER_TIMEOUT", 1.0)
     server = HTTPServer(("127.0.0.1", 0), _Quiet)
     thread = threading.Thread(target=server.serve_forever, daemon=True)
     thread.start()

@@ -12,13 +12,11 @@ import math
 
 import numpy as np
 import pytest
-from click.testing import CliRunner
-from conftest import one_line_error
+from conftest import invoke, one_line_error
 from matplotlib.text import Text
 
 import rockslide
 from rockslide import plots
-from rockslide.cli import main
 from rockslide.core import criteria
 from rockslide.core.physics import REST, ROCK, ROCKSLIP, SLIP
 from rockslide.core.simulate import Model, Settings, simulate
@@ -30,8 +28,6 @@ COLUMN_WIDTH = 3.5
 MIN_FONT = 6.0
 
 
-def invoke(*args):
-    return CliRunner().invoke(main, [str(a) for a in args])
 
 
 def texts(fig) -> list[str]:

@@ -183,7 +183,7 @@ def test_device_gpu_without_a_gpu_is_one_line(tmp_path, command):
         pytest.skip("this machine has a GPU")
     args = (["--mu", "0.3,0.5"] if command == "sweep" else ["--suite", SUITE, "--levels", "0.5g"])
     result = invoke(command, EXAMPLE, *args, "--records-dir", RECORDS, "--out-dir", tmp_path, "--device", "gpu")
-    one_line_error(result, "--device gpu")
+    one_line_error(result, "--device")
     assert not any(tmp_path.iterdir())
 
 
@@ -193,7 +193,7 @@ def test_device_gpu_without_numba_cuda_names_the_extra(tmp_path, monkeypatch):
                         lambda name, *a: None if name == "numba_cuda" else real_find_spec(name, *a))
     result = invoke("sweep", EXAMPLE, "--mu", "0.3,0.5", "--records-dir", RECORDS, "--out-dir", tmp_path,
                     "--device", "gpu")
-    one_line_error(result, "--device gpu", "pip install 'rockslide[gpu]'")
+    one_line_error(result, "--device", "pip install 'rockslide[gpu]'")
 
 
 @pytest.mark.parametrize("extra, option", [(["--workers", "2"], "--workers"),

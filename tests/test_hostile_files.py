@@ -10,22 +10,13 @@ import shutil
 import h5py
 import numpy as np
 import pytest
-import yaml
-from conftest import REPO, SHIPPED, invoke, one_line_error
+from conftest import REPO, _case, invoke, one_line_error
 
 from rockslide.io import files
 
 posix = pytest.mark.skipif(os.name != "posix", reason="symbolic links and pids as on POSIX")
 
 
-def _case(folder):
-    data = yaml.safe_load((REPO / "configs" / "example.yaml").read_text().replace("../records/", ""))
-    data["ground"]["tail"] = "0 s"
-    data["solver"]["dt"] = "1 ms"
-    data["output"] = {"dir": str(folder / "out"), "interval": "10 ms"}
-    (folder / "case.yaml").write_text(yaml.safe_dump(data))
-    for name in SHIPPED:
-        shutil.copy(REPO / "records" / name, folder / name)
 
 
 @posix

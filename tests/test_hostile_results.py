@@ -16,11 +16,9 @@ import textwrap
 import h5py
 import numpy as np
 import pytest
-from conftest import REPO, invoke, one_line_error
+from conftest import REPO, G, _case, fragility_file, invoke, one_line_error, openquake_csv
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from test_hostile_files import _case
-from test_risk import G, fragility_file, openquake_csv
 
 import rockslide
 from rockslide.errors import OutputError

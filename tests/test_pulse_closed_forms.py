@@ -21,6 +21,7 @@ import math
 
 import numpy as np
 import pytest
+from conftest import G0, critical_duration
 from rocking_reference import time_to_angle_under_constant_push
 from scipy.integrate import quad
 from scipy.optimize import brentq
@@ -29,7 +30,6 @@ from rockslide.case import parse_case
 from rockslide.core.simulate import Model, Settings, simulate
 from rockslide.engine import prepare as runner
 
-G0 = 9.80665
 QUAD = {"epsabs": 0.0, "epsrel": 1e-13, "limit": 200}
 
 
@@ -80,17 +80,6 @@ def time_under_push(theta0, rate0, theta1, push, alpha, R):
                 theta0, theta1, **QUAD)[0]
 
 
-def critical_duration(A, alpha, R):
-    """Housner (1963), exact (no small-angle approximation): a rectangular pulse ``A > g tan(alpha)``
-    lifts the block at once and pushes it up monotonically; after the pulse the motion is free, so
-    the block overturns without impact exactly when the energy at the pulse's end reaches the
-    barrier at ``theta = alpha``:
-    ``(3 / (2 R)) [A (sin(alpha) - sin(alpha - theta1)) - g (cos(alpha - theta1) - cos(alpha))]
-    = (3 g / (2 R)) (1 - cos(alpha - theta1))``, whose root is
-    ``sin(alpha - theta1) = sin(alpha) - (g / A) (1 - cos(alpha))``. The critical duration is the
-    time to reach that ``theta1`` under the pulse (`rocking_reference`'s quadrature)."""
-    theta1 = alpha - math.asin(math.sin(alpha) - G0 / A * (1.0 - math.cos(alpha)))
-    return time_to_angle_under_constant_push(theta1, A / G0, alpha, 0.75 * G0 / R)
 
 
 @pytest.mark.parametrize("ratio", [1.5, 3.0, 6.0])

@@ -19,16 +19,14 @@ import os
 import h5py
 import numpy as np
 import pytest
-from conftest import invoke, one_line_error
+from conftest import G, fragility_file, invoke, one_line_error, openquake_csv
 from scipy import optimize, stats
 
 import rockslide
 from rockslide.analyses import risk as rk
 from rockslide.errors import CaseError
 from rockslide.io import hazard as hz
-from rockslide.io import results
 
-G = 9.80665
 K0, K, THETA, BETA = 1e-4, 2.5, 0.5, 0.4          # [1/yr at 1 g], [-], [g], [-]: the issue's example
 
 
@@ -181,17 +179,6 @@ def test_fragility_uncertainty_gives_an_interval_around_the_rate():
 # --------------------------------------------------------------------------------------------------
 
 
-def openquake_csv(path, levels_g, poes, *, imt="PGA", years=50.0, kind="mean", sites=None):
-    """A hazard-curve CSV as OpenQuake's ``export_hcurves_csv`` writes it (levels with 7 decimals,
-    PoEs as %.6E, site coordinates with 5)."""
-    sites = sites or [(0.0, 0.0)] * len(poes)
-    comment = (f'#,,,,,"generated_by=\'OpenQuake engine 3.18.0\', start_date=\'2023-10-03T06:09:08\', '
-               f"checksum=2107362341, kind='{kind}', investigation_time={years}, imt='{imt}'\"")
-    header = "lon,lat,depth," + ",".join(f"poe-{v:.7f}" for v in levels_g)
-    rows = [f"{lon:.5f},{lat:.5f},-0.10000," + ",".join(f"{p:.6E}" for p in row)
-            for (lon, lat), row in zip(sites, poes, strict=True)]
-    path.write_text("\n".join([comment, header, *rows]) + "\n")
-    return path
 
 
 def test_openquake_file_parses_to_poisson_rates(tmp_path):
@@ -308,35 +295,6 @@ def test_a_header_naming_the_period_and_the_unit(tmp_path):
         rockslide.risk(hazard=plain, median="0.1g", beta=0.4, im="sa(0.3s)")
 
 
-def fragility_file(path, *, median=0.5 * G, beta=0.4, interval=True, im="pga", bootstrap=None, suite_text=None):
-    """A fragility file with the variables `rockslide fragility` writes that `risk` reads
-    (``bootstrap``: ``(medians, betas)`` of resamples, for the first state)."""
-    levels = np.array([0.2, 0.4, 0.6, 0.8, 1.0]) * G
-    fraction = np.array([[0.0, 0.3, 0.7, 0.9, 1.0], [0.2, 0.6, 0.9, 1.0, 1.0]])
-    per_state = ("damage_state",)
-    bounds = (0.8, 1.25) if interval else (math.nan, math.nan)
-    exceeded = (np.random.default_rng(1).random((3, levels.size, 2)) < fraction.T).astype(np.int8)   # 3 records
-    variables = {"exceeded": (("record", "level", "damage_state"), exceeded, {}),
-                 "definition": (per_state, np.array(["overturn", "rotation>0.5alpha"], dtype=object), {}),
-                 "fraction_exceeded": (("damage_state", "level"), fraction, {"units": "1"}),
-                 "median": (per_state, np.array([median, median / 2]), {"units": "m/s^2"}),
-                 "beta": (per_state, np.array([beta, beta]), {"units": "1"}),
-                 "fit_note": (per_state, np.array(["", ""], dtype=object), {})}
-    for name, value in (("median", median), ("beta", beta)):
-        for side, factor in zip(("lower", "upper"), bounds, strict=True):
-            variables[f"{name}_{side}"] = (per_state, np.array([value * factor] * 2), {})
-    coords = [("record", np.array(["r1", "r2", "r3"], dtype=object), {}), ("level", levels, {"units": "m/s^2"}),
-              ("damage_state", np.array(["overturn", "rotation>0.5alpha"], dtype=object), {})]
-    if bootstrap is not None:
-        n = len(bootstrap[0])
-        coords.append(("resample", np.arange(n, dtype=np.float64), {}))
-        for name, values in zip(("median", "beta"), bootstrap, strict=True):
-            variables[f"bootstrap_{name}"] = (("damage_state", "resample"), np.array([values, [np.nan] * n]), {})
-    attrs = {"intensity_measure": im, "confidence_level": 0.95}
-    if suite_text is not None:
-        attrs["suite_text"] = suite_text
-    results.write_dataset(path, coords, variables, format=results.FRAGILITY_FORMAT, attrs=attrs)
-    return path
 
 
 def test_fragility_file_fit_stripes_and_interval(tmp_path):

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
-from conftest import invoke, one_line_error
+from conftest import invoke, one_line_error, sweep_args, variables_equal
 
 from rockslide.analyses import sweep as sw
 from rockslide.case import case_to_dict, case_with, load_case
@@ -44,23 +44,6 @@ SUMMARY_FIELDS = ("overturned", "overturn_time", "direction", "max_rotation", "m
 def compiled():
     """Compile (or load) both batch drivers once, before any subprocess needs them."""
     batch.warm_up()
-
-
-def sweep_args(out: Path, *axes, extra=()):
-    return ["sweep", EXAMPLE, *axes, "--records-dir", RECORDS, "--out-dir", out, "--no-progress",
-            *extra]
-
-
-def variables_equal(a: Path, b: Path) -> None:
-    """Two sweep files hold the same grid and exactly the same values."""
-    x, y = results.read_sweep(a), results.read_sweep(b)
-    assert [(n, v.tolist()) for n, v, _ in x.coords] == [(n, v.tolist()) for n, v, _ in y.coords]
-    assert x.variables.keys() == y.variables.keys()
-    for name, (values, attrs) in x.variables.items():
-        other, other_attrs = y.variables[name]
-        assert values.dtype == other.dtype, name
-        assert np.array_equal(values, other, equal_nan=values.dtype.kind == "f"), name
-        assert attrs == other_attrs
 
 
 # --------------------------------------------------------------------------------------------------

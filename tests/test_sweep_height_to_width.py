@@ -34,7 +34,7 @@ def test_height_to_width_keeps_the_height_and_sets_the_width():
     name, values, attrs = sw.coordinates(plan)[0]
     assert name == "height_to_width" and list(values) == [2.0, 4.0]
     assert "h/b" in attrs["long_name"] and attrs["height"] == case.block.height
-    assert attrs["option"] == "--height-to-width"
+    assert attrs["option"] == "height_to_width"
     assert "h/b" in sw.AXES["height_to_width"].label
 
 

@@ -44,7 +44,10 @@ _WHERE = {
     "write_example": ".tools", "work_precision": ".tools", "describe_mesh": ".tools", "is_mesh_file": ".tools",
 }
 
-__all__ = sorted(_WHERE)
+#: The documented API (docs/api.md); the other names of `_WHERE` serve the command line.
+__all__ = ["load_case", "case_with", "Case", "run", "RunResult", "Summary", "ensemble", "sweep", "fragility", "risk",
+           "StudyResult", "sweep_study", "fragility_study", "risk_study", "risk_outputs", "OutputSet", "read_result",
+           "export_pelicun", "plot_results", "describe_mesh", "work_precision"]
 
 
 def __getattr__(name: str):

@@ -59,7 +59,6 @@ class RunProgress:
 
     def __call__(self, reached: float, end: float) -> None:
         interrupts.check()
-        show_warnings()
         if not self.show:
             return
         from tqdm import tqdm

@@ -117,7 +117,8 @@ ATTRIBUTE_KINDS = {
     "role": "text", "path": "text", "sha256": "text",
     # studies
     "case_text": "text", "case_file": "text", "suite": "text", "suite_text": "text", "axes": "text",
-    "sweep_key": "text", "events": "text", "mu_kinetic_ratio": "number", "chunk_size": "count", "height": "positive",
+    "sweep_key": "text", "events": "text", "mu_kinetic_ratio": "number_or_nan", "chunk_size": "count",
+    "height": "positive",
     "intensity_measure": "text", "intensity_measure_units": "text", "intensity_measure_long_name": "text",
     "intensity_measure_label": "text", "intensity_measure_display_unit": "text",
     "intensity_measure_display_scale": "positive", "confidence_level": "fraction", "bootstrap_resamples": "count",
