@@ -134,3 +134,26 @@ def test_a_cluster_that_finishes_nothing_is_given_up_with_one_line(tmp_path, mon
     assert 0.5 <= time.monotonic() - started < 10
     assert caught.value.source == "scheduler" and "resumes" in caught.value.message
     assert len(said) == 1 and "waiting for 1 chunks" in said[0]
+
+
+def test_a_hazard_curve_of_millions_of_levels_is_refused_while_read(ws):
+    """``risk`` with 2 million hazard levels ran past 300 s; it is now one line naming the line where
+    the curve passes `hazard.MAX_LEVELS`, after reading a bounded share of the file."""
+    from rockslide.io import hazard
+
+    rows = "\n".join(f"{0.001 * (1 + i * 1e-4):.9g},{1e-2 / (1 + i):.9g}" for i in range(hazard.MAX_LEVELS + 5))
+    (ws / "big.csv").write_text("PGA [g],annual rate\n" + rows + "\n")
+    started = time.monotonic()
+    one_line_error(invoke("risk", "--median", "0.5g", "--beta", "0.4", "--hazard", "big.csv", "--no-plot"),
+                   "big.csv", f"line {hazard.MAX_LEVELS + 2}", f"more than {hazard.MAX_LEVELS} levels")
+    assert time.monotonic() - started < 10
+
+
+def test_a_suite_that_lists_a_record_twice_is_refused(ws):
+    """A suite listing one record hundreds of times ran for minutes, then out of memory; one record
+    listed twice is now one line naming both entries, before any record is read."""
+    _case(ws)
+    entries = "\n".join(f"  - {{name: r{i}, horizontal: synthetic_kt_h.at2}}" for i in range(300))
+    (ws / "suite.yaml").write_text(f"records:\n{entries}\n")
+    one_line_error(invoke("fragility", "case.yaml", "--suite", "suite.yaml", "--levels", "0.2g", "--no-plot"),
+                   "suite.yaml", "records[1] (r1) is records[0] (r0) again")

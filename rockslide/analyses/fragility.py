@@ -587,6 +587,7 @@ def plan_fragility(case: Case, suite: Suite, im: IntensityMeasure, levels: sw.Ax
         raise CaseError("a fragility analysis scales each vertical record by its horizontal's factor; "
                         "remove pga_vertical (vertical_factor may stay)", source=case.source,
                         field="ground.scale.pga_vertical")
+    _refuse_repeated_records(suite)
     n_records, n_levels = len(suite.entries), len(levels)
     n = n_records * n_levels
     if n > MAX_POINTS:
@@ -730,6 +731,19 @@ def plan_fragility(case: Case, suite: Suite, im: IntensityMeasure, levels: sw.Ax
                           measures=measures, files=files, vertical_factor=vertical_factor, vertical=vertical,
                           vertical_note=vertical_note)
     return with_parameter_samples(fplan, samples, seed, chunk_size) if samples else fplan
+
+
+def _refuse_repeated_records(suite: Suite) -> None:
+    """Refuse a suite that lists one record twice (the same files and orientation): it would weigh
+    that record twice in the fits, and hundreds of copies ran for minutes, then out of memory."""
+    seen: dict = {}
+    for r, entry in enumerate(suite.entries):
+        key = (entry.horizontal, entry.vertical, entry.horizontal_2, entry.orientation)
+        if key in seen:
+            first = suite.entries[seen[key]]
+            raise CaseError(f"records[{r}] ({entry.name}) is records[{seen[key]}] ({first.name}) again: the same "
+                            "files (and orientation); list each record once", source=suite.source)
+        seen[key] = r
 
 
 def with_parameter_samples(fplan: FragilityPlan, samples: int, seed: int, chunk_size: int | None = None
