@@ -97,6 +97,10 @@ class Block:
     radius_of_gyration : float, optional
         ``sqrt(I_cm / M)`` [m] about the centre of mass. None: the uniform rectangle's,
         ``sqrt((bm^2 + h^2) / 3)``, ``bm = (b1 + b2) / 2``.
+    depth : float, optional
+        Full base depth [m] of a box (along its rocking axis): the block is then screened in both
+        planes (model-asymmetric.md section 9: the second plane is a block ``depth`` wide across the
+        first, under the component across the block). None: one plane.
     """
 
     height: float
@@ -106,6 +110,7 @@ class Block:
     centre_of_mass_height: float | None = None
     half_widths: tuple[float, float] | None = None
     radius_of_gyration: float | None = None
+    depth: float | None = None
 
     @property
     def asymmetric(self) -> bool:
@@ -659,6 +664,9 @@ CASE_KEYS: dict[str, dict] = {
         "half_widths": _key("length_pair", "[b1, b2]: distances of the base corners from the vertical through "
                             "the centre of mass, b1 the corner a positive ground acceleration tips the body "
                             "over (instead of width), e.g. '[0.044 m, 0.129 m]'"),
+        "depth": _key("length", "full base depth of a box, along its rocking axis: with two horizontal components "
+                      "it is also screened in the other plane (a block that wide, under the component across), "
+                      "the verdict the worse of the two", bounds=[(">", 0.0)]),
         "radius_of_gyration": _key("length", "sqrt(I/M) about the centre of mass (default: the uniform "
                                    "rectangle's, sqrt((bm^2 + h^2)/3), bm = (b1 + b2)/2), at most "
                                    "sqrt(max(b1, b2)^2 + h^2)"),
@@ -1472,6 +1480,10 @@ def _block_checks(raw: dict, ctx: _Ctx) -> None:
         if not 0.0 < k <= k_max:
             ctx.fail("block.radius_of_gyration", f"expected within (0, {k_max:.6g} m], the largest a body of "
                      f"that size can have (sqrt(max(b1, b2)^2 + h^2)), got {_with_unit(k, 'm')}")
+    if block["depth"] is not None and (block["half_widths"] is not None or k is not None):
+        ctx.fail("block.depth", "is a box's depth: give it with block.height and block.width (a body given by "
+                 "half_widths or a radius of gyration is screened in one plane; rockslide info describes a mesh "
+                 "in both)")
     e = raw["contact"]["restitution"]
     if (block["half_widths"] is not None and b1 != b2) or k is not None:
         k2 = k * k if k is not None else ((0.5 * (b1 + b2)) ** 2 + h * h) / 3.0

@@ -99,6 +99,8 @@ def run_lines(result, *, units=None) -> list[str]:
     """The printout of `run` (`rockslide run`): its summary, ensemble and floor (without the files)."""
     lines = run_text(result.name, result.summary, result.ensemble, ground=result.ground or None,
                      units=units).split("\n")
+    if result.planes is not None:
+        lines += planes_lines(result.planes)
     if (result.integration or {}).get("mode") == "auto":
         lines.append(f"  solver.dt: {result.integration['note']}")
     if result.floor is not None:
@@ -116,7 +118,7 @@ def run_payload(result) -> dict:
     floor = result.floor
     return {"name": result.name, **results.summary_to_json_dict(result.summary, result.events),
             "ground": result.ground, "floor": floor, "ensemble": results.json_ready(result.ensemble),
-            "integration": results.json_ready(result.integration)}
+            "integration": results.json_ready(result.integration), "planes": results.json_ready(result.planes)}
 
 
 def record_lines(record, details: dict) -> list[str]:
@@ -160,3 +162,17 @@ def json_ready(value):
     from ..io.results import json_ready as ready
 
     return ready(value)
+
+
+def planes_lines(planes: dict) -> list[str]:
+    """A box's screening in both planes: each plane's verdict and the worse (`api.runs._planes`)."""
+    lines = [f"  both planes ({planes['screening']}):"]
+    for name in ("width", "depth"):
+        plane = planes[name]
+        where = "" if plane["orientation"] is None else f" at {math.degrees(plane['orientation']) % 360:g} deg"
+        ratio = plane["max_rotation_ratio"]
+        how = plane.get("note") or ("" if plane["overturned"] else f", {100 * ratio:.3g} % of alpha")
+        lines.append(f"    {name} plane{where}: {plane['verdict']}{how if plane.get('note') is None else '; ' + how}")
+    worse = planes[planes["worse"]]
+    lines.append(f"    verdict of the box: {worse['verdict']} (the {planes['worse']} plane)")
+    return lines

@@ -54,6 +54,11 @@ class RunResult:
     floor : dict or None
         For a case on a floor: ``description`` and the peaks of the floor's motion (``pfa``
         [m/s^2], ``pfv`` [m/s], and of the ground under the building).
+    planes : dict or None
+        With ``block.depth`` (a box in both planes, model-asymmetric.md section 9): per plane
+        (``width``, ``depth``) its ``orientation`` [rad] (None: one component), ``verdict``,
+        ``overturned``, ``max_rotation_ratio``; ``worse`` names the plane of the worse verdict, and
+        ``screening`` says that the planes are uncoupled. None without a depth.
     integration : dict or None
         The step the run took (``step`` [s], ``mode`` fixed or auto and, with ``solver.dt: auto``,
         its error estimates: `engine.prepare.step_report`), as ``rockslide run --json`` gives it.
@@ -74,6 +79,7 @@ class RunResult:
     attrs: dict = field(default_factory=dict)
     ensemble: dict | None = None
     floor: dict | None = None
+    planes: dict | None = None
     integration: dict | None = None
     files: object = None
     written: str = ""
@@ -178,10 +184,10 @@ def run(case: Case | Mapping | str | Path, *, records_dir: str | Path | None = N
         eplan.precision = precision
     where = {"device": device, "workers": workers, "say": say, "bars": bars}
     if outputs is not None:
-        return _run_into(outputs, prepared, eplan, started, progress=progress, **where)
+        return _run_into(outputs, prepared, eplan, started, progress=progress, folder=folder, **where)
     result = engine.simulate_prepared(prepared, progress=progress)
     summary = None if eplan is None else _neighbourhood(eplan, result, **where)[0]
-    return _run_result(prepared, result, summary)
+    return _run_result(prepared, result, summary, planes=_planes(prepared, result, folder))
 
 
 def _members(ensemble) -> tuple[int | None, float | None]:
@@ -196,6 +202,42 @@ def _members(ensemble) -> tuple[int | None, float | None]:
         members, precision = ens.parse_members(ensemble)
         return (ens.PILOT_MEMBERS, precision) if precision is not None else (members, None)
     return whole(ensemble, "ensemble", 1), None
+
+
+#: What every printout of a box in both planes says of it (model-asymmetric.md section 9).
+SCREENING = ("an uncoupled screening: each plane is the planar model under the component along it; a box "
+             "rocking about a corner is not modelled")
+
+
+def _planes(prepared, result, folder) -> dict | None:
+    """A box's screening in both planes (``block.depth``): the run just made is the width plane; the
+    depth plane is a block ``depth`` wide across it, under the component across the block (with one
+    horizontal component it sees none: no run). None without a depth."""
+    from ..case import case_with
+    from ..engine import prepare as engine
+
+    case = prepared.case
+    if case.block.depth is None:
+        return None
+    width = {"orientation": None if prepared.components is None else prepared.components.orientation,
+             **_plane_of(result.summary)}
+    if prepared.components is None:
+        depth = {"orientation": None, "verdict": "standing", "overturned": False, "max_rotation_ratio": 0.0,
+                 "note": "one horizontal component: the depth plane sees no horizontal motion"}
+    else:
+        across = prepared.components.orientation + 0.5 * math.pi
+        across -= 2.0 * math.pi if across > 2.0 * math.pi else 0.0
+        other = case_with(case, {"block.width": case.block.depth, "block.depth": None, "block.orientation": across})
+        depth = {"orientation": across,
+                 **_plane_of(engine.simulate_prepared(engine.prepare(other, folder, history=False)).summary)}
+    worse = "depth" if (depth["overturned"], depth["max_rotation_ratio"]) > (width["overturned"],
+                                                                            width["max_rotation_ratio"]) else "width"
+    return {"width": width, "depth": depth, "worse": worse, "screening": SCREENING}
+
+
+def _plane_of(summary) -> dict:
+    return {"verdict": summary.verdict, "overturned": bool(summary.overturned),
+            "max_rotation_ratio": math.inf if summary.overturned else float(summary.max_rotation_ratio)}
 
 
 def _run_result(prepared, result, summary, **more) -> RunResult:
@@ -233,7 +275,7 @@ def _neighbourhood(eplan, result, *, device="cpu", workers=None, say=None, bars=
         return ens.compute(eplan, result.summary.overturned, progress=tell, **where)
 
 
-def _run_into(outputs, prepared, eplan, started, *, say, progress, device, workers, bars) -> RunResult:
+def _run_into(outputs, prepared, eplan, started, *, say, progress, device, workers, bars, folder) -> RunResult:
     """`run` with its files (``outputs``): the command line's run."""
     from ..engine import prepare as engine
     from ..io import results
@@ -259,7 +301,11 @@ def _run_into(outputs, prepared, eplan, started, *, say, progress, device, worke
             if eplan is not None:
                 summary, dimension, group = _neighbourhood(eplan, result, device=device, workers=workers, say=say,
                                                            bars=bars)
-            writer.finish(result, **_stored_run(case, prepared, summary, None if group is None else (dimension, group)))
+            planes = _planes(prepared, result, folder)
+            stored = _stored_run(case, prepared, summary, None if group is None else (dimension, group))
+            if planes is not None:
+                stored["extra_attrs"] = {**stored["extra_attrs"], "planes": json.dumps(planes, allow_nan=True)}
+            writer.finish(result, **stored)
         if outputs.plot:
             from ..plots import response_figure
             kept = writer.written_result()
@@ -275,7 +321,7 @@ def _run_into(outputs, prepared, eplan, started, *, say, progress, device, worke
             stale.append(ensemble_png)          # it showed the neighbourhood of the result replaced
         staging.publish(remove=stale)
     written = outputs.written() + (f" and {ensemble_png}" if summary is not None and outputs.plot else "")
-    return _run_result(prepared, result, summary, files=outputs, written=written)
+    return _run_result(prepared, result, summary, files=outputs, written=written, planes=planes)
 
 
 def _stored_run(case, prepared, summary, group) -> dict:
