@@ -130,6 +130,12 @@ def axis_changes(axis: str, value: float, case: Case, ratio: float | None) -> di
         return changes
     if axis == "height_to_width":       # h/b = 0 is an infinitely wide block: refused as a width
         return {"block.width": case.block.height / value if value != 0 else math.inf}
+    if axis in ("b1", "b2"):                 # an asymmetric body (docs/asymmetric.md), h and I kept as given
+        b1, b2 = case.block.corners
+        changes = {"block.half_widths": [value, b2] if axis == "b1" else [b1, value], "block.width": None}
+        if case.block.centre_of_mass_height is None:
+            changes.update({"block.height": None, "block.centre_of_mass_height": case.block.height / 2.0})
+        return changes
     if axis == "floor_period":              # the first mode's period; a floor of one mode if there is none
         modes = [dataclasses.asdict(m) for m in case.ground.floor.horizontal] or [{}]
         modes[0] = {**modes[0], "period": value}

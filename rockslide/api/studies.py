@@ -83,7 +83,8 @@ def sweep(case: Case | Mapping | str | Path, *, mu_kinetic_ratio: float | None =
     **axes : str or sequence
         The axes, in dimension order: ``mu``, ``pga``, ``vertical_factor``, ``restitution``,
         ``height_to_width`` (h/b, the field's slenderness ratio; the height kept), ``gravity``,
-        ``floor_period`` (the period of the floor's first horizontal mode, docs/floors.md), and for
+        ``floor_period`` (the period of the floor's first horizontal mode, docs/floors.md), ``b1`` and
+        ``b2`` (the corners of an asymmetric body, docs/asymmetric.md), and for
         a pulse case
         ``amplitude``, ``period``, ``duration``, and for a case with two horizontal components
         ``azimuth`` (``block.orientation``). Each is ``"start:stop:step"`` or a comma list as

@@ -131,7 +131,7 @@ FLAGS = {name: "--" + name.replace("_", "-") for name in (
     "azimuth", "floor_period", "mu_kinetic_ratio", "chunk_size", "device", "workers", "scheduler", "wait_workers",
     "shard", "tls_ca_file", "confidence", "life", "age", "median", "beta", "hazard", "damage", "im", "levels",
     "units", "suite", "samples", "case_vertical", "export", "export_family", "records_dir", "size", "out_dir",
-    "density",
+    "density", "b1", "b2",
     "name", "seed", "dpi", "time_shift", "crop", "height", "width", "ah_max", "mu_max", "hazard_units", "configs")}
 FLAGS.update({"n": "--ensemble", "member": "--ensemble", "ensemble": "--ensemble", "model": "--model",
               "fragility_table": "--fragility-table", "level": "--levels", "record": "--suite",

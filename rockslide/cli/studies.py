@@ -138,6 +138,10 @@ def _tls_files(ca_file, cert, key) -> dict:
 @_axis_option("floor_period", "time", "Period of the first horizontal mode of the floor the block stands on "
               "(ground.floor.horizontal; a floor of one mode, 5 % damping and participation 1 when the case "
               "has none): the block's response over the building's period", "0.1s:3s:0.1s")
+@_axis_option("b1", "length", "Distance b1 of the base corner a positive ground acceleration tips the body over "
+              "(block.half_widths[0]; a rectangle becomes the body of its half height and b2 = width/2: "
+              "docs/asymmetric.md)", "20mm:100mm:5mm")
+@_axis_option("b2", "length", "Distance b2 of the other base corner (block.half_widths[1])", "50mm:150mm:10mm")
 @click.option("--mu-kinetic-ratio", type=float, default=None, metavar="R",
               help="mu_kinetic = R * mu_static for --mu (default: the case's ratio).")
 @records_dir_option

@@ -77,6 +77,11 @@ AXES: dict[str, AxisKind] = {a.name: a for a in (
     AxisKind("floor_period", "floor_period", "time", "ground.floor.horizontal",
              "period of the first horizontal mode of the floor the block stands on", "s",
              "floor period T_1 [s]"),
+    AxisKind("b1", "b1", "length", "block.half_widths",
+             "distance b1 of the base corner a positive ground acceleration tips the body over (pivot 1)", "m",
+             "b1 [mm]", 1e-3),
+    AxisKind("b2", "b2", "length", "block.half_widths",
+             "distance b2 of the other base corner (pivot 2)", "m", "b2 [mm]", 1e-3),
 )}
 #: Axes no longer offered, with what replaces them (one line, exit 2 where they are asked for).
 RETIRED_AXES = {
