@@ -422,7 +422,7 @@ BAD = [
      ["ground.horizontal.file: missing required key"]),
     # types
     ("type-block-list", variant({"block": [0.2, 0.1, 10]}),
-     ["block: expected a mapping (keys: height, width, mass, orientation, centre_of_mass_height, half_widths, "
+     ["block: expected a mapping (keys: height, width, mass, orientation, centre_of_mass_height, half_widths, depth, "
       "radius_of_gyration), got a list [0.2, 0.1, 10]"]),
     ("type-contact-string", variant({"contact": "rough"}), ["contact: expected a mapping", "'rough'"]),
     ("type-scale-number", variant({"ground.scale": 2}),
