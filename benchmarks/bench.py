@@ -22,6 +22,7 @@ import numpy as np
 from baseline import plain_rk4_rocking
 from scipy.integrate import quad
 
+from rockslide.analyses.precision import best_cpu_time
 from rockslide.core.reference import simulate_reference
 from rockslide.core.simulate import Model, Settings, ground_array, simulate
 from rockslide.io import records as rec
@@ -34,14 +35,7 @@ MODES = ("located", "step-end")
 PAPER_BLOCK = dict(height=0.2, width=0.1, restitution=0.8)
 
 
-def cpu(fn, repeat=3):
-    """Best CPU time of ``repeat`` calls, and the last result."""
-    best, result = math.inf, None
-    for _ in range(repeat):
-        t = time.process_time()
-        result = fn()
-        best = min(best, time.process_time() - t)
-    return best, result
+cpu = best_cpu_time          # the library's timer (rockslide.analyses.precision)
 
 
 # ----------------------------------------------------------------------------------------------

@@ -4,7 +4,6 @@ kernel), and the sweep's axes name the corners."""
 
 from __future__ import annotations
 
-import numpy as np
 import pytest
 from conftest import REPO
 

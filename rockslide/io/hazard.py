@@ -311,7 +311,10 @@ def _read_openquake(lines: list[str], source: str, trim: bool) -> list[HazardTab
     return curves
 
 
-def _read_plain(lines: list[str], source: str, units: str | None, trim: bool) -> list[HazardTable]:
+def _two_columns(lines, source: str, what: str) -> tuple[list, list | None, int]:
+    """The rows of a table of two numbers a line (``#`` starts a comment), its header (the first line
+    that is not numbers, before any row) and the header's line number; at most `MAX_LEVELS` rows.
+    ``what`` says what the two columns are, for the message of a line of another width."""
     rows, header, header_line = [], None, 0
     for line_number, line in enumerate(lines, 1):
         interrupts.check()
@@ -320,11 +323,9 @@ def _read_plain(lines: list[str], source: str, units: str | None, trim: bool) ->
             continue
         cells = _cells(text)
         if len(cells) != 2:
-            raise CaseError(f"{len(cells)} values; a plain hazard curve has two columns: the IM level and its "
-                            "annual rate of exceedance [1/yr] (or give OpenQuake's export as written)",
-                            source=source, field=f"line {line_number}")
+            raise CaseError(f"{len(cells)} values; {what}", source=source, field=f"line {line_number}")
         if len(rows) >= MAX_LEVELS:
-            raise CaseError(f"more than {MAX_LEVELS} levels in one hazard curve (OpenQuake's have tens): a "
+            raise CaseError(f"more than {MAX_LEVELS} levels in one table (OpenQuake's curves have tens): a "
                             "coarser table", source=source, field=f"line {line_number}")
         try:
             rows.append((float(cells[0]), float(cells[1])))
@@ -332,6 +333,13 @@ def _read_plain(lines: list[str], source: str, units: str | None, trim: bool) ->
             if rows or header is not None:
                 raise CaseError(f"not numbers: {text[:60]!r}", source=source, field=f"line {line_number}") from None
             header, header_line = cells, line_number
+    return rows, header, header_line
+
+
+def _read_plain(lines: list[str], source: str, units: str | None, trim: bool) -> list[HazardTable]:
+    rows, header, header_line = _two_columns(lines, source, "a plain hazard curve has two columns: the IM level "
+                                             "and its annual rate of exceedance [1/yr] (or give OpenQuake's export "
+                                             "as written)")
     measure, unit = None, units
     if header is not None:
         name, header_unit = _header_cell(header[0])
@@ -511,25 +519,9 @@ def read_fragility_table(path) -> tuple[str, str, np.ndarray, np.ndarray]:
         raise CaseError("not a text file (expected a CSV of level and probability)", source=source) from None
     except OSError as exc:
         raise CaseError(f"cannot read the file: {exc.strerror or exc}", source=source) from None
-    rows, header = [], None
-    for line_number, line in enumerate(text.replace("\r\n", "\n").replace("\r", "\n").split("\n"), 1):
-        cells_text = line.split("#", 1)[0].strip()
-        if not cells_text:
-            continue
-        cells = _cells(cells_text)
-        if len(cells) != 2:
-            raise CaseError(f"{len(cells)} values; a fragility table has two columns: the IM level and the "
-                            "probability of reaching the state", source=source, field=f"line {line_number}")
-        if len(rows) >= MAX_LEVELS:
-            raise CaseError(f"more than {MAX_LEVELS} levels in one hazard curve (OpenQuake's have tens): a "
-                            "coarser table", source=source, field=f"line {line_number}")
-        try:
-            rows.append((float(cells[0]), float(cells[1])))
-        except ValueError:
-            if rows or header is not None:
-                raise CaseError(f"not numbers: {cells_text[:60]!r}", source=source,
-                                field=f"line {line_number}") from None
-            header = cells
+    rows, header, _ = _two_columns(text.replace("\r\n", "\n").replace("\r", "\n").split("\n"), source,
+                                   "a fragility table has two columns: the IM level and the probability of "
+                                   "reaching the state")
     name, unit = _header_cell(header[0]) if header is not None else ("", None)
     if not _is_measure(name) or not unit:
         raise CaseError("expected a header naming the measure and the levels' unit, e.g. 'PGA [g], probability'",
