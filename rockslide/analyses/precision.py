@@ -135,8 +135,8 @@ def work_precision(prepared: Prepared, *, divisors=DEFAULT_DIVISORS, modes=("loc
     for mode in modes:
         for dt in dts:
             settings = replace(base, dt=dt, events=mode)
-            seconds, result = best_cpu_time(lambda s=settings: simulate(prepared.model, g.dt, g.horizontal, g.vertical, s,
-                                                                start=start), repeat)
+            seconds, result = best_cpu_time(
+                lambda s=settings: simulate(prepared.model, g.dt, g.horizontal, g.vertical, s, start=start), repeat)
             error_time, error_rotation = step_errors(_events(result), ref_events, 1.0)
             n = substeps(g.dt, dt)
             rows.append({"step": g.dt / n, "n_sub": n, "mode": mode, "cpu": seconds, "steps": intervals * n,
