@@ -794,8 +794,8 @@ def runs_overlay_figure(runs, names, *, title: str = "", caption: str = "", size
                            lw=0.8 if k == 0 else 0.6, alpha=0.9, zorder=3 + k)
             alpha = run.summary.alpha
             if math.isfinite(alpha) and phi.size and np.abs(phi).max() >= ALPHA_SHOWN_FRACTION * alpha:
-                for side in (1.0, -1.0):
-                    rot_ax.axhline(side * alpha, color=colour, ls="--", lw=0.9, zorder=2)
+                for side, limit in _alphas(run.summary).items():
+                    rot_ax.axhline(side * limit, color=colour, ls="--", lw=0.9, zorder=2)
                 alpha_drawn = True
             s = run.summary
             if s.overturned and s.overturn_time is not None and t0 <= s.overturn_time <= t1:
@@ -939,6 +939,13 @@ def _title(result, name: str) -> str:
     return head + "\n" + ",  ".join(facts)
 
 
+def _alphas(summary) -> dict:
+    """The tipping angles on each side of the rotation: ``+alpha_1`` (rocking about pivot 1, phi > 0)
+    and ``-alpha_2`` (pivot 2); both alpha for a rectangle or a file that does not say."""
+    alpha_2 = getattr(summary, "alpha_2", math.nan)
+    return {1.0: summary.alpha, -1.0: alpha_2 if math.isfinite(alpha_2) else summary.alpha}
+
+
 def _response_panel(ax, result, shift, span, *, label, window=None, notes=True, alpha_drawn=None):
     """Rotation (left axis, with +-alpha) and slip in mm (right axis) over the shaded states, for
     ``span``. What the panel has to say goes in its title line, on the right, never over the data
@@ -973,13 +980,16 @@ def _response_panel(ax, result, shift, span, *, label, window=None, notes=True, 
         reach = {1.0: float(phi.max(initial=0.0)), -1.0: -float(phi.min(initial=0.0))}
         if max(reach.values()) >= ALPHA_SHOWN_FRACTION * alpha:
             sides = [1.0, -1.0]          # both: the legend says +-alpha
-    rot_lim, slip_lim = _aligned_limits(np.append(phi, [side * alpha for side in sides]), x_mm)
+    limits = _alphas(result.summary)
+    rot_lim, slip_lim = _aligned_limits(np.append(phi, [side * limits[side] for side in sides]), x_mm)
     for side in sides:
-        ax.axhline(side * alpha, color=ALPHA_COLOUR, ls="--", lw=0.9, zorder=2, label=f"{side:+g}α")
+        ax.axhline(side * limits[side], color=ALPHA_COLOUR, ls="--", lw=0.9, zorder=2, label=f"{side:+g}α")
     if sides and alpha_drawn is not None:
         alpha_drawn.append(True)
     if math.isfinite(alpha) and phi.size and not sides:
-        said.append("±α off scale" if _narrow(ax.figure) else f"±α = ±{alpha:.4g} rad off scale")
+        both = (f"±α = ±{alpha:.4g} rad" if limits[1.0] == limits[-1.0] else
+                f"α₁ = {limits[1.0]:.4g}, −α₂ = −{limits[-1.0]:.4g} rad")
+        said.append("±α off scale" if _narrow(ax.figure) else f"{both} off scale")
     ax.set_ylim(*rot_lim)
     slip_ax.set_ylim(*slip_lim)
     ax.set_xlim(a + shift, b + shift)
@@ -1185,7 +1195,9 @@ def _legend_handles(result, *, ground: bool = True, alpha: bool = True, horizont
                Line2D([], [], color=SLIP_COLOUR, lw=1.5, label="slip x")]
     if alpha and math.isfinite(result.summary.alpha):
         # not "tips over past it": a block may pass alpha and be rocked back by the ground
-        handles.append(Line2D([], [], color=ALPHA_COLOUR, ls="--", lw=0.9, label="±α (restoring limit)"))
+        limits = _alphas(result.summary)
+        label = "±α (restoring limit)" if limits[1.0] == limits[-1.0] else "α₁, −α₂ (restoring limits)"
+        handles.append(Line2D([], [], color=ALPHA_COLOUR, ls="--", lw=0.9, label=label))
     if ground:
         support = "floor" if floor else "ground"
         handles += [Line2D([], [], color=GROUND_COLOURS[key], lw=1.0,

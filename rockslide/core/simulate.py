@@ -188,6 +188,7 @@ class Summary:
     alpha: float = math.nan           #: [rad] atan(b/h), the rotation past which gravity tips the block over
     max_rotation_ratio: float = math.nan   #: max ``|phi|`` / alpha, how near overturning (> 1 passed alpha)
     undecided: bool = False           #: ended moving, with the energy or tilt to overturn (`may_still_overturn`)
+    alpha_2: float = math.nan         #: [rad] atan(b2/h), pivot 2's tipping angle (alpha's for a rectangle)
 
     @property
     def verdict(self) -> str:
@@ -553,6 +554,7 @@ def summarise(st: np.ndarray, model: Model, record_end: float) -> Summary:
         energy={k: float(v) for k, v in energy.items()},
         alpha=float(p[L.P_ALPHA]),
         max_rotation_ratio=float(st[L.S_MAX_THETA]) / float(p[L.P_ALPHA]),
+        alpha_2=float(p[L.P_ALPHA2]),
     )
 
 

@@ -111,7 +111,7 @@ ATTRIBUTE_KINDS = {
     # a run's summary and provenance
     "overturned": "bool", "undecided": "bool", **{t: "number_or_nan" for t in _TIMES}, "direction": "direction",
     "max_rotation": "number", "max_rotation_time": "number", "max_slip": "number", "residual_slip": "number",
-    "impacts": "count", "status": "text", "end_time": "number", "alpha": "number_or_nan",
+    "impacts": "count", "status": "text", "end_time": "number", "alpha": "number_or_nan", "alpha_2": "number_or_nan",
     "max_rotation_ratio": "number_or_nan", "states_seen": "text", "verdict": "text",
     "integration_step": "step", "ensemble": "json", "yaml": "text",
     "role": "text", "path": "text", "sha256": "text",

@@ -144,7 +144,7 @@ _CHUNK_ROWS = 16384
 _COMPRESSION = {"compression": "gzip", "compression_opts": 1, "shuffle": True}
 _SUMMARY_SCALARS = ("overturned", "overturn_time", "direction", "fall_start_time", "max_rotation",
                     "max_rotation_time", "max_slip", "residual_slip", "impacts", "status", "end_time",
-                    "alpha", "max_rotation_ratio", "undecided")
+                    "alpha", "max_rotation_ratio", "undecided", "alpha_2")
 #: ``/events`` in the file: `EVENT_DTYPE` with its names as UTF-8 text (variable length) instead of
 #: the core's fixed-length bytes.
 EVENT_FILE_DTYPE = np.dtype([(name, h5py.string_dtype("utf-8") if EVENT_DTYPE[name].kind == "S"
@@ -982,6 +982,7 @@ def _summary_from_attrs(attrs: dict) -> Summary:
         alpha=float(attrs.get("alpha", math.nan)),
         max_rotation_ratio=float(attrs.get("max_rotation_ratio", math.nan)),
         undecided=bool(attrs.get("undecided", False)),
+        alpha_2=float(attrs.get("alpha_2", attrs.get("alpha", math.nan))),     # files before: a rectangle
     )
 
 
