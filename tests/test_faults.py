@@ -1014,25 +1014,29 @@ def test_text_that_is_not_plain_numbers_is_counted_before_it_is_parsed(ws, monke
 
 
 def test_a_suite_listing_one_record_many_times_is_bounded_before_any_run(ws, monkeypatch):
-    """An 18 KB suite listing one long record 400 times ran for minutes, then failed: the suite's
-    samples together are bounded as its records are read (the bound lowered here to 3.5 times
-    the record's samples: the fourth entry passes it), and a record listed many times is read
-    once."""
+    """An 18 KB suite listing one long record 400 times ran for minutes, then failed: a record listed
+    twice is now refused before any record is read, and the suite's samples together are bounded as
+    its records are read (the bound lowered here to 1.5 times a record's samples: the second entry
+    passes it)."""
     from rockslide.analyses import fragility
     from rockslide.io import records
 
     (ws / "case.yaml").write_text(case_text(QUICK))
-    samples = records.load_record(ws / "synthetic_kt_h.at2").data.size
-    monkeypatch.setattr(fragility, "MAX_SUITE_SAMPLES", int(3.5 * samples))
-    (ws / "suite.yaml").write_text("records:\n" + "".join(
-        f"  - {{name: r{i}, horizontal: synthetic_kt_h.at2}}\n" for i in range(400)))
     reads = []
     real = records.load_record
     monkeypatch.setattr(records, "load_record", lambda *a, **k: reads.append(a) or real(*a, **k))
+    (ws / "suite.yaml").write_text("records:\n" + "".join(
+        f"  - {{name: r{i}, horizontal: synthetic_kt_h.at2}}\n" for i in range(400)))
     line = one_error_line(invoke("fragility", "case.yaml", "--suite", "suite.yaml", "--levels", "0.5g",
                                  "--no-plot", "--records-dir", "."))
-    assert "suite.yaml: the suite's records hold more than" in line and "reached at records[3], r3, of 400" in line
-    assert len(reads) == 1
+    assert "suite.yaml: records[1] (r1) is records[0] (r0) again" in line and reads == []
+    samples = real(ws / "synthetic_kt_h.at2").data.size
+    monkeypatch.setattr(fragility, "MAX_SUITE_SAMPLES", int(1.5 * samples))
+    (ws / "suite.yaml").write_text("records:\n  - {name: h, horizontal: synthetic_kt_h.at2}\n"
+                                   "  - {name: v, horizontal: synthetic_kt_v.at2}\n")
+    line = one_error_line(invoke("fragility", "case.yaml", "--suite", "suite.yaml", "--levels", "0.5g",
+                                 "--no-plot", "--records-dir", "."))
+    assert "suite.yaml: the suite's records hold more than" in line and "reached at records[1], v, of 2" in line
     assert not (ws / "out").exists() or listing(ws / "out") == []
 
 
