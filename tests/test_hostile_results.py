@@ -17,7 +17,7 @@ import h5py
 import numpy as np
 import pytest
 from conftest import REPO, G, _case, fragility_file, invoke, one_line_error, openquake_csv
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 import rockslide
@@ -195,13 +195,30 @@ def test_files_as_written_still_read(files):
     assert float(stored.attrs["intensity_measure_display_scale"]) == pytest.approx(G)
 
 
-@settings(deadline=None, max_examples=40, suppress_health_check=[HealthCheck.function_scoped_fixture,
-                                                                  HealthCheck.too_slow])
+@pytest.mark.parametrize("kind", ["run", "sweep", "fragility", "risk"])
+def test_an_empty_attribute_is_read_or_one_output_error(files, tmp_path, kind):
+    """HDF5 reports an empty attribute's size (zero bytes) as an error; the reader must not pass it
+    on (found by the property test below with ``np.zeros(0, int8)``)."""
+    for name in sorted(set(h5checked.ATTRIBUTE_KINDS) | {"format", "anything"}):
+        (tmp_path / name).mkdir()
+        path = _crafted(files, kind, tmp_path / name, _set(name, np.zeros(0, dtype=np.int8)))
+        try:
+            rockslide.read_result(path)
+        except OutputError as exc:
+            assert str(path) in str(exc) and "\n" not in str(exc)
+
+
+@settings(deadline=None, max_examples=40,
+          suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
 @given(name=st.sampled_from(sorted(h5checked.ATTRIBUTE_KINDS) + ["anything"]),
-       value=st.one_of(st.integers(-2**63, 2**63 - 1), st.floats(), st.text(max_size=50), st.booleans(),
+       value=st.one_of(st.integers(-2**63, 2**63 - 1), st.floats(),
+                       st.text(st.characters(blacklist_characters="\x00"), max_size=50),  # h5py writes no NUL
+                       st.booleans(),
                        st.lists(st.floats(), min_size=1, max_size=20).map(np.array),
                        st.integers(0, 200_000).map(lambda n: np.zeros(n, dtype=np.int8))),
        kind=st.sampled_from(["run", "sweep", "fragility", "risk"]))
+@example(name="format", value=np.array([0.0]), kind="run")             # a list is not a format name
+@example(name="name", value=np.zeros(0, dtype=np.int8), kind="sweep")  # HDF5 errs on a zero-byte size
 def test_any_attribute_value_is_read_or_one_output_error(files, tmp_path_factory, name, value, kind):
     """An attribute of any name rockslide reads, of any kind and size: the reader gives the file
     back or one OutputError naming it, never another exception."""

@@ -160,6 +160,14 @@ def _where(obj, name: str) -> str:
     return f"attribute {name!r} of {path}"
 
 
+def storage_size(attr):
+    """The bytes an attribute holds: HDF5 reports an empty one's zero bytes as an error."""
+    try:
+        return attr.get_storage_size()
+    except RuntimeError:
+        return 0
+
+
 def attribute_values(obj, source: str, *, skip=()) -> Entries:
     """The attributes of a group or dataset ``obj``, each bounded and checked before it is read.
 
@@ -183,7 +191,7 @@ def attribute_values(obj, source: str, *, skip=()) -> Entries:
     for name in obj.attrs:
         try:
             attr = obj.attrs.get_id(name)
-            size = attr.get_storage_size()
+            size = storage_size(attr)
             shape = attr.shape
             dtype = attr.dtype
         except (OSError, KeyError, TypeError, ValueError) as exc:

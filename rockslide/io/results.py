@@ -1203,11 +1203,11 @@ def file_format(path) -> str | None:
         return None                             # the reader of the kind asked says why
     try:
         with h5py.File(path, "r", locking=False) as f:
-            size = f.attrs.get_id("format").get_storage_size() if "format" in f.attrs else 0
+            size = h5checked.storage_size(f.attrs.get_id("format")) if "format" in f.attrs else 0
             value = _plain(f.attrs.get("format")) if size <= MAX_ATTRIBUTE_BYTES else None
     except OSError:
         return None
-    return value if value in FORMATS else None
+    return value if isinstance(value, str) and value in FORMATS else None
 
 
 def read_sweep(path) -> StoredSweep:
