@@ -33,6 +33,7 @@ import yaml
 
 from .errors import CaseError
 from .inputs import open_regular, regular_size
+from .mesh import MESH_LENGTH_UNITS
 from .pulses import SHAPES, Pulse, common_intervals
 from .units import SI_UNITS, STANDARD_GRAVITY, UNIT_REQUIRED, UNITS, parse_quantity, unit_factor, written_unit
 
@@ -59,6 +60,7 @@ __all__ = [
     "Distribution",
     "Uncertain",
     "case_with",
+    "other_plane",
     "iter_case_keys",
     "load_case",
     "load_suite",
@@ -101,6 +103,15 @@ class Block:
         Full base depth [m] of a box (along its rocking axis): the block is then screened in both
         planes (model-asymmetric.md section 9: the second plane is a block ``depth`` wide across the
         first, under the component across the block). None: one plane.
+    mesh : str, optional
+        The closed triangle mesh (OBJ, STL, PLY) the body was derived from (docs/meshes.md), as an
+        absolute path: `centre_of_mass_height`, `half_widths`, `radius_of_gyration` and `mass` are
+        its planar body along `orientation` (the mesh's x axis, east, when None), and the body is
+        screened in both planes. None: the body is given by its sizes.
+    mesh_units : str, optional
+        The mesh's length unit (``m``, ``cm``, ``mm``, ``in``, ``ft``).
+    density : float, optional
+        [kg/m^3] of a mesh's body (its mass the density times the volume), or None (``mass`` given).
     """
 
     height: float
@@ -111,6 +122,14 @@ class Block:
     half_widths: tuple[float, float] | None = None
     radius_of_gyration: float | None = None
     depth: float | None = None
+    mesh: str | None = None
+    mesh_units: str | None = None
+    density: float | None = None
+
+    @property
+    def both_planes(self) -> bool:
+        """Whether the body is screened in both planes: a box with a `depth`, or a mesh."""
+        return self.depth is not None or self.mesh is not None
 
     @property
     def asymmetric(self) -> bool:
@@ -138,8 +157,15 @@ class Block:
         b1, b2 = self.corners
         a1, a2 = self.tipping_angles
         gyration = "" if self.radius_of_gyration is None else f", radius of gyration {self.radius_of_gyration:.4g} m"
-        return (f"body: centre of mass {self.height / 2.0:.4g} m high, corners b1 = {b1:.4g} m, b2 = {b2:.4g} m"
+        what = "body" if self.mesh is None else f"body of {Path(self.mesh).name} along {self.mesh_azimuth_text}"
+        return (f"{what}: centre of mass {self.height / 2.0:.4g} m high, corners b1 = {b1:.4g} m, b2 = {b2:.4g} m"
                 f"{gyration}, {self.mass:.4g} kg, α1 = {a1:.4g} rad (tips over at ah > 0), α2 = {a2:.4g} rad")
+
+    @property
+    def mesh_azimuth_text(self) -> str:
+        """The direction a mesh's body is taken along, in words (``azimuth 90 deg``)."""
+        azimuth = self.orientation if self.orientation is not None else 0.5 * math.pi
+        return f"azimuth {math.degrees(azimuth) % 360:.4g} deg"
 
     @property
     def half_width(self) -> float:
@@ -449,7 +475,15 @@ class Uncertain:
         it (``f`` > 1: a stockier block). The name says which quantity varies, not which ratio.
     orientation : Distribution or None
         The block's orientation itself [rad] (``block.orientation``), for a case with two horizontal
-        components, e.g. uniform over 0 to 180 degrees: the orientation unknown.
+        components, e.g. uniform over 0 to 180 degrees: the orientation unknown. A mesh's body is
+        derived again for each member's orientation.
+    b1, b2 : Distribution or None
+        A factor on one corner's distance from the vertical through the centre of mass
+        (``block.half_widths``; a rectangle's ``width / 2``): where a scan or a drawing leaves the
+        base's edge uncertain. Either makes a rectangle an asymmetric body (its radius of gyration
+        the rectangle's of each member's size).
+    radius_of_gyration : Distribution or None
+        A factor on the radius of gyration (given, a mesh's, or the rectangle's by default).
     """
 
     intensity: Distribution | None = None
@@ -458,6 +492,9 @@ class Uncertain:
     size: Distribution | None = None
     slenderness: Distribution | None = None
     orientation: Distribution | None = None
+    b1: Distribution | None = None
+    b2: Distribution | None = None
+    radius_of_gyration: Distribution | None = None
 
     def given(self) -> dict[str, Distribution]:
         """The quantities given, by name."""
@@ -654,7 +691,7 @@ CASE_KEYS: dict[str, dict] = {
     "block": _key("mapping", "the rectangular rigid block", required=True, keys={
         "height": _key("length", "full height 2h (or centre_of_mass_height)", bounds=[(">", 0.0)]),
         "width": _key("length", "full base width 2b (or half_widths)", bounds=[(">", 0.0)]),
-        "mass": _key("mass", "mass", required=True, bounds=[(">", 0.0)]),
+        "mass": _key("mass", "mass (of a mesh: instead of its density)", bounds=[(">", 0.0)]),
         "orientation": _key("angle", "azimuth of the base width (across the rocking axis), clockwise "
                             "from north, with two horizontal components, e.g. '30 deg' (default: "
                             "along ground.horizontal_1)", bounds=[(">=", -2.0 * math.pi), ("<=", 2.0 * math.pi)],
@@ -670,6 +707,14 @@ CASE_KEYS: dict[str, dict] = {
         "radius_of_gyration": _key("length", "sqrt(I/M) about the centre of mass (default: the uniform "
                                    "rectangle's, sqrt((bm^2 + h^2)/3), bm = (b1 + b2)/2), at most "
                                    "sqrt(max(b1, b2)^2 + h^2)"),
+        "mesh": _key("string", "a closed triangle mesh (OBJ, STL, PLY) of the body, instead of its sizes: its "
+                     "planar body along block.orientation (default: the mesh's x axis, east) is derived and "
+                     "screened in both planes (docs/meshes.md); a relative name resolves against the case "
+                     "file's folder"),
+        "mesh_units": _key("choice", "length unit of the mesh's coordinates (a mesh file does not state it)",
+                           choices=list(MESH_LENGTH_UNITS)),
+        "density": _key("density", "density of a mesh's body: its mass is density x volume (or give mass)",
+                        bounds=[(">", 0.0)]),
     }),
     "contact": _key("mapping", "block-foundation contact", required=True, keys={
         "mu_static": _key("dimensionless", "static friction coefficient", required=True,
@@ -759,6 +804,11 @@ CASE_KEYS: dict[str, dict] = {
                                "components, angles with their unit, e.g. {uniform: [0 deg, 180 deg]}",
                                bounds=[(">=", -2.0 * math.pi), ("<=", 2.0 * math.pi)]),
                         "quantity": "angle"},
+        "b1": _key("distribution", "factor on b1, the corner a positive ground acceleration tips the body over "
+                   "(block.half_widths[0], a rectangle's width/2)", bounds=[(">", 0.0)]),
+        "b2": _key("distribution", "factor on b2, the other corner (block.half_widths[1])", bounds=[(">", 0.0)]),
+        "radius_of_gyration": _key("distribution", "factor on the radius of gyration about the centre of mass",
+                                   bounds=[(">", 0.0)]),
     }),
 }
 
@@ -1157,9 +1207,10 @@ def _with_unit(x: float, unit: str) -> str:
 class _Ctx:
     """Where the data came from, for messages; how bare numbers are read; the units written."""
 
-    def __init__(self, source: str, si_numbers: bool = False):
+    def __init__(self, source: str, si_numbers: bool = False, base_dir: Path | None = None):
         self.source = source
         self.si_numbers = si_numbers
+        self.base_dir = base_dir
         self.units: dict[str, str] = {}
 
     def fail(self, path: str | None, message: str):
@@ -1458,6 +1509,14 @@ def _block_checks(raw: dict, ctx: _Ctx) -> None:
     at most ``e_max`` (docs/model-asymmetric.md section 4.2). The body's form is stored with
     ``height = 2 h`` and ``width = b1 + b2``."""
     block = raw["block"]
+    if block["mesh"] is not None:
+        _mesh_body(block, ctx)
+    else:
+        for key in ("mesh_units", "density"):
+            if block[key] is not None:
+                ctx.fail(f"block.{key}", "is a mesh's: give it with block.mesh")
+        if block["mass"] is None:
+            ctx.fail("block.mass", f"missing required key ({CASE_KEYS['block']['keys']['mass']['doc']} [kg])")
     pairs = (("height", "centre_of_mass_height"), ("width", "half_widths"))
     for plain, body in pairs:
         if block[plain] is not None and block[body] is not None:
@@ -1480,7 +1539,7 @@ def _block_checks(raw: dict, ctx: _Ctx) -> None:
         if not 0.0 < k <= k_max:
             ctx.fail("block.radius_of_gyration", f"expected within (0, {k_max:.6g} m], the largest a body of "
                      f"that size can have (sqrt(max(b1, b2)^2 + h^2)), got {_with_unit(k, 'm')}")
-    if block["depth"] is not None and (block["half_widths"] is not None or k is not None):
+    if block["depth"] is not None and block["mesh"] is None and (block["half_widths"] is not None or k is not None):
         ctx.fail("block.depth", "is a box's depth: give it with block.height and block.width (a body given by "
                  "half_widths or a radius of gyration is screened in one plane; rockslide info describes a mesh "
                  "in both)")
@@ -1492,6 +1551,36 @@ def _block_checks(raw: dict, ctx: _Ctx) -> None:
         if e is not None and e > e_max:
             ctx.fail("contact.restitution", f"must be at most e_max = {e_max:.10g} for this body (beyond it an "
                      f"impact of a sliding base could add energy; docs/asymmetric.md), got {_num(e)}")
+
+
+def _mesh_body(block: dict, ctx: _Ctx) -> None:
+    """Fill a mesh's ``block`` with its planar body along ``block.orientation`` (the mesh's x axis,
+    east, when not given): ``centre_of_mass_height``, ``half_widths``, ``radius_of_gyration``,
+    ``mass`` (`mesh.body_of_file`, model-asymmetric.md section 9), ``mesh`` the file's absolute path."""
+    from . import mesh as meshes
+    from .errors import OutputError
+
+    for key in ("height", "width", "centre_of_mass_height", "half_widths", "radius_of_gyration", "depth"):
+        if block[key] is not None:
+            ctx.fail(f"block.{key}", "and block.mesh are exclusive: the mesh gives the body's sizes and inertia "
+                     "(and its second plane)")
+    if block["mesh_units"] is None:
+        ctx.fail("block.mesh_units", f"missing: the length unit of the mesh's coordinates "
+                 f"({', '.join(MESH_LENGTH_UNITS)}): a mesh file does not state it")
+    if (block["density"] is None) == (block["mass"] is None):
+        ctx.fail("block.density", "give the body's density (its mass is density x volume) or block.mass, "
+                 "one of them" + (", not both" if block["density"] is not None else ""))
+    path = Path(block["mesh"]).expanduser()
+    if not path.is_absolute():
+        path = (ctx.base_dir if ctx.base_dir is not None else Path.cwd()) / path
+    azimuth = block["orientation"] if block["orientation"] is not None else 0.5 * math.pi
+    try:
+        body = meshes.body_of_file(path, units=block["mesh_units"], azimuth=azimuth, density=block["density"],
+                                   mass=block["mass"])
+    except (CaseError, OutputError) as exc:
+        ctx.fail("block.mesh", f"{path.name}: {exc.message}")
+    block.update(mesh=str(path.absolute()), centre_of_mass_height=body.h, half_widths=(body.b1, body.b2),
+                 radius_of_gyration=body.radius_of_gyration, mass=body.mass)
 
 
 def _cross_checks(raw: dict, ctx: _Ctx) -> None:
@@ -1507,6 +1596,9 @@ def _cross_checks(raw: dict, ctx: _Ctx) -> None:
     ground = raw["ground"]
     scale = ground["scale"]
     _component_checks(raw, ctx)
+    if raw["block"]["mesh"] is not None and ground["horizontal_2"] is not None and raw["block"]["orientation"] is None:
+        ctx.fail("block.orientation", "is needed for a mesh with two horizontal components: the azimuth, in the "
+                 "ground's frame and the mesh's (x east, y north), of the direction its body is taken along")
     if raw["uncertain"]["orientation"] is not None and ground["horizontal_2"] is None:
         ctx.fail("uncertain.orientation", "given, but the ground has one horizontal component: turning the "
                  "block needs two, ground.horizontal_1 and ground.horizontal_2")
@@ -1561,7 +1653,7 @@ def _component_checks(raw: dict, ctx: _Ctx, path: str = "ground") -> None:
     ground = raw["ground"] if path == "ground" else raw
     one, two = ground.pop("horizontal_1"), ground["horizontal_2"]
     if one is None and two is None:
-        if raw["block"]["orientation"] is not None:
+        if raw["block"]["orientation"] is not None and raw["block"].get("mesh") is None:
             ctx.fail("block.orientation", "given, but the ground has one horizontal component: give two, "
                      "ground.horizontal_1 and ground.horizontal_2 (each a file and its azimuth)")
         return
@@ -1602,7 +1694,7 @@ def _pulse_checks(ground: dict, ctx: _Ctx) -> None:
 
 
 def _build(data, *, source: str, base_dir: Path | None, text: str, si_numbers: bool = False) -> Case:
-    ctx = _Ctx(source, si_numbers)
+    ctx = _Ctx(source, si_numbers, base_dir)
     if data is None:
         ctx.fail(None, f"the case file is empty (expected a mapping with keys: {', '.join(CASE_KEYS)})")
     if not isinstance(data, Mapping):
@@ -1706,6 +1798,12 @@ def _block_dict(block: Block) -> dict:
     """The block's keys as a case file gives them: a body (``half_widths``) by its centre of mass's
     height and half widths, not by the bounding rectangle its `Block` also holds."""
     out = {f.name: getattr(block, f.name) for f in dataclasses.fields(block) if getattr(block, f.name) is not None}
+    if block.mesh is not None:          # the body is the mesh's: derived again when read
+        for key in ("height", "width", "centre_of_mass_height", "half_widths", "radius_of_gyration"):
+            out.pop(key, None)
+        if block.density is not None:
+            out.pop("mass")
+        return out
     if block.centre_of_mass_height is not None:
         out.pop("height")
     if block.half_widths is not None:
@@ -1728,6 +1826,15 @@ def _with_si_units(value, unit: str):
     if isinstance(value, list):
         return [_with_si_units(v, unit) for v in value]
     return f"{float(value)!r} {unit}"
+
+
+def other_plane(case: Case, orientation: float) -> Case:
+    """The case of a body's second plane in the screening of both planes (model-asymmetric.md
+    section 9; `Block.both_planes`): a box turned to ``orientation`` [rad] with its depth as its
+    width, or a mesh's body along ``orientation``."""
+    if case.block.mesh is not None:
+        return case_with(case, {"block.orientation": orientation})
+    return case_with(case, {"block.width": case.block.depth, "block.depth": None, "block.orientation": orientation})
 
 
 def case_with(case: Case, changes: Mapping[str, object]) -> Case:

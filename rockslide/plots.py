@@ -2093,7 +2093,7 @@ BODY_COLOUR = "#cfcac0"
 
 
 def body_figure(bodies, *, title: str | None = None, size=None) -> Figure:
-    """A body's planar models (`io.mesh.PlanarBody`): one panel per plane, side by side.
+    """A body's planar models (`mesh.PlanarBody`): one panel per plane, side by side.
 
     Each panel shows the body's silhouette on the vertical plane of its direction ``u`` (``u`` to
     the right, seen from the side of azimuth + 90 deg: the mesh's triangles facing that side,
@@ -2104,7 +2104,7 @@ def body_figure(bodies, *, title: str | None = None, size=None) -> Figure:
     Parameters
     ----------
     bodies : PlanarBody or sequence of PlanarBody
-        From `io.mesh.planar_bodies` or `io.mesh.box_bodies`.
+        From `mesh.planar_bodies` or `mesh.box_bodies`.
     title : str, optional
         Default: the mesh file's name.
     size : None, "column", "page", "slide", "WxH" or (width, height)

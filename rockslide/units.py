@@ -21,7 +21,7 @@ STANDARD_GRAVITY = 9.80665  # [m/s^2]
 
 #: The SI unit of each kind, as written in messages.
 SI_UNITS = {"length": "m", "mass": "kg", "time": "s", "acceleration": "m/s^2", "angle": "rad",
-            "angular_rate": "rad/s", "velocity": "m/s", "dimensionless": ""}
+            "angular_rate": "rad/s", "velocity": "m/s", "density": "kg/m^3", "dimensionless": ""}
 
 UNITS: dict[str, dict[str, float]] = {
     "length": {"m": 1.0, "cm": 1e-2, "mm": 1e-3},
@@ -36,6 +36,7 @@ UNITS: dict[str, dict[str, float]] = {
     "angle": {"rad": 1.0, "deg": math.pi / 180.0},
     "angular_rate": {"rad/s": 1.0, "deg/s": math.pi / 180.0},
     "velocity": {"m/s": 1.0, "cm/s": 1e-2, "mm/s": 1e-3},
+    "density": {"kg/m^3": 1.0, "kg/m3": 1.0, "g/cm^3": 1000.0, "g/cm3": 1000.0},
     "dimensionless": {"": 1.0},
 }
 
@@ -203,7 +204,8 @@ def written_unit(value) -> str | None:
 def _example(kind: str) -> str:
     return {
         "length": "200 mm", "mass": "10 kg", "time": "0.1 ms", "acceleration": "800 gal",
-        "angle": "2 deg", "angular_rate": "0.5 rad/s", "velocity": "0.1 m/s", "dimensionless": "0.5",
+        "angle": "2 deg", "angular_rate": "0.5 rad/s", "velocity": "0.1 m/s", "density": "2650 kg/m^3",
+        "dimensionless": "0.5",
     }[kind]
 
 

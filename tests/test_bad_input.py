@@ -223,7 +223,8 @@ BAD_INPUTS = [
     # -- types -------------------------------------------------------------------------------------------
     bad_case("type-block-list", case_text({"block": [0.2, 0.1, 10]}),
              ["case.yaml: block: expected a mapping (keys: height, width, mass, orientation, "
-              "centre_of_mass_height, half_widths, depth, radius_of_gyration)", "got a list"]),
+              "centre_of_mass_height, half_widths, depth, radius_of_gyration, mesh, mesh_units, density)",
+              "got a list"]),
     bad_case("type-mass-bool", case_text({"block.mass": True}),
              ["block.mass: expected a mass", "'10 kg'", "got True"]),
     bad_case("type-mu-word", case_text({"contact.mu_static": "high"}),

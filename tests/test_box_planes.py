@@ -49,7 +49,7 @@ def test_the_worse_plane_is_named_in_the_printout_and_the_json(tmp_path):
     (tmp_path / "box.yaml").write_text(__import__("yaml").safe_dump(box()))
     text = invoke("run", tmp_path / "box.yaml", "--no-plot", "--out-dir", tmp_path)
     assert text.exit_code == 0, text.output
-    assert "both planes (an uncoupled screening" in text.stdout and "verdict of the box" in text.stdout
+    assert "both planes (an uncoupled screening" in text.stdout and "verdict of the body" in text.stdout
     result = rockslide.read_result(tmp_path / "box.h5")
     assert "planes" in result.attrs
 

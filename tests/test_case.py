@@ -423,7 +423,7 @@ BAD = [
     # types
     ("type-block-list", variant({"block": [0.2, 0.1, 10]}),
      ["block: expected a mapping (keys: height, width, mass, orientation, centre_of_mass_height, half_widths, depth, "
-      "radius_of_gyration), got a list [0.2, 0.1, 10]"]),
+      "radius_of_gyration, mesh, mesh_units, density), got a list [0.2, 0.1, 10]"]),
     ("type-contact-string", variant({"contact": "rough"}), ["contact: expected a mapping", "'rough'"]),
     ("type-scale-number", variant({"ground.scale": 2}),
      ["ground.scale: expected a mapping", "got an integer 2"]),

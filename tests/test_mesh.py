@@ -1,4 +1,4 @@
-"""A scanned body as planar bodies (rockslide/io/mesh.py; model-asymmetric.md section 9).
+"""A scanned body as planar bodies (rockslide/mesh.py; model-asymmetric.md section 9).
 
 What these tests protect: a box mesh in each format gives the box's planar bodies (closed forms,
 1e-10 where the file keeps the coordinates exactly); an off-centre body gives the b1, b2, h and k2
@@ -20,9 +20,9 @@ import numpy as np
 import pytest
 import trimesh
 
+from rockslide import mesh as meshio
 from rockslide.errors import CaseError, OutputError
-from rockslide.io import mesh as meshio
-from rockslide.io.mesh import SCREENING_NOTE, box_bodies, describe, planar_bodies, planar_body, read_mesh
+from rockslide.mesh import SCREENING_NOTE, box_bodies, describe, planar_bodies, planar_body, read_mesh
 
 TOL = 1e-10
 EAST, NORTH, SOUTH, WEST = math.pi / 2, 0.0, math.pi, 1.5 * math.pi

@@ -31,6 +31,7 @@ import numpy as np
 
 from ..case import Case, Distribution
 from ..core import kernel as K
+from ..core import layout as L
 from ..core.simulate import Model, set_model
 from ..engine.execute import execute
 from ..engine.plan import MAX_POINTS, Plan, assemble, default_chunk_size
@@ -188,27 +189,44 @@ def plan_ensemble(case: Case, n: int = DEFAULT_MEMBERS, *, seed: int = SEED, rec
 def member_parameters(case: Case, params: np.ndarray, values: dict) -> tuple[np.ndarray, np.ndarray]:
     """Kernel parameter rows of members: ``params`` (the nominal case's row for each member) with
     each member's block and contact, from its sampled ``values`` (`sample`: factors on the size (h
-    and b), on the width b alone (``slenderness``: b/h times it, the field's h/b divided by it) and
-    on the friction, the restitution itself; a quantity not sampled keeps the case's
-    value). The block's constants come from `core.simulate.Model`, as for a run, so a member at the
-    nominal values has the nominal row exactly. Returns ``(params, restitution per member)``."""
+    and b), on the width b alone (``slenderness``: b/h times it, the field's h/b divided by it), on
+    either corner alone (``b1``, ``b2``), on the radius of gyration and on the friction, the
+    restitution itself; a quantity not sampled keeps the case's value). A mesh turned per member
+    (``orientation``) starts from each member's own body in ``params`` (`case.Block.mesh`). The
+    block's constants come from `core.simulate.Model`, as for a run, so a member at the nominal
+    values has the nominal row exactly. Returns ``(params, restitution per member)``."""
     params = params.copy()
     n = params.shape[0]
     one = np.ones(n)
     size, slender, friction = values.get("size", one), values.get("slenderness", one), values.get("friction", one)
+    corner_1, corner_2, gyration = values.get("b1", one), values.get("b2", one), values.get("radius_of_gyration", one)
     width, height = case.block.width * size * slender, case.block.height * size
     mu, nu = case.contact.mu_static * friction, case.contact.mu_kinetic * friction
     restitution = (np.clip(values["restitution"], 0.0, 1.0) if "restitution" in values
                    else np.full(n, case.contact.restitution))
-    body = case.block.half_widths is not None or case.block.radius_of_gyration is not None
+    block = case.block
+    body = block.half_widths is not None or block.radius_of_gyration is not None \
+        or any(name in values for name in ("b1", "b2", "radius_of_gyration"))
+    turned = block.mesh is not None and "orientation" in values
+    b1, b2 = np.full(n, block.corners[0]), np.full(n, block.corners[1])
+    half_height, k = np.full(n, 0.5 * block.height), np.full(n, np.nan)
+    if block.radius_of_gyration is not None:
+        k[:] = block.radius_of_gyration
+    if turned:              # each member's own body, derived from the mesh along its orientation
+        b1, b2, half_height = params[:, L.P_B1].copy(), params[:, L.P_B2].copy(), params[:, L.P_H].copy()
+        k = np.sqrt(params[:, L.P_K2])
     for i in range(n):
         if body:      # an asymmetric body (docs/asymmetric.md): its corners scale as the width
-            b1, b2 = case.block.corners
-            k = case.block.radius_of_gyration
-            model = Model(b1 * float(size[i] * slender[i]), 0.5 * float(height[i]), float(mu[i]), float(nu[i]),
-                          float(restitution[i]), case.gravity, case.block.mass,
-                          half_width_2=b2 * float(size[i] * slender[i]),
-                          radius_of_gyration=None if k is None else k * float(size[i]))
+            stretch = float(size[i] * slender[i])
+            m1, m2 = float(b1[i]) * stretch * float(corner_1[i]), float(b2[i]) * stretch * float(corner_2[i])
+            mh = float(half_height[i]) * float(size[i])
+            mk = None if math.isnan(k[i]) else float(k[i]) * float(size[i])
+            if "radius_of_gyration" in values:
+                if mk is None:          # the rectangle's of this member's size
+                    mk = math.sqrt(Model(m1, mh, 0.0, 0.0, 0.0, half_width_2=m2).k2)
+                mk *= float(gyration[i])
+            model = Model(m1, mh, float(mu[i]), float(nu[i]), float(restitution[i]), case.gravity, case.block.mass,
+                          half_width_2=m2, radius_of_gyration=mk)
         else:
             model = Model.from_block(float(width[i]), float(height[i]), float(mu[i]), float(nu[i]),
                                      float(restitution[i]), case.gravity, case.block.mass)

@@ -165,7 +165,7 @@ def json_ready(value):
 
 
 def planes_lines(planes: dict) -> list[str]:
-    """A box's screening in both planes: each plane's verdict and the worse (`api.runs._planes`)."""
+    """A box's or a mesh's screening in both planes: each plane's verdict and the worse (`api.runs._planes`)."""
     lines = [f"  both planes ({planes['screening']}):"]
     for name in ("width", "depth"):
         plane = planes[name]
@@ -173,6 +173,8 @@ def planes_lines(planes: dict) -> list[str]:
         ratio = plane["max_rotation_ratio"]
         how = plane.get("note") or ("" if plane["overturned"] else f", {100 * ratio:.3g} % of alpha")
         lines.append(f"    {name} plane{where}: {plane['verdict']}{how if plane.get('note') is None else '; ' + how}")
+        if plane.get("body"):
+            lines.append(f"      {plane['body']}")
     worse = planes[planes["worse"]]
-    lines.append(f"    verdict of the box: {worse['verdict']} (the {planes['worse']} plane)")
+    lines.append(f"    verdict of the body: {worse['verdict']} (the {planes['worse']} plane)")
     return lines

@@ -55,7 +55,7 @@ class RunResult:
         For a case on a floor: ``description`` and the peaks of the floor's motion (``pfa``
         [m/s^2], ``pfv`` [m/s], and of the ground under the building).
     planes : dict or None
-        With ``block.depth`` (a box in both planes, model-asymmetric.md section 9): per plane
+        With ``block.depth`` or ``block.mesh`` (both planes, model-asymmetric.md section 9): per plane
         (``width``, ``depth``) its ``orientation`` [rad] (None: one component), ``verdict``,
         ``overturned``, ``max_rotation_ratio``; ``worse`` names the plane of the worse verdict, and
         ``screening`` says that the planes are uncoupled. None without a depth.
@@ -205,31 +205,35 @@ def _members(ensemble) -> tuple[int | None, float | None]:
 
 
 #: What every printout of a box in both planes says of it (model-asymmetric.md section 9).
-SCREENING = ("an uncoupled screening: each plane is the planar model under the component along it; a box "
+SCREENING = ("an uncoupled screening: each plane is the planar model under the component along it; a body "
              "rocking about a corner is not modelled")
 
 
 def _planes(prepared, result, folder) -> dict | None:
-    """A box's screening in both planes (``block.depth``): the run just made is the width plane; the
-    depth plane is a block ``depth`` wide across it, under the component across the block (with one
-    horizontal component it sees none: no run). None without a depth."""
-    from ..case import case_with
+    """A box's or a mesh's screening in both planes (`case.Block.both_planes`): the run just made is
+    the width plane; the depth plane is `case.other_plane` across it, under the component across the
+    block (with one horizontal component it sees none: no run). None for a body in one plane."""
+    from ..case import other_plane
     from ..engine import prepare as engine
 
     case = prepared.case
-    if case.block.depth is None:
+    if not case.block.both_planes:
         return None
     width = {"orientation": None if prepared.components is None else prepared.components.orientation,
              **_plane_of(result.summary)}
+    facing = case.block.orientation if case.block.orientation is not None else 0.5 * math.pi
+    facing = facing if prepared.components is None else prepared.components.orientation
+    across = facing + 0.5 * math.pi
+    across -= 2.0 * math.pi if across > 2.0 * math.pi else 0.0
+    other = other_plane(case, across) if prepared.components is not None or case.block.mesh is not None else None
     if prepared.components is None:
         depth = {"orientation": None, "verdict": "standing", "overturned": False, "max_rotation_ratio": 0.0,
                  "note": "one horizontal component: the depth plane sees no horizontal motion"}
     else:
-        across = prepared.components.orientation + 0.5 * math.pi
-        across -= 2.0 * math.pi if across > 2.0 * math.pi else 0.0
-        other = case_with(case, {"block.width": case.block.depth, "block.depth": None, "block.orientation": across})
         depth = {"orientation": across,
                  **_plane_of(engine.simulate_prepared(engine.prepare(other, folder, history=False)).summary)}
+    if case.block.mesh is not None:         # a mesh's planes are bodies of their own: say which
+        width["body"], depth["body"] = case.block.describe(), other.block.describe()
     worse = "depth" if (depth["overturned"], depth["max_rotation_ratio"]) > (width["overturned"],
                                                                             width["max_rotation_ratio"]) else "width"
     return {"width": width, "depth": depth, "worse": worse, "screening": SCREENING}

@@ -155,7 +155,7 @@ def work_precision(case, *, records_dir=None, reference: str = "auto", modes=("l
     return table
 
 
-#: The file endings read as meshes (`io.mesh`) by `describe_mesh` and ``rockslide info``.
+#: The file endings read as meshes (`rockslide.mesh`) by `describe_mesh` and ``rockslide info``.
 MESH_ENDINGS = (".obj", ".stl", ".ply")
 
 
@@ -166,7 +166,7 @@ def is_mesh_file(path) -> bool:
 
 def describe_mesh(path: str | Path, *, units: str | None, azimuth=None, density=None, mass=None,
                   figure: str | Path | None = None, overwrite: bool = False, dpi=None, size=None) -> dict:
-    """A scanned object's planar bodies along ``azimuth`` and across it (`io.mesh.planar_bodies`;
+    """A scanned object's planar bodies along ``azimuth`` and across it (`mesh.planar_bodies`;
     docs/meshes.md), as ``rockslide info rock.obj`` prints them, with the case-file keys of each.
 
     Parameters
@@ -189,7 +189,7 @@ def describe_mesh(path: str | Path, *, units: str | None, azimuth=None, density=
         ``lines`` (the printout), ``bodies`` (per plane: ``b1``, ``b2``, ``h`` [m], ``k2`` [m^2],
         ``mass`` [kg], ``azimuth`` [rad], and ``block``, the case file's keys of that body).
     """
-    from ..io import mesh
+    from .. import mesh
     from ..units import parse_quantity
 
     if units is None:
@@ -198,7 +198,9 @@ def describe_mesh(path: str | Path, *, units: str | None, azimuth=None, density=
     az = math.pi / 2 if azimuth is None else parse_quantity(azimuth, "angle", source="azimuth", si_numbers=True)
     rho = None
     if density is not None:
-        rho = _density(density)
+        rho = parse_quantity(density, "density", source="density", si_numbers=True)
+        if not (math.isfinite(rho) and rho > 0.0):
+            raise CaseError(f"expected a positive density such as '2650 kg/m^3', got {density!r}", source="density")
     kg = None if mass is None else parse_quantity(mass, "mass", source="mass")
     bodies = mesh.planar_bodies(mesh.read_mesh(path, units=units), azimuth=az, density=rho, mass=kg)
     out = {"file": str(path), "lines": mesh.describe(bodies), "bodies": []}
@@ -219,18 +221,3 @@ def describe_mesh(path: str | Path, *, units: str | None, azimuth=None, density=
         out["figure"] = str(figure)
     return out
 
-
-def _density(value) -> float:
-    """A density [kg/m^3] from ``"2650 kg/m^3"``, ``"2.65 g/cm^3"`` or a number (SI)."""
-    text = str(value).strip().replace(" ", "")
-    for unit, factor in (("kg/m^3", 1.0), ("kg/m3", 1.0), ("g/cm^3", 1000.0), ("g/cm3", 1000.0), ("", 1.0)):
-        if text.endswith(unit) and (unit or text.replace(".", "", 1).replace("e", "", 1).lstrip("+-").isdigit()):
-            try:
-                number = float(text[:len(text) - len(unit)] if unit else text) * factor
-            except ValueError:
-                break
-            if math.isfinite(number) and number > 0:
-                return number
-            break
-    raise CaseError(f"expected a positive density such as '2650 kg/m^3' or '2.65 g/cm^3', got {value!r}",
-                    source="density")

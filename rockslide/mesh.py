@@ -35,10 +35,10 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import CaseError, OutputError, exception_text
-from ..inputs import open_regular
+from .errors import CaseError, OutputError, exception_text
+from .inputs import open_regular
 
-__all__ = ["read_mesh", "PlanarBody", "planar_body", "planar_bodies", "box_bodies", "describe",
+__all__ = ["read_mesh", "PlanarBody", "planar_body", "planar_bodies", "box_bodies", "describe", "body_of_file",
            "MESH_FORMATS", "MESH_LENGTH_UNITS", "MAX_MESH_BYTES", "MAX_MESH_FACES", "CONTACT_TOLERANCE",
            "SCREENING_NOTE"]
 
@@ -249,6 +249,53 @@ def planar_bodies(mesh, *, azimuth: float, density: float | None = None, mass: f
     rest = _resting(mesh, tolerance, source)
     body_mass = _mass(density, mass, rest["volume"], source)
     return tuple(_along(rest, az, body_mass, tolerance, source, mesh) for az in (azimuth, azimuth + 0.5 * math.pi))
+
+
+#: Meshes read by `body_of_file`, by file (path, size, modification time) and unit: a sweep over
+#: orientations or a case changed key by key reads and measures its mesh once.
+_RESTING_CACHE: dict = {}
+#: The most meshes `_RESTING_CACHE` keeps (the oldest is dropped).
+_RESTING_CACHE_SIZE = 4
+
+
+def body_of_file(path, *, units: str, azimuth: float, density: float | None = None,
+                 mass: float | None = None) -> PlanarBody:
+    """The planar body along ``azimuth`` of the mesh in file ``path``: `read_mesh` then `planar_body`,
+    the mesh read and rested once per file and unit (a case's ``block.mesh``, `case.Block`).
+
+    Parameters
+    ----------
+    path : str or Path
+        The mesh file (OBJ, STL, PLY).
+    units : str
+        Its length unit (`MESH_LENGTH_UNITS`).
+    azimuth : float
+        The shaking direction [rad], clockwise from north, in the mesh frame.
+    density, mass : float, optional
+        [kg/m^3] or [kg], as `planar_body`.
+
+    Raises
+    ------
+    CaseError, OutputError
+        As `read_mesh` and `planar_body`, naming the file.
+    """
+    source = str(path)
+    try:
+        stat = Path(path).stat()
+        key = (str(Path(path).resolve()), stat.st_size, stat.st_mtime_ns, str(units))
+    except OSError:                     # missing or unreadable: `read_mesh` says which, naming the file
+        key = None
+    cached = _RESTING_CACHE.get(key) if key is not None else None
+    if cached is None:
+        mesh = read_mesh(path, units=units)
+        cached = (mesh, _resting(mesh, CONTACT_TOLERANCE, source))
+        if key is not None:
+            while len(_RESTING_CACHE) >= _RESTING_CACHE_SIZE:
+                _RESTING_CACHE.pop(next(iter(_RESTING_CACHE)))
+            _RESTING_CACHE[key] = cached
+    mesh, rest = cached
+    azimuth = _finite(azimuth, "azimuth", source)
+    return _along(rest, azimuth, _mass(density, mass, rest["volume"], source), CONTACT_TOLERANCE, source, mesh)
 
 
 def box_bodies(width: float, depth: float, height: float, mass: float | None, orientation: float
