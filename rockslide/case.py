@@ -1532,25 +1532,55 @@ def _block_checks(raw: dict, ctx: _Ctx) -> None:
     b1, b2 = block["half_widths"] if block["half_widths"] is not None else (block["width"] / 2.0,) * 2
     h = block["height"] / 2.0
     k = block["radius_of_gyration"]
+    failures = dict(body_failures(b1, b2, h, k, raw["contact"]["restitution"]))
+    if "block.radius_of_gyration" in failures:
+        ctx.fail("block.radius_of_gyration", failures["block.radius_of_gyration"])
+    if block["depth"] is not None and (block["half_widths"] is not None or k is not None):
+        ctx.fail("block.depth", "is a box's depth: give it with block.height and block.width (a body given by "
+                 "half_widths or a radius of gyration is screened in one plane; rockslide info describes a mesh "
+                 "in both)")
+    if "contact.restitution" in failures:
+        ctx.fail("contact.restitution", failures["contact.restitution"])
+
+
+def body_failures(b1: float, b2: float, h: float, k: float | None, e: float | None) -> list[tuple[str, str]]:
+    """What a body's radius of gyration and restitution break (docs/model-asymmetric.md section 4.2):
+    ``k`` within ``(0, k_max]``, ``k_max = sqrt(max(b1, b2)^2 + h^2)``, and, for an asymmetric body
+    (``b1 != b2`` or ``k`` given), ``e`` at most ``e_max``. A pure check, the one for a case file
+    (`_block_checks`) and an ensemble's members (`analyses.ensemble`).
+
+    Parameters
+    ----------
+    b1, b2 : float
+        [m] The base corners' distances from the vertical through the centre of mass.
+    h : float
+        [m] The centre of mass's height.
+    k : float or None
+        [m] The radius of gyration about the centre of mass (None: the uniform rectangle's).
+    e : float or None
+        [-] The coefficient of restitution (None: not checked).
+
+    Returns
+    -------
+    list of (str, str)
+        ``(key, what is wrong)`` per failure, in the order of the keys; empty when the body is within.
+    """
+    out = []
     if k is not None:
         # Any body inside the bounding box [-b1, b2] x [0, 2h] with its centre of mass at (0, h) has
         # 0 < I/M <= max over the box of the squared distance from the centre of mass, b_max^2 + h^2.
         k_max = math.sqrt(max(b1, b2) ** 2 + h * h)
         if not 0.0 < k <= k_max:
-            ctx.fail("block.radius_of_gyration", f"expected within (0, {k_max:.6g} m], the largest a body of "
-                     f"that size can have (sqrt(max(b1, b2)^2 + h^2)), got {_with_unit(k, 'm')}")
-    if block["depth"] is not None and block["mesh"] is None and (block["half_widths"] is not None or k is not None):
-        ctx.fail("block.depth", "is a box's depth: give it with block.height and block.width (a body given by "
-                 "half_widths or a radius of gyration is screened in one plane; rockslide info describes a mesh "
-                 "in both)")
-    e = raw["contact"]["restitution"]
-    if (block["half_widths"] is not None and b1 != b2) or k is not None:
+            out.append(("block.radius_of_gyration", f"expected within (0, {k_max:.6g} m], the largest a body of "
+                        f"that size can have (sqrt(max(b1, b2)^2 + h^2)), got {_with_unit(k, 'm')}"))
+    if e is not None and (b1 != b2 or k is not None):
         k2 = k * k if k is not None else ((0.5 * (b1 + b2)) ** 2 + h * h) / 3.0
         rho1, rho2 = math.sqrt(k2 + b1 * b1 + h * h), math.sqrt(k2 + b2 * b2 + h * h)
         e_max = (h * h + math.sqrt((k2 + b1 * b1) * (k2 + b2 * b2))) / (rho1 * rho2)
-        if e is not None and e > e_max:
-            ctx.fail("contact.restitution", f"must be at most e_max = {e_max:.10g} for this body (beyond it an "
-                     f"impact of a sliding base could add energy; docs/asymmetric.md), got {_num(e)}")
+        if e > e_max:
+            out.append(("contact.restitution", f"must be at most e_max = {e_max:.10g} for this body (beyond it an "
+                        f"impact of a sliding base could add energy; docs/asymmetric.md), got {_num(e)}"))
+    return out
 
 
 def _mesh_body(block: dict, ctx: _Ctx) -> None:

@@ -9,10 +9,10 @@ import math
 
 import numpy as np
 import pytest
-from conftest import invoke, one_line_error
+from conftest import REPO, invoke, one_line_error
 
 from rockslide.analyses import ensemble
-from rockslide.case import Distribution
+from rockslide.case import Distribution, load_case
 from rockslide.errors import CaseError, numbers_from
 from rockslide.io import hazard
 
@@ -40,12 +40,23 @@ def test_a_level_that_overflows_in_si_is_one_line(tmp_path):
                           "--out-dir", tmp_path), "h.csv", "in SI")
 
 
-def test_a_lognormal_of_huge_beta_is_one_line_naming_its_key():
-    """Its samples overflowed to inf and underflowed to 0, then divided by zero (internal error)."""
-    with pytest.raises(CaseError, match=r"^uncertain.size: the lognormal's samples go beyond"):
-        ensemble.sample({"size": Distribution("lognormal", 1.0, 1e300)}, 16)
+def test_a_lognormal_of_huge_beta_draws_without_a_warning_and_says_each_member_outside():
+    """Its samples overflowed to inf and underflowed to 0, then divided by zero (internal error).
+    Now they are drawn as they come, without a warning line, and each member they put outside the
+    model is said (`ensemble.drawn_outside`; tests/test_ensemble_draws.py runs such ensembles)."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        drawn = ensemble.sample({"size": Distribution("lognormal", 1.0, 1e300)}, 16)
+    assert set(np.unique(drawn["size"])) <= {0.0, math.inf}
+    case = load_case(REPO / "configs" / "example.yaml")
+    outside, reasons = ensemble.drawn_outside(case, drawn, np.ones(16))
+    assert outside.all() and sum(reasons.values()) == 16
+    assert set(reasons) == {"uncertain.size: factor not finite", "uncertain.size: factor not above 0"}
     values = ensemble.sample({"size": Distribution("lognormal", 1.0, 0.3)}, 16)["size"]
     assert np.all(values > 0) and abs(float(np.median(np.log(values)))) < 0.3
+    assert not ensemble.drawn_outside(case, {"size": values}, np.ones(16))[0].any()
 
 
 def test_numbers_from_names_the_input_and_lets_underflow_pass():

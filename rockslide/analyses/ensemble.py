@@ -8,7 +8,9 @@ over the quantities that are uncertain in practice (the case's ``uncertain`` sec
 (chunked, on threads, a dask cluster or a GPU). It reports:
 
 - the probability of overturning over the members that stay within the model, with its 95 %
-  Wilson score interval (`wilson_interval`);
+  Wilson score interval (`wilson_interval`); a member drawn outside what the model takes (an
+  infinite factor, a restitution above a body's e_max: `drawn_outside`) is left out and said, as
+  one that leaves the model during the computation is;
 - the distribution of the largest rotation over alpha (median, 5 % and 95 %);
 - how the verdict depends on each varied quantity: the share overturning among the members in the
   lowest and in the highest third of its samples, and the quantity with the largest difference.
@@ -24,7 +26,7 @@ from __future__ import annotations
 import json
 import math
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -37,7 +39,7 @@ from ..engine.execute import execute
 from ..engine.plan import MAX_POINTS, Plan, assemble, default_chunk_size
 from ..engine.prepare import RunWarning, coarse_step_warning
 from ..engine.step import keep_resolved
-from ..errors import CaseError, numbers_from
+from ..errors import CaseError
 from . import sweep as sw
 
 __all__ = ["DEFAULTS", "DEFAULT_MEMBERS", "distributions", "sample", "plan_ensemble", "compute", "summarise",
@@ -79,7 +81,8 @@ def sample(dists: dict[str, Distribution], n: int, seed: int = SEED) -> dict[str
     """``n`` samples of each distribution, by Latin hypercube (one stratum of probability ``1/n``
     per member and quantity, the strata paired at random; scipy's ``qmc.LatinHypercube`` with
     ``seed``), through each distribution's inverse CDF. A quantity without spread gives its value
-    to every member, exactly."""
+    to every member, exactly. Values as drawn, also those no model takes (a lognormal of huge beta
+    overflows to infinity and underflows to 0): `drawn_outside` says which members they make."""
     from scipy.stats import norm, qmc
 
     varying = [name for name, d in dists.items() if d.spread]
@@ -90,16 +93,111 @@ def sample(dists: dict[str, Distribution], n: int, seed: int = SEED) -> dict[str
             out[name] = np.full(n, d.nominal if d.kind == "uniform" else d.a)
             continue
         q = u[:, varying.index(name)]
-        if d.kind == "uniform":
-            out[name] = d.a + (d.b - d.a) * q
-        elif d.kind == "normal":
-            out[name] = d.a + d.b * norm.ppf(q)
-        else:
-            with numbers_from(f"uncertain.{name}", what="the lognormal's samples"):
+        with np.errstate(over="ignore", under="ignore", invalid="ignore"):    # said per member, not here
+            if d.kind == "uniform":
+                out[name] = d.a + (d.b - d.a) * q
+            elif d.kind == "normal":
+                out[name] = d.a + d.b * norm.ppf(q)
+            else:
                 out[name] = d.a * np.exp(d.b * norm.ppf(q))
-                if not (out[name] > 0).all():
-                    raise FloatingPointError("underflow to 0")
     return out
+
+
+#: The quantities drawn as factors (on the intensity, the friction, the size, the width): finite and > 0.
+FACTORS = ("intensity", "friction", "size", "slenderness")
+#: The status of a member drawn outside the model in the members' variables (`member_variables`), after
+#: the kernel's statuses (`core.kernel.STATUS_NAMES`): its outcomes are not data.
+STATUS_DRAWN_OUTSIDE = len(K.STATUS_NAMES)
+
+
+def drawn_outside(case: Case, values: dict, peaks: np.ndarray) -> tuple[np.ndarray, dict]:
+    """The members whose drawn ``values`` (`sample`) lie outside what the model accepts, and why.
+
+    A member is outside when a factor (:data:`FACTORS`) is not finite or not above 0; when its
+    intensity factor takes the scaled ground motion (``peaks`` [m/s^2], the nominal case's peak per
+    member) beyond `engine.prepare.within_acceleration_bound`; when its block's height or width leaves
+    `engine.prepare.LENGTH_RANGE`; when its restitution or orientation is not finite; and, for an
+    asymmetric body, when its radius of gyration or restitution breaks `case.body_failures` (the
+    checks of a case file). They are left out of the statistics and said, as the members that leave
+    the model during the computation are.
+
+    Returns
+    -------
+    outside : bool[n]
+    reasons : dict
+        ``"uncertain.NAME: what"`` -> members (one member may have several reasons).
+    """
+    from ..case import body_failures
+    from ..engine.prepare import LENGTH_RANGE, MAX_ACCELERATION_IN_G, within_acceleration_bound
+
+    n = len(peaks)
+    outside = np.zeros(n, dtype=bool)
+    reasons: dict[str, int] = {}
+
+    def say(mask: np.ndarray, label: str) -> None:
+        mask = mask & ~outside          # one reason per member: the first found
+        if mask.any():
+            reasons[label] = reasons.get(label, 0) + int(mask.sum())
+            outside[mask] = True
+
+    for name in FACTORS:
+        if name in values:
+            v = values[name]
+            say(~np.isfinite(v), f"uncertain.{name}: factor not finite")
+            say(~(v > 0.0), f"uncertain.{name}: factor not above 0")
+    for name in ("restitution", "orientation"):
+        if name in values:
+            say(~np.isfinite(values[name]), f"uncertain.{name}: not finite")
+    one = np.ones(n)
+    with np.errstate(over="ignore", under="ignore", invalid="ignore"):
+        if "intensity" in values:
+            peak = peaks * np.where(outside, 1.0, values["intensity"])
+            say(~within_acceleration_bound(peak, case.gravity),
+                f"uncertain.intensity: scaled ground motion beyond {MAX_ACCELERATION_IN_G:.0e} g")
+        size, slender = values.get("size", one), values.get("slenderness", one)
+        low, high = LENGTH_RANGE
+        lengths = (case.block.height * size, case.block.width * size * slender)
+        names = ", ".join(f"uncertain.{name}" for name in ("size", "slenderness") if name in values)
+        say(~np.logical_and.reduce([(low <= x) & (x <= high) for x in lengths]),
+            f"{names}: the block's height or width beyond {low:g} to {high:g} m")
+    if case.block.half_widths is not None or case.block.radius_of_gyration is not None:
+        b1, b2 = case.block.corners
+        h, k = 0.5 * case.block.height, case.block.radius_of_gyration
+        e = (np.clip(values["restitution"], 0.0, 1.0) if "restitution" in values
+             else np.full(n, case.contact.restitution))
+        label = {"block.radius_of_gyration": ("slenderness", "the radius of gyration beyond the largest the "
+                                              "body can have (sqrt(max(b1, b2)^2 + h^2))"),
+                 "contact.restitution": ("restitution", "restitution above e_max of the body (docs/asymmetric.md)")}
+        failing: dict[str, list[int]] = {}
+        for i in np.flatnonzero(~outside):
+            f = float(size[i] * slender[i])
+            for key, _ in body_failures(b1 * f, b2 * f, h * float(size[i]),
+                                        None if k is None else k * float(size[i]), float(e[i])):
+                name, what = label[key]
+                quantities = [q for q in (name, "slenderness") if q in values] or [name]
+                failing.setdefault(f"{', '.join(f'uncertain.{q}' for q in dict.fromkeys(quantities))}: {what}",
+                                   []).append(int(i))
+        for text, members in failing.items():
+            mask = np.zeros(n, dtype=bool)
+            mask[members] = True
+            say(mask, text)
+    return outside, reasons
+
+
+def _nominal_peaks(plan: Plan, rows: np.ndarray) -> np.ndarray:
+    """[m/s^2] The peak scaled ground acceleration of the nominal plan's ``rows`` (horizontal or
+    vertical, whichever is larger), as `engine.prepare.check_against_ground` measures a run's."""
+    peaks = np.empty(len(rows))
+    windows: dict = {}
+    for j, r in enumerate(rows):
+        window = (int(plan.first[r]), int(plan.count[r]))
+        if window not in windows:
+            part = plan.base[:, window[0]:window[0] + window[1]]
+            windows[window] = (float(np.max(np.abs(part[0:2]), initial=0.0)),
+                               float(np.max(np.abs(part[2:4]), initial=0.0)))
+        horizontal, vertical = windows[window]
+        peaks[j] = max(abs(plan.factor_h[r]) * horizontal, abs(plan.factor_v[r]) * vertical)
+    return peaks
 
 
 @dataclass
@@ -121,6 +219,11 @@ class EnsemblePlan:
         The case's records as read (`engine.prepare.read_records`), for the rounds that follow.
     precision : float or None
         The width of the 95 % interval asked for (`to_precision`): this plan is its first round.
+    outside : bool[n] or None
+        The members drawn outside the model (`drawn_outside`): computed at the nominal values, left
+        out of the statistics; their ``samples`` hold the values drawn, NaN where not finite.
+    outside_reasons : dict
+        Why (`drawn_outside`): ``"uncertain.NAME: what"`` -> members.
     """
 
     plan: Plan
@@ -130,6 +233,8 @@ class EnsemblePlan:
     seed: int
     records: dict | None = None
     precision: float | None = None
+    outside: np.ndarray | None = None
+    outside_reasons: dict = field(default_factory=dict)
 
     @property
     def n(self) -> int:
@@ -154,11 +259,13 @@ def plan_ensemble(case: Case, n: int = DEFAULT_MEMBERS, *, seed: int = SEED, rec
         raise CaseError(f"an ensemble runs the compiled kernel; got method {case.solver.method!r}",
                         source=case.source, field="solver.method")
     dists, defaults = distributions(case)
-    values = sample(dists, int(n), seed)
+    drawn = sample(dists, int(n), seed)
     e = case.contact.restitution
-    if "orientation" in values:         # a record per orientation: the members as an --azimuth sweep
-        axis = sw.Axis("azimuth", tuple(float(v) for v in values["orientation"]),
-                       tuple(f"{math.degrees(v):.6g}deg" for v in values["orientation"]), "uncertain.orientation")
+    if "orientation" in drawn:         # a record per orientation: the members as an --azimuth sweep
+        orientation = np.where(np.isfinite(drawn["orientation"]), drawn["orientation"],
+                               _nominal_value(case, "orientation", dists["orientation"]))
+        axis = sw.Axis("azimuth", tuple(float(v) for v in orientation),
+                       tuple(f"{math.degrees(v):.6g}deg" for v in orientation), "uncertain.orientation")
         axes, rows = [axis], np.arange(int(n), dtype=np.int64)
     else:
         axes, rows = [sw.parse_axis("restitution", repr(e))], np.zeros(int(n), dtype=np.int64)
@@ -166,6 +273,13 @@ def plan_ensemble(case: Case, n: int = DEFAULT_MEMBERS, *, seed: int = SEED, rec
         warnings.simplefilter("ignore", RunWarning)
         nominal = sw.plan_sweep(case, axes, records_dir=records_dir, chunk_size=1, records=records)
     n = int(n)
+    outside, reasons = drawn_outside(case, drawn, _nominal_peaks(nominal, rows))
+    if outside.all():
+        first = max(reasons, key=reasons.get)
+        raise CaseError(f"every one of the {n} members is drawn outside the model ({_reasons_text(reasons)}); "
+                        "expected a distribution whose draws the model takes (a smaller spread)",
+                        source=case.source, field=first.split(":", 1)[0].split(",", 1)[0])
+    values = {name: np.where(outside, _nominal_value(case, name, dists[name]), v) for name, v in drawn.items()}
     params, restitution = member_parameters(case, nominal.case_params(rows), values)
     if case.solver.auto:            # the nominal case's step, each member's block resolved
         keep_resolved(params)
@@ -181,9 +295,27 @@ def plan_ensemble(case: Case, n: int = DEFAULT_MEMBERS, *, seed: int = SEED, rec
                     base=nominal.base, first=nominal.first[rows], count=nominal.count[rows],
                     record_end=nominal.record_end[rows], records=nominal.records, step_study=nominal.step_study,
                     chunk_size=default_chunk_size(n) if chunk_size is None else int(chunk_size))
-    stored = dict(values)
-    stored["restitution"] = restitution
-    return EnsemblePlan(plan=plan, distributions=dists, samples=stored, defaults=defaults, seed=seed, records=records)
+    with np.errstate(invalid="ignore"):
+        stored = {name: np.where(np.isfinite(v), np.clip(v, 0.0, 1.0) if name == "restitution" else v, np.nan)
+                  for name, v in drawn.items()}
+    stored.setdefault("restitution", restitution)
+    return EnsemblePlan(plan=plan, distributions=dists, samples=stored, defaults=defaults, seed=seed, records=records,
+                        outside=outside, outside_reasons=reasons)
+
+
+def _nominal_value(case: Case, name: str, dist: Distribution) -> float:
+    """What a member drawn outside the model computes with for ``name``: the case's own value (a
+    factor of 1, its restitution) or the distribution's nominal orientation."""
+    if name == "restitution":
+        return case.contact.restitution
+    return dist.nominal if name == "orientation" else 1.0
+
+
+def _reasons_text(reasons: dict) -> str:
+    """``uncertain.intensity: factor not finite`` (one reason) or each with its count."""
+    if len(reasons) == 1:
+        return next(iter(reasons))
+    return "; ".join(f"{text} ({count})" for text, count in reasons.items())
 
 
 def member_parameters(case: Case, params: np.ndarray, values: dict) -> tuple[np.ndarray, np.ndarray]:
@@ -243,9 +375,40 @@ def compute(eplan: EnsemblePlan, nominal_overturned: bool, **where) -> tuple[dic
     workers, scheduler, device, progress). Returns the summary (`summarise`), the dimension
     ``member`` as ``(name, values, attributes)`` and the members' variables (`member_variables`)."""
     done = execute(eplan.plan, **where)
-    variables = sw.sweep_variables(eplan.plan, done.states)
+    variables = mark_drawn_outside(eplan, sw.sweep_variables(eplan.plan, done.states))
     members = ("member", np.arange(eplan.n), dict(MEMBER_ATTRS))
     return summarise(eplan, variables, nominal_overturned), members, member_variables(eplan, variables)
+
+
+#: The outcomes of a member drawn outside the model (`mark_drawn_outside`): computed at the nominal
+#: values, they are no member's data.
+_NOT_DATA = {"overturned": 0, "undecided": 0, "impacts": 0, "direction": 0, "overturn_mode": 0, "modes": 0}
+
+
+def mark_drawn_outside(eplan: EnsemblePlan, variables: dict) -> dict:
+    """The members' variables (`sweep.sweep_variables`) with the members drawn outside the model
+    (`EnsemblePlan.outside`) marked: status :data:`STATUS_DRAWN_OUTSIDE` (``drawn_outside`` among its
+    ``flag_meanings``), their floating-point outcomes NaN and their coded ones 0, so that nothing
+    reads them as data."""
+    outside = eplan.outside if eplan.outside is not None else np.zeros(eplan.n, dtype=bool)
+    status, attrs = variables["status"]
+    attrs = {**attrs, "flag_values": np.arange(STATUS_DRAWN_OUTSIDE + 1, dtype=np.int8),
+             "flag_meanings": f"{attrs['flag_meanings']} drawn_outside",
+             "long_name": "ok, or where the computation left the model, or drawn_outside: a member whose drawn "
+                          "values the model does not take (not computed)"}
+    out = {**variables, "status": (np.where(np.reshape(outside, np.shape(status)), STATUS_DRAWN_OUTSIDE,
+                                            status).astype(np.int8), attrs)}
+    if not outside.any():
+        return out
+    for name, (values, var_attrs) in variables.items():
+        if name == "status":
+            continue
+        mask = np.reshape(outside, np.shape(values))
+        if np.issubdtype(np.asarray(values).dtype, np.floating):
+            out[name] = (np.where(mask, np.nan, values), var_attrs)
+        elif name in _NOT_DATA:
+            out[name] = (np.where(mask, _NOT_DATA[name], values).astype(np.asarray(values).dtype), var_attrs)
+    return out
 
 
 def wilson_interval(k: int, n: int, confidence: float = CONFIDENCE) -> tuple[float, float]:
@@ -269,7 +432,9 @@ def summarise(eplan: EnsemblePlan, variables: dict, nominal_overturned: bool) ->
     ``ensemble`` object and the result file's ``ensemble`` attribute.
 
     Keys: ``n``, ``seed``, ``quantities`` (each distribution as the case file writes it),
-    ``defaults``, ``n_within_model`` (members with status ok), ``n_overturned``, ``p_overturn``,
+    ``defaults``, ``n_within_model`` (members with status ok, not drawn outside the model),
+    ``n_drawn_outside`` and ``drawn_outside`` (members drawn outside the model, `drawn_outside`, and
+    why: ``"uncertain.NAME: what"`` -> members; left out of every statistic), ``n_overturned``, ``p_overturn``,
     ``interval`` ([low, high], 95 % Wilson), ``n_undecided``, ``rotation_ratio`` (``median``,
     ``p05``, ``p95`` of max rotation / alpha over the members within the model), ``sensitivity``
     (per quantity that varies: ``p_low``, ``p_high``, the probability of overturning in the lowest
@@ -280,7 +445,8 @@ def summarise(eplan: EnsemblePlan, variables: dict, nominal_overturned: bool) ->
     status = np.ravel(variables["status"][0])
     over = np.ravel(variables["overturned"][0]).astype(bool)
     ratio = np.ravel(variables["max_rotation_ratio"][0])
-    ok = status == K.STATUS_OK
+    outside = eplan.outside if eplan.outside is not None else np.zeros(status.shape, dtype=bool)
+    ok = (status == K.STATUS_OK) & ~outside
     n_ok, k = int(ok.sum()), int((over & ok).sum())
     low, high = wilson_interval(k, n_ok)
     sensitivity = {}
@@ -301,7 +467,8 @@ def summarise(eplan: EnsemblePlan, variables: dict, nominal_overturned: bool) ->
     return {
         "n": eplan.n, "seed": eplan.seed, "defaults": eplan.defaults,
         "quantities": {name: d.spec() for name, d in eplan.distributions.items()},
-        "n_within_model": n_ok, "n_overturned": k, "p_overturn": k / n_ok if n_ok else math.nan,
+        "n_within_model": n_ok, "n_drawn_outside": int(outside.sum()), "drawn_outside": dict(eplan.outside_reasons),
+        "n_overturned": k, "p_overturn": k / n_ok if n_ok else math.nan,
         "interval": [low, high], "confidence": CONFIDENCE,
         "n_undecided": int(np.ravel(variables["undecided"][0])[ok].sum()),
         "rotation_ratio": {"median": float(quantiles[0]), "p05": float(quantiles[1]), "p95": float(quantiles[2])},
@@ -334,7 +501,11 @@ def describe(summary: dict, nominal_verdict: str) -> list[str]:
     note = summary.get("step", {}).get("step_note")
     if note:
         lines.append(f"  {note}")
-    outside = n - summary["n_within_model"]
+    drawn = summary.get("n_drawn_outside", 0)
+    if drawn:
+        lines.append(f"  {drawn} of {n} members drawn outside the model ({_reasons_text(summary['drawn_outside'])}): "
+                     "left out")
+    outside = n - summary["n_within_model"] - drawn
     if outside:
         lines.append(f"  {outside} of {n} neighbours left the model (flight or painleve): not counted")
     most = summary["most_sensitive"]
@@ -470,7 +641,9 @@ def to_precision(case: Case, width: float, nominal_overturned: bool, *, seed: in
         low, high = summary["interval"]
         if high - low <= width or n >= MAX_POINTS:
             break
-        n = min(MAX_POINTS, max(members_needed(summary["n_overturned"], summary["n_within_model"], width),
-                                int(math.ceil(1.5 * n))))
+        # the members asked for are those counted: as many more as were left out (drawn or left outside)
+        needed = members_needed(summary["n_overturned"], summary["n_within_model"], width)
+        counted = summary["n_within_model"] / n
+        n = min(MAX_POINTS, max(int(math.ceil(needed / counted)) if counted else needed, int(math.ceil(1.5 * n))))
     summary.update({"precision": width, "rounds": rounds})
     return eplan, summary, members, variables

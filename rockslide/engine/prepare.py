@@ -119,6 +119,13 @@ MAX_START_TIME = 1e6
 ABSURD_ACCELERATION_IN_G = 10.0
 
 
+def within_acceleration_bound(peak, gravity: float):
+    """Whether a peak scaled ground acceleration ``peak`` [m/s^2] (a number or an array) is one the
+    model computes: finite and at most :data:`MAX_ACCELERATION_IN_G` times ``gravity`` [m/s^2] (a
+    scale to the bound itself rounds, hence the 1e-12). NaN and infinity are not."""
+    return peak <= MAX_ACCELERATION_IN_G * gravity * (1.0 + 1e-12)
+
+
 def check_parameters(case: Case) -> None:
     """Refuse a block, gravity or initial state outside the ranges float64 represents safely
     (the bounds above), with one line naming the key."""
@@ -154,7 +161,7 @@ def check_against_ground(case: Case, ground: rec.GroundMotion, *, warn: bool = T
                         field="ground.time_shift")
     peak = max(float(np.max(np.abs(ground.horizontal), initial=0.0)),
                float(np.max(np.abs(ground.vertical), initial=0.0)))
-    if peak > MAX_ACCELERATION_IN_G * case.gravity * (1.0 + 1e-12):     # a scale to the bound itself rounds
+    if not within_acceleration_bound(peak, case.gravity):
         raise CaseError(f"the scaled ground motion reaches {peak:.3g} m/s^2 = {peak / case.gravity:.3g} g; "
                         f"expected at most {MAX_ACCELERATION_IN_G:.0e} g (beyond, the computation "
                         "cannot stay finite); check the record's units and ground.scale",
