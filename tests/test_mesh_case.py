@@ -232,3 +232,21 @@ def test_an_ensemble_over_orientations_turns_the_mesh_per_member(tmp_path):
         angle = float(members["sample_orientation"][i])
         alone = rockslide.run(case_with(base, {"block.orientation": angle, "uncertain": None}), history=False)
         assert float(members["max_rotation"][i]) == pytest.approx(alone.summary.max_rotation, rel=1e-12, abs=1e-15)
+
+
+def test_members_whose_corners_leave_no_room_for_their_inertia_are_left_out():
+    """A radius of gyration near the largest the body can have (sqrt(max(b1, b2)^2 + h^2)): members
+    drawn with a smaller b2 can no longer have it, and are left out and said (issue 43.11), counted
+    here from the drawn factors."""
+    h, b1, b2 = 0.294, 0.044, 0.129
+    k = 0.995 * math.hypot(b2, h)
+    rock = {**case({**ROCK, "radius_of_gyration": f"{k!r} m"},
+                   horizontal={"pulse": "one-sine", "amplitude": "0.25 g", "period": "0.4 s"}, tail="1 s"),
+            "uncertain": {"b2": {"uniform": [0.9, 1.0]}}}
+    members = rockslide.ensemble(rock, 40)
+    f2 = members["sample_b2"].values
+    expected = k > np.hypot(np.maximum(b1, b2 * f2), h)
+    assert 0 < expected.sum() < 40
+    summary = __import__("json").loads(members.attrs["ensemble"])
+    assert summary["n_drawn_outside"] == expected.sum()
+    assert any("uncertain.b2" in reason for reason in summary["drawn_outside"])

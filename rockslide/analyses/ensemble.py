@@ -104,13 +104,14 @@ def sample(dists: dict[str, Distribution], n: int, seed: int = SEED) -> dict[str
 
 
 #: The quantities drawn as factors (on the intensity, the friction, the size, the width): finite and > 0.
-FACTORS = ("intensity", "friction", "size", "slenderness")
+FACTORS = ("intensity", "friction", "size", "slenderness", "b1", "b2", "radius_of_gyration")
 #: The status of a member drawn outside the model in the members' variables (`member_variables`), after
 #: the kernel's statuses (`core.kernel.STATUS_NAMES`): its outcomes are not data.
 STATUS_DRAWN_OUTSIDE = len(K.STATUS_NAMES)
 
 
-def drawn_outside(case: Case, values: dict, peaks: np.ndarray) -> tuple[np.ndarray, dict]:
+def drawn_outside(case: Case, values: dict, peaks: np.ndarray, params: np.ndarray | None = None
+                  ) -> tuple[np.ndarray, dict]:
     """The members whose drawn ``values`` (`sample`) lie outside what the model accepts, and why.
 
     A member is outside when a factor (:data:`FACTORS`) is not finite or not above 0; when its
@@ -120,6 +121,9 @@ def drawn_outside(case: Case, values: dict, peaks: np.ndarray) -> tuple[np.ndarr
     asymmetric body, when its radius of gyration or restitution breaks `case.body_failures` (the
     checks of a case file). They are left out of the statistics and said, as the members that leave
     the model during the computation are.
+
+    ``params``: the members' nominal kernel rows (`member_bodies`; needed for a mesh turned per
+    member).
 
     Returns
     -------
@@ -160,22 +164,23 @@ def drawn_outside(case: Case, values: dict, peaks: np.ndarray) -> tuple[np.ndarr
         names = ", ".join(f"uncertain.{name}" for name in ("size", "slenderness") if name in values)
         say(~np.logical_and.reduce([(low <= x) & (x <= high) for x in lengths]),
             f"{names}: the block's height or width beyond {low:g} to {high:g} m")
-    if case.block.half_widths is not None or case.block.radius_of_gyration is not None:
-        b1, b2 = case.block.corners
-        h, k = 0.5 * case.block.height, case.block.radius_of_gyration
+    with np.errstate(over="ignore", under="ignore", invalid="ignore"):
+        bodies = member_bodies(case, params, values)
+    if bodies is not None:
         e = (np.clip(values["restitution"], 0.0, 1.0) if "restitution" in values
              else np.full(n, case.contact.restitution))
-        label = {"block.radius_of_gyration": ("slenderness", "the radius of gyration beyond the largest the "
+        drawn_body = [q for q in ("size", "slenderness", "b1", "b2", "radius_of_gyration") if q in values]
+        label = {"block.radius_of_gyration": (drawn_body, "the radius of gyration beyond the largest the "
                                               "body can have (sqrt(max(b1, b2)^2 + h^2))"),
-                 "contact.restitution": ("restitution", "restitution above e_max of the body (docs/asymmetric.md)")}
+                 "contact.restitution": (["restitution", *drawn_body], "restitution above e_max of the body "
+                                         "(docs/asymmetric.md)")}
         failing: dict[str, list[int]] = {}
         for i in np.flatnonzero(~outside):
-            f = float(size[i] * slender[i])
-            for key, _ in body_failures(b1 * f, b2 * f, h * float(size[i]),
-                                        None if k is None else k * float(size[i]), float(e[i])):
-                name, what = label[key]
-                quantities = [q for q in (name, "slenderness") if q in values] or [name]
-                failing.setdefault(f"{', '.join(f'uncertain.{q}' for q in dict.fromkeys(quantities))}: {what}",
+            b1, b2, h, k = (float(x[i]) for x in bodies)
+            for key, _ in body_failures(b1, b2, h, None if math.isnan(k) else k, float(e[i])):
+                names, what = label[key]
+                quantities = [q for q in names if q in values] or ["slenderness"]
+                failing.setdefault(f"{', '.join(f'uncertain.{q}' for q in quantities)}: {what}",
                                    []).append(int(i))
         for text, members in failing.items():
             mask = np.zeros(n, dtype=bool)
@@ -273,7 +278,7 @@ def plan_ensemble(case: Case, n: int = DEFAULT_MEMBERS, *, seed: int = SEED, rec
         warnings.simplefilter("ignore", RunWarning)
         nominal = sw.plan_sweep(case, axes, records_dir=records_dir, chunk_size=1, records=records)
     n = int(n)
-    outside, reasons = drawn_outside(case, drawn, _nominal_peaks(nominal, rows))
+    outside, reasons = drawn_outside(case, drawn, _nominal_peaks(nominal, rows), nominal.case_params(rows))
     if outside.all():
         first = max(reasons, key=reasons.get)
         raise CaseError(f"every one of the {n} members is drawn outside the model ({_reasons_text(reasons)}); "
@@ -318,6 +323,35 @@ def _reasons_text(reasons: dict) -> str:
     return "; ".join(f"{text} ({count})" for text, count in reasons.items())
 
 
+def member_bodies(case: Case, params: np.ndarray | None, values: dict) -> tuple[np.ndarray, ...] | None:
+    """Each member's body ``(b1, b2, h, k)`` [m] (``k`` NaN: the rectangle's default), for an
+    asymmetric body or a case whose ``uncertain`` section draws ``b1``, ``b2`` or the radius of
+    gyration; None for a rectangle (`member_parameters` then builds it from its width and height).
+    The corners scale as the width (``size`` x ``slenderness`` x their own factor), ``h`` and ``k``
+    as the size, ``k`` also by its own factor; a mesh turned per member (``orientation``) starts from
+    each member's own body in ``params``, the nominal plan's rows (`case.Block.mesh`)."""
+    block = case.block
+    if block.half_widths is None and block.radius_of_gyration is None \
+            and not any(name in values for name in ("b1", "b2", "radius_of_gyration")):
+        return None
+    n = len(next(iter(values.values()), ())) if params is None else params.shape[0]
+    one = np.ones(n)
+    size, slender = values.get("size", one), values.get("slenderness", one)
+    b1, b2 = np.full(n, block.corners[0]), np.full(n, block.corners[1])
+    half_height = np.full(n, 0.5 * block.height)
+    k = np.full(n, np.nan if block.radius_of_gyration is None else block.radius_of_gyration)
+    if block.mesh is not None and "orientation" in values:      # each member's body from the mesh
+        b1, b2, half_height = params[:, L.P_B1].copy(), params[:, L.P_B2].copy(), params[:, L.P_H].copy()
+        k = np.sqrt(params[:, L.P_K2])
+    stretch = size * slender
+    b1, b2 = b1 * stretch * values.get("b1", one), b2 * stretch * values.get("b2", one)
+    half_height, k = half_height * size, k * size
+    if "radius_of_gyration" in values:
+        default = np.sqrt(((0.5 * (b1 + b2)) ** 2 + half_height ** 2) / 3.0)   # `core.simulate.Model.k2`
+        k = np.where(np.isnan(k), default, k) * values["radius_of_gyration"]
+    return b1, b2, half_height, k
+
+
 def member_parameters(case: Case, params: np.ndarray, values: dict) -> tuple[np.ndarray, np.ndarray]:
     """Kernel parameter rows of members: ``params`` (the nominal case's row for each member) with
     each member's block and contact, from its sampled ``values`` (`sample`: factors on the size (h
@@ -331,34 +365,16 @@ def member_parameters(case: Case, params: np.ndarray, values: dict) -> tuple[np.
     n = params.shape[0]
     one = np.ones(n)
     size, slender, friction = values.get("size", one), values.get("slenderness", one), values.get("friction", one)
-    corner_1, corner_2, gyration = values.get("b1", one), values.get("b2", one), values.get("radius_of_gyration", one)
     width, height = case.block.width * size * slender, case.block.height * size
     mu, nu = case.contact.mu_static * friction, case.contact.mu_kinetic * friction
     restitution = (np.clip(values["restitution"], 0.0, 1.0) if "restitution" in values
                    else np.full(n, case.contact.restitution))
-    block = case.block
-    body = block.half_widths is not None or block.radius_of_gyration is not None \
-        or any(name in values for name in ("b1", "b2", "radius_of_gyration"))
-    turned = block.mesh is not None and "orientation" in values
-    b1, b2 = np.full(n, block.corners[0]), np.full(n, block.corners[1])
-    half_height, k = np.full(n, 0.5 * block.height), np.full(n, np.nan)
-    if block.radius_of_gyration is not None:
-        k[:] = block.radius_of_gyration
-    if turned:              # each member's own body, derived from the mesh along its orientation
-        b1, b2, half_height = params[:, L.P_B1].copy(), params[:, L.P_B2].copy(), params[:, L.P_H].copy()
-        k = np.sqrt(params[:, L.P_K2])
+    bodies = member_bodies(case, params, values)
     for i in range(n):
-        if body:      # an asymmetric body (docs/asymmetric.md): its corners scale as the width
-            stretch = float(size[i] * slender[i])
-            m1, m2 = float(b1[i]) * stretch * float(corner_1[i]), float(b2[i]) * stretch * float(corner_2[i])
-            mh = float(half_height[i]) * float(size[i])
-            mk = None if math.isnan(k[i]) else float(k[i]) * float(size[i])
-            if "radius_of_gyration" in values:
-                if mk is None:          # the rectangle's of this member's size
-                    mk = math.sqrt(Model(m1, mh, 0.0, 0.0, 0.0, half_width_2=m2).k2)
-                mk *= float(gyration[i])
+        if bodies is not None:      # an asymmetric body (docs/asymmetric.md)
+            m1, m2, mh, mk = (float(x[i]) for x in bodies)
             model = Model(m1, mh, float(mu[i]), float(nu[i]), float(restitution[i]), case.gravity, case.block.mass,
-                          half_width_2=m2, radius_of_gyration=mk)
+                          half_width_2=m2, radius_of_gyration=None if math.isnan(mk) else mk)
         else:
             model = Model.from_block(float(width[i]), float(height[i]), float(mu[i]), float(nu[i]),
                                      float(restitution[i]), case.gravity, case.block.mass)
