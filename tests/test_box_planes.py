@@ -65,3 +65,21 @@ def test_a_body_with_a_depth_is_refused(ws):
         "name: b\nblock: {centre_of_mass_height: 0.3 m, half_widths: [0.05 m, 0.1 m], depth: 0.2 m, mass: 1 kg}\n"
         "contact: {mu_static: 0.6, restitution: 0.8}\nground: {tail: 1 s}\n")
     one_line_error(invoke("run", "case.yaml"), "block.depth", "a box's depth")
+
+
+def test_an_ensemble_over_orientations_screens_each_member_in_both_planes():
+    """Each member of an ensemble over an uncertain orientation (issue 39.3) has the verdict of a
+    run of the box at its orientation in both planes: the worse plane, named, and its rotation."""
+    case = {**box(pga="0.4 g"), "uncertain": {"orientation": {"uniform": ["0 deg", "180 deg"]}}}
+    members = rockslide.ensemble(case, 6)
+    planes = members["plane"].values
+    assert set(planes) == {0, 1}                       # both planes decide some member
+    for i, angle in enumerate(members["sample_orientation"].values):
+        run = rockslide.run(box(pga="0.4 g", orientation=f"{float(angle)!r} rad"), history=False).planes
+        worse = run[run["worse"]]
+        assert ("width", "depth")[planes[i]] == run["worse"]
+        assert bool(members["overturned"][i]) == worse["overturned"]
+        if not worse["overturned"]:
+            assert float(members["max_rotation_ratio"][i]) == pytest.approx(worse["max_rotation_ratio"], rel=1e-12)
+    summary = __import__("json").loads(members.attrs["ensemble"])
+    assert summary["planes"]["depth_decides"] == int((planes == 1).sum())

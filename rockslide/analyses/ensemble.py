@@ -31,7 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..case import Case, Distribution
+from ..case import Case, Distribution, other_plane
 from ..core import kernel as K
 from ..core import layout as L
 from ..core.simulate import Model, set_model
@@ -229,6 +229,10 @@ class EnsemblePlan:
         out of the statistics; their ``samples`` hold the values drawn, NaN where not finite.
     outside_reasons : dict
         Why (`drawn_outside`): ``"uncertain.NAME: what"`` -> members.
+    planes : bool
+        Whether each member is screened in both planes (a box's depth or a mesh turned by
+        ``uncertain.orientation``, model-asymmetric.md section 9): the plan's axes are then
+        ``(member, plane)`` and `compute` keeps each member's worse plane (`worse_plane`).
     """
 
     plan: Plan
@@ -240,10 +244,12 @@ class EnsemblePlan:
     precision: float | None = None
     outside: np.ndarray | None = None
     outside_reasons: dict = field(default_factory=dict)
+    planes: bool = False
 
     @property
     def n(self) -> int:
-        return self.plan.n_cases
+        """Members (a member in both planes is two of the plan's cases)."""
+        return self.plan.n_cases // 2 if self.planes else self.plan.n_cases
 
 
 def plan_ensemble(case: Case, n: int = DEFAULT_MEMBERS, *, seed: int = SEED, records_dir: Path | None = None,
@@ -266,36 +272,55 @@ def plan_ensemble(case: Case, n: int = DEFAULT_MEMBERS, *, seed: int = SEED, rec
     dists, defaults = distributions(case)
     drawn = sample(dists, int(n), seed)
     e = case.contact.restitution
+    planes = case.block.both_planes and "orientation" in drawn
     if "orientation" in drawn:         # a record per orientation: the members as an --azimuth sweep
         orientation = np.where(np.isfinite(drawn["orientation"]), drawn["orientation"],
                                _nominal_value(case, "orientation", dists["orientation"]))
+        if planes:                     # each member's width plane, then its depth plane
+            orientation = np.column_stack([orientation, _across(orientation)]).ravel()
         axis = sw.Axis("azimuth", tuple(float(v) for v in orientation),
                        tuple(f"{math.degrees(v):.6g}deg" for v in orientation), "uncertain.orientation")
-        axes, rows = [axis], np.arange(int(n), dtype=np.int64)
+        axes, rows = [axis], np.arange(len(orientation), dtype=np.int64)
     else:
         axes, rows = [sw.parse_axis("restitution", repr(e))], np.zeros(int(n), dtype=np.int64)
     with warnings.catch_warnings():         # the nominal case's warnings are its run's (`prepare`)
         warnings.simplefilter("ignore", RunWarning)
         nominal = sw.plan_sweep(case, axes, records_dir=records_dir, chunk_size=1, records=records)
     n = int(n)
-    outside, reasons = drawn_outside(case, drawn, _nominal_peaks(nominal, rows), nominal.case_params(rows))
+    width_rows = rows[0::2] if planes else rows
+    outside, reasons = drawn_outside(case, drawn, _nominal_peaks(nominal, width_rows), nominal.case_params(width_rows))
+    if planes:
+        across = other_plane(case, float(_across(case.block.orientation or 0.0)))
+        across_drawn = {name: v for name, v in drawn.items() if name not in BODY_FACTORS}
+        also, more = drawn_outside(across, across_drawn, _nominal_peaks(nominal, rows[1::2]),
+                                   nominal.case_params(rows[1::2]))
+        for text, count in more.items():
+            reasons[f"{text} (depth plane)"] = count
+        outside |= also
     if outside.all():
         first = max(reasons, key=reasons.get)
         raise CaseError(f"every one of the {n} members is drawn outside the model ({_reasons_text(reasons)}); "
                         "expected a distribution whose draws the model takes (a smaller spread)",
                         source=case.source, field=first.split(":", 1)[0].split(",", 1)[0])
     values = {name: np.where(outside, _nominal_value(case, name, dists[name]), v) for name, v in drawn.items()}
-    params, restitution = member_parameters(case, nominal.case_params(rows), values)
+    params, restitution = member_parameters(case, nominal.case_params(width_rows), values)
+    intensity = values.get("intensity", np.ones(n))
+    if planes:                      # the depth plane's body (the box's depth, the mesh turned), the same draws
+        depth, _ = member_parameters(across, nominal.case_params(rows[1::2]),
+                                     {k: v for k, v in values.items() if k not in BODY_FACTORS})
+        params = np.stack([params, depth], axis=1).reshape(2 * n, -1)
+        intensity = np.repeat(intensity, 2)
     if case.solver.auto:            # the nominal case's step, each member's block resolved
         keep_resolved(params)
-    intensity = values.get("intensity", np.ones(n))
     if coarse_step_warning(case.source, nominal.params) is None:
         warning = coarse_step_warning(case.source, params, lambda i: f"ensemble member {i}: the smallest block")
         if warning:
             warnings.warn(warning, RunWarning, stacklevel=2)
     kind = sw.AxisKind("member", "member", "dimensionless", "", "member of the ensemble", "1", "member")
-    axis = sw.Axis("member", tuple(float(i) for i in range(n)), tuple(str(i) for i in range(n)), str(n), kind)
-    plan = assemble(case, [axis], params=params, states=nominal.case_states(rows),
+    axes = [sw.Axis("member", tuple(float(i) for i in range(n)), tuple(str(i) for i in range(n)), str(n), kind)]
+    if planes:
+        axes.append(sw.Axis("plane", (0.0, 1.0), ("width", "depth"), "width,depth", PLANE_KIND))
+    plan = assemble(case, axes, params=params, states=nominal.case_states(rows),
                     factor_h=nominal.factor_h[rows] * intensity, factor_v=nominal.factor_v[rows] * intensity,
                     base=nominal.base, first=nominal.first[rows], count=nominal.count[rows],
                     record_end=nominal.record_end[rows], records=nominal.records, step_study=nominal.step_study,
@@ -305,7 +330,43 @@ def plan_ensemble(case: Case, n: int = DEFAULT_MEMBERS, *, seed: int = SEED, rec
                   for name, v in drawn.items()}
     stored.setdefault("restitution", restitution)
     return EnsemblePlan(plan=plan, distributions=dists, samples=stored, defaults=defaults, seed=seed, records=records,
-                        outside=outside, outside_reasons=reasons)
+                        outside=outside, outside_reasons=reasons, planes=planes)
+
+
+#: What the printout says of a member's two planes (as a run's, `api.runs.SCREENING`).
+PLANES_NOTE = ("an uncoupled screening: each member's verdict is the worse of its width plane and its depth plane, "
+               "each under the component along it")
+#: The quantities that draw a body's own shape in its width plane (not carried to its depth plane).
+BODY_FACTORS = ("b1", "b2", "radius_of_gyration")
+#: The axis of the two planes of a member screened in both (`EnsemblePlan.planes`).
+PLANE_KIND = sw.AxisKind("plane", "plane", "dimensionless", "", "plane of the screening (0: width, 1: depth)", "1",
+                         "plane")
+
+
+def _across(orientation):
+    """The depth plane's azimuth [rad]: ``orientation + 90 deg``, within +-360 deg."""
+    across = np.asarray(orientation, dtype=float) + 0.5 * math.pi
+    return np.where(across > 2.0 * math.pi, across - 2.0 * math.pi, across)
+
+
+def worse_plane(variables: dict) -> dict:
+    """Each member's variables (`sweep.sweep_variables` over ``(member, plane)``) from its worse plane:
+    a plane that left the model (its status), else the one that overturns, else the larger rotation
+    ratio (as a run's screening, `api.runs`); and ``plane``, which it was (0 width, 1 depth)."""
+    status, over = variables["status"][0], np.asarray(variables["overturned"][0]).astype(bool)
+    ratio = np.where(over, np.inf, np.nan_to_num(np.asarray(variables["max_rotation_ratio"][0], dtype=float),
+                                                 nan=-1.0))
+    bad = status != K.STATUS_OK
+    depth = np.where(bad[:, 0] | bad[:, 1], bad[:, 1] & ~bad[:, 0],
+                     (over[:, 1] > over[:, 0]) | ((over[:, 1] == over[:, 0]) & (ratio[:, 1] > ratio[:, 0])))
+    pick = depth.astype(np.int64)
+    members = np.arange(len(pick))
+    out = {name: (np.asarray(values)[members, pick], attrs) for name, (values, attrs) in variables.items()}
+    out["plane"] = (pick.astype(np.int8), {"long_name": "the plane of the member's worse verdict (model-asymmetric.md "
+                                                        "section 9, an uncoupled screening)",
+                                           "flag_values": np.array([0, 1], dtype=np.int8),
+                                           "flag_meanings": "width depth"})
+    return out
 
 
 def _nominal_value(case: Case, name: str, dist: Distribution) -> float:
@@ -391,7 +452,10 @@ def compute(eplan: EnsemblePlan, nominal_overturned: bool, **where) -> tuple[dic
     workers, scheduler, device, progress). Returns the summary (`summarise`), the dimension
     ``member`` as ``(name, values, attributes)`` and the members' variables (`member_variables`)."""
     done = execute(eplan.plan, **where)
-    variables = mark_drawn_outside(eplan, sw.sweep_variables(eplan.plan, done.states))
+    variables = sw.sweep_variables(eplan.plan, done.states)
+    if eplan.planes:
+        variables = worse_plane(variables)
+    variables = mark_drawn_outside(eplan, variables)
     members = ("member", np.arange(eplan.n), dict(MEMBER_ATTRS))
     return summarise(eplan, variables, nominal_overturned), members, member_variables(eplan, variables)
 
@@ -492,6 +556,8 @@ def summarise(eplan: EnsemblePlan, variables: dict, nominal_overturned: bool) ->
         "nominal_overturned": bool(nominal_overturned), "flips": flips, "robust": flips == 0 and n_ok == eplan.n,
         "integration_step": eplan.plan.step,
         "step": {} if eplan.plan.step_study is None else eplan.plan.step_study.attributes(),
+        **({"planes": {"depth_decides": int((np.ravel(variables["plane"][0])[ok] == 1).sum()),
+                       "screening": PLANES_NOTE}} if "plane" in variables else {}),
     }
 
 
@@ -517,6 +583,10 @@ def describe(summary: dict, nominal_verdict: str) -> list[str]:
     note = summary.get("step", {}).get("step_note")
     if note:
         lines.append(f"  {note}")
+    planes = summary.get("planes")
+    if planes:
+        lines.append(f"  both planes ({planes['screening']}): the depth plane decides {planes['depth_decides']} of "
+                     f"{summary['n_within_model']}")
     drawn = summary.get("n_drawn_outside", 0)
     if drawn:
         lines.append(f"  {drawn} of {n} members drawn outside the model ({_reasons_text(summary['drawn_outside'])}): "
@@ -567,9 +637,10 @@ def member_variables(eplan: EnsemblePlan, variables: dict) -> dict:
         what = words.get(name, f"factor: {name}")
         out[f"sample_{name}"] = (("member",), values, {"units": units.get(name, "1"), "long_name": what})
     for name in ("overturned", "max_rotation", "max_rotation_ratio", "status", "undecided", "impacts",
-                 "max_slip", "end_time"):
-        values, attrs = variables[name]
-        out[name] = (("member",), np.ravel(values), attrs)
+                 "max_slip", "end_time", "plane"):
+        if name in variables:
+            values, attrs = variables[name]
+            out[name] = (("member",), np.ravel(values), attrs)
     return out
 
 

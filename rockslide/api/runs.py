@@ -271,7 +271,8 @@ def _neighbourhood(eplan, result, *, device="cpu", workers=None, say=None, bars=
                                                           seed=eplan.seed, records=eplan.records,
                                                           progress=lambda cases: interrupts.check(), **where)
         return summary, members, variables
-    with (bars or _no_bar)(f"{eplan.plan.case.name}: neighbours", eplan.n, "member") as update:
+    with (bars or _no_bar)(f"{eplan.plan.case.name}: neighbours", eplan.plan.n_cases,
+                           "plane" if eplan.planes else "member") as update:
         def tell(members: int) -> None:
             interrupts.check()
             update(members)
@@ -423,7 +424,8 @@ def _ensemble_figure(summary: dict, variables: dict, nominal, name: str, prepare
     headline = ens.describe(summary, nominal.verdict)[0]
     return ensemble_figure(ratio, over, math.inf if nominal.overturned else nominal.max_rotation_ratio,
                            summary_text=headline.split("; ", 1)[-1],
-                           title=f"{name}: {summary['n']} neighbours (seed {summary['seed']})", size=size,
+                           title=f"{name}: {summary['n']} neighbours (seed {summary['seed']})"
+                                 + (", each the worse of its two planes" if summary.get("planes") else ""), size=size,
                            caption=_run_about(prepared, step)["caption"])
 
 
