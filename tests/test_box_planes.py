@@ -83,3 +83,10 @@ def test_an_ensemble_over_orientations_screens_each_member_in_both_planes():
             assert float(members["max_rotation_ratio"][i]) == pytest.approx(worse["max_rotation_ratio"], rel=1e-12)
     summary = __import__("json").loads(members.attrs["ensemble"])
     assert summary["planes"]["depth_decides"] == int((planes == 1).sum())
+
+
+def test_a_sweep_of_a_box_says_it_screens_the_width_plane_only(tmp_path):
+    (tmp_path / "box.yaml").write_text(__import__("yaml").safe_dump(box()))
+    result = invoke("sweep", tmp_path / "box.yaml", "--pga", "0.3g,0.4g", "--no-plot", "--out-dir", tmp_path)
+    assert result.exit_code == 0, result.output
+    assert "block.depth: a sweep screens the width plane only" in result.stderr

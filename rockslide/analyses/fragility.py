@@ -623,6 +623,8 @@ def plan_fragility(case: Case, suite: Suite, im: IntensityMeasure, levels: sw.Ax
             found["vertical"], found["vertical_sha256"] = Path(case_record[0].path).name, case_record[0].sha256
         where = _entry_source(suite, r)
         pair = entry.horizontal_2 is not None
+        if pair and entry is suite.entries[0]:
+            sw.warn_one_plane(case, "a fragility analysis")
         if im.rotd is not None and not pair:
             raise CaseError(f"{im.label} needs two horizontal components; the record {where} has one "
                             "(give horizontal_1 and horizontal_2 in the suite file)", source="im")

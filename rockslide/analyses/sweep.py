@@ -107,8 +107,8 @@ from ..io.results import RECORD_ROLES
 from ..pulses import Pulse, linear_overturning_ratio
 from ..units import STANDARD_GRAVITY, unit_factor
 
-__all__ = ["AXES", "AxisKind", "Axis", "parse_axis", "plan_sweep", "sweep_variables", "worst_azimuth", "coordinates",
-           "table_coordinates",
+__all__ = ["AXES", "AxisKind", "Axis", "parse_axis", "plan_sweep", "warn_one_plane", "sweep_variables",
+           "worst_azimuth", "coordinates", "table_coordinates",
            "root_attributes", "spectrum_scales", "figure", "stored_figure"]
 
 #: Points validated between two checks for Ctrl-C (and two calls of the planning's progress).
@@ -252,7 +252,18 @@ def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = N
         pilot = None
     study_step(plan, [] if pilot is None else [(slice(None), case, pilot)], "the case file's own case")
     plan.key = definition_key(plan)
+    if case.ground.two_components:
+        warn_one_plane(case, "a sweep")
     return plan
+
+
+def warn_one_plane(case: Case, study: str) -> None:
+    """Say that ``study`` screens a box's or a mesh's width plane only (`case.Block.both_planes`):
+    ``rockslide run`` and ensembles over an uncertain orientation screen both."""
+    if case.block.both_planes:
+        warnings.warn(f"{case.source}: block.{'mesh' if case.block.mesh is not None else 'depth'}: {study} screens "
+                      "the width plane only (the block as oriented); rockslide run, and run --ensemble over "
+                      "uncertain.orientation, screen both planes (an uncoupled screening)", RunWarning, stacklevel=3)
 
 
 def _plan_records(case: Case, axes, ratio, chunk_size: int, records_dir, records, progress) -> Plan:
