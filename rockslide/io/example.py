@@ -21,6 +21,8 @@ SUITE_FILE = "suite-synthetic.yaml"
 SPECTRUM_FILE = "spectrum-one-sine.yaml"
 #: A made-up hazard curve in OpenQuake's hazard-curve CSV layout, for ``rockslide risk``.
 HAZARD_FILE = "hazard-example-PGA.csv"
+#: A case of a body given by its mesh (`ROCK_FILE`) on the example's records.
+ROCK_CASE_FILE = "rock.yaml"
 #: The example's records: file name, seed (in the title), component.
 RECORDS = (("synthetic_kt_h.at2", 1995, "horizontal"), ("synthetic_kt_v.at2", 1996, "vertical"))
 RECORD_DT = 0.01   # [s]
@@ -83,8 +85,8 @@ def rock_obj(b1: float = 0.044, b2: float = 0.129, h: float = 0.294, depth: floa
 
 def write_example(folder, *, overwrite: bool = False) -> list[Path]:
     """Write ``folder/example.yaml`` and its records, ``folder/suite-synthetic.yaml`` and its
-    records, ``folder/spectrum-one-sine.yaml``, ``folder/hazard-example-PGA.csv`` and
-    ``folder/rock.obj`` (`rock_obj`), published
+    records, ``folder/spectrum-one-sine.yaml``, ``folder/hazard-example-PGA.csv``,
+    ``folder/rock.obj`` (`rock_obj`) and ``folder/rock.yaml`` (its case), published
     together (`files.Staging`): nothing is written if one of them exists and ``overwrite`` is
     false, and after Ctrl-C or an error the folders this made are removed again.
 
@@ -94,7 +96,7 @@ def write_example(folder, *, overwrite: bool = False) -> list[Path]:
         A file exists (without ``overwrite``), or the folder cannot be created or written.
     """
     folder = Path(folder)
-    texts = (CASE_FILE, SUITE_FILE, SPECTRUM_FILE, HAZARD_FILE)
+    texts = (CASE_FILE, SUITE_FILE, SPECTRUM_FILE, HAZARD_FILE, ROCK_CASE_FILE)
     names = [*texts, ROCK_FILE, *(name for name, _, _ in RECORDS), *suite_record_names()]
     made = [path for path in (*reversed(folder.parents), folder, folder / "suite-synthetic") if not path.exists()]
     try:
