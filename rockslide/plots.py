@@ -831,7 +831,8 @@ CRITERIA_COLOURS = {REST: "#ffffff", SLIP: STATE_COLOURS[SLIP], ROCK: STATE_COLO
                     ROCKSLIP: STATE_COLOURS[ROCKSLIP]}
 
 
-def criteria_figure(ah_over_g, mu_values, maps, *, title: str = "", size=None, caption: str = "") -> Figure:
+def criteria_figure(ah_over_g, mu_values, maps, *, title: str = "", size=None, caption: str = "",
+                    xlabel: str = "horizontal acceleration |A_h| [g]") -> Figure:
     """Mode-initiation maps (the paper's Figure 5): one panel per vertical acceleration.
 
     Parameters
@@ -847,6 +848,8 @@ def criteria_figure(ah_over_g, mu_values, maps, *, title: str = "", size=None, c
     size : None, "column", "page", "slide", "WxH" or (width, height)
         The figure's size [in] (`figure_size`; default 4.2 in a panel across, 4.6 in high; at a
         column's width, the panels are stacked).
+    xlabel : str
+        The x axis's label (an asymmetric body's map is signed: each side its corner).
     """
     from matplotlib.colors import BoundaryNorm, ListedColormap
 
@@ -874,7 +877,7 @@ def criteria_figure(ah_over_g, mu_values, maps, *, title: str = "", size=None, c
             ax.set_ylim(mu_values[0], mu_values[-1])
             ax.set_title(name, fontsize=_pt(10))
             if not stacked or ax is axes[-1]:
-                ax.set_xlabel("horizontal acceleration |A_h| [g]")
+                ax.set_xlabel(xlabel)
             if stacked or ax is axes[0]:
                 ax.set_ylabel("static friction μ")
         names = {REST: "rest", SLIP: "slip", ROCK: "liftoff", ROCKSLIP: "liftoff-slip"}

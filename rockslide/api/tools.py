@@ -87,15 +87,28 @@ def criteria_map(case=None, *, height=None, width=None, vertical="-0.5g,0g,0.5g"
     path = Path(path)
     if not overwrite and (path.exists() or path.is_symlink()):
         raise OutputError(f"{path} exists (use --overwrite to replace it)")
-    ah = np.linspace(0.0, ah_max, 301)
     mu = np.linspace(0.0, mu_max, 241)
-    maps = [(f"A_v = {a:+.2f} g", crit.mode_map(ah, mu, a, w / 2, h / 2), crit.mode_boundaries(ah, a, w / 2, h / 2))
-            for a in avs]
-    caption = (f"block width × height {w:.4g} × {h:.4g} m, α = {math.atan2(w, h):.4g} rad; from rest under "
-               f"constant accelerations (eqs. 6, 11, 26: no record, no time step; μ across the map, e plays no "
-               f"part); rockslide {__version__}")
-    figure = criteria_figure(ah, mu, maps, title=f"modes initiated from rest: {w:g} m wide, {h:g} m high",
-                             size=size, caption=caption)
+    about = "from rest under constant accelerations (eqs. 6, 11, 26: no record, no time step; μ across the map, " \
+            f"e plays no part); rockslide {__version__}"
+    if block is not None and block.asymmetric and height is None and width is None:
+        # a body tips over corner 1 under A_h > 0 and corner 2 under A_h < 0: both sides drawn
+        (b1, b2), k = block.corners, block.radius_of_gyration
+        body = {"half_width_2": b2, "radius_of_gyration": k}
+        ah = np.linspace(-ah_max, ah_max, 601)
+        maps = [(f"A_v = {a:+.2f} g", crit.mode_map(ah, mu, a, b1, h / 2, **body),
+                 crit.mode_boundaries(ah, a, b1, h / 2, **body)) for a in avs]
+        caption = f"{block.describe()}; A_h > 0 turns it about corner 1 (b1), A_h < 0 about corner 2 (b2); {about}"
+        title = (f"modes initiated from rest: a body with corners {b1:.4g} m and {b2:.4g} m, centre of mass "
+                 f"{h / 2:.4g} m high")
+        figure = criteria_figure(ah, mu, maps, title=title, size=size, caption=caption,
+                                 xlabel="horizontal acceleration A_h [g]")
+    else:
+        ah = np.linspace(0.0, ah_max, 301)
+        maps = [(f"A_v = {a:+.2f} g", crit.mode_map(ah, mu, a, w / 2, h / 2), crit.mode_boundaries(ah, a, w / 2, h / 2))
+                for a in avs]
+        caption = f"block width × height {w:.4g} × {h:.4g} m, α = {math.atan2(w, h):.4g} rad; {about}"
+        figure = criteria_figure(ah, mu, maps, title=f"modes initiated from rest: {w:g} m wide, {h:g} m high",
+                                 size=size, caption=caption)
     save_figure(figure, path, overwrite=overwrite, dpi=dpi)
     return path
 
