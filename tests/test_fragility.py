@@ -692,3 +692,17 @@ def test_parameter_samples_draw_from_the_stated_defaults_and_refuse_intensity(ex
     with pytest.raises(CaseError, match="uncertain.intensity: does not apply"):
         fr.plan_fragility(example.with_(uncertain={"intensity": {"uniform": [0.9, 1.1]}}), load_suite(SUITE), im,
                           fr.parse_levels("1g", im), records_dir=RECORDS, samples=2)
+
+
+def test_pga_rocking_of_a_body_is_normalised_by_its_weaker_corner(example):
+    """``pga_rocking`` = PGA / (g tan alpha): for an asymmetric body tan alpha is its weaker corner's
+    ``min(b1, b2) / h``, the smaller of its two static tipping accelerations (a rectangle: b/h)."""
+    body = example.with_({"block.width": None, "block.height": None, "block.centre_of_mass_height": 0.1,
+                          "block.half_widths": [0.06, 0.02]})
+    im = fr.parse_im("pga_rocking")
+    fplan = fr.plan_fragility(body, load_suite(SUITE), im, fr.parse_levels("1,2", im), records_dir=RECORDS)
+    for r, case in enumerate(fplan.record_cases[:2]):
+        peak = np.max(np.abs(runner.load_ground(case, RECORDS).horizontal))
+        for j, level in enumerate(fplan.levels.values):
+            k = fplan.plan.factor_h[r * 2 + j]
+            assert k * peak / (body.gravity * 0.02 / 0.1) == pytest.approx(level, rel=1e-12)

@@ -14,7 +14,8 @@ fraction of runs that reach each damage state.
   ``rockslide run`` of that case gives identical numbers.
 - **Intensity measures** (:data:`INTENSITY_MEASURES`, `core.intensity`): ``pga``, ``pgv``
   (baseline-corrected, see `core.intensity`), ``pga_rocking`` = PGA / (g tan alpha) with the
-  case's block and gravity, and ``sa(T)``, the 5 %-damped pseudo-spectral acceleration at period
+  case's block and gravity (an asymmetric body: the weaker corner's ``min(b1, b2) / h``, the
+  smaller static tipping acceleration), and ``sa(T)``, the 5 %-damped pseudo-spectral acceleration at period
   ``T``, all of the horizontal record as read; ``pfa`` and ``pfv``, the same peaks of the motion the
   block stands on: the floor's when the case gives ``ground.floor`` (each record is the ground under
   the building, filtered by its modes, `engine.prepare.floor_ground`), else the record's (a floor
@@ -599,7 +600,7 @@ def plan_fragility(case: Case, suite: Suite, im: IntensityMeasure, levels: sw.Ax
     check_parameters(case)
     folder = records_dir if records_dir is not None else rec.records_dir()
     vertical_factor = float(case.ground.scale.vertical_factor)
-    tan_alpha = case.block.width / case.block.height
+    tan_alpha = min(case.block.corners) / case.block.half_height   # a body's weaker corner; a rectangle's b/h
     level_values = np.asarray(levels.values, dtype=np.float64)
     vertical, vertical_note, case_record = _vertical_source(case, suite, folder, case_vertical)
 
