@@ -147,7 +147,8 @@ class PlanarBody:
     contact_tolerance : float
         [m] (`CONTACT_TOLERANCE`).
     plane : str
-        Which plane this is, in words (``"azimuth 90 deg"``, ``"width"``, ``"depth"``).
+        Which plane this is, in words (``"azimuth 90 deg"``, ``"width"``, ``"depth"``, or ``"shaking"``:
+        the one direction of a body under one horizontal component).
     source : str or None
         The mesh file, for messages and captions.
     notes : tuple of str

@@ -2174,7 +2174,8 @@ def _body_panel(ax, body) -> None:
     ax.set_ylim(bottom, upper)
     ax.set_aspect("equal", adjustable="box")
     direction = math.degrees(body.azimuth) % 360.0
-    name = f"{body.plane} ({direction:.4g}°)" if body.plane in ("width", "depth") else f"azimuth {direction:.4g}°"
+    name = (f"{body.plane} ({direction:.4g}°)" if body.plane in ("width", "depth") else
+            "the shaking direction" if body.plane == "shaking" else f"azimuth {direction:.4g}°")
     ax.set_title(f"along {name}, u →\ntan α₁ = {body.b1 / body.h:.3g}, tan α₂ = {body.b2 / body.h:.3g}",
                  fontsize=_pt(10))
     ax.set_xlabel("along u [m]")

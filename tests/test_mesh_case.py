@@ -267,3 +267,20 @@ def test_the_examples_rock_case_runs(tmp_path):
     result = invoke("run", tmp_path / "ex" / "rock.yaml", "--no-plot", "--out-dir", tmp_path)
     assert result.exit_code == 0, result.output
     assert "body of rock.obj along azimuth 90 deg" in result.stdout
+
+
+def test_a_run_of_a_body_draws_its_planes(tmp_path):
+    """``rockslide run`` of a mesh's case also writes NAME.body.png (its silhouette in both planes,
+    with both tipping angles); a rectangle's run does not, and a run without figures removes one
+    left from before."""
+    l_prism(tmp_path / "l.obj")
+    (tmp_path / "l.yaml").write_text(yaml.safe_dump(case(mesh_block("l.obj"))))
+    result = invoke("run", tmp_path / "l.yaml", "--out-dir", tmp_path)
+    assert result.exit_code == 0, result.output
+    assert (tmp_path / "body.body.png").stat().st_size > 10_000 and "body.body.png" in result.stdout
+    again = invoke("run", tmp_path / "l.yaml", "--out-dir", tmp_path, "--overwrite", "--no-plot")
+    assert again.exit_code == 0 and not (tmp_path / "body.body.png").exists()
+    (tmp_path / "r.yaml").write_text(yaml.safe_dump({**case({"height": "1 m", "width": "0.3 m", "mass": "1 kg"}),
+                                                     "name": "plain"}))
+    assert invoke("run", tmp_path / "r.yaml", "--out-dir", tmp_path).exit_code == 0
+    assert not (tmp_path / "plain.body.png").exists()

@@ -239,6 +239,31 @@ def _planes(prepared, result, folder) -> dict | None:
     return {"width": width, "depth": depth, "worse": worse, "screening": SCREENING}
 
 
+def _block_bodies(case, prepared) -> tuple:
+    """The planar bodies a run's figure ``NAME.body.png`` draws (`plots.body_figure`): a mesh's
+    silhouette along the block's direction and across it, a box's two planes, an asymmetric body's
+    outline; none for a plain rectangle (the paper's block)."""
+    from .. import mesh
+
+    block = case.block
+    facing = block.orientation if block.orientation is not None else (
+        prepared.components.orientation if prepared.components is not None else 0.5 * math.pi)
+    if block.mesh is not None:
+        return tuple(mesh.body_of_file(block.mesh, units=block.mesh_units, azimuth=az, density=block.density,
+                                       mass=None if block.density is not None else block.mass)
+                     for az in (facing, facing + 0.5 * math.pi))
+    if block.depth is not None:
+        return mesh.box_bodies(block.width, block.depth, block.height, block.mass, facing)
+    if not block.asymmetric:
+        return ()
+    (b1, b2), h = block.corners, block.half_height
+    k2 = block.radius_of_gyration ** 2 if block.radius_of_gyration is not None else (
+        (0.5 * (b1 + b2)) ** 2 + h * h) / 3.0
+    return (mesh.PlanarBody(azimuth=facing, b1=b1, b2=b2, h=h, k2=k2, mass=block.mass, volume=math.nan,
+                            centre_of_mass=(0.0, 0.0, h), support=((-b1, 0.0), (b2, 0.0)),
+                            plane="width" if prepared.components is not None else "shaking"),)
+
+
 def _plane_of(summary) -> dict:
     return {"verdict": summary.verdict, "overturned": bool(summary.overturned),
             "max_rotation_ratio": math.inf if summary.overturned else float(summary.max_rotation_ratio)}
@@ -296,6 +321,8 @@ def _run_into(outputs, prepared, eplan, started, *, say, progress, device, worke
     files.warn_free_space(outputs.folder, work.rows * results.BYTES_PER_ROW)
     _compile_note(say)
     ensemble_png = outputs.folder / f"{case.name}.ensemble.png"
+    body_png = outputs.folder / f"{case.name}.body.png"
+    bodies = _block_bodies(case, prepared)
     summary = group = None
     with outputs.staging() as staging:
         keep = KEEP_HISTORY_ROWS if outputs.plot else 0
@@ -321,11 +348,18 @@ def _run_into(outputs, prepared, eplan, started, *, say, progress, device, worke
             if summary is not None:
                 outputs.save_figure(_ensemble_figure(summary, group, result.summary, case.name, prepared, result.step,
                                                      size=outputs.size), staging, ensemble_png)
+            if bodies:
+                from ..plots import body_figure
+                outputs.save_figure(body_figure(bodies, title=f"{case.name}: the body's planes", size=outputs.size),
+                                    staging, body_png)
         stale = [] if outputs.plot else [outputs.png]
         if outputs.overwrite and (not outputs.plot or summary is None):
             stale.append(ensemble_png)          # it showed the neighbourhood of the result replaced
+        if outputs.overwrite and (not outputs.plot or not bodies):
+            stale.append(body_png)
         staging.publish(remove=stale)
-    written = outputs.written() + (f" and {ensemble_png}" if summary is not None and outputs.plot else "")
+    written = outputs.written() + (f" and {ensemble_png}" if summary is not None and outputs.plot else "") \
+        + (f" and {body_png}" if bodies and outputs.plot else "")
     return _run_result(prepared, result, summary, files=outputs, written=written, planes=planes)
 
 
