@@ -169,7 +169,9 @@ def drawn_outside(case: Case, values: dict, peaks: np.ndarray, params: np.ndarra
     if bodies is not None:
         e = (np.clip(values["restitution"], 0.0, 1.0) if "restitution" in values
              else np.full(n, case.contact.restitution))
-        drawn_body = [q for q in ("size", "slenderness", "b1", "b2", "radius_of_gyration") if q in values]
+        shaping = ("size", "slenderness", "b1", "b2", "radius_of_gyration") + (
+            ("orientation",) if case.block.mesh is not None else ())        # a mesh's body turns with it
+        drawn_body = [q for q in shaping if q in values]
         label = {"block.radius_of_gyration": (drawn_body, "the radius of gyration beyond the largest the "
                                               "body can have (sqrt(max(b1, b2)^2 + h^2))"),
                  "contact.restitution": (["restitution", *drawn_body], "restitution above e_max of the body "
@@ -179,7 +181,7 @@ def drawn_outside(case: Case, values: dict, peaks: np.ndarray, params: np.ndarra
             b1, b2, h, k = (float(x[i]) for x in bodies)
             for key, _ in body_failures(b1, b2, h, None if math.isnan(k) else k, float(e[i])):
                 names, what = label[key]
-                quantities = [q for q in names if q in values] or ["slenderness"]
+                quantities = [q for q in names if q in values] or ["restitution"]
                 failing.setdefault(f"{', '.join(f'uncertain.{q}' for q in quantities)}: {what}",
                                    []).append(int(i))
         for text, members in failing.items():
