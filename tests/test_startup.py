@@ -103,6 +103,16 @@ def test_a_risk_of_a_given_fragility_loads_no_numba(tmp_path):
     assert done.stdout.splitlines()[-1] == "[]"
 
 
+def test_a_fragility_analysis_of_peaks_on_one_thread_loads_no_numba(tmp_path):
+    """A fragility analysis over PGA on one thread measures its records with numpy (an oscillator,
+    for Sa, would load numba) and computes with the build's machine code: no numba with the build."""
+    from rockslide.core import native
+
+    [loaded] = loaded_after(["fragility", EXAMPLE, "--suite", REPO / "rockslide" / "suite-synthetic.yaml", "--levels",
+                             "0.5g,1g", "--workers", "1", "--no-plot", "--out-dir", tmp_path])
+    assert ("numba" in loaded) == (native.ahead_of_time() is None)
+
+
 @pytest.mark.skipif(not Path("/proc/self/task").is_dir(), reason="counts threads in /proc (Linux)")
 @pytest.mark.parametrize("given", [None, "2"])
 def test_the_command_gives_openblas_one_thread_unless_told(given):
