@@ -18,7 +18,7 @@ help:
 	@echo "               fuzzers: tests/conftest.py SLOW_MODULES, SLOW_TESTS, @pytest.mark.slow);"
 	@echo "               make test runs them all"
 	@echo "make check     lint, import contracts, then the tests"
-	@echo "make bench     speed and accuracy benchmarks -> results/bench.md, bench_kernel.md, bench_sweep.md, bench_fragility.md, bench_startup.md, bench_large.md, bench_auto_step.md, work_precision.png"
+	@echo "make bench     speed and accuracy benchmarks -> results/bench.md, bench_kernel.md, bench_sweep.md, bench_fragility.md, bench_startup.md, bench_overhead.md, bench_large.md, bench_auto_step.md, work_precision.png"
 	@echo "make table1    the paper's Table 1 and Figures 5-10 -> results/ (needs the paper's records)"
 	@echo "make example   run configs/example.yaml"
 	@echo "make spectrum  an overturning spectrum under one-sine pulses -> results/spectrum.png"
@@ -48,6 +48,7 @@ bench:
 	$(PYTHON) benchmarks/bench_auto_step.py --out results
 	$(PYTHON) benchmarks/bench_startup.py --cold >> results/bench.md
 	$(PYTHON) benchmarks/bench_startup.py > results/bench_startup.md
+	$(PYTHON) benchmarks/bench_overhead.py --out results > /dev/null
 
 table1:
 	$(PYTHON) -m rockslide table1 --records-dir "$(ROCKSLIDE_RECORDS)" --out-dir results

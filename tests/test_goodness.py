@@ -43,6 +43,16 @@ def test_deviance_is_the_likelihood_ratio_written_with_scipy_binom():
     assert gf.deviance(n, z, p) == pytest.approx(2 * (saturated - model), rel=1e-12)
 
 
+def test_the_p_value_is_scipy_stats_chi2_sf_to_the_last_bit():
+    """`lognormal_goodness` takes the deviance's p-value from scipy.special's ``chdtrc`` (what
+    ``scipy.stats.chi2.sf`` computes, without importing scipy.stats): the same number to the bit,
+    over deviances from 0 to far in the tail, and at 0, infinity and NaN."""
+    deviances = np.concatenate([np.random.default_rng(3).exponential(10.0, 2000), [0.0, 1e-300, 1e3, np.inf, np.nan]])
+    for dof in range(1, 40):
+        assert stats.chi2.sf(deviances, dof).tobytes() == gf.chdtrc(dof, deviances).tobytes()
+        assert all(float(stats.chi2.sf(d, dof)).hex() == float(gf.chdtrc(dof, d)).hex() for d in deviances[-25:])
+
+
 def test_kobe_lognormal_is_rejected_and_the_first_line_says_so():
     median, beta = kobe_fit()
     fit = gf.lognormal_goodness(KOBE_LEVELS, KOBE_N, KOBE_Z, median, beta)

@@ -71,6 +71,48 @@ def test_a_run_loads_what_it_needs(tmp_path):
     assert not {"obspy", "dask", "distributed", "tqdm"} & set(with_plot)
 
 
+def test_a_sweep_on_one_thread_loads_no_numba_with_the_build(tmp_path):
+    """A sweep on one thread (``--workers 1``) computes with the build's machine code case by case
+    (`execute.local_kernel`): no numba, no scipy; without the build, numba's batch driver. Its
+    chunks of two threads load numba's batch driver (which releases the GIL) either way."""
+    from rockslide.core import native
+
+    out = tmp_path / "out"
+    grid = ["sweep", EXAMPLE, "--mu", "0.4,0.5", "--pga", "500gal,700gal", "--no-plot", "--no-progress"]
+    one, two = loaded_after([*grid, "--workers", "1", "--out-dir", out / "one"],
+                            [*grid, "--workers", "2", "--out-dir", out / "two"])
+    assert ("numba" in one) == (native.ahead_of_time() is None)
+    assert "scipy" not in one or native.ahead_of_time() is None
+    assert "numba" in two
+    one, two = (results.read_sweep(out / where / "example.sweep.h5").variables for where in ("one", "two"))
+    assert one.keys() == two.keys()
+    for name in one:
+        assert one[name][0].tobytes() == two[name][0].tobytes(), name
+
+
+def test_a_risk_of_a_given_fragility_loads_no_numba(tmp_path):
+    """``rockslide risk --median --beta`` measures no record and runs no kernel: neither numba (the
+    intensity measures' oscillator) nor scipy.stats (the goodness of a fit) is loaded for it."""
+    code = ("import sys\nfrom rockslide.cli import main\n"
+            "main(sys.argv[1:], prog_name='rockslide', standalone_mode=False)\n"
+            "print(sorted(m for m in ('numba', 'scipy.stats') if m in sys.modules))")
+    done = subprocess.run([sys.executable, "-c", code, "risk", "--median", "0.5g", "--beta", "0.4", "--hazard",
+                           str(REPO / "rockslide" / "hazard-example-PGA.csv"), "--out-dir", str(tmp_path),
+                           "--no-plot"], cwd=REPO, capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr[-3000:]
+    assert done.stdout.splitlines()[-1] == "[]"
+
+
+def test_a_fragility_analysis_of_peaks_on_one_thread_loads_no_numba(tmp_path):
+    """A fragility analysis over PGA on one thread measures its records with numpy (an oscillator,
+    for Sa, would load numba) and computes with the build's machine code: no numba with the build."""
+    from rockslide.core import native
+
+    [loaded] = loaded_after(["fragility", EXAMPLE, "--suite", REPO / "rockslide" / "suite-synthetic.yaml", "--levels",
+                             "0.5g,1g", "--workers", "1", "--no-plot", "--out-dir", tmp_path])
+    assert ("numba" in loaded) == (native.ahead_of_time() is None)
+
+
 @pytest.mark.skipif(not Path("/proc/self/task").is_dir(), reason="counts threads in /proc (Linux)")
 @pytest.mark.parametrize("given", [None, "2"])
 def test_the_command_gives_openblas_one_thread_unless_told(given):
@@ -258,6 +300,28 @@ def test_the_machine_code_of_the_build_is_numbas_to_the_last_bit(built_native, m
         assert _same_result(expected, got), name
         visited.update(got.summary.states_seen)
     assert visited == {"REST", "SLIP", "ROCK", "ROCKSLIP", "OVERTURNED"}
+
+
+@pytest.mark.slow
+def test_a_batch_on_the_machine_code_of_the_build_is_numbas_to_the_last_bit(built_native, monkeypatch):
+    """`simulate.compute_batch` (one thread's chunks: the build's `run` case by case) gives the final
+    states of numba's batch driver (`batch.compute`) bit for bit, over a grid of cases that rest,
+    slide, rock and overturn."""
+    from rockslide.analyses import sweep as sw
+    from rockslide.case import load_case
+    from rockslide.core import batch, native, simulate
+
+    plan = sw.plan_sweep(load_case(EXAMPLE), [sw.parse_axis("mu", "0.2:0.9:0.1"),
+                                               sw.parse_axis("pga", "100gal:1500gal:200gal")],
+                         records_dir=REPO / "records")
+    inputs = (plan.case_params(), plan.case_states(), plan.base, plan.first, plan.count, plan.factor_h,
+              plan.factor_v)
+    expected = batch.compute(*inputs)
+    monkeypatch.setattr(native, "entry_points", lambda: built_native)
+    got = simulate.compute_batch(*inputs)
+    assert got.tobytes() == expected.tobytes()
+    modes = set(got[:, simulate.L.S_MODE].astype(int))
+    assert {simulate.REST, simulate.OVERTURNED} <= modes and len(modes) >= 3
 
 
 def test_edited_sources_run_on_numbas_jit(monkeypatch):

@@ -32,7 +32,6 @@ from pathlib import Path
 import numpy as np
 
 from ..case import Case, Distribution, other_plane
-from ..core import kernel as K
 from ..core import layout as L
 from ..core.simulate import Model, set_model
 from ..engine.execute import execute
@@ -107,7 +106,7 @@ def sample(dists: dict[str, Distribution], n: int, seed: int = SEED) -> dict[str
 FACTORS = ("intensity", "friction", "size", "slenderness", "b1", "b2", "radius_of_gyration")
 #: The status of a member drawn outside the model in the members' variables (`member_variables`), after
 #: the kernel's statuses (`core.kernel.STATUS_NAMES`): its outcomes are not data.
-STATUS_DRAWN_OUTSIDE = len(K.STATUS_NAMES)
+STATUS_DRAWN_OUTSIDE = len(L.STATUS_NAMES)
 
 
 def drawn_outside(case: Case, values: dict, peaks: np.ndarray, params: np.ndarray | None = None
@@ -358,7 +357,7 @@ def worse_plane(variables: dict) -> dict:
     status, over = variables["status"][0], np.asarray(variables["overturned"][0]).astype(bool)
     ratio = np.where(over, np.inf, np.nan_to_num(np.asarray(variables["max_rotation_ratio"][0], dtype=float),
                                                  nan=-1.0))
-    bad = status != K.STATUS_OK
+    bad = status != L.STATUS_OK
     depth = np.where(bad[:, 0] | bad[:, 1], bad[:, 1] & ~bad[:, 0],
                      (over[:, 1] > over[:, 0]) | ((over[:, 1] == over[:, 0]) & (ratio[:, 1] > ratio[:, 0])))
     pick = depth.astype(np.int64)
@@ -528,7 +527,7 @@ def summarise(eplan: EnsemblePlan, variables: dict, nominal_overturned: bool) ->
     over = np.ravel(variables["overturned"][0]).astype(bool)
     ratio = np.ravel(variables["max_rotation_ratio"][0])
     outside = eplan.outside if eplan.outside is not None else np.zeros(status.shape, dtype=bool)
-    ok = (status == K.STATUS_OK) & ~outside
+    ok = (status == L.STATUS_OK) & ~outside
     n_ok, k = int(ok.sum()), int((over & ok).sum())
     low, high = wilson_interval(k, n_ok)
     sensitivity = {}

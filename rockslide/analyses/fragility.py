@@ -59,8 +59,7 @@ import numpy as np
 from scipy.special import log_ndtr, ndtr, ndtri
 
 from ..case import Case, RecordSpec, Suite, SuiteEntry, case_with, load_suite, with_orientations
-from ..core import intensity
-from ..core import kernel as K
+from ..core import layout as K
 from ..core.simulate import ground_array
 from ..engine.plan import MAX_POINTS, Plan, assemble, case_inputs, default_chunk_size
 from ..engine.prepare import (
@@ -158,6 +157,8 @@ class IntensityMeasure:
 
     def of_pair(self, a1, a2, dt: float) -> float:
         """RotD50 or RotD100 of two orthogonal horizontal components [m/s^2] sampled at ``dt`` [s]."""
+        from ..core import intensity  # numba and scipy: where a measure is taken (`risk` takes none)
+
         measure = "sa" if self.period is not None else self.name.split("_", 1)[1]
         peaks = intensity.rotd_peaks(a1, a2, dt, measure, self.period)
         return float(np.median(peaks) if self.rotd == 50 else np.max(peaks))
@@ -171,6 +172,8 @@ class IntensityMeasure:
     def of_record(self, acceleration, dt: float, gravity: float, tan_alpha: float) -> float:
         """The measure of a horizontal record [SI] (for ``pfa`` and ``pfv``: of the floor's motion);
         ``gravity`` [m/s^2] and ``tan_alpha`` (the block's b/h) serve ``pga_rocking``."""
+        from ..core import intensity
+
         if self.name in ("pgv", "pfv"):
             return intensity.peak_velocity(acceleration, dt)
         if self.period is not None:
@@ -261,6 +264,8 @@ def parse_im(text: str) -> IntensityMeasure:
     if not low <= period <= high:
         raise CaseError(f"the period of sa(T) must be within {low:g} s ... {high:g} s (a response spectrum's "
                         f"range: below it Sa is the PGA), got {period:g} s", source="im")
+    from ..core import intensity
+
     shown, damping = f"{period:g} s", f"{100 * intensity.DAMPING:g} %"
     return IntensityMeasure(f"sa({shown})", "acceleration", "m/s^2",
                             f"pseudo-spectral acceleration of the horizontal record at T = {shown}, "
@@ -581,6 +586,8 @@ def plan_fragility(case: Case, suite: Suite, im: IntensityMeasure, levels: sw.Ax
     RecordError
         A record cannot be found or read (naming the suite file and the entry).
     """
+    from ..core import intensity  # numba and scipy: where records are measured (`risk` measures none)
+
     if case.solver.method != "kernel":
         raise CaseError(f"a fragility analysis runs the compiled kernel; got method {case.solver.method!r}",
                         source=case.source, field="solver.method")

@@ -54,7 +54,7 @@ import numpy as np
 
 from .. import interrupts
 from ..case import Case, case_with
-from ..core import kernel as K
+from ..core import layout as K
 from ..core.simulate import ground_array, tail_samples
 from ..engine.axes import (  # noqa: F401  (the engine's vocabulary, re-exported: `sweep.AXES`, `sweep.parse_axis`...)
     _RETIRED_LABELS,

@@ -28,11 +28,14 @@ def bars(*, no_progress: bool = False):
     no frames land in log files; none with ``no_progress``."""
     @contextlib.contextmanager
     def bar(description: str, total: int, unit: str, *, transient: bool = False):
-        from tqdm import tqdm
-
         if not transient:
             show_warnings()             # the input is accepted: its warnings, then the work
         disable = True if no_progress else (not sys.stderr.isatty() if transient else None)
+        if disable or not sys.stderr.isatty():      # no bar (tqdm's disable=None: none off a terminal)
+            yield lambda cases: None
+            return
+        from tqdm import tqdm
+
         with tqdm(total=total, unit=unit, file=sys.stderr, desc=description, disable=disable, dynamic_ncols=True,
                   leave=not transient, smoothing=0.1) as t:
             yield t.update

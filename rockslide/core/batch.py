@@ -26,6 +26,7 @@ import numpy as np
 from numba import njit
 
 from . import kernel as K
+from .simulate import kernel_inputs  # noqa: F401  (plain numpy, shared with `simulate.compute_batch`; re-exported)
 
 __all__ = ["compute", "kernel_inputs", "warm_up", "warm_up_case", "run_batch"]
 
@@ -81,19 +82,6 @@ def compute(params, states, base, first, count, kh, kv):
     if params.shape[0]:
         run_batch(params, out, base, K.rest_bounds(base), count)
     return out
-
-
-def kernel_inputs(params, states, base, first, count, kh, kv):
-    """`compute`'s arguments as the kernel takes them: ``(params, states, base, count)``, fresh
-    C-contiguous float64 (int64 ``count``) arrays, each case's record columns set in ``params``."""
-    params = np.array(params, dtype=np.float64, order="C", copy=True)
-    states = np.array(states, dtype=np.float64, order="C", copy=True)
-    n = params.shape[0]
-    base = np.ascontiguousarray(base, dtype=np.float64)
-    params[:, K.P_FIRST] = np.broadcast_to(first, n)
-    params[:, K.P_KH] = np.broadcast_to(kh, n)
-    params[:, K.P_KV] = np.broadcast_to(kv, n)
-    return params, states, base, np.ascontiguousarray(np.broadcast_to(count, n), dtype=np.int64)
 
 
 def warm_up_case():

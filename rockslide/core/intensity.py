@@ -35,13 +35,10 @@ as given: for a processed record the two are the same, for the review's raw reco
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
-from numba import njit
-from scipy.linalg import expm
-
-from . import compiled  # noqa: F401  (before any cache=True: numba needs a cache folder)
 
 __all__ = ["DAMPING", "POINTS_PER_PERIOD", "peak_acceleration", "ground_velocity", "peak_velocity",
            "sdof_coefficients", "sdof_response", "substeps_for", "oscillator_history", "spectral_acceleration",
@@ -133,6 +130,8 @@ def sdof_coefficients(period: float, damping: float, step: float):
     ``expm(M h)`` times its state before (Van Loan 1978): ``expm(M h)[:2, :2] = A`` and the input
     columns give ``[u, u'](t + h) = A [u, u'] + G0 a(t) + G1 s`` with ``s = (a(t + h) - a(t)) / h``.
     """
+    from scipy.linalg import expm  # a third of a second: only where an oscillator is stepped
+
     omega = 2.0 * math.pi / period
     m = np.zeros((4, 4))
     m[0, 1] = 1.0
@@ -146,10 +145,20 @@ def sdof_coefficients(period: float, damping: float, step: float):
     return A, np.ascontiguousarray(g0 - g1 / step), np.ascontiguousarray(g1 / step)
 
 
-@njit(cache=True)
+@functools.cache
+def _oscillator():
+    """`_oscillate` compiled by numba (or loaded from its cache) at the first oscillator's response,
+    so that the peak measures (PGA, PGV: plain numpy) load neither numba nor scipy.linalg."""
+    from numba import njit
+
+    from . import compiled  # noqa: F401  (before any cache=True: numba needs a cache folder)
+
+    return njit(cache=True)(_oscillate)
+
+
 def _oscillate(a, m, A, B0, B1, u, v):
     """Step the recurrence over the record ``a`` with each interval cut into ``m`` equal steps;
-    write ``u``, ``u'`` at every step end (``u[0] = v[0] = 0``: at rest)."""
+    write ``u``, ``u'`` at every step end (``u[0] = v[0] = 0``: at rest). Compiled by `_oscillator`."""
     x = 0.0
     y = 0.0
     u[0] = 0.0
@@ -199,7 +208,7 @@ def sdof_response(acceleration, dt: float, period: float, damping: float = DAMPI
     A, B0, B1 = sdof_coefficients(period, damping, dt / m)
     u = np.empty((a.size - 1) * m + 1)
     velocity = np.empty_like(u)
-    _oscillate(a, m, A, B0, B1, u, velocity)
+    _oscillator()(a, m, A, B0, B1, u, velocity)
     return u, velocity
 
 

@@ -7,8 +7,11 @@ so that ``rockslide run`` neither imports numba nor waits for it (issue 11; READ
 the build's architecture, and records the `source_stamp` of the sources it compiled beside it.
 `entry_points` returns that module when it imports and its stamp is the stamp of the sources
 beside it (they were not edited since), else numba's JIT dispatchers of the same functions. Both
-run the same code: results are identical to the last bit (tests/test_startup.py). The batch, GPU
-and fragility paths keep numba's JIT, whose cache the build fills as well (`build.precompile`).
+run the same code: results are identical to the last bit (tests/test_startup.py). A study on one
+thread calls `run` case by case too (`simulate.compute_batch`, `engine.execute.local_kernel`);
+studies on several threads, the dask workers and the GPU keep numba's JIT (its batch driver
+releases the GIL, which this module's functions hold), whose cache the build fills as well
+(`build.precompile`).
 
 Plain standard library at import: numba is imported only by `build` and by the JIT fallback.
 """
@@ -77,6 +80,11 @@ def entry_points():
     return ahead_of_time() or just_in_time()
 
 
+def is_ahead_of_time() -> bool:
+    """Whether `entry_points` are the build's machine code in this process (no numba needed for them)."""
+    return not isinstance(entry_points(), types.SimpleNamespace)
+
+
 def build(folder: Path | None = None) -> Path:
     """Compile `ENTRY_POINTS` ahead of time into ``folder`` (default: beside this file) and record
     their `source_stamp`. Returns the extension module's path. Needs numba and a C compiler."""
@@ -101,4 +109,4 @@ def build(folder: Path | None = None) -> Path:
 
 
 __all__ = ["COMPILED_MODULES", "ENTRY_POINTS", "source_stamp", "ahead_of_time", "just_in_time", "entry_points",
-           "build"]
+           "is_ahead_of_time", "build"]

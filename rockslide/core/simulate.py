@@ -481,6 +481,41 @@ def simulate(model: Model, dt_record: float, horizontal, vertical, settings: Set
     )
 
 
+def kernel_inputs(params, states, base, first, count, kh, kv):
+    """A batch's arguments as the kernel takes them (`batch.compute`, `compute_batch`): ``(params,
+    states, base, count)``, fresh C-contiguous float64 (int64 ``count``) arrays, each case's record
+    columns (``P_FIRST``, ``P_KH``, ``P_KV``) set in ``params``."""
+    params = np.array(params, dtype=np.float64, order="C", copy=True)
+    states = np.array(states, dtype=np.float64, order="C", copy=True)
+    n = params.shape[0]
+    base = np.ascontiguousarray(base, dtype=np.float64)
+    params[:, L.P_FIRST] = np.broadcast_to(first, n)
+    params[:, L.P_KH] = np.broadcast_to(kh, n)
+    params[:, L.P_KV] = np.broadcast_to(kv, n)
+    return params, states, base, np.ascontiguousarray(np.broadcast_to(count, n), dtype=np.int64)
+
+
+def compute_batch(params, states, base, first, count, kh, kv):
+    """`batch.compute` through `native.entry_points`: the batch driver's loop (`batch.run_batch`:
+    one `kernel.run` per case, no history, no event log) in Python over the build's machine code.
+
+    The same kernel on the same inputs: the final states are `batch.compute`'s to the last bit
+    (tests/test_startup.py). Without numba's batch driver nothing of numba is imported or loaded (a
+    second or more at the start of a study), but each case holds the GIL while it runs: this is
+    for one thread (a sweep with ``--workers 1``, on one core); other threads, such as the one
+    waiting for Ctrl-C, run between two cases. Arguments and result as `batch.compute`'s.
+    """
+    params, out, base, count = kernel_inputs(params, states, base, first, count, kh, kv)
+    if params.shape[0]:
+        core = native.entry_points()
+        bounds = core.rest_bounds(base)
+        history = np.empty((len(L.HISTORY_COLUMNS), 0))
+        events = np.empty((0, len(L.EVENT_COLUMNS)))
+        for i in range(params.shape[0]):
+            core.run(params[i], base, bounds, out[i], history, 0, 0, events, count[i])
+    return out
+
+
 def history_dict(columns: np.ndarray) -> dict[str, np.ndarray]:
     """History arrays by name from the kernel's ``float64[6, n]`` output (views, no copies)."""
     out = {name: columns[i] for i, name in enumerate(L.HISTORY_COLUMNS)}
@@ -617,5 +652,6 @@ def may_still_overturn(st: np.ndarray, R: float, alpha: float, gravity: float, n
 
 
 __all__ = ["Model", "Settings", "Summary", "Result", "simulate", "substeps", "parameters", "ground_array",
-           "ground_series", "may_still_overturn", "may_still_overturn_params", "tail_samples", "interval_count",
+           "ground_series", "kernel_inputs", "compute_batch", "may_still_overturn", "may_still_overturn_params",
+           "tail_samples", "interval_count",
            "REST", "SLIP", "ROCK", "ROCKSLIP", "OVERTURNED"]

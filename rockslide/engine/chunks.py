@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core import kernel as K
+from ..core import layout as K
 from ..errors import CaseError, OutputError, exception_text
 from ..io.files import atomic_write, remove_stale_temporaries
 from .plan import Plan

@@ -16,7 +16,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import interrupts
-from ..core import batch
 from ..errors import CaseError, exception_text
 from .chunks import ChunkStore
 from .plan import Plan
@@ -35,6 +34,8 @@ def compute_chunk(inputs, chunk: int, n_chunks: int, identity: dict | None = Non
     params, states, rows, base, first, count, kh, kv = inputs
     cases = slice(chunk, None, n_chunks)
     own = cases if rows is None else rows[cases]
+    from ..core import batch
+
     return batch.compute(params[own], states[own], base, first[cases], count[cases], kh[cases], kv[cases])
 
 

@@ -6,8 +6,9 @@ already holds is reused, the free space is checked, the kernel compiled (and sai
 callback called, and the final states of every case returned.
 
 - **Where.** Locally on a pool of threads, one chunk per task (`batch.compute`, which releases the
-  GIL; a thread takes the next chunk as soon as it is done), or on a dask.distributed cluster: one
-  task per chunk (`batch.compute`) returning plain numpy arrays. Both give identical results. Or on
+  GIL; a thread takes the next chunk as soon as it is done; on one thread, the build's machine code
+  case by case, without loading numba: `local_kernel`), or on a dask.distributed cluster: one task
+  per chunk (`batch.compute`) returning plain numpy arrays. All give identical results. Or on
   an NVIDIA GPU (``device="gpu"``, the optional extra ``rockslide[gpu]``: `core.gpu`, the same
   kernel compiled for the device), many chunks per launch (`DEVICE_CASES_PER_LAUNCH`); the device
   may round the last bits differently (fused multiply-adds).
@@ -23,8 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import interrupts
-from ..core import batch
-from ..core import kernel as K
+from ..core import layout as K
 from ..errors import CaseError, exception_text
 from .chunks import ChunkStore, MemoryStore, collect, missing_chunks
 from .cluster import (  # noqa: F401  (the cluster's names, used here and re-exported: `execute.find_scheduler`...)
@@ -48,7 +48,7 @@ from .prepare import STEPS_PER_SECOND
 def compute(plan: Plan, store: ChunkStore, chunks: Sequence[int], *, workers: int | None = None,
             scheduler: str | Scheduler | None = None, progress: Callable[[int], None] | None = None,
             device: str = "cpu", wait_workers: float | None = None,
-            report: Callable[[str], None] | None = None) -> None:
+            report: Callable[[str], None] | None = None, out: np.ndarray | None = None) -> bool:
     """Compute ``chunks`` of ``plan`` and store each as soon as it is done.
 
     Parameters
@@ -72,6 +72,14 @@ def compute(plan: Plan, store: ChunkStore, chunks: Sequence[int], *, workers: in
         `WAIT_FOR_WORKERS`).
     report : callable, optional
         Called with a note for the user (that it waits for a worker).
+    out : float64[n, N_STATE], optional
+        The final states of every case of the plan: a local run on the CPU also puts the states it
+        computes there, so that they need not be read back from ``store``.
+
+    Returns
+    -------
+    bool
+        Whether ``out`` holds the states of ``chunks`` (a local run on the CPU given ``out``).
 
     Raises
     ------
@@ -92,7 +100,9 @@ def compute(plan: Plan, store: ChunkStore, chunks: Sequence[int], *, workers: in
     elif device == "gpu":
         _compute_device(plan, store, chunks, progress)
     else:
-        _compute_local(plan, store, chunks, workers, progress)
+        _compute_local(plan, store, chunks, workers, progress, out)
+        return out is not None
+    return False
 
 
 #: Where a local sweep computes (``--device``): ``auto`` is the GPU when one is usable and the study
@@ -179,22 +189,26 @@ def check_workers(workers: int | None) -> None:
                         source="workers")
 
 
-def _compute_local(plan, store, chunks, workers, progress):
-    """The chunks on a pool of threads running the compiled batch (`batch.run_batch` releases the
-    GIL), one chunk per task: each thread takes the next chunk as soon as it is done, so cases that
-    rock for a minute and cases at rest even out and every core is busy to the end. Each chunk is
-    stored as soon as it is done; Ctrl-C is checked while waiting, and the chunks being computed
-    are finished and kept."""
+def _compute_local(plan, store, chunks, workers, progress, out=None):
+    """The chunks on a pool of threads running the compiled batch (`local_kernel`: `batch.run_batch`
+    releases the GIL; on one thread, the build's machine code), one chunk per task: each thread
+    takes the next chunk as soon as it is done, so cases that rock for a minute and cases at rest
+    even out and every core is busy to the end. Each chunk is stored as soon as it is done; Ctrl-C
+    is checked while waiting, and the chunks being computed are finished and kept."""
     from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 
     check_workers(workers)
     threads = int(workers) if workers is not None else local_threads()
+    run = local_kernel(threads)
 
     def task(chunk: int) -> int:
         if interrupts.requested() is not None:      # stopping: start no new chunk
             return 0
         indices = plan.chunk_indices(chunk)
-        store.save(chunk, indices, batch.compute(*_chunk_inputs(plan, indices)))
+        states = run(*_chunk_inputs(plan, indices))
+        store.save(chunk, indices, states)
+        if out is not None:             # the chunks' cases are disjoint: the threads write apart
+            out[indices] = states
         return indices.size
 
     with ThreadPoolExecutor(max_workers=threads, thread_name_prefix="rockslide-sweep") as pool:
@@ -212,6 +226,23 @@ def _compute_local(plan, store, chunks, workers, progress):
                 future.cancel()
             raise
     interrupts.check()
+
+
+def local_kernel(threads: int) -> Callable:
+    """What computes a chunk on ``threads`` local threads (`batch.compute`'s arguments and result).
+
+    On one thread, where the build's machine code is there (`native.is_ahead_of_time`), that code
+    case by case (`simulate.compute_batch`): numba is neither imported nor loaded, which is most of
+    what a study costs beyond its compute (issue 41, item 4), and the states are the same to the
+    last bit. Else numba's batch driver (`batch.compute`), which releases the GIL so that the
+    threads compute side by side."""
+    from ..core import native
+
+    if threads == 1 and native.is_ahead_of_time():
+        from ..core.simulate import compute_batch
+        return compute_batch
+    from ..core import batch
+    return batch.compute
 
 
 def local_threads() -> int:
@@ -376,15 +407,17 @@ def execute(plan: Plan, store=None, *, workers: int | None = None, scheduler: st
     if free_space_at is not None:
         from ..io import files
         files.require_free_space(Path(free_space_at), bytes_needed(plan, len(missing)), f"the {what}")
-    if not scheduler and missing:
+    if not scheduler and missing and not on_machine_code(device, workers):
         warm_up(device, say)
     if progress is not None and plan.n_cases > computed:
         progress(plan.n_cases - computed)
     started = time.perf_counter()
-    compute(plan, store, missing, workers=workers, scheduler=scheduler, progress=progress, device=device,
-            wait_workers=wait_workers, report=say)
+    held = compute(plan, store, missing, workers=workers, scheduler=scheduler, progress=progress, device=device,
+                   wait_workers=wait_workers, report=say, out=final)
     seconds = time.perf_counter() - started
-    return Execution(None if shard is not None else collect(plan, store, missing, final), computed, seconds, store)
+    if shard is None and not held:                 # the chunks computed elsewhere: read them once
+        collect(plan, store, missing, final)
+    return Execution(final, computed, seconds, store)
 
 
 def parse_shard(text: str | None) -> tuple[int, int] | None:
@@ -402,6 +435,15 @@ def parse_shard(text: str | None) -> tuple[int, int] | None:
     return index, count
 
 
+def on_machine_code(device: str, workers: int | None) -> bool:
+    """Whether a local run on ``device`` with ``workers`` threads computes with the build's machine
+    code (`local_kernel`): nothing to compile or load before it (`warm_up`)."""
+    from ..core import simulate
+
+    threads = int(workers) if workers is not None else local_threads()
+    return device == "cpu" and local_kernel(threads) is simulate.compute_batch
+
+
 def warm_up(device: str, say: Callable[[str], None]) -> None:
     """Compile the batch kernel (or the device kernel) before the clock starts, saying so when it
     takes a while: a first compile on a new CPU, a new numba or an edited kernel."""
@@ -415,6 +457,8 @@ def warm_up(device: str, say: Callable[[str], None]) -> None:
         if note:
             say(f"  compiled the device kernel in {time.perf_counter() - compiling:.0f} s")
         return
+    from ..core import batch
+
     note = first_compile_note(batch.run_batch, "the batch kernel")
     if note:
         say(note)

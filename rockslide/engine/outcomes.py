@@ -6,8 +6,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core import kernel as K
-from ..core.physics import OVERTURNED
+from ..core import layout as K
+from ..core.layout import OVERTURNED
 from ..core.simulate import may_still_overturn_params
 from .plan import Plan
 

@@ -19,8 +19,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .._version import __version__
-from ..core import compiled
-from ..core import kernel as K
+from ..core import layout as K
+from ..core import native
 from ..errors import CaseError
 
 if TYPE_CHECKING:
@@ -263,7 +263,7 @@ def definition_key(plan: Plan) -> str:
 
     The case text, the axes (values as given and in SI), the kinetic friction ratio, the chunk size,
     every point's kernel parameters, initial state and scale factors, the unscaled ground samples,
-    the package version and the compiled core's sources (`compiled.source_stamp`).
+    the package version and the compiled core's sources (`native.source_stamp`).
     """
     digest = hashlib.sha256()
     header = {
@@ -271,7 +271,7 @@ def definition_key(plan: Plan) -> str:
         "case_text": plan.case.text,
         "axes": [[a.name, list(a.texts), [repr(v) for v in a.values]] for a in plan.axes],
         "mu_kinetic_ratio": repr(plan.mu_kinetic_ratio), "chunk_size": plan.chunk_size,
-        "kernel_source": compiled.source_stamp(),
+        "kernel_source": native.source_stamp(),
     }
     digest.update(json.dumps(header, sort_keys=True).encode())
     for rows_of in (plan.case_params, plan.case_states):          # every point's, a block at a time
