@@ -175,6 +175,94 @@ SLOW_TESTS = {
     "test_bad_input.py::test_random_case_files_give_a_result_or_a_clean_error": "hypothesis",
 }
 
+# Tests of 1 to 18 s each (`--durations=0` of `make test-fast` on 2026-11-28, 2 loaded cores) that
+# the inner loop leaves out in groups, each group keeping a quicker test of the same feature in
+# `make test-fast` (named after the group).
+SLOW_TESTS.update(dict.fromkeys([
+    "test_paper.py::test_every_verdict_and_description_matches_with_the_papers_gravity",
+    "test_paper.py::test_with_standard_gravity_only_gravity_sensitive_rows_differ",
+    "test_paper.py::test_the_papers_remarks_hold",
+    "test_paper.py::test_interaction_times_on_the_papers_time_axis",
+    "test_paper.py::test_outputs_are_written",
+    "test_paper.py::test_the_committed_table_is_what_make_table1_writes_now",
+    "test_paper.py::test_the_kobe_vertical_peaks_of_table_1_follow_from_the_recorded_ratio",
+    "test_hard_cases.py::test_table1_verdicts_hold_at_half_the_step",
+], "Table 1 at the case files' 0.1 ms step, twice (test_paper keeps the 15 rows at the auto step)"))
+SLOW_TESTS.update(dict.fromkeys([
+    "test_asymmetric.py::test_kernel_and_reference_solver_agree_on_an_asymmetric_body_with_vertical_motion",
+    "test_asymmetric.py::test_rocking_accelerations_and_contact_forces_at_the_contracts_states",
+    "test_hard_cases.py::test_slender_block_agrees_with_the_reference",
+    "test_hard_cases.py::test_outcome_near_a_painleve_point_does_not_depend_on_the_step",
+    "test_pulse_closed_forms.py::test_half_sine_minimum_amplitude_tends_to_housners_as_alpha_vanishes",
+    "test_two_components.py::test_rotd50_and_rotd100_by_brute_force",
+    "test_two_components.py::test_the_bootstrap_over_orientations_resamples_records_not_orientations",
+    "test_fragility.py::test_bootstrap_intervals_cover_the_true_median_and_beta",
+    "test_large_grids.py::test_a_grid_beyond_a_million_points_is_planned_in_distinct_rows",
+    "test_hard_cases.py::test_reference_does_not_skip_a_failed_integration",
+    "test_hostile_files.py::test_time_options_at_the_edge_of_float_are_a_line_or_the_whole_record",
+], "long simulations and resamplings (test_reference, test_exact, test_equations and the other cases of "
+   "the same modules stay)"))
+SLOW_TESTS.update(dict.fromkeys([
+    "test_hostile_results.py::test_a_read_only_home_adds_no_line_of_matplotlib",
+    "test_auto_step.py::test_bench_gpu_writes_its_file_from_what_it_measured",
+    "test_bad_input.py::test_bad_environment_and_options_are_one_line",
+    "test_plots.py::test_rendering_does_not_load_pyplot",
+    "test_startup.py::test_without_a_writable_cache_folder_the_core_compiles_in_memory",
+    "test_startup.py::test_a_run_loads_what_it_needs",
+    "test_docs_and_architecture.py::test_the_core_imports_without_io_libraries",
+    "test_asymmetric.py::test_simulated_device_gives_the_cpu_final_states_of_asymmetric_bodies",
+    "test_results.py::test_killed_writer_never_leaves_a_half_written_result",
+    "test_results.py::test_ctrl_c_during_a_write_leaves_nothing",
+    "test_hostile_text.py::test_a_quantity_of_thousands_of_digits_is_refused_at_once",
+    "test_hostile_text.py::test_record_headers_that_crawled_are_read_at_once",
+], "a fresh Python process (imports, compiling, signals, time bounds): the command line is tested in "
+   "process (test_cli, test_bad_input) in the fast loop"))
+SLOW_TESTS.update(dict.fromkeys([
+    "test_plots.py::test_other_formats",
+    "test_plots.py::test_save_figure_is_atomic",
+    "test_plots.py::test_save_figure_refuses_to_overwrite",
+    "test_plots.py::test_titles_placed_without_a_search_are_where_matplotlib_puts_them",
+    "test_plots.py::test_png_holds_the_figure_as_drawn",
+    "test_figure_captions.py::test_size_column_is_a_column_wide_with_fonts_of_6_pt_at_least",
+    "test_figure_captions.py::test_named_and_explicit_sizes",
+    "test_startup.py::test_the_run_figure_is_the_figure_of_the_file",
+    "test_no_plot_figure.py::test_the_same_sweep_again_without_plot_keeps_its_figure",
+    "test_no_plot_figure.py::test_another_sweep_without_plot_removes_the_figure_it_does_not_show",
+    "test_mesh.py::test_the_meshes_page_runs",
+    "test_two_components.py::test_two_orientations_plotted_have_different_captions",
+    "test_cli.py::test_criteria_options_take_units",
+    "test_figure_captions.py::test_plot_two_fragility_files_overlays_their_curves_with_bands",
+    "test_figure_captions.py::test_sweep_maps_give_each_colour_one_meaning",
+    "test_figure_captions.py::test_plot_two_runs_writes_one_figure_with_the_cases_in_its_legend",
+    "test_floors.py::test_a_floor_run_and_a_ground_run_overlaid_say_which_is_which",
+], "figures drawn to files (test_plots keeps every kind rendered to PNG, the labels and the layout at "
+   "150 dpi)"))
+SLOW_TESTS.update(dict.fromkeys([
+    "test_risk.py::test_command_writes_file_figure_and_json",
+    "test_goodness.py::test_two_measures_on_the_command_line",
+    "test_pulses.py::test_spectrum_file_and_figure",
+    "test_fragility.py::test_the_shared_suite_of_real_records",
+    "test_fragility.py::test_parameter_samples_are_in_the_file_the_json_and_the_figure",
+    "test_precision.py::test_the_command_prints_and_draws",
+    "test_ensemble.py::test_the_statue_under_kobe_is_neither_safe_nor_doomed",
+], "a whole analysis from the command line with its figure (each module's other tests of the same "
+   "command stay)"))
+SLOW_TESTS.update(dict.fromkeys([
+    "test_records.py::test_the_printed_exponent_is_the_decimal_one",
+    "test_records.py::test_fields_are_split_at_commas_and_white_space",
+    "test_records.py::test_random_at2_text_reads_or_refuses",
+    "test_records.py::test_random_column_text_reads_or_refuses",
+    "test_records.py::test_random_text_sniffed_reads_or_refuses",
+    "test_records.py::test_the_quick_reading_of_numbers_reads_what_the_careful_one_reads",
+    "test_records.py::test_plain_numbers_read_at_once_give_the_numbers_read_line_by_line",
+    "test_case.py::test_random_text",
+    "test_case.py::test_random_yamlish_text",
+    "test_equations.py::test_impact_never_creates_energy_and_respects_coulomb",
+    "test_hostile_results.py::test_any_attribute_value_is_read_or_one_output_error",
+    "test_hostile_results.py::test_an_empty_attribute_is_read_or_one_output_error",
+    "test_bad_input.py::test_random_record_text_through_run_gives_a_result_or_a_clean_error",
+], "hypothesis: 100 to 500 examples (test_hostile_text's fuzzers stay)"))
+
 
 def pytest_collection_modifyitems(config, items):
     for item in items:

@@ -335,7 +335,9 @@ LAYOUTS["offset texts"] = lambda r: scaled(r["rockslip"], 1e-6, 1e-6)
 LAYOUTS["wide tick labels"] = lambda r: scaled(r["rockslip"], 1e-2, 1e4)
 
 
-@pytest.mark.parametrize("dpi", [50, 150, 300])
+# `make test-fast` draws each layout at 150 dpi only; `make test` at all three
+@pytest.mark.parametrize("dpi", [pytest.param(50, marks=pytest.mark.slow), 150,
+                                 pytest.param(300, marks=pytest.mark.slow)])
 @pytest.mark.parametrize("layout", list(LAYOUTS))
 def test_the_layout_keeps_everything_in_the_figure_and_apart(responses, layout, dpi):
     """What constrained layout did, `_fit_column` does once: every panel with its decorations
