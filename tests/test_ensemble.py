@@ -182,3 +182,16 @@ def test_the_slenderness_factor_is_named_for_what_it_scales():
     lines = ens.describe(summary, "standing")
     assert lines[-1] == ("  most sensitive to slenderness (the factor on the width b): overturns in 100 % of its "
                          "lowest third, 0 % of its highest")
+
+
+@pytest.mark.parametrize("d,n,seed", [(1, 1, 0), (2, 7, 1), (5, 200, 1), (8, 1000, 12345)])
+def test_the_latin_hypercube_is_scipys_to_the_bit(d, n, seed):
+    """`ensemble.latin_hypercube` writes out scipy's ``qmc.LatinHypercube`` (so that an ensemble does
+    not import scipy.stats): the same points for the same seed, bit for bit, and the normal's
+    inverse CDF it uses is ``norm.ppf``'s."""
+    from scipy.special import ndtri
+    from scipy.stats import norm, qmc
+
+    points = ens.latin_hypercube(d, n, seed)
+    assert np.array_equal(points, qmc.LatinHypercube(d=d, seed=seed).random(n))
+    assert np.array_equal(ndtri(points), norm.ppf(points))

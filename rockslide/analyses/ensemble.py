@@ -76,16 +76,30 @@ def distributions(case: Case) -> tuple[dict[str, Distribution], bool]:
     return out, True
 
 
+def latin_hypercube(d: int, n: int, seed: int) -> np.ndarray:
+    """``n`` points of a ``d``-dimensional Latin hypercube in [0, 1): stratum ``k / n`` of each
+    dimension holds one point, placed uniformly in it, the strata paired by random permutations.
+    scipy's ``stats.qmc.LatinHypercube(d, seed=seed).random(n)`` (scrambled, strength 1) to the last
+    bit (tests/test_ensemble.py), written out so that an ensemble does not import ``scipy.stats``
+    (about a second)."""
+    rng = np.random.default_rng(seed)
+    within = rng.uniform(size=(n, d))
+    strata = np.tile(np.arange(1, n + 1), (d, 1))
+    for row in strata:
+        rng.shuffle(row)
+    return (strata.T - within) / n
+
+
 def sample(dists: dict[str, Distribution], n: int, seed: int = SEED) -> dict[str, np.ndarray]:
     """``n`` samples of each distribution, by Latin hypercube (one stratum of probability ``1/n``
-    per member and quantity, the strata paired at random; scipy's ``qmc.LatinHypercube`` with
-    ``seed``), through each distribution's inverse CDF. A quantity without spread gives its value
-    to every member, exactly. Values as drawn, also those no model takes (a lognormal of huge beta
-    overflows to infinity and underflows to 0): `drawn_outside` says which members they make."""
-    from scipy.stats import norm, qmc
+    per member and quantity, the strata paired at random: `latin_hypercube`), through each
+    distribution's inverse CDF. A quantity without spread gives its value to every member, exactly.
+    Values as drawn, also those no model takes (a lognormal of huge beta overflows to infinity and
+    underflows to 0): `drawn_outside` says which members they make."""
+    from scipy.special import ndtri  # the normal's inverse CDF: scipy.stats.norm.ppf's, to the bit
 
     varying = [name for name, d in dists.items() if d.spread]
-    u = qmc.LatinHypercube(d=max(1, len(varying)), seed=seed).random(n) if varying else np.empty((n, 0))
+    u = latin_hypercube(max(1, len(varying)), n, seed) if varying else np.empty((n, 0))
     out = {}
     for name, d in dists.items():
         if name not in varying:
@@ -96,9 +110,9 @@ def sample(dists: dict[str, Distribution], n: int, seed: int = SEED) -> dict[str
             if d.kind == "uniform":
                 out[name] = d.a + (d.b - d.a) * q
             elif d.kind == "normal":
-                out[name] = d.a + d.b * norm.ppf(q)
+                out[name] = d.a + d.b * ndtri(q)
             else:
-                out[name] = d.a * np.exp(d.b * norm.ppf(q))
+                out[name] = d.a * np.exp(d.b * ndtri(q))
     return out
 
 
@@ -499,9 +513,9 @@ def wilson_interval(k: int, n: int, confidence: float = CONFIDENCE) -> tuple[flo
     ``(nan, nan)`` for ``n = 0``."""
     if n == 0:
         return math.nan, math.nan
-    from scipy.stats import norm
+    from scipy.special import ndtri  # scipy.stats.norm.ppf's, to the bit
 
-    z = float(norm.ppf(0.5 + confidence / 2.0))
+    z = float(ndtri(0.5 + confidence / 2.0))
     p = k / n
     centre = (p + z * z / (2 * n)) / (1 + z * z / n)
     half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
