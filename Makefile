@@ -13,7 +13,7 @@ export ROCKSLIDE_RECORDS := $(abspath $(RECORDS))
 help:
 	@echo "make install   install rockslide with its test tools (pip install -e '.[test]')"
 	@echo "make test      the whole test suite"
-	@echo "make test-fast the inner loop (2 to 3 minutes of CPU): the suite without the tests marked slow,"
+	@echo "make test-fast the inner loop (under 2 minutes): the suite without the tests marked slow,"
 	@echo "               which leaves out dask clusters, signals and killed subprocesses, full disks, the docs"
 	@echo "               build, the CUDA simulator, the heavier tests that start a Python process, Table 1 at"
 	@echo "               the 0.1 ms step (it keeps Table 1 at the auto step), the long reference comparisons"

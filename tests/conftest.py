@@ -200,6 +200,7 @@ SLOW_TESTS.update(dict.fromkeys([
     "test_large_grids.py::test_a_grid_beyond_a_million_points_is_planned_in_distinct_rows",
     "test_hard_cases.py::test_reference_does_not_skip_a_failed_integration",
     "test_hostile_files.py::test_time_options_at_the_edge_of_float_are_a_line_or_the_whole_record",
+    "test_reference.py::test_kernel_and_reference_agree_event_by_event[low friction, slip only]",
 ], "long simulations and resamplings (test_reference, test_exact, test_equations and the other cases of "
    "the same modules stay)"))
 SLOW_TESTS.update(dict.fromkeys([
@@ -215,6 +216,10 @@ SLOW_TESTS.update(dict.fromkeys([
     "test_results.py::test_ctrl_c_during_a_write_leaves_nothing",
     "test_hostile_text.py::test_a_quantity_of_thousands_of_digits_is_refused_at_once",
     "test_hostile_text.py::test_record_headers_that_crawled_are_read_at_once",
+    "test_startup.py::test_a_sweep_on_one_thread_loads_no_numba_with_the_build",
+    "test_startup.py::test_a_risk_of_a_given_fragility_loads_no_numba",
+    "test_startup.py::test_a_fragility_analysis_of_peaks_on_one_thread_loads_no_numba",
+    "test_startup.py::test_the_figure_module_leaves_matplotlib_as_it_found_it",
 ], "a fresh Python process (imports, compiling, signals, time bounds): the command line is tested in "
    "process (test_cli, test_bad_input) in the fast loop"))
 SLOW_TESTS.update(dict.fromkeys([
@@ -235,6 +240,9 @@ SLOW_TESTS.update(dict.fromkeys([
     "test_figure_captions.py::test_sweep_maps_give_each_colour_one_meaning",
     "test_figure_captions.py::test_plot_two_runs_writes_one_figure_with_the_cases_in_its_legend",
     "test_floors.py::test_a_floor_run_and_a_ground_run_overlaid_say_which_is_which",
+    "test_mesh_case.py::test_a_run_of_a_body_draws_its_planes",
+    "test_criteria_body.py::test_the_criteria_command_draws_a_body_on_both_sides",
+    "test_no_plot_figure.py::test_the_same_fragility_for_its_json_keeps_its_figure_another_does_not",
 ], "figures drawn to files (test_plots keeps every kind rendered to PNG, the labels and the layout at "
    "150 dpi)"))
 SLOW_TESTS.update(dict.fromkeys([
