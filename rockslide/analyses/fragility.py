@@ -59,7 +59,7 @@ import numpy as np
 from scipy.special import log_ndtr, ndtr, ndtri
 
 from ..case import Case, RecordSpec, Suite, SuiteEntry, case_with, load_suite, with_orientations
-from ..core import layout as K
+from ..core import layout as L
 from ..core.simulate import ground_array
 from ..engine.plan import MAX_POINTS, Plan, assemble, case_inputs, default_chunk_size
 from ..engine.prepare import (
@@ -390,7 +390,7 @@ def exceedances(variables: dict, alpha: np.ndarray, states) -> np.ndarray:
         exceeded = overturned if state.quantity == "overturned" else overturned | (values[state.quantity]
                                                                                   > state.threshold)
         out[..., i] = exceeded
-    out[variables["status"][0] != K.STATUS_OK] = -1
+    out[variables["status"][0] != L.STATUS_OK] = -1
     return out
 
 
@@ -611,8 +611,8 @@ def plan_fragility(case: Case, suite: Suite, im: IntensityMeasure, levels: sw.Ax
     level_values = np.asarray(levels.values, dtype=np.float64)
     vertical, vertical_note, case_record = _vertical_source(case, suite, folder, case_vertical)
 
-    params = np.empty((n, K.N_PARAMS))
-    states = np.empty((n, K.N_STATE))
+    params = np.empty((n, L.N_PARAMS))
+    states = np.empty((n, L.N_STATE))
     factor_h, factor_v = np.empty(n), np.empty(n)
     first, count, record_end = np.empty(n, np.int64), np.empty(n, np.int64), np.empty(n)
     bases, record_cases, files, entries = [], [], [], []
@@ -1323,7 +1323,7 @@ def analyse(fplan: FragilityPlan, final_states: np.ndarray, states, *, resamples
         raise CaseError(f"unknown model {model!r}; expected {', '.join(MODELS)}", source="model")
     plan = fplan.plan
     variables = sw.sweep_variables(plan, final_states)
-    alpha = plan.case_column(K.P_ALPHA).reshape(plan.shape)
+    alpha = plan.case_column(L.P_ALPHA).reshape(plan.shape)
     variables["max_rotation_ratio"] = (variables["max_rotation"][0] / alpha,
                                        {"units": "1", "long_name": "largest rotation |phi| / alpha"})
     variables["scale_factor"] = (plan.factor_h.reshape(plan.shape).copy(),
@@ -1546,7 +1546,7 @@ def json_summary(fplan: FragilityPlan, analysis: Analysis) -> dict:
         "damage_states": out,
         "model": analysis.model,
         "n_runs": int(status.size),
-        "n_outside_model": int((status != K.STATUS_OK).sum()),
+        "n_outside_model": int((status != L.STATUS_OK).sum()),
         "n_undecided": int(analysis.variables["undecided"][0].sum()),
         "parameter_samples": None if not fplan.samples else {
             "n": fplan.samples, "seed": fplan.seed,

@@ -54,7 +54,7 @@ import numpy as np
 
 from .. import interrupts
 from ..case import Case, case_with
-from ..core import layout as K
+from ..core import layout as L
 from ..core.simulate import ground_array, tail_samples
 from ..engine.axes import (  # noqa: F401  (the engine's vocabulary, re-exported: `sweep.AXES`, `sweep.parse_axis`...)
     _RETIRED_LABELS,
@@ -278,7 +278,7 @@ def _plan_records(case: Case, axes, ratio, chunk_size: int, records_dir, records
     grid = _Grid(axes, RECORD_SCALE_AXES)                    # the scale axes planned apart
     n_other = grid.size(grid.other)
     supports, grounds_of = Supports(), {}        # (orientation, floor) -> the ground the block stands on
-    params, states = np.empty((n_other, K.N_PARAMS)), np.empty((n_other, K.N_STATE))
+    params, states = np.empty((n_other, L.N_PARAMS)), np.empty((n_other, L.N_STATE))
     first, count = np.empty(n_other, dtype=np.int64), np.empty(n_other, dtype=np.int64)
     record_end = np.empty(n_other)
     for j, combo, point in _points(case, grid.other_axes, ratio, grid.scaled_progress(progress), grid.named()):
@@ -499,7 +499,7 @@ def _plan_pulses(case: Case, axes, ratio, chunk_size: int, n: int, progress=None
     motion is checked once per pulse at the largest amplitude of the grid."""
     grid = _Grid(axes, ("amplitude",))
     n_other = grid.size(grid.other)
-    params, states = np.empty((n_other, K.N_PARAMS)), np.empty((n_other, K.N_STATE))
+    params, states = np.empty((n_other, L.N_PARAMS)), np.empty((n_other, L.N_STATE))
     factor_v, record_end = np.empty(n_other), np.empty(n_other)
     first, count = np.empty(n_other, dtype=np.int64), np.empty(n_other, dtype=np.int64)
     records: dict[tuple, object] = {}         # (pulses at amplitude 1, dt, tail) -> the pulses sampled
@@ -868,7 +868,7 @@ def _maps(axes, variables: dict, title: str, *, size=None, caption: str = "", ca
 
 def time_shares(states: np.ndarray) -> dict:
     """Total time in each moving state over the grid [s] (where a sweep's work goes)."""
-    return {"SLIP": float(states[:, K.S_T_SLIP].sum()), "ROCK": float(states[:, K.S_T_ROCK].sum()),
-            "ROCKSLIP": float(states[:, K.S_T_ROCKSLIP].sum()),
-            "REST": float(states[:, K.S_T_REST].sum())}
+    return {"SLIP": float(states[:, L.S_T_SLIP].sum()), "ROCK": float(states[:, L.S_T_ROCK].sum()),
+            "ROCKSLIP": float(states[:, L.S_T_ROCKSLIP].sum()),
+            "REST": float(states[:, L.S_T_REST].sum())}
 

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core import layout as K
+from ..core import layout as L
 from ..errors import CaseError, OutputError, exception_text
 from ..io.files import atomic_write, remove_stale_temporaries
 from .plan import Plan
@@ -101,7 +101,7 @@ class ChunkStore:
             return None
         if key != self.key:
             self.damaged[chunk] = "of another sweep definition"
-        elif not np.array_equal(stored, indices) or states.shape != (indices.size, K.N_STATE):
+        elif not np.array_equal(stored, indices) or states.shape != (indices.size, L.N_STATE):
             self.damaged[chunk] = "other cases than the plan's"
         elif checksum != self.checksum(stored, states):
             self.damaged[chunk] = "its checksum does not match its content"
@@ -187,7 +187,7 @@ def collect(plan: Plan, store: ChunkStore, chunks=None, out: np.ndarray | None =
     OutputError
         A chunk is missing or damaged (it was deleted meanwhile): rerun to compute it.
     """
-    out = np.empty((plan.n_cases, K.N_STATE)) if out is None else out
+    out = np.empty((plan.n_cases, L.N_STATE)) if out is None else out
     for chunk in range(plan.n_chunks) if chunks is None else chunks:
         indices = plan.chunk_indices(chunk)
         states = store.load(chunk, indices)

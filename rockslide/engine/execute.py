@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import interrupts
-from ..core import layout as K
+from ..core import layout as L
 from ..errors import CaseError, exception_text
 from .chunks import ChunkStore, MemoryStore, collect, missing_chunks
 from .cluster import (  # noqa: F401  (the cluster's names, used here and re-exported: `execute.find_scheduler`...)
@@ -381,7 +381,7 @@ def execute(plan: Plan, store=None, *, workers: int | None = None, scheduler: st
     for other in store.others():
         say(f"  note: {other} holds chunks of another {what} definition or device (not used; delete it to free the "
             "space)")
-    final = None if shard is not None else np.empty((plan.n_cases, K.N_STATE))
+    final = None if shard is not None else np.empty((plan.n_cases, L.N_STATE))
     missing = missing_chunks(plan, store, final)          # each stored chunk read once
     for chunk, reason in sorted(store.damaged.items()):
         say(f"  note: {store.path(chunk)} cannot be used ({reason}); computing it again")

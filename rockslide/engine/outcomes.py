@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core import layout as K
+from ..core import layout as L
 from ..core.layout import OVERTURNED
 from ..core.simulate import may_still_overturn_params
 from .plan import Plan
@@ -14,8 +14,8 @@ from .plan import Plan
 #: Bits of the ``modes`` variable.
 MODE_BITS = {"slip": 1, "liftoff": 2, "liftoff_slip": 4}
 
-STATUS_FLAGS = {"flag_values": np.arange(len(K.STATUS_NAMES), dtype=np.int8),
-                "flag_meanings": " ".join(K.STATUS_NAMES)}
+STATUS_FLAGS = {"flag_values": np.arange(len(L.STATUS_NAMES), dtype=np.int8),
+                "flag_meanings": " ".join(L.STATUS_NAMES)}
 
 
 def sweep_variables(plan: Plan, states: np.ndarray) -> dict:
@@ -31,15 +31,15 @@ def sweep_variables(plan: Plan, states: np.ndarray) -> dict:
     """
     shape = plan.shape
     st = states
-    overturned = st[:, K.S_MODE] == OVERTURNED
-    status = st[:, K.S_STATUS].astype(np.int8)
-    t_slip, t_rock, t_rockslip = st[:, K.S_T_SLIP], st[:, K.S_T_ROCK], st[:, K.S_T_ROCKSLIP]
+    overturned = st[:, L.S_MODE] == OVERTURNED
+    status = st[:, L.S_STATUS].astype(np.int8)
+    t_slip, t_rock, t_rockslip = st[:, L.S_T_SLIP], st[:, L.S_T_ROCK], st[:, L.S_T_ROCKSLIP]
     modes = ((t_slip > 0) * MODE_BITS["slip"] + (t_rock > 0) * MODE_BITS["liftoff"]
              + (t_rockslip > 0) * MODE_BITS["liftoff_slip"]).astype(np.int8)
-    end = np.where(np.isnan(st[:, K.S_END_TIME]), plan.record_end, st[:, K.S_END_TIME])
-    alpha = plan.case_column(K.P_ALPHA)
+    end = np.where(np.isnan(st[:, L.S_END_TIME]), plan.record_end, st[:, L.S_END_TIME])
+    alpha = plan.case_column(L.P_ALPHA)
     undecided = np.zeros(len(st), dtype=bool)
-    moving = np.flatnonzero(st[:, K.S_MODE] != K.REST)                   # a block at rest stands
+    moving = np.flatnonzero(st[:, L.S_MODE] != L.REST)                   # a block at rest stands
     for i, row in zip(moving, moving if plan.rows is None else plan.rows[moving], strict=True):
         p = plan.params[row]
         undecided[i] = may_still_overturn_params(st[i], p)
@@ -53,31 +53,31 @@ def sweep_variables(plan: Plan, states: np.ndarray) -> dict:
                        {"units": "1", "long_name": "overturned (1) or standing (0)",
                         "flag_values": np.array([0, 1], dtype=np.int8),
                         "flag_meanings": "standing overturned"}),
-        "overturn_time": (grid(np.where(overturned, st[:, K.S_OVERTURN_TIME], nan), np.float64),
+        "overturn_time": (grid(np.where(overturned, st[:, L.S_OVERTURN_TIME], nan), np.float64),
                           {"units": "s", "long_name": "time the rotation reached pi/2 (NaN: standing)"}),
-        "direction": (grid(np.where(overturned, st[:, K.S_DIRECTION], 0.0), np.int8),
+        "direction": (grid(np.where(overturned, st[:, L.S_DIRECTION], 0.0), np.int8),
                       {"units": "1", "long_name": "sign of the rotation at overturning (0: standing)",
                        "flag_values": np.array([-1, 0, 1], dtype=np.int8),
                        "flag_meanings": "negative standing positive"}),
-        "fall_start_time": (grid(np.where(overturned, st[:, K.S_FALL_START], nan), np.float64),
+        "fall_start_time": (grid(np.where(overturned, st[:, L.S_FALL_START], nan), np.float64),
                             {"units": "s", "long_name": "time the rotation last passed alpha before "
                              "overturning (NaN: standing)"}),
-        "max_rotation": (grid(st[:, K.S_MAX_THETA], np.float64),
+        "max_rotation": (grid(st[:, L.S_MAX_THETA], np.float64),
                          {"units": "rad", "long_name": "largest rotation |phi|"}),
         "alpha": (grid(alpha, np.float64),
                   {"units": "rad", "long_name": "alpha = atan(b/h): the rotation past which gravity "
                    "tips the block over"}),
-        "max_rotation_ratio": (grid(st[:, K.S_MAX_THETA] / alpha, np.float64),
+        "max_rotation_ratio": (grid(st[:, L.S_MAX_THETA] / alpha, np.float64),
                                {"units": "1", "long_name": "largest rotation / alpha: how near "
                                 "overturning (above 1: past alpha)"}),
-        "max_slip": (grid(st[:, K.S_MAX_X], np.float64),
+        "max_slip": (grid(st[:, L.S_MAX_X], np.float64),
                      {"units": "m", "long_name": "largest slip displacement |x|"}),
-        "residual_slip": (grid(st[:, K.S_X], np.float64),
+        "residual_slip": (grid(st[:, L.S_X], np.float64),
                           {"units": "m", "long_name": "slip displacement x at the end"}),
-        "impacts": (grid(st[:, K.S_IMPACTS], np.int32),
+        "impacts": (grid(st[:, L.S_IMPACTS], np.int32),
                     {"units": "1", "long_name": "number of rocking impacts"}),
         # the run stops at overturning, so the impacts counted are those before it
-        "overturn_mode": (grid(np.where(overturned, np.where(st[:, K.S_IMPACTS] > 0, 2, 1), 0), np.int8),
+        "overturn_mode": (grid(np.where(overturned, np.where(st[:, L.S_IMPACTS] > 0, 2, 1), 0), np.int8),
                           {"units": "1", "long_name": "how the block overturned: without any impact "
                            "before, or after one or more impacts (0: standing)",
                            "flag_values": np.array([0, 1, 2], dtype=np.int8),

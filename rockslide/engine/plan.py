@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .._version import __version__
-from ..core import layout as K
+from ..core import layout as L
 from ..core import native
 from ..errors import CaseError
 
@@ -142,7 +142,7 @@ class Plan:
     @property
     def steps_per_case(self) -> int:
         """Integration steps of the longest case that runs to the end of its record and tail."""
-        return int(np.max(self.count * self.case_column(K.P_N_SUB))) if self.n_cases else 0
+        return int(np.max(self.count * self.case_column(L.P_N_SUB))) if self.n_cases else 0
 
     def case_params(self, cases=slice(None)) -> np.ndarray:
         """``float64[k, N_PARAMS]``: the kernel parameters of points ``cases`` (indices or a slice)."""
@@ -153,7 +153,7 @@ class Plan:
         return self.states[cases] if self.rows is None else self.states[self.rows[cases]]
 
     def case_column(self, column: int) -> np.ndarray:
-        """``float64[n]``: one kernel parameter (``K.P_...``) of every point."""
+        """``float64[n]``: one kernel parameter (``L.P_...``) of every point."""
         return self.params[:, column] if self.rows is None else self.params[self.rows, column]
 
     def describe(self) -> str:
@@ -207,7 +207,7 @@ def assemble(case: Case, axes, *, params, states, factor_h, factor_v, base, firs
     caller then sets it after changing the steps, `prepare.study_step`)."""
     plan = Plan(case=case, axes=list(axes), mu_kinetic_ratio=mu_kinetic_ratio, params=params, states=states,
                 factor_h=factor_h, factor_v=factor_v, base=base, first=first, count=count, record_end=record_end,
-                step=float(params[:, K.P_STEP].min()) if step is None else step, records=records,
+                step=float(params[:, L.P_STEP].min()) if step is None else step, records=records,
                 chunk_size=chunk_size, rows=rows, step_study=step_study)
     if keyed:
         plan.key = definition_key(plan)
@@ -288,7 +288,7 @@ HASH_BLOCK = 1 << 16
 
 def bytes_needed(plan: Plan, n_chunks: int) -> int:
     """Bytes on disk for ``n_chunks`` more chunk files and the result file (both uncompressed)."""
-    per_case_chunk = (K.N_STATE + 1) * 8
+    per_case_chunk = (L.N_STATE + 1) * 8
     cases = min(n_chunks * plan.chunk_size, plan.n_cases)     # a chunk holds at most the plan's cases
     return cases * per_case_chunk + plan.n_cases * RESULT_BYTES_PER_CASE + 2**16
 
