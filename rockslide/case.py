@@ -33,7 +33,7 @@ import yaml
 
 from .errors import CaseError
 from .inputs import open_regular, regular_size
-from .mesh import MESH_LENGTH_UNITS
+from .mesh import MESH_LENGTH_UNITS, rectangle_k2
 from .pulses import SHAPES, Pulse, common_intervals
 from .units import SI_UNITS, STANDARD_GRAVITY, UNIT_REQUIRED, UNITS, parse_quantity, unit_factor, written_unit
 
@@ -1574,7 +1574,7 @@ def body_failures(b1: float, b2: float, h: float, k: float | None, e: float | No
             out.append(("block.radius_of_gyration", f"expected within (0, {k_max:.6g} m], the largest a body of "
                         f"that size can have (sqrt(max(b1, b2)^2 + h^2)), got {_with_unit(k, 'm')}"))
     if e is not None and (b1 != b2 or k is not None):
-        k2 = k * k if k is not None else ((0.5 * (b1 + b2)) ** 2 + h * h) / 3.0
+        k2 = k * k if k is not None else rectangle_k2(b1, b2, h)
         rho1, rho2 = math.sqrt(k2 + b1 * b1 + h * h), math.sqrt(k2 + b2 * b2 + h * h)
         e_max = (h * h + math.sqrt((k2 + b1 * b1) * (k2 + b2 * b2))) / (rho1 * rho2)
         if e > e_max:

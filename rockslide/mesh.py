@@ -39,6 +39,7 @@ from .errors import CaseError, OutputError, exception_text
 from .inputs import open_regular
 
 __all__ = ["read_mesh", "PlanarBody", "planar_body", "planar_bodies", "box_bodies", "describe", "body_of_file",
+           "rectangle_k2",
            "MESH_FORMATS", "MESH_LENGTH_UNITS", "MAX_MESH_BYTES", "MAX_MESH_FACES", "CONTACT_TOLERANCE",
            "SCREENING_NOTE"]
 
@@ -299,6 +300,15 @@ def body_of_file(path, *, units: str, azimuth: float, density: float | None = No
     return _along(rest, azimuth, _mass(density, mass, rest["volume"], source), CONTACT_TOLERANCE, source, mesh)
 
 
+def rectangle_k2(b1, b2, h):
+    """``I_cm / M`` [m^2] of the uniform rectangle with corners ``b1``, ``b2`` from the vertical
+    through its centre of mass, ``h`` below it: ``(bm^2 + h^2) / 3``, ``bm = (b1 + b2) / 2``
+    (model-asymmetric.md section 1: the default inertia). Floats or numpy arrays. The numerical core
+    has its own (`core.simulate.Model.k2`), which it may not import from here."""
+    bm = 0.5 * (b1 + b2)
+    return (bm * bm + h * h) / 3.0
+
+
 def box_bodies(width: float, depth: float, height: float, mass: float | None, orientation: float
                ) -> tuple[PlanarBody, PlanarBody]:
     """A box's two planar bodies: along its width (azimuth ``orientation``, ``b1 = b2 = width/2``) and
@@ -329,7 +339,7 @@ def box_bodies(width: float, depth: float, height: float, mass: float | None, or
         t = 0.5 * across
         support = ((b, -t), (b, t), (-b, t), (-b, -t))
         outline = np.array([[[-b, 0.0], [b, 0.0], [b, height]], [[-b, 0.0], [b, height], [-b, height]]])
-        bodies.append(PlanarBody(azimuth=az, b1=b, b2=b, h=h, k2=(b * b + h * h) / 3.0, mass=mass,
+        bodies.append(PlanarBody(azimuth=az, b1=b, b2=b, h=h, k2=rectangle_k2(b, b, h), mass=mass,
                                  volume=width * depth * height, centre_of_mass=(0.0, 0.0, h), support=support,
                                  plane=plane, outline=outline))
     return tuple(bodies)

@@ -39,6 +39,7 @@ from ..engine.plan import MAX_POINTS, Plan, assemble, default_chunk_size
 from ..engine.prepare import RunWarning, coarse_step_warning
 from ..engine.step import keep_resolved
 from ..errors import CaseError
+from ..mesh import rectangle_k2
 from . import sweep as sw
 
 __all__ = ["DEFAULTS", "DEFAULT_MEMBERS", "distributions", "sample", "plan_ensemble", "compute", "summarise",
@@ -423,7 +424,7 @@ def member_bodies(case: Case, params: np.ndarray | None, values: dict) -> tuple[
     b1, b2 = b1 * stretch * values.get("b1", one), b2 * stretch * values.get("b2", one)
     half_height, k = half_height * size, k * size
     if "radius_of_gyration" in values:
-        default = np.sqrt(((0.5 * (b1 + b2)) ** 2 + half_height ** 2) / 3.0)   # `core.simulate.Model.k2`
+        default = np.sqrt(rectangle_k2(b1, b2, half_height))
         k = np.where(np.isnan(k), default, k) * values["radius_of_gyration"]
     return b1, b2, half_height, k
 

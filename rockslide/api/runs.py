@@ -221,9 +221,7 @@ def _planes(prepared, result, folder) -> dict | None:
         return None
     width = {"orientation": None if prepared.components is None else prepared.components.orientation,
              **_plane_of(result.summary)}
-    facing = case.block.orientation if case.block.orientation is not None else 0.5 * math.pi
-    facing = facing if prepared.components is None else prepared.components.orientation
-    across = facing + 0.5 * math.pi
+    across = _facing(prepared) + 0.5 * math.pi
     across -= 2.0 * math.pi if across > 2.0 * math.pi else 0.0
     other = other_plane(case, across) if prepared.components is not None or case.block.mesh is not None else None
     if prepared.components is None:
@@ -239,15 +237,23 @@ def _planes(prepared, result, folder) -> dict | None:
     return {"width": width, "depth": depth, "worse": worse, "screening": SCREENING}
 
 
+def _facing(prepared) -> float:
+    """[rad] The azimuth a run's (width) plane is taken along: its components' orientation (the
+    block's, or the first component's), else ``block.orientation`` (a mesh's direction under one
+    component), else 90 deg (a mesh's x axis)."""
+    if prepared.components is not None:
+        return prepared.components.orientation
+    orientation = prepared.case.block.orientation
+    return orientation if orientation is not None else 0.5 * math.pi
+
+
 def _block_bodies(case, prepared) -> tuple:
     """The planar bodies a run's figure ``NAME.body.png`` draws (`plots.body_figure`): a mesh's
     silhouette along the block's direction and across it, a box's two planes, an asymmetric body's
     outline; none for a plain rectangle (the paper's block)."""
     from .. import mesh
 
-    block = case.block
-    facing = block.orientation if block.orientation is not None else (
-        prepared.components.orientation if prepared.components is not None else 0.5 * math.pi)
+    block, facing = case.block, _facing(prepared)
     if block.mesh is not None:
         return tuple(mesh.body_of_file(block.mesh, units=block.mesh_units, azimuth=az, density=block.density,
                                        mass=None if block.density is not None else block.mass)
@@ -257,8 +263,7 @@ def _block_bodies(case, prepared) -> tuple:
     if not block.asymmetric:
         return ()
     (b1, b2), h = block.corners, block.half_height
-    k2 = block.radius_of_gyration ** 2 if block.radius_of_gyration is not None else (
-        (0.5 * (b1 + b2)) ** 2 + h * h) / 3.0
+    k2 = block.radius_of_gyration ** 2 if block.radius_of_gyration is not None else mesh.rectangle_k2(b1, b2, h)
     return (mesh.PlanarBody(azimuth=facing, b1=b1, b2=b2, h=h, k2=k2, mass=block.mass, volume=math.nan,
                             centre_of_mass=(0.0, 0.0, h), support=((-b1, 0.0), (b2, 0.0)),
                             plane="width" if prepared.components is not None else "shaking"),)
