@@ -1,20 +1,25 @@
-"""What a study costs beyond its compute (issue 41, item 4): the paper's Kobe grid on one core.
+"""What a study costs beyond its compute (issue 41, item 4): ``sweep``, ``fragility``, ``run
+--ensemble`` and ``risk``, each without its figure, as a user types them.
 
-The goal: ``rockslide sweep`` of the Kobe grid (Figure 9(b)'s case, 41 mu x 37 PGA = 1517 cases,
-150 s of record at dt = 0.1 ms) with ``--workers 1 --no-plot`` takes at most its compute + 0.5 s of
-wall time, i.e. start-up, imports, reading the case and the records, planning, loading the kernel,
-collecting the chunks and writing the HDF5 file together take 0.5 s or less:
+The goal: each takes at most its compute + 0.5 s of wall time on a quiet 2-core machine, i.e.
+start-up, imports, reading the case and the records, planning, loading the kernel, collecting the
+results and writing the HDF5 file together take 0.5 s or less. The commands (`STUDIES`):
 
-    rockslide sweep configs/table1/fig09b-mu052.yaml --mu 0.40:0.80:0.01 --pga 100gal:1000gal:25gal \\
-        --workers 1 --no-plot
+- the paper's Kobe grid (Figure 9(b)'s case, 41 mu x 37 PGA = 1517 cases, 150 s of record at
+  dt = 0.1 ms), on one core (``--workers 1``) and on all cores (the default);
+- ``run --ensemble 200`` of the shipped example (200 neighbours of the case, all cores);
+- ``fragility`` of the example over the synthetic suite at 15 PGA levels (90 runs, all cores);
+- ``risk`` of a given fragility (median, beta) on the shipped hazard curve (no compute).
 
-The command runs ``--repeat`` times (default 7), each in a fresh process as a user types it (byte
-code written: PYTHONDONTWRITEBYTECODE unset; one untimed run first). "compute" is the command's own
-figure ("computed 1517 cases in 1.2 s (1264 cases/s)": cases / rate, which keeps four digits);
+Each runs ``--repeat`` times (default 7), each in a fresh process as a user types it (byte code
+written: PYTHONDONTWRITEBYTECODE unset; one untimed run first), the studies taking turns. "compute"
+is the time the process spent computing cases: the kernel's time of every `engine.execute.execute`
+(its ``Execution.seconds``, which leaves out loading a JIT) plus, for a run, its nominal case
+(`engine.prepare.simulate_prepared`), summed by a wrapper the process starts with (`PROBE`);
 "beyond" is wall - compute per run. The medians and ranges are printed, and the floor no command
-can go below: a bare ``python``, ``import numpy``, the libraries a sweep needs (numpy, h5py for
+can go below: a bare ``python``, ``import numpy``, the libraries a study needs (numpy, h5py for
 its file, yaml for its case, click for its command line; their start and exit), and ``import
-numpy, numba`` (what a study pays before anything when it loads numba's JIT instead of the
+numpy, numba`` (what a study would pay before anything if it loaded numba's JIT instead of the
 build's machine code). Asserts nothing: the goals live here, never in the tests.
 
 The machine is shared: the load average and the other busy processes are printed with the figures.
@@ -29,7 +34,6 @@ import argparse
 import contextlib
 import io
 import os
-import re
 import statistics
 import sys
 import tempfile
@@ -39,17 +43,51 @@ from bench_startup import KOBE_CASE, find_records, machine, spread, timed, user_
 
 REPO = Path(__file__).resolve().parents[1]
 GRID = ("--mu", "0.40:0.80:0.01", "--pga", "100gal:1000gal:25gal")
+EXAMPLE = "configs/example.yaml"
+#: (what, the command's arguments after ``rockslide``): each also gets ``--out-dir``, ``--overwrite``.
+STUDIES = (
+    ("Kobe grid, 1517 cases, one core", ["sweep", KOBE_CASE.as_posix(), *GRID, "--workers", "1", "--no-plot"]),
+    ("Kobe grid, 1517 cases, all cores", ["sweep", KOBE_CASE.as_posix(), *GRID, "--no-plot"]),
+    ("ensemble of 200 of the example", ["run", EXAMPLE, "--ensemble", "200", "--no-plot"]),
+    ("fragility of the example, 6 records x 15 levels", [
+        "fragility", EXAMPLE, "--suite", "records/suite-synthetic.yaml", "--levels", "0.1g:1.5g:0.1g",
+        "--no-plot"]),
+    ("risk of a given fragility", ["risk", "--median", "0.5g", "--beta", "0.4", "--hazard",
+                                   "rockslide/hazard-example-PGA.csv", "--no-plot"]),
+)
 GOAL = 0.5          # [s] wall - compute, issue 41 item 4
-_COMPUTED = re.compile(r"computed (\d+) cases in [\d.]+ s \((\d+) cases/s\)")
+#: The wrapper each command runs in: it sums the compute time (module docstring) and prints it as
+#: the last line of stderr, then runs the command as ``rockslide`` would. The wrapped functions are
+#: replaced before any rockslide module binds them.
+PROBE = """
+import atexit, sys, time
+spent = [0.0]
+atexit.register(lambda: print(f"compute-seconds {spent[0]!r}", file=sys.stderr))
+from rockslide.engine import execute as _ex, prepare as _pr
+_execute, _simulate = _ex.execute, _pr.simulate_prepared
+def execute(*args, **kwargs):
+    done = _execute(*args, **kwargs)
+    spent[0] += done.seconds
+    return done
+def simulate_prepared(*args, **kwargs):
+    began = time.perf_counter()
+    try:
+        return _simulate(*args, **kwargs)
+    finally:
+        spent[0] += time.perf_counter() - began
+_ex.execute, _pr.simulate_prepared = execute, simulate_prepared
+from rockslide import cli
+sys.argv[0] = "rockslide"
+cli.entry()
+"""
 
 
-def compute_seconds(stdout: str) -> float:
-    """The compute time the command printed, from its case count and rate (more digits than its
-    seconds)."""
-    match = _COMPUTED.search(stdout)
-    if match is None:
-        raise SystemExit(f"no compute time in the command's printout:\n{stdout}")
-    return int(match.group(1)) / int(match.group(2))
+def compute_seconds(stderr: str) -> float:
+    """The compute time the wrapper printed (`PROBE`)."""
+    for line in reversed(stderr.splitlines()):
+        if line.startswith("compute-seconds "):
+            return float(line.split()[1])
+    raise SystemExit(f"no compute time from the wrapper:\n{stderr[-3000:]}")
 
 
 def measure(repeat: int) -> None:
@@ -59,33 +97,36 @@ def measure(repeat: int) -> None:
     env = user_env(ROCKSLIDE_RECORDS=str(records.resolve()),
                    PYTHONPATH=os.pathsep.join(filter(None, [str(REPO), os.environ.get("PYTHONPATH")])))
     out = Path(tempfile.mkdtemp(prefix="rockslide-overhead-"))
-    command = [sys.executable, "-m", "rockslide", "sweep", str(KOBE_CASE), *GRID, "--workers", "1", "--no-plot",
-               "--out-dir", str(out), "--overwrite"]
-    print("# What the Kobe grid costs beyond its compute (one core, no figure)\n")
+    commands = [[sys.executable, "-c", PROBE, *arguments, "--out-dir", str(out / str(i)), "--overwrite"]
+                for i, (_, arguments) in enumerate(STUDIES)]
+    print("# What a study costs beyond its compute (no figure)\n")
     for line in machine():
         print(line + "  ")
-    print(f"\n`rockslide sweep {KOBE_CASE.as_posix()} {' '.join(GRID)} --workers 1 --no-plot` (1517 cases), "
-          f"{repeat} times in a fresh process after one untimed run; median (range) in seconds\n")
-    timed(command, cwd=REPO, env=env)
-    walls, cpus, computes = [], [], []
+    print(f"\nEach command {repeat} times in a fresh process after one untimed run, the commands taking turns; "
+          "median (range) in seconds\n")
+    for command in commands:
+        timed(command, cwd=REPO, env=env)
+    walls, cpus, computes = ([[] for _ in STUDIES] for _ in range(3))
     for _ in range(repeat):
-        wall, cpu, done = timed(command, cwd=REPO, env=env)
-        walls.append(wall)
-        cpus.append(cpu)
-        computes.append(compute_seconds(done.stdout))
-    beyond = [w - c for w, c in zip(walls, computes, strict=True)]
-    verdict = "met" if statistics.median(beyond) <= GOAL else "not met"
-    print("| wall [s] | CPU [s] | compute [s] | wall - compute [s] | goal |")
-    print("|---:|---:|---:|---:|---|")
-    print(f"| {spread(walls)} | {spread(cpus)} | {spread(computes)} | {spread(beyond)} | "
-          f"<= {GOAL:.1f}: {verdict} |")
+        for i, command in enumerate(commands):
+            wall, cpu, done = timed(command, cwd=REPO, env=env)
+            walls[i].append(wall)
+            cpus[i].append(cpu)
+            computes[i].append(compute_seconds(done.stderr))
+    print("| study | `rockslide ...` | wall [s] | CPU [s] | compute [s] | wall - compute [s] | goal |")
+    print("|---|---|---:|---:|---:|---:|---|")
+    for i, (what, arguments) in enumerate(STUDIES):
+        beyond = [w - c for w, c in zip(walls[i], computes[i], strict=True)]
+        verdict = "met" if statistics.median(beyond) <= GOAL else "not met"
+        print(f"| {what} | `{' '.join(arguments)}` | {spread(walls[i])} | {spread(cpus[i])} | {spread(computes[i])} | "
+              f"{spread(beyond)} | <= {GOAL:.1f}: {verdict} |")
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     print(f"\nload average at the end: {load:.2f}\n")
     print(f"## The floor: a process that only starts ({repeat} times each)\n")
     print("| command | wall [s] |")
     print("|---|---:|")
     for what, code in (("`python -c pass`", "pass"), ("`python -c 'import numpy'`", "import numpy"),
-                       ("`python -c 'import numpy, h5py, yaml, click'` (what a sweep must load)",
+                       ("`python -c 'import numpy, h5py, yaml, click'` (what a study must load)",
                         "import numpy, h5py, yaml, click"),
                        ("`python -c 'import numpy, numba'`", "import numpy, numba")):
         floor = [timed([sys.executable, "-c", code], cwd=REPO, env=env)[0] for _ in range(repeat)]

@@ -77,7 +77,9 @@ def test_a_lognormal_of_huge_beta_leaves_its_impossible_members_out(ws):
     assert not infinite
     assert np.array_equal(status == ens.STATUS_DRAWN_OUTSIDE, expected)
     assert np.array_equal(np.isnan(sampled), ~np.isfinite(factors))
-    assert np.array_equal(sampled[np.isfinite(factors)], factors[np.isfinite(factors)])
+    # the ensemble's normal quantile (AS241) is within 1.1e-15 of scipy's (Cephes), times beta 300 and
+    # |z| <= 4 in the exponent: 1.3e-12 relative at most
+    assert np.allclose(sampled[np.isfinite(factors)], factors[np.isfinite(factors)], rtol=2e-12, atol=0)
     within = status == 0
     left = int(((status > 0) & ~expected).sum())             # flight or painleve, during the computation
     assert summary["n_within_model"] == int(within.sum()) == N - int(expected.sum()) - left

@@ -832,7 +832,9 @@ def test_a_damaged_numba_cache_is_removed_and_compiled_again(ws, tmp_path):
     """A truncated cache file of the batch kernel (a full disk, a killed compile, a flipped
     byte) made every sweep fail for good with an internal error; now the sweep says so in one note,
     removes the core's cache, compiles it again and succeeds, and the next sweep loads the new cache.
-    The cache lives in a folder of the test's own (NUMBA_CACHE_DIR), so the project's stays as it is."""
+    The cache lives in a folder of the test's own (NUMBA_CACHE_DIR), so the project's stays as it is.
+    The sweeps run as on an installation without the build's machine code (`native.ahead_of_time`
+    None: no C compiler at install, or an edited core), where every study computes on numba's JIT."""
     (ws / "case.yaml").write_text(case_text(QUICK))
     cache = tmp_path / "numba-cache"
     env = {**os.environ, "NUMBA_CACHE_DIR": str(cache), "PYTHONPATH": os.pathsep.join(
@@ -840,9 +842,11 @@ def test_a_damaged_numba_cache_is_removed_and_compiled_again(ws, tmp_path):
     env.pop("ROCKSLIDE_RECORDS", None)
 
     def sweep():
-        return subprocess.run([sys.executable, "-m", "rockslide.cli", "sweep", "case.yaml", "--mu", "0.3,0.5",
-                               "--overwrite", "--no-plot", "--no-progress"], cwd=ws, env=env, capture_output=True,
-                              text=True, timeout=900)
+        code = ("import sys\nfrom rockslide.core import native\nnative.ahead_of_time = lambda: None\n"
+                "from rockslide.cli import main\nmain(sys.argv[1:], prog_name='rockslide')\n")
+        return subprocess.run([sys.executable, "-c", code, "sweep", "case.yaml", "--mu", "0.3,0.5", "--overwrite",
+                               "--no-plot", "--no-progress"], cwd=ws, env=env, capture_output=True, text=True,
+                              timeout=900)
 
     first = sweep()
     assert first.returncode == 0, first.stderr

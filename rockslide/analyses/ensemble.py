@@ -43,7 +43,8 @@ from ..mesh import rectangle_k2
 from . import sweep as sw
 
 __all__ = ["DEFAULTS", "DEFAULT_MEMBERS", "distributions", "sample", "plan_ensemble", "compute", "summarise",
-           "wilson_interval", "EnsemblePlan", "members_needed", "to_precision", "parse_members", "AUTO_PRECISION"]
+           "wilson_interval", "normal_quantile", "latin_hypercube", "EnsemblePlan", "members_needed", "to_precision",
+           "parse_members", "AUTO_PRECISION"]
 
 #: Members of an ensemble without ``--ensemble N``'s N (``--robustness``).
 DEFAULT_MEMBERS = 200
@@ -77,6 +78,53 @@ def distributions(case: Case) -> tuple[dict[str, Distribution], bool]:
     return out, True
 
 
+#: Wichura's (1988) algorithm AS241 (PPND16): the coefficients of the normal's inverse CDF, central
+#: region (|p - 1/2| <= 0.425) then the tails for r = sqrt(-ln min(p, 1 - p)) <= 5 and > 5, each a
+#: numerator and a denominator, highest power first (as Python's ``statistics.NormalDist`` has them).
+_AS241 = (
+    ((2.5090809287301226727e+3, 3.3430575583588128105e+4, 6.7265770927008700853e+4, 4.5921953931549871457e+4,
+      1.3731693765509461125e+4, 1.9715909503065514427e+3, 1.3314166789178437745e+2, 3.3871328727963666080e+0),
+     (5.2264952788528545610e+3, 2.8729085735721942674e+4, 3.9307895800092710610e+4, 2.1213794301586595867e+4,
+      5.3941960214247511077e+3, 6.8718700749205790830e+2, 4.2313330701600911252e+1, 1.0)),
+    ((7.7454501427834140764e-4, 2.2723844989269184583e-2, 2.4178072517745061177e-1, 1.2704582524523683826e+0,
+      3.6478483247632046050e+0, 5.7694972214606914055e+0, 4.6303378461565452959e+0, 1.4234371107496835773e+0),
+     (1.0507500716444168432e-9, 5.4759380849953449460e-4, 1.5198666563616457197e-2, 1.4810397642748007459e-1,
+      6.8976733498510000455e-1, 1.6763848301838038494e+0, 2.0531916266377588219e+0, 1.0)),
+    ((2.0103343992922881327e-7, 2.7115555687434875782e-5, 1.2426609473880784386e-3, 2.6532189526576123093e-2,
+      2.9656057182850489123e-1, 1.7848265399172913358e+0, 5.4637849111641143699e+0, 6.6579046435011037772e+0),
+     (2.0442631033899397856e-15, 1.4215117583164458887e-7, 1.8463183175100546818e-5, 7.8686913114561325910e-4,
+      1.4875361290850614852e-2, 1.3692988092273580531e-1, 5.9983220655588793769e-1, 1.0)),
+)
+
+
+def _horner(coefficients, x):
+    value = np.full_like(x, coefficients[0])
+    for c in coefficients[1:]:
+        value = value * x + c
+    return value
+
+
+def normal_quantile(p) -> np.ndarray:
+    """The standard normal's inverse CDF (quantile) at ``p``, by Wichura's algorithm AS241 (Applied
+    Statistics 37, 477-484, 1988; relative error about 1e-16), the expressions of Python's
+    ``statistics.NormalDist.inv_cdf`` evaluated on arrays: ``-inf`` at 0, ``inf`` at 1, NaN outside
+    [0, 1]. Python's own values to the bit, and within 1.1e-15 (relative) of scipy's
+    ``special.ndtri`` (tests/test_ensemble.py), without importing scipy.special (0.3 s of a 1.4 s
+    ensemble on the 2-core development machine)."""
+    p = np.asarray(p, dtype=np.float64)
+    q = p - 0.5
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        r = 0.180625 - q * q
+        central = _horner(_AS241[0][0], r) * q / _horner(_AS241[0][1], r)
+        t = np.sqrt(-np.log(np.where(q <= 0.0, p, 1.0 - p)))
+        near, far = t - 1.6, t - 5.0
+        tail = np.where(t <= 5.0, _horner(_AS241[1][0], near) / _horner(_AS241[1][1], near),
+                        _horner(_AS241[2][0], far) / _horner(_AS241[2][1], far))
+    x = np.where(np.abs(q) <= 0.425, central, np.where(q < 0.0, -tail, tail))
+    x = np.where(p == 0.0, -np.inf, np.where(p == 1.0, np.inf, x))
+    return np.where((p >= 0.0) & (p <= 1.0), x, np.nan)
+
+
 def latin_hypercube(d: int, n: int, seed: int) -> np.ndarray:
     """``n`` points of a ``d``-dimensional Latin hypercube in [0, 1): stratum ``k / n`` of each
     dimension holds one point, placed uniformly in it, the strata paired by random permutations.
@@ -97,8 +145,6 @@ def sample(dists: dict[str, Distribution], n: int, seed: int = SEED) -> dict[str
     distribution's inverse CDF. A quantity without spread gives its value to every member, exactly.
     Values as drawn, also those no model takes (a lognormal of huge beta overflows to infinity and
     underflows to 0): `drawn_outside` says which members they make."""
-    from scipy.special import ndtri  # the normal's inverse CDF: scipy.stats.norm.ppf's, to the bit
-
     varying = [name for name, d in dists.items() if d.spread]
     u = latin_hypercube(max(1, len(varying)), n, seed) if varying else np.empty((n, 0))
     out = {}
@@ -111,9 +157,9 @@ def sample(dists: dict[str, Distribution], n: int, seed: int = SEED) -> dict[str
             if d.kind == "uniform":
                 out[name] = d.a + (d.b - d.a) * q
             elif d.kind == "normal":
-                out[name] = d.a + d.b * ndtri(q)
+                out[name] = d.a + d.b * normal_quantile(q)
             else:
-                out[name] = d.a * np.exp(d.b * ndtri(q))
+                out[name] = d.a * np.exp(d.b * normal_quantile(q))
     return out
 
 
@@ -514,9 +560,7 @@ def wilson_interval(k: int, n: int, confidence: float = CONFIDENCE) -> tuple[flo
     ``(nan, nan)`` for ``n = 0``."""
     if n == 0:
         return math.nan, math.nan
-    from scipy.special import ndtri  # scipy.stats.norm.ppf's, to the bit
-
-    z = float(ndtri(0.5 + confidence / 2.0))
+    z = float(normal_quantile(0.5 + confidence / 2.0))
     p = k / n
     centre = (p + z * z / (2 * n)) / (1 + z * z / n)
     half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)

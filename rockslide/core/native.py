@@ -7,11 +7,14 @@ so that ``rockslide run`` neither imports numba nor waits for it (issue 11; READ
 the build's architecture, and records the `source_stamp` of the sources it compiled beside it.
 `entry_points` returns that module when it imports and its stamp is the stamp of the sources
 beside it (they were not edited since), else numba's JIT dispatchers of the same functions. Both
-run the same code: results are identical to the last bit (tests/test_startup.py). A study on one
-thread calls `run` case by case too (`simulate.compute_batch`, `engine.execute.local_kernel`);
-studies on several threads, the dask workers and the GPU keep numba's JIT (its batch driver
-releases the GIL, which this module's functions hold), whose cache the build fills as well
-(`build.precompile`).
+run the same code: results are identical to the last bit (tests/test_startup.py).
+
+The module's functions release the GIL while they run, as ``@njit(nogil=True)`` functions do
+(`RELEASES_GIL`): a local study calls `run` case by case on each of its threads
+(`simulate.compute_batch`, `engine.execute.local_kernel`), side by side, without numba's batch
+driver (1.2-1.4 s to import and load on the 2-core development machine, more than the compute of
+most studies started by hand). The dask workers and the GPU keep numba's JIT, whose cache the build
+fills as well (`build.precompile`).
 
 Plain standard library at import: numba is imported only by `build` and by the JIT fallback.
 """
@@ -31,6 +34,9 @@ from pathlib import Path
 COMPILED_MODULES = ("layout", "physics", "kernel", "batch", "gpu")
 MODULE_NAME = "_native"
 STAMP_FILE = f"{MODULE_NAME}.stamp"
+#: The compiled functions' Python wrappers release the GIL around the machine code (`build`): part of
+#: the stamp, so that a module built before they did is not taken for one that does.
+RELEASES_GIL = True
 
 _VECTOR, _MATRIX = "f8[::1]", "f8[:, ::1]"
 #: (name, module, numba signature) of each function `simulate` calls from Python.
@@ -51,7 +57,7 @@ ENTRY_POINTS = (
 def source_stamp() -> str:
     """SHA-256 of `ENTRY_POINTS` and of the sources of `COMPILED_MODULES` (stable across processes
     and machines), read once per process."""
-    digest = hashlib.sha256(repr(ENTRY_POINTS).encode())
+    digest = hashlib.sha256(repr((ENTRY_POINTS, RELEASES_GIL)).encode())
     folder = Path(__file__).parent
     for name in COMPILED_MODULES:
         digest.update((folder / f"{name}.py").read_bytes())
@@ -87,10 +93,22 @@ def is_ahead_of_time() -> bool:
 
 def build(folder: Path | None = None) -> Path:
     """Compile `ENTRY_POINTS` ahead of time into ``folder`` (default: beside this file) and record
-    their `source_stamp`. Returns the extension module's path. Needs numba and a C compiler."""
+    their `source_stamp`. Returns the extension module's path. Needs numba and a C compiler.
+
+    ``pycc`` has no option for it, but its compiler takes numba's compilation flags: with
+    ``release_gil`` set (what ``nogil=True`` sets for the JIT), each function's Python wrapper
+    unpacks its arguments, releases the GIL, runs the machine code and takes the GIL back
+    (tests/test_startup.py finds ``PyEval_SaveThread`` in the module). The functions touch no
+    Python object while they run: `batch.run_batch` calls `kernel.run` under ``nogil=True`` too."""
     with warnings.catch_warnings():      # pending deprecation since numba 0.57 (README, 'The first run')
         warnings.simplefilter("ignore", PendingDeprecationWarning)
         from numba.pycc import CC
+        from numba.pycc import compiler as pycc_compiler
+
+    class ReleasingGil(pycc_compiler.Flags):
+        def __init__(self, *args, **kwargs):
+            super().__init__(*args, **kwargs)
+            self.release_gil = RELEASES_GIL
 
     folder = Path(folder) if folder is not None else Path(__file__).parent
     stamp = folder / STAMP_FILE
@@ -101,12 +119,16 @@ def build(folder: Path | None = None) -> Path:
     for name, module, signature in ENTRY_POINTS:
         dispatcher = getattr(importlib.import_module(f"{__package__}.{module}"), name)
         compiler.export(name, signature)(dispatcher.py_func)
-    compiler.compile()
+    plain, pycc_compiler.Flags = pycc_compiler.Flags, ReleasingGil
+    try:
+        compiler.compile()
+    finally:
+        pycc_compiler.Flags = plain
     temporary = folder / f".{STAMP_FILE}.{os.getpid()}.tmp"
     temporary.write_text(source_stamp())
     os.replace(temporary, stamp)
     return folder / Path(compiler.output_file).name
 
 
-__all__ = ["COMPILED_MODULES", "ENTRY_POINTS", "source_stamp", "ahead_of_time", "just_in_time", "entry_points",
-           "is_ahead_of_time", "build"]
+__all__ = ["COMPILED_MODULES", "ENTRY_POINTS", "RELEASES_GIL", "source_stamp", "ahead_of_time", "just_in_time",
+           "entry_points", "is_ahead_of_time", "build"]

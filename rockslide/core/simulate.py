@@ -501,9 +501,9 @@ def compute_batch(params, states, base, first, count, kh, kv):
 
     The same kernel on the same inputs: the final states are `batch.compute`'s to the last bit
     (tests/test_startup.py). Without numba's batch driver nothing of numba is imported or loaded (a
-    second or more at the start of a study), but each case holds the GIL while it runs: this is
-    for one thread (a sweep with ``--workers 1``, on one core); other threads, such as the one
-    waiting for Ctrl-C, run between two cases. Arguments and result as `batch.compute`'s.
+    second or more at the start of a study). Each case releases the GIL while it runs (the build
+    compiles the module so: `native.RELEASES_GIL`), so that a study's threads compute side by side
+    and the one waiting for Ctrl-C runs meanwhile. Arguments and result as `batch.compute`'s.
     """
     params, out, base, count = kernel_inputs(params, states, base, first, count, kh, kv)
     if params.shape[0]:

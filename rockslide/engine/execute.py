@@ -5,9 +5,10 @@ or `chunks.MemoryStore`); `execute` is the whole orchestration every analysis us
 already holds is reused, the free space is checked, the kernel compiled (and said so), a progress
 callback called, and the final states of every case returned.
 
-- **Where.** Locally on a pool of threads, one chunk per task (`batch.compute`, which releases the
-  GIL; a thread takes the next chunk as soon as it is done; on one thread, the build's machine code
-  case by case, without loading numba: `local_kernel`), or on a dask.distributed cluster: one task
+- **Where.** Locally on a pool of threads, one chunk per task (the build's machine code case by
+  case, which releases the GIL, without loading numba; numba's batch driver where the build has
+  none: `local_kernel`; a thread takes the next chunk as soon as it is done), or on a
+  dask.distributed cluster: one task
   per chunk (`batch.compute`) returning plain numpy arrays. All give identical results. Or on
   an NVIDIA GPU (``device="gpu"``, the optional extra ``rockslide[gpu]``: `core.gpu`, the same
   kernel compiled for the device), many chunks per launch (`DEVICE_CASES_PER_LAUNCH`); the device
@@ -190,8 +191,8 @@ def check_workers(workers: int | None) -> None:
 
 
 def _compute_local(plan, store, chunks, workers, progress, out=None):
-    """The chunks on a pool of threads running the compiled batch (`local_kernel`: `batch.run_batch`
-    releases the GIL; on one thread, the build's machine code), one chunk per task: each thread
+    """The chunks on a pool of threads running the compiled kernel (`local_kernel`, which releases
+    the GIL), one chunk per task: each thread
     takes the next chunk as soon as it is done, so cases that rock for a minute and cases at rest
     even out and every core is busy to the end. Each chunk is stored as soon as it is done; Ctrl-C
     is checked while waiting, and the chunks being computed are finished and kept."""
@@ -229,16 +230,22 @@ def _compute_local(plan, store, chunks, workers, progress, out=None):
 
 
 def local_kernel(threads: int) -> Callable:
-    """What computes a chunk on ``threads`` local threads (`batch.compute`'s arguments and result).
+    """What computes a chunk on each of ``threads`` local threads (`batch.compute`'s arguments and
+    result).
 
-    On one thread, where the build's machine code is there (`native.is_ahead_of_time`), that code
-    case by case (`simulate.compute_batch`): numba is neither imported nor loaded, which is most of
-    what a study costs beyond its compute (issue 41, item 4), and the states are the same to the
-    last bit. Else numba's batch driver (`batch.compute`), which releases the GIL so that the
-    threads compute side by side."""
+    Where the build's machine code is there (`native.is_ahead_of_time`), that code case by case
+    (`simulate.compute_batch`; it releases the GIL while a case runs, so the threads compute side
+    by side): numba is neither imported nor loaded, which was most of what a study cost beyond its
+    compute (issue 41, item 4). Else numba's batch driver (`batch.compute`), which releases the
+    GIL as well. The states are the same to the last bit. The build's code is for a generic CPU of
+    its architecture: on the 2-core development machine it ran the Kobe grid 4 % slower than
+    numba's driver compiled for this CPU (median of 5 alternations, -4 to +8 %), which a study
+    repays by not loading numba (1.2-1.4 s) unless it computes for more than half a minute; the
+    upper estimate of a study's time (`work_estimate`) is too coarse to choose by (253 s for the
+    Kobe grid's 1.4 s). ``threads`` does not change the choice."""
     from ..core import native
 
-    if threads == 1 and native.is_ahead_of_time():
+    if native.is_ahead_of_time():
         from ..core.simulate import compute_batch
         return compute_batch
     from ..core import batch
