@@ -214,3 +214,26 @@ def test_the_normal_quantile_is_pythons_and_scipys():
     assert np.all(np.abs(x - reference) <= 1.1e-15 * np.abs(reference))
     edges = np.array([0.0, 1.0, -0.1, 1.1, np.nan])
     assert np.array_equal(ens.normal_quantile(edges), ndtri(edges), equal_nan=True)
+
+
+def test_a_large_ensemble_says_what_it_will_take_before_planning(monkeypatch):
+    """An ensemble of 10^6 members planned for a minute without a word (issue 43, item 3). From
+    `runs.ENSEMBLE_NOTE_MEMBERS` members on, the first thing said is how long planning takes and
+    an upper estimate of the compute: here the threshold is lowered to 3 and the ensemble has 4,
+    so the note is checked against the same estimate (`prepare.work` of the nominal case's steps)."""
+    from rockslide.api import runs
+    from rockslide.engine import prepare
+
+    monkeypatch.setattr(runs, "ENSEMBLE_NOTE_MEMBERS", 3)
+    said = []
+    case = rockslide.load_case(REPO / "configs" / "example.yaml")
+    rockslide.run(case, ensemble=4, workers=1, history=False, records_dir=REPO / "records", report=said.append)
+    prepared = prepare.prepare(case, REPO / "records", history=False)
+    upper = 4 * prepare.work(prepared).steps / prepare.STEPS_PER_SECOND
+    assert said[0] == (f"rockslide: note: an ensemble of 4 members: planning them takes about 0 s, computing them up "
+                       f"to {prepare.duration_text(upper)} on 1 thread (far less for members at rest or overturned); "
+                       "the progress bar then shows the time left")
+    monkeypatch.setattr(runs, "ENSEMBLE_NOTE_MEMBERS", 5)
+    said.clear()
+    rockslide.run(case, ensemble=4, workers=1, history=False, records_dir=REPO / "records", report=said.append)
+    assert not any("planning them" in line for line in said)

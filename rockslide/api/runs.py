@@ -18,6 +18,14 @@ from ._shared import as_case, callable_arg, check_where, path_arg, whole, with_s
 #: progress bar on a terminal).
 LONG_RUN = 10.0
 
+#: An ensemble of this many members or more says, before it plans them, how long planning and
+#: computing them may take (`ensemble_note`): planning takes 40-60 us a member on the 2-core
+#: development machine (`PLAN_SECONDS_PER_MEMBER`), a minute for 10^6, which went by without a word.
+ENSEMBLE_NOTE_MEMBERS = 20_000
+#: [s] Planning one member of an ensemble (its draws, its checks, its kernel row), an upper figure
+#: from the 2-core development machine (1.3 s for 20 000 members with both cores busy).
+PLAN_SECONDS_PER_MEMBER = 6e-5
+
 #: A run's figure is drawn from its history kept in memory while it has at most this many rows (96
 #: MB; reading the file back would take as much); a longer history is read back from the file.
 KEEP_HISTORY_ROWS = 2_000_000
@@ -180,6 +188,8 @@ def run(case: Case | Mapping | str | Path, *, records_dir: str | Path | None = N
     eplan = None
     if members is not None:        # (with a precision: its first round, which says what the ensemble is)
         from ..analyses import ensemble as ens
+        if members >= ENSEMBLE_NOTE_MEMBERS:
+            say(ensemble_note(prepared, members, workers))
         eplan = ens.plan_ensemble(case, members, seed=seed, records_dir=folder, records=prepared.records)
         eplan.precision = precision
     where = {"device": device, "workers": workers, "say": say, "bars": bars}
@@ -188,6 +198,21 @@ def run(case: Case | Mapping | str | Path, *, records_dir: str | Path | None = N
     result = engine.simulate_prepared(prepared, progress=progress)
     summary = None if eplan is None else _neighbourhood(eplan, result, **where)[0]
     return _run_result(prepared, result, summary, planes=_planes(prepared, result, folder))
+
+
+def ensemble_note(prepared, members: int, workers: int | None) -> str:
+    """What an ensemble of ``members`` of ``prepared``'s case may take, said before it is planned: its
+    planning (`PLAN_SECONDS_PER_MEMBER`) and an upper estimate of its compute on ``workers`` threads
+    (every member moving to the end, as `engine.prepare.work` estimates a run)."""
+    from ..engine import prepare as engine
+    from ..engine.execute import local_threads
+
+    threads = int(workers) if workers is not None else local_threads()
+    computing = members * engine.work(prepared).steps / (engine.STEPS_PER_SECOND * threads)
+    return (f"rockslide: note: an ensemble of {members} members: planning them takes about "
+            f"{engine.duration_text(members * PLAN_SECONDS_PER_MEMBER)}, computing them up to "
+            f"{engine.duration_text(computing)} on {threads} thread{'s' if threads > 1 else ''} (far less for members "
+            "at rest or overturned); the progress bar then shows the time left")
 
 
 def _members(ensemble) -> tuple[int | None, float | None]:
