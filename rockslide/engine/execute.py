@@ -8,8 +8,8 @@ callback called, and the final states of every case returned.
 - **Where.** Locally on a pool of threads, one chunk per task (the build's machine code case by
   case, which releases the GIL, without loading numba; numba's batch driver where the build has
   none: `local_kernel`; a thread takes the next chunk as soon as it is done), or on a
-  dask.distributed cluster: one task
-  per chunk (`batch.compute`) returning plain numpy arrays. All give identical results. Or on
+  dask.distributed cluster: one task per chunk (`batch.compute`) returning plain numpy arrays.
+  All give identical results. Or on
   an NVIDIA GPU (``device="gpu"``, the optional extra ``rockslide[gpu]``: `core.gpu`, the same
   kernel compiled for the device), many chunks per launch (`DEVICE_CASES_PER_LAUNCH`); the device
   may round the last bits differently (fused multiply-adds).
@@ -192,10 +192,10 @@ def check_workers(workers: int | None) -> None:
 
 def _compute_local(plan, store, chunks, workers, progress, out=None):
     """The chunks on a pool of threads running the compiled kernel (`local_kernel`, which releases
-    the GIL), one chunk per task: each thread
-    takes the next chunk as soon as it is done, so cases that rock for a minute and cases at rest
-    even out and every core is busy to the end. Each chunk is stored as soon as it is done; Ctrl-C
-    is checked while waiting, and the chunks being computed are finished and kept."""
+    the GIL), one chunk per task: each thread takes the next chunk as soon as it is done, so cases
+    that rock for a minute and cases at rest even out and every core is busy to the end. Each chunk
+    is stored as soon as it is done; Ctrl-C is checked while waiting, and the chunks being computed
+    are finished and kept."""
     from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 
     check_workers(workers)
