@@ -73,7 +73,7 @@ def main(argv=None) -> int:
     for n in counts:
         local_t, local = timed(lambda n=n: sweep(workers=n), args.repeat)
         with distributed.LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
-                                      dashboard_address=None, silence_logs=50) as cluster:
+                                      dashboard_address=":0", silence_logs=50) as cluster:
             address = cluster.scheduler_address
             sweep(scheduler=address)                            # the workers load the core: not timed
             dask_t, remote = timed(lambda address=address: sweep(scheduler=address), args.repeat)

@@ -159,7 +159,7 @@ def end_to_end(cases: int) -> list[str]:
         case = Path(folder) / "pulse.yaml"
         case.write_text(PULSE_CASE)
         with distributed.LocalCluster(n_workers=cores, threads_per_worker=1, processes=True, host="127.0.0.1",
-                                      dashboard_address=None, silence_logs=50) as cluster:
+                                      dashboard_address=":0", silence_logs=50) as cluster:
             runs = (("threads", []), (f"dask, {cores} workers", ["--scheduler", cluster.scheduler_address]))
             for name, where in runs:
                 out = Path(folder) / name.split(",")[0]

@@ -534,7 +534,7 @@ def test_dask_cluster_on_loopback_gives_the_local_result(tmp_path):
     result = invoke(*sweep_args(local, *axes, extra=["--no-plot", "--chunk-size", "5"]))
     assert result.exit_code == 0, result.output
     with distributed.LocalCluster(host="127.0.0.1", n_workers=2, threads_per_worker=1, processes=True,
-                                  dashboard_address=None) as cluster:
+                                  dashboard_address=":0") as cluster:
         remote = tmp_path / "remote"
         result = invoke(*sweep_args(remote, *axes, extra=["--no-plot", "--chunk-size", "5", "--scheduler",
                                                           cluster.scheduler_address]))
