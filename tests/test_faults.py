@@ -172,7 +172,7 @@ def test_a_chunk_group_computed_when_the_signal_comes_is_kept(ws, monkeypatch):
     plan = sw.plan_sweep(load_case(ws / "case.yaml"), [sw.parse_axis("mu", "0.3:0.6:0.1")], records_dir=ws,
                          chunk_size=1)
     store = chunks.ChunkStore.beside(ws / "out" / "example.sweep.h5", plan.key)
-    compute = ex.local_kernel(1)      # what one thread computes with (`batch.compute` or the build's code)
+    compute = ex.local_kernel()       # what a thread computes with (`batch.compute` or the build's code)
 
     signalled = []
 
@@ -184,7 +184,7 @@ def test_a_chunk_group_computed_when_the_signal_comes_is_kept(ws, monkeypatch):
                 time.sleep(0.001)
         return compute(*args, **kwargs)
 
-    monkeypatch.setattr(ex, "local_kernel", lambda threads: interrupted_meanwhile)
+    monkeypatch.setattr(ex, "local_kernel", lambda: interrupted_meanwhile)
     # a background job (a CI script started with &) inherits SIGINT ignored, which handling_signals respects
     previous = signal.signal(signal.SIGINT, signal.default_int_handler)
     try:

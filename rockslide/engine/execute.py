@@ -200,7 +200,7 @@ def _compute_local(plan, store, chunks, workers, progress, out=None):
 
     check_workers(workers)
     threads = int(workers) if workers is not None else local_threads()
-    run = local_kernel(threads)
+    run = local_kernel()
 
     def task(chunk: int) -> int:
         if interrupts.requested() is not None:      # stopping: start no new chunk
@@ -229,9 +229,8 @@ def _compute_local(plan, store, chunks, workers, progress, out=None):
     interrupts.check()
 
 
-def local_kernel(threads: int) -> Callable:
-    """What computes a chunk on each of ``threads`` local threads (`batch.compute`'s arguments and
-    result).
+def local_kernel() -> Callable:
+    """What computes a chunk on each local thread (`batch.compute`'s arguments and result).
 
     Where the build's machine code is there (`native.is_ahead_of_time`), that code case by case
     (`simulate.compute_batch`; it releases the GIL while a case runs, so the threads compute side
@@ -242,7 +241,7 @@ def local_kernel(threads: int) -> Callable:
     numba's driver compiled for this CPU (median of 5 alternations, -4 to +8 %), which a study
     repays by not loading numba (1.2-1.4 s) unless it computes for more than half a minute; the
     upper estimate of a study's time (`work_estimate`) is too coarse to choose by (253 s for the
-    Kobe grid's 1.4 s). ``threads`` does not change the choice."""
+    Kobe grid's 1.4 s)."""
     from ..core import native
 
     if native.is_ahead_of_time():
@@ -414,7 +413,7 @@ def execute(plan: Plan, store=None, *, workers: int | None = None, scheduler: st
     if free_space_at is not None:
         from ..io import files
         files.require_free_space(Path(free_space_at), bytes_needed(plan, len(missing)), f"the {what}")
-    if not scheduler and missing and not on_machine_code(device, workers):
+    if not scheduler and missing and not on_machine_code(device):
         warm_up(device, say)
     if progress is not None and plan.n_cases > computed:
         progress(plan.n_cases - computed)
@@ -442,13 +441,12 @@ def parse_shard(text: str | None) -> tuple[int, int] | None:
     return index, count
 
 
-def on_machine_code(device: str, workers: int | None) -> bool:
-    """Whether a local run on ``device`` with ``workers`` threads computes with the build's machine
-    code (`local_kernel`): nothing to compile or load before it (`warm_up`)."""
+def on_machine_code(device: str) -> bool:
+    """Whether a local run on ``device`` computes with the build's machine code (`local_kernel`):
+    nothing to compile or load before it (`warm_up`)."""
     from ..core import simulate
 
-    threads = int(workers) if workers is not None else local_threads()
-    return device == "cpu" and local_kernel(threads) is simulate.compute_batch
+    return device == "cpu" and local_kernel() is simulate.compute_batch
 
 
 def warm_up(device: str, say: Callable[[str], None]) -> None:
