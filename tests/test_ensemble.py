@@ -194,28 +194,6 @@ def test_the_latin_hypercube_is_scipys_to_the_bit(d, n, seed):
     assert np.array_equal(points, qmc.LatinHypercube(d=d, seed=seed).random(n))
 
 
-def test_the_normal_quantile_is_pythons_and_scipys():
-    """`ensemble.normal_quantile` (AS241 on arrays, so that an ensemble imports no scipy.special):
-    Python's ``NormalDist.inv_cdf`` (the same algorithm, in C) to the bit over the central region,
-    both tails and down to the smallest double; scipy's ``ndtri`` (Cephes, another algorithm)
-    within 1.1e-15 relative; -inf, inf at 0, 1 and NaN outside [0, 1] as ndtri."""
-    import statistics
-
-    from scipy.special import ndtri
-
-    rng = np.random.default_rng(7)
-    p = np.concatenate([rng.random(20_000), 10.0 ** -rng.uniform(0, 320, 4000), 1 - 10.0 ** -rng.uniform(0, 16, 4000),
-                        [0.075, 0.925, 0.5 - 0.425, 0.5 + 0.425, np.exp(-25.0), 5e-324]])
-    p = p[(p > 0) & (p < 1)]
-    x = ens.normal_quantile(p)
-    inv_cdf = statistics.NormalDist().inv_cdf
-    assert np.array_equal(x, [inv_cdf(v) for v in p])
-    reference = ndtri(p)
-    assert np.all(np.abs(x - reference) <= 1.1e-15 * np.abs(reference))
-    edges = np.array([0.0, 1.0, -0.1, 1.1, np.nan])
-    assert np.array_equal(ens.normal_quantile(edges), ndtri(edges), equal_nan=True)
-
-
 def test_a_large_ensemble_says_what_it_will_take_before_planning(monkeypatch):
     """An ensemble of 10^6 members planned for a minute without a word (issue 43, item 3). From
     `runs.ENSEMBLE_NOTE_MEMBERS` members on, the first thing said is how long planning takes and

@@ -120,14 +120,11 @@ def test_the_command_gives_openblas_one_thread_unless_told(given):
     workers would otherwise spin for about 0.1 s of CPU after loading (a third of a run without
     figure): a run's threads are the main one and no BLAS worker. A value the user set is kept."""
     code = """
-import os, sys
+import atexit, os, sys
 sys.argv = ["rockslide", "info", "records/synthetic_kt_h.at2"]
 from rockslide import cli
-try:
-    cli.entry()
-except SystemExit:
-    pass
-print(os.environ.get("OPENBLAS_NUM_THREADS"), len(os.listdir("/proc/self/task")))
+atexit.register(lambda: print(os.environ.get("OPENBLAS_NUM_THREADS"), len(os.listdir("/proc/self/task"))))
+cli.entry()
 """
     env = {k: v for k, v in os.environ.items() if k != "OPENBLAS_NUM_THREADS"}
     if given is not None:
@@ -139,6 +136,62 @@ print(os.environ.get("OPENBLAS_NUM_THREADS"), len(os.listdir("/proc/self/task"))
     assert setting == (given or "1")
     if given is None:
         assert threads == "1"
+
+
+LEAVING = """
+import atexit, sys, threading
+from rockslide.cli import app
+class Noisy:
+    def __del__(self):
+        print("torn down")
+noisy = Noisy()
+atexit.register(lambda: print("exit handler"))
+print("buffered", end=" ")
+{setup}
+app.leave(SystemExit({code}))
+"""
+
+
+@pytest.mark.parametrize("left, torn_down", [
+    ("", False),                                              # nothing left: no teardown
+    ("threading.Thread(target=threading.Event().wait, args=(1,)).start()", True),     # a thread runs
+    ("import h5py, tempfile; kept = h5py.File(tempfile.mktemp(suffix='.h5'), 'w')", True),   # a file open
+])
+def test_the_command_leaves_without_teardown_only_when_nothing_is_left(left, torn_down):
+    """`app.leave` ends the process with ``os._exit`` (no unloading of modules, 0.06-0.1 s) only
+    when the main thread is alone and no HDF5 file is open; either way the exit handlers run, what
+    was printed is flushed and the exit code is the command's. Teardown shows by an object's
+    ``__del__``, which only the interpreter's teardown calls."""
+    done = subprocess.run([sys.executable, "-c", LEAVING.format(setup=left, code=3)], cwd=REPO, capture_output=True,
+                          text=True, timeout=300)
+    assert done.returncode == 3, done.stderr[-3000:]
+    assert done.stdout.startswith("buffered exit handler")
+    assert ("torn down" in done.stdout) == torn_down
+
+
+def test_a_message_exit_takes_the_usual_way():
+    """``SystemExit("message")`` (exit code 1, the message on stderr) is the interpreter's to end."""
+    done = subprocess.run([sys.executable, "-c", LEAVING.format(setup="", code="'a message'")], cwd=REPO,
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 1
+    assert done.stderr.strip().endswith("a message") and "torn down" in done.stdout
+
+
+def test_the_modules_a_study_writes_with_load_while_it_computes():
+    """`api._shared.importing_meanwhile` (a study's outputs: rockslide.io.results and h5py, and
+    rockslide.plots with a figure): loaded by the end of the block, on a thread that is gone by
+    then; a module that cannot be imported is left to fail where it is used, and the others load."""
+    code = """
+import sys, threading
+from rockslide.api._shared import importing_meanwhile
+assert "wave" not in sys.modules
+with importing_meanwhile(["rockslide.io.results", "rockslide.no_such_module", "wave"]):
+    pass
+print("h5py" in sys.modules, "rockslide.io.results" in sys.modules, "wave" in sys.modules, threading.active_count())
+"""
+    done = subprocess.run([sys.executable, "-c", code], cwd=REPO, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr[-3000:]
+    assert done.stdout.split() == ["True", "True", "True", "1"]
 
 
 def short_example(folder: Path) -> Path:

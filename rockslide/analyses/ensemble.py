@@ -33,6 +33,7 @@ import numpy as np
 
 from ..case import Case, Distribution, other_plane
 from ..core import layout as L
+from ..core.normal import normal_quantile
 from ..core.simulate import Model, set_model
 from ..engine.execute import execute
 from ..engine.plan import MAX_POINTS, Plan, assemble, default_chunk_size
@@ -43,7 +44,7 @@ from ..mesh import rectangle_k2
 from . import sweep as sw
 
 __all__ = ["DEFAULTS", "DEFAULT_MEMBERS", "distributions", "sample", "plan_ensemble", "compute", "summarise",
-           "wilson_interval", "normal_quantile", "latin_hypercube", "EnsemblePlan", "members_needed", "to_precision",
+           "wilson_interval", "latin_hypercube", "EnsemblePlan", "members_needed", "to_precision",
            "parse_members", "AUTO_PRECISION"]
 
 #: Members of an ensemble without ``--ensemble N``'s N (``--robustness``).
@@ -76,53 +77,6 @@ def distributions(case: Case) -> tuple[dict[str, Distribution], bool]:
     out = {name: d for name, d in DEFAULTS.items() if d is not None}
     out["restitution"] = Distribution("uniform", max(0.0, e - RESTITUTION_SPREAD), min(1.0, e + RESTITUTION_SPREAD))
     return out, True
-
-
-#: Wichura's (1988) algorithm AS241 (PPND16): the coefficients of the normal's inverse CDF, central
-#: region (|p - 1/2| <= 0.425) then the tails for r = sqrt(-ln min(p, 1 - p)) <= 5 and > 5, each a
-#: numerator and a denominator, highest power first (as Python's ``statistics.NormalDist`` has them).
-_AS241 = (
-    ((2.5090809287301226727e+3, 3.3430575583588128105e+4, 6.7265770927008700853e+4, 4.5921953931549871457e+4,
-      1.3731693765509461125e+4, 1.9715909503065514427e+3, 1.3314166789178437745e+2, 3.3871328727963666080e+0),
-     (5.2264952788528545610e+3, 2.8729085735721942674e+4, 3.9307895800092710610e+4, 2.1213794301586595867e+4,
-      5.3941960214247511077e+3, 6.8718700749205790830e+2, 4.2313330701600911252e+1, 1.0)),
-    ((7.7454501427834140764e-4, 2.2723844989269184583e-2, 2.4178072517745061177e-1, 1.2704582524523683826e+0,
-      3.6478483247632046050e+0, 5.7694972214606914055e+0, 4.6303378461565452959e+0, 1.4234371107496835773e+0),
-     (1.0507500716444168432e-9, 5.4759380849953449460e-4, 1.5198666563616457197e-2, 1.4810397642748007459e-1,
-      6.8976733498510000455e-1, 1.6763848301838038494e+0, 2.0531916266377588219e+0, 1.0)),
-    ((2.0103343992922881327e-7, 2.7115555687434875782e-5, 1.2426609473880784386e-3, 2.6532189526576123093e-2,
-      2.9656057182850489123e-1, 1.7848265399172913358e+0, 5.4637849111641143699e+0, 6.6579046435011037772e+0),
-     (2.0442631033899397856e-15, 1.4215117583164458887e-7, 1.8463183175100546818e-5, 7.8686913114561325910e-4,
-      1.4875361290850614852e-2, 1.3692988092273580531e-1, 5.9983220655588793769e-1, 1.0)),
-)
-
-
-def _horner(coefficients, x):
-    value = np.full_like(x, coefficients[0])
-    for c in coefficients[1:]:
-        value = value * x + c
-    return value
-
-
-def normal_quantile(p) -> np.ndarray:
-    """The standard normal's inverse CDF (quantile) at ``p``, by Wichura's algorithm AS241 (Applied
-    Statistics 37, 477-484, 1988; relative error about 1e-16), the expressions of Python's
-    ``statistics.NormalDist.inv_cdf`` evaluated on arrays: ``-inf`` at 0, ``inf`` at 1, NaN outside
-    [0, 1]. Python's own values to the bit, and within 1.1e-15 (relative) of scipy's
-    ``special.ndtri`` (tests/test_ensemble.py), without importing scipy.special (0.3 s of a 1.4 s
-    ensemble on the 2-core development machine)."""
-    p = np.asarray(p, dtype=np.float64)
-    q = p - 0.5
-    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        r = 0.180625 - q * q
-        central = _horner(_AS241[0][0], r) * q / _horner(_AS241[0][1], r)
-        t = np.sqrt(-np.log(np.where(q <= 0.0, p, 1.0 - p)))
-        near, far = t - 1.6, t - 5.0
-        tail = np.where(t <= 5.0, _horner(_AS241[1][0], near) / _horner(_AS241[1][1], near),
-                        _horner(_AS241[2][0], far) / _horner(_AS241[2][1], far))
-    x = np.where(np.abs(q) <= 0.425, central, np.where(q < 0.0, -tail, tail))
-    x = np.where(p == 0.0, -np.inf, np.where(p == 1.0, np.inf, x))
-    return np.where((p >= 0.0) & (p <= 1.0), x, np.nan)
 
 
 def latin_hypercube(d: int, n: int, seed: int) -> np.ndarray:

@@ -56,10 +56,10 @@ from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
-from scipy.special import log_ndtr, ndtr, ndtri
 
 from ..case import Case, RecordSpec, Suite, SuiteEntry, case_with, load_suite, with_orientations
 from ..core import layout as L
+from ..core.normal import log_normal_cdf, normal_cdf, normal_quantile
 from ..core.simulate import ground_array
 from ..engine.plan import MAX_POINTS, Plan, assemble, case_inputs, default_chunk_size
 from ..engine.prepare import (
@@ -1039,7 +1039,7 @@ def _support_note(levels: np.ndarray, n: np.ndarray, z: np.ndarray, show) -> str
 
 def _log_likelihood(a, b, s, n, z):
     eta = a[:, None] + b[:, None] * s
-    return np.sum(z * log_ndtr(eta) + (n - z) * log_ndtr(-eta), axis=-1)
+    return np.sum(z * log_normal_cdf(eta) + (n - z) * log_normal_cdf(-eta), axis=-1)
 
 
 def probit_mle(s: np.ndarray, n: np.ndarray, z: np.ndarray):
@@ -1064,12 +1064,12 @@ def probit_mle(s: np.ndarray, n: np.ndarray, z: np.ndarray):
     Newton's method on the log-likelihood ``sum z ln Phi(eta) + (n - z) ln Phi(-eta)``, which is
     concave in ``(a, b)``, with step halving so that it never decreases; started from the
     weighted least-squares line through the probits of ``(z + 1/2) / (n + 1)``. The derivatives in
-    ``eta`` use the ratios ``phi / Phi`` evaluated through ``log_ndtr`` (no underflow in the tails).
+    ``eta`` use the ratios ``phi / Phi`` evaluated through `core.normal.log_normal_cdf` (no underflow in the tails).
     """
     s = np.asarray(s, dtype=np.float64)
     n = np.atleast_2d(np.asarray(n, dtype=np.float64))
     z = np.atleast_2d(np.asarray(z, dtype=np.float64))
-    y = ndtri((z + 0.5) / (n + 1.0))
+    y = normal_quantile((z + 0.5) / (n + 1.0))
     w0, w1, w2 = n.sum(-1), (n * s).sum(-1), (n * s * s).sum(-1)
     y0, y1 = (n * y).sum(-1), (n * s * y).sum(-1)
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -1090,8 +1090,8 @@ def _newton(a, b, s, n, z):
     for _ in range(FIT_ITERATIONS):
         eta = a[:, None] + b[:, None] * s
         log_phi = -0.5 * eta * eta - log_phi_const
-        up = np.exp(log_phi - log_ndtr(eta))              # phi / Phi
-        down = np.exp(log_phi - log_ndtr(-eta))           # phi / (1 - Phi)
+        up = np.exp(log_phi - log_normal_cdf(eta))        # phi / Phi
+        down = np.exp(log_phi - log_normal_cdf(-eta))     # phi / (1 - Phi)
         d1 = z * up - (n - z) * down                      # d ll / d eta
         d2 = z * up * (eta + up) + (n - z) * down * (down - eta)   # -d2 ll / d eta2 >= 0
         g0, g1 = d1.sum(-1), (d1 * s).sum(-1)
@@ -1262,7 +1262,7 @@ def _bootstrap(out: StateFit, s, exceeded, capacity, resamples, seed, per_record
 
 def fragility(x, median: float, beta: float) -> np.ndarray:
     """``Phi(ln(x / median) / beta)``: the probability of reaching the state at intensity ``x``."""
-    return ndtr(np.log(np.asarray(x, dtype=np.float64) / median) / beta)
+    return normal_cdf(np.log(np.asarray(x, dtype=np.float64) / median) / beta)
 
 
 # --------------------------------------------------------------------------------------------------

@@ -1,5 +1,5 @@
 """From a fragility curve and a site's hazard curve to an annual rate of reaching a damage state
-(``rockslide risk``). Pure numerics (numpy, scipy): no files, no figures.
+(``rockslide risk``). Pure numerics (numpy; the normal distribution of `core.normal`): no files, no figures.
 
 The rate of the damage state F at a site is the fragility integrated over the hazard curve,
 
@@ -58,8 +58,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-from scipy.special import log_ndtr, ndtr
 
+from ..core.normal import log_normal_cdf, normal_cdf
 from ..errors import CaseError, numbers_from
 
 #: Fraction of the rate below which the hazard curve's ends are of no consequence (no note).
@@ -173,7 +173,7 @@ class Lognormal:
     beta: float
 
     def __call__(self, x) -> np.ndarray:
-        return ndtr(np.log(np.asarray(x, dtype=np.float64) / self.median) / self.beta)
+        return normal_cdf(np.log(np.asarray(x, dtype=np.float64) / self.median) / self.beta)
 
     def snapped(self, levels) -> Lognormal:
         """Itself: a lognormal has no levels to move (`Tabulated.snapped`)."""
@@ -189,7 +189,7 @@ class Lognormal:
         # Phi(b) - Phi(a) from the side where both are small (no cancellation of numbers near 1)
         upper = a > 0
         low, high = np.where(upper, -b, a), np.where(upper, -a, b)
-        log_width = log_ndtr(high) + np.log(-np.expm1(log_ndtr(low) - log_ndtr(high)))
+        log_width = log_normal_cdf(high) + np.log(-np.expm1(log_normal_cdf(low) - log_normal_cdf(high)))
         return np.exp(np.log(curve.rates[:-1]) + k * (u[:-1] - mu) + 0.5 * (k * beta) ** 2 + log_width)
 
 

@@ -103,7 +103,6 @@ from ..engine.prepare import (
 )
 from ..errors import CaseError, RecordError
 from ..io import records as rec
-from ..io.results import RECORD_ROLES
 from ..pulses import Pulse, linear_overturning_ratio
 from ..units import STANDARD_GRAVITY, unit_factor
 
@@ -241,6 +240,7 @@ def plan_sweep(case: Case, axes: Sequence[Axis], *, records_dir: Path | None = N
                             source=case.source, field="ground.floor")
         plan = _plan_pulses(case, axes, ratio, chunk_size, n, progress)
     else:
+        records = read_records(case, records_dir) if records is None else records    # once, for the pilot too
         plan = _plan_records(case, axes, ratio, chunk_size, records_dir, records, progress)
     # one pilot, of the case file's own case, stands for every point (docs/performance.md); at the
     # default step it only says what auto would take, and a case file that cannot run alone says nothing
@@ -753,6 +753,8 @@ def caption(case_text: str, axes, records, step, version) -> str:
 
 def stored_caption(stored) -> str:
     """`caption` of a sweep file read back."""
+    from ..io.results import RECORD_ROLES  # h5py: a sweep loads it while it computes (api._shared)
+
     attrs = stored.attrs
     records = [{"role": role, "path": attrs[f"record_{role}"]} for role in RECORD_ROLES
                if attrs.get(f"record_{role}")]

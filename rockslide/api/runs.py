@@ -12,7 +12,7 @@ from pathlib import Path
 from ..case import Case
 from ..core.simulate import Result, Summary
 from ..errors import CaseError, OutputError
-from ._shared import as_case, callable_arg, check_where, path_arg, whole, with_scale
+from ._shared import as_case, callable_arg, check_where, importing_meanwhile, path_arg, whole, with_scale
 
 #: A single run expected to take longer than this [s] says so before it starts (and shows a
 #: progress bar on a terminal).
@@ -358,11 +358,12 @@ def _run_into(outputs, prepared, eplan, started, *, say, progress, device, worke
         keep = KEEP_HISTORY_ROWS if outputs.plot else 0
         with results.ResultWriter(outputs.h5, overwrite=outputs.overwrite, staging=staging, keep_rows=keep) as writer:
             streamed = case.solver.method == "kernel"
-            result = engine.simulate_prepared(prepared, on_chunk=writer.append_history if streamed else None,
-                                              progress=progress)
-            if eplan is not None:
-                summary, dimension, group = _neighbourhood(eplan, result, device=device, workers=workers, say=say,
-                                                           bars=bars)
+            with importing_meanwhile(["rockslide.plots"] if outputs.plot else []):
+                result = engine.simulate_prepared(prepared, on_chunk=writer.append_history if streamed else None,
+                                                  progress=progress)
+                if eplan is not None:
+                    summary, dimension, group = _neighbourhood(eplan, result, device=device, workers=workers, say=say,
+                                                               bars=bars)
             planes = _planes(prepared, result, folder)
             stored = _stored_run(case, prepared, summary, None if group is None else (dimension, group))
             if planes is not None:

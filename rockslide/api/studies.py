@@ -16,7 +16,18 @@ from pathlib import Path
 
 from ..case import Case
 from ..errors import CaseError
-from ._shared import as_case, axis_text, axis_values, callable_arg, check_where, path_arg, real, whole
+from ._shared import (
+    as_case,
+    axis_text,
+    axis_values,
+    callable_arg,
+    check_where,
+    importing_meanwhile,
+    output_modules,
+    path_arg,
+    real,
+    whole,
+)
 
 
 @dataclass
@@ -146,7 +157,7 @@ def sweep_study(case, axes: Sequence[tuple], *, mu_kinetic_ratio=None, records_d
     from ..analyses import sweep as sw
     from ..engine.chunks import ChunkStore
     from ..engine.prepare import duration_text
-    from ..io import datasets, records
+    from ..io import records
 
     say = report if report is not None else (lambda text: None)
     started = time.perf_counter()
@@ -185,7 +196,7 @@ def sweep_study(case, axes: Sequence[tuple], *, mu_kinetic_ratio=None, records_d
                              lines=_sweep_lines(plan, variables, done) + _step_note(plan))
         if outputs is not None:
             _write(result, outputs, figure=lambda: sw.figure(plan, variables, size=outputs.size),
-                   table=lambda: (datasets.sweep_dataset(sw.table_coordinates(result.coords), variables),
+                   table=lambda: (_datasets().sweep_dataset(sw.table_coordinates(result.coords), variables),
                                   [a.name for a in plan.axes]))
             done.store.remove()
         return result
@@ -253,10 +264,11 @@ def _execute(plan, store, outputs, *, what, description, label, unit, workers, s
                 progress(cases)
 
         try:
-            done = execute(plan, held, workers=workers, scheduler=scheduler, device=device, progress=tell, report=say,
-                           what=what, label=label, description=description, unit=unit,
-                           free_space_at=None if outputs is None else outputs.folder, shard=shard,
-                           wait_workers=wait_workers)
+            with importing_meanwhile(output_modules(None if shard is not None else outputs)):
+                done = execute(plan, held, workers=workers, scheduler=scheduler, device=device, progress=tell,
+                               report=say, what=what, label=label, description=description, unit=unit,
+                               free_space_at=None if outputs is None else outputs.folder, shard=shard,
+                               wait_workers=wait_workers)
         except interrupts.Interrupted as exc:
             if isinstance(held, ChunkStore):
                 kept = held.for_plan(plan.key)
@@ -269,6 +281,14 @@ def _execute(plan, store, outputs, *, what, description, label, unit, workers, s
             "--shard collects them)")
         return None
     return done
+
+
+def _datasets():
+    """`io.datasets`, loaded where a table is written (it loads h5py, which a study loads while it
+    computes: `importing_meanwhile`)."""
+    from ..io import datasets
+
+    return datasets
 
 
 def _write(result: StudyResult, outputs, *, figure, table, more=None) -> None:
@@ -426,7 +446,7 @@ def fragility_study(case, suite, *, im="pga", levels, damage=(), units=None, res
                     command_line: str = "") -> StudyResult | None:
     """`fragility`, conducted (the arguments as in `sweep_study`). Returns None for a shard."""
     from ..analyses import fragility as fr
-    from ..io import datasets, records
+    from ..io import records
 
     say = report if report is not None else (lambda text: None)
     case = as_case(case)
@@ -473,13 +493,13 @@ def fragility_study(case, suite, *, im="pga", levels, damage=(), units=None, res
                                         outputs.png.with_suffix(".surface.png"))
                 if export_path is not None:
                     from ..io import pelicun
-                    dataset = datasets.study_dataset(result.coords, result.variables, result.attrs)
+                    dataset = _datasets().study_dataset(result.coords, result.variables, result.attrs)
                     left_out.extend(pelicun.write_pelicun(dataset, export[1], export_path, family=export_family,
                                                           overwrite=outputs.overwrite, staging=staging)[2])
 
             per_run = [name for name, _, _ in result.coords if name not in ("damage_state", "resample")]
             _write(result, outputs, figure=lambda: fr.figure(fplan, analysis, size=outputs.size),
-                   table=lambda: (datasets.study_dataset(result.coords, result.variables), per_run), more=more)
+                   table=lambda: (_datasets().study_dataset(result.coords, result.variables), per_run), more=more)
             done.store.remove()
         result.lines = _fragility_lines(fplan, analysis, done, measure, export, export_path, export_family, left_out,
                                         model, surfaces, second) + _step_note(fplan.plan)

@@ -14,4 +14,6 @@ contract in ``pyproject.toml`` enforces it.
 - `reference`: the same state machine on scipy's adaptive DOP853, for checks.
 - `criteria`: mode-initiation maps (eqs. 6, 11, 26).
 - `intensity`: intensity measures of a record (PGA, PGV, Sa(T, 5 %)).
+- `normal`: the normal distribution's CDF, log-CDF and quantile and the chi-square tail, on numpy
+  (the fits' and the ensembles' statistics, without scipy.special).
 """

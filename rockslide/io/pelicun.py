@@ -186,7 +186,7 @@ def lognormal_crossing(median_low: float, beta_low: float, median_high: float, b
     """Where the lognormal of the higher state (larger median) rises above the lower state's:
     ``(x, excess)``, the demand of the crossing [the medians' unit] and the largest ``P_high - P_low``
     over all demands [-] (0 and None when it never does: equal betas)."""
-    from scipy.special import ndtr
+    from ..core.normal import normal_cdf
 
     if beta_low == beta_high:
         return None, 0.0
@@ -194,7 +194,7 @@ def lognormal_crossing(median_low: float, beta_low: float, median_high: float, b
     crossing = math.exp((beta_high * ln_low - beta_low * ln_high) / (beta_high - beta_low))
     spread = 8.0 * max(beta_low, beta_high)
     grid = np.exp(np.linspace(min(ln_low, ln_high) - spread, max(ln_low, ln_high) + spread, 4001))
-    excess = ndtr(np.log(grid / median_high) / beta_high) - ndtr(np.log(grid / median_low) / beta_low)
+    excess = normal_cdf(np.log(grid / median_high) / beta_high) - normal_cdf(np.log(grid / median_low) / beta_low)
     return crossing, float(max(excess.max(), 0.0))
 
 
