@@ -86,6 +86,14 @@ def test_readme_set_up_is_two_commands_that_ci_runs():
         assert command in README, command
 
 
+def test_the_python_the_docs_ask_for_is_the_packages():
+    """The README and the getting-started page name the Python the package requires (they said
+    3.10 while pyproject.toml required 3.11, for the possessive quantifiers of its parsers)."""
+    required = re.search(r'requires-python = ">=(\d+\.\d+)"', (REPO / "pyproject.toml").read_text()).group(1)
+    for page in (README, (REPO / "docs" / "guide" / "getting-started.md").read_text()):
+        assert re.findall(r"Python (\d+\.\d+) or later", page) == [required]
+
+
 def first_session() -> tuple[str, list[tuple[str, str]]]:
     """The README's section 'A first session' and its fenced blocks, in order, as (language, text)."""
     section = README.split("\n## A first session\n", 1)[1].split("\n## ", 1)[0]
