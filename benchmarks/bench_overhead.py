@@ -37,6 +37,7 @@ import contextlib
 import io
 import os
 import statistics
+import subprocess
 import sys
 import tempfile
 from pathlib import Path
@@ -109,6 +110,19 @@ def compute_seconds(stderr: str) -> tuple[float, float]:
     raise SystemExit(f"no compute time from the wrapper:\n{stderr[-3000:]}")
 
 
+#: A fixed piece of plain Python: its time says how fast the machine is while the figures are taken
+#: (a shared virtual machine's speed drifts; on the development machine the same loop took 1.9 s in
+#: one hour and 2.9 s in the next, with nothing else running).
+SPEED_PROBE = "s = 0\nfor i in range(20_000_000):\n    s += i"
+
+
+def speed_probe() -> float:
+    """[s] The wall time of `SPEED_PROBE` in a fresh process, best of three."""
+    code = f"import time\nt = time.perf_counter()\n{SPEED_PROBE}\nprint(time.perf_counter() - t)"
+    return min(float(subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                                    check=True).stdout) for _ in range(3))
+
+
 def measure(repeat: int) -> None:
     records = find_records()
     if records is None:
@@ -121,6 +135,7 @@ def measure(repeat: int) -> None:
     print("# What a study costs beyond its compute (no figure)\n")
     for line in machine():
         print(line + "  ")
+    print(f"speed probe (20 million additions in plain Python, best of 3) at the start: {speed_probe():.2f} s  ")
     print(f"\nEach command {repeat} times in a fresh process after one untimed run, the commands taking turns; "
           "median (range) in seconds\n")
     for command in commands:
@@ -142,7 +157,7 @@ def measure(repeat: int) -> None:
         print(f"| {what} | `{' '.join(arguments)}` | {spread(walls[i])} | {spread(cpus[i])} | {spread(computes[i])} | "
               f"{spread(beyond)} | <= {GOAL:.1f}: {verdict} | {spread(fits[i]) if any(fits[i]) else '-'} |")
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
-    print(f"\nload average at the end: {load:.2f}\n")
+    print(f"\nload average at the end: {load:.2f}; speed probe at the end: {speed_probe():.2f} s\n")
     print(f"## The floor: a process that only starts ({repeat} times each)\n")
     print("| command | wall [s] |")
     print("|---|---:|")

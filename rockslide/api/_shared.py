@@ -8,13 +8,18 @@ import importlib
 import threading
 from collections.abc import Mapping, Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-from ..case import Case, load_case
 from ..errors import CaseError
+
+if TYPE_CHECKING:
+    from ..case import Case
 
 
 def as_case(case) -> Case:
-    """A Case from a Case, a mapping or a path (`load_case`)."""
+    """A Case from a Case, a mapping or a path (`case.load_case`)."""
+    from ..case import Case, load_case  # with yaml: loaded by the conductors that take a case
+
     if isinstance(case, Case):
         return case
     if not isinstance(case, (Mapping, str, Path)):

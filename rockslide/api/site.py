@@ -10,8 +10,6 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import CaseError, RockslideError
-from .runs import RunResult
-from .stored import read_result
 
 
 def risk(fragility: str | Path | None = None, hazard=None, *, damage: str = "overturn", stripes: bool = False,
@@ -105,8 +103,8 @@ def risk_study(fragility=None, hazard=None, *, outputs=None, command_line: str =
     """`risk`, conducted: its analysis, dataset, printout (``lines``, and ``warnings`` for the
     standard error) and JSON summary, written to ``outputs`` when given (`risk_outputs`); the
     other arguments as `risk`'s."""
-    from ..analyses import fragility as fr
     from ..analyses import risk as rk
+    from ..analyses.measures import parse_im
     from ..io import results
     from .studies import StudyResult
 
@@ -117,7 +115,7 @@ def risk_study(fragility=None, hazard=None, *, outputs=None, command_line: str =
         outputs.remove_stale_temporaries()
     result = StudyResult("risk", analysis.fragility.damage_state, *rk.dataset(analysis, command_line),
                          summary=rk.json_summary(analysis))
-    show = fr.parse_im(analysis.measure["name"]).show
+    show = parse_im(analysis.measure["name"]).show
     result.warnings = [f"rockslide: warning: {line}" for line in rk.warnings_of(analysis, show)]
     result.lines = rk.summary_lines(analysis, show)
     if analysis.fragility.uncertainty:
@@ -162,13 +160,13 @@ def risk_analysis(fragility=None, hazard=None, *, damage: str = "overturn", stri
 
 def _table_fragility(path, damage):
     """The fragility of `risk --fragility-table` and its intensity measure."""
-    from ..analyses import fragility as fr
     from ..analyses import risk as rk
+    from ..analyses.measures import parse_im
     from ..io import hazard as hz
     from ..units import unit_factor
 
     name, unit, levels, p = hz.read_fragility_table(path)
-    measure = fr.parse_im(name)
+    measure = parse_im(name)
     levels = levels * unit_factor(unit, measure.kind, source=str(path))
     return rk.FragilityUsed(rk.Tabulated(levels, p), damage, str(path), "tabulated (linear in ln x between its "
                             "levels, constant outside)", highest_tested=float(levels[-1])), measure
@@ -176,15 +174,15 @@ def _table_fragility(path, damage):
 
 def _risk_fragility(path, *, damage, stripes, median, beta, im, model=None):
     """The fragility of `risk` and its intensity measure."""
-    from ..analyses import fragility as fr
     from ..analyses import risk as rk
+    from ..analyses.measures import parse_im
     from ..units import parse_quantity
 
     if path is None:
         if median is None or beta is None:
             raise CaseError("give a fragility file, or a lognormal with both median and beta "
                             "(e.g. median 0.5g, beta 0.4)", source="fragility")
-        measure = fr.parse_im(im)
+        measure = parse_im(im)
         theta = parse_quantity(median, measure.kind, source="median")
         if not theta > 0:
             raise CaseError(f"the lognormal needs a positive median, got {median!r}", source="median")
@@ -195,12 +193,15 @@ def _risk_fragility(path, *, damage, stripes, median, beta, im, model=None):
                                 [], ""), measure
     if median is not None or beta is not None:
         raise CaseError("give either a fragility file or median and beta, not both", source="median/beta")
+    from .runs import RunResult
+    from .stored import read_result
+
     given = hasattr(path, "data_vars")
     ds = path if given else read_result(path)
     path = "the fragility dataset given" if given else str(path)
     if isinstance(ds, RunResult) or "damage_state" not in ds.coords:
         raise CaseError("not a fragility file (NAME.fragility.h5 of 'rockslide fragility')", source=path)
-    measure = fr.parse_im(ds.attrs["intensity_measure"])
+    measure = parse_im(ds.attrs["intensity_measure"])
     along = measure.rotd is None and _two_components(ds.attrs)
     states = [str(s) for s in ds["damage_state"].values]
     if damage not in states:

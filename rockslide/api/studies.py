@@ -13,8 +13,8 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-from ..case import Case
 from ..errors import CaseError
 from ._shared import (
     as_case,
@@ -28,6 +28,9 @@ from ._shared import (
     real,
     whole,
 )
+
+if TYPE_CHECKING:
+    from ..case import Case
 
 
 @dataclass

@@ -106,7 +106,6 @@ import numpy as np
 
 from .. import interrupts
 from .._version import __version__
-from ..case import MAX_NAME_LENGTH
 from ..core.layout import HISTORY_COLUMNS, STATE_NAMES
 from ..core.simulate import EVENT_DTYPE, Result, Summary
 from ..errors import OutputError
@@ -876,6 +875,8 @@ def _check_result_layout(f: h5py.File) -> None:
 def _check_result_values(stored: StoredResult) -> None:
     """The values a figure and a summary are made of: finite times and samples, a positive step, a
     direction of -1, 0 or 1, a name that fits a case's. ValueError says what is wrong."""
+    from ..case import MAX_NAME_LENGTH  # the case files' (and yaml's) module: loaded where a file is read
+
     result = stored.result
     for label, values in (("/time_history", list(result.history.values())),
                           ("/ground", [result.ground_time, result.ground_horizontal, result.ground_vertical])):
