@@ -94,7 +94,8 @@ def isotonic(n, z) -> np.ndarray:
     Inference*, theorem 1.4.4): the value at level ``j`` is ``max_{i <= j} min_{k >= j}`` of the
     pooled fraction ``sum z / sum n`` over levels ``i..k``, the pools that pooling adjacent
     violators would form. All rows at once on numpy: ``L^2`` pools a row, where pooling adjacent
-    violators takes a Python loop a row (20 times slower for 1000 rows of 15 levels)."""
+    violators takes a Python loop a row (4.7 times slower for 1000 rows of 15 levels, 2.3 times
+    for 40)."""
     n = np.asarray(n, dtype=np.float64)
     z = np.asarray(z, dtype=np.float64)
     levels = n.shape[-1]
