@@ -197,6 +197,26 @@ print("h5py" in sys.modules, "rockslide.io.results" in sys.modules, "wave" in sy
     assert done.stdout.split() == ["True", "True", "True", "1"]
 
 
+def test_a_study_loads_its_output_modules_meanwhile_only_on_the_builds_code(monkeypatch):
+    """`api._shared.output_modules`: a local study on the build's machine code (whose threads import
+    nothing) loads its output modules while it computes; on numba's JIT, the GPU or a cluster, which
+    import modules of their own meanwhile, it loads them after."""
+    from types import SimpleNamespace
+
+    from rockslide.api._shared import output_modules
+    from rockslide.core import native
+    from rockslide.engine import execute
+
+    drawn, bare = SimpleNamespace(plot=True), SimpleNamespace(plot=False)
+    on_build = native.is_ahead_of_time()
+    assert output_modules(drawn) == (["rockslide.io.results", "rockslide.plots"] if on_build else [])
+    assert output_modules(bare) == (["rockslide.io.results"] if on_build else [])
+    assert output_modules(drawn, device="gpu") == output_modules(drawn, scheduler="tcp://127.0.0.1:8786") == []
+    assert output_modules(None) == []
+    monkeypatch.setattr(execute, "local_kernel", lambda: None)          # numba's JIT: no build
+    assert output_modules(drawn) == []
+
+
 def short_example(folder: Path) -> Path:
     """The shipped example on its own records, output every millisecond (22 000 rows): quick."""
     case = folder / "example.yaml"

@@ -167,8 +167,14 @@ def importing_meanwhile(modules: Sequence[str]):
         loader.join()
 
 
-def output_modules(outputs) -> list[str]:
-    """The modules a study's ``outputs`` (`outputs.Outputs`, or None) are written with."""
-    if outputs is None:
+def output_modules(outputs, *, device: str = "cpu", scheduler=None) -> list[str]:
+    """The modules a study's ``outputs`` (`outputs.Outputs`, or None) are written with, to load
+    while it computes (`importing_meanwhile`): only where it computes locally on the build's
+    machine code, whose threads import nothing and whose main thread only waits (numba's JIT, the
+    GPU and a cluster import modules of their own meanwhile, which a second importing thread could
+    meet in the opposite order)."""
+    from ..engine.execute import on_machine_code
+
+    if outputs is None or scheduler is not None or not on_machine_code(device):
         return []
     return ["rockslide.io.results"] + (["rockslide.plots"] if outputs.plot else [])

@@ -338,6 +338,7 @@ def _neighbourhood(eplan, result, *, device="cpu", workers=None, say=None, bars=
 def _run_into(outputs, prepared, eplan, started, *, say, progress, device, workers, bars, folder) -> RunResult:
     """`run` with its files (``outputs``): the command line's run."""
     from ..engine import prepare as engine
+    from ..engine.execute import on_machine_code
     from ..io import results
 
     case = prepared.case
@@ -358,7 +359,7 @@ def _run_into(outputs, prepared, eplan, started, *, say, progress, device, worke
         keep = KEEP_HISTORY_ROWS if outputs.plot else 0
         with results.ResultWriter(outputs.h5, overwrite=outputs.overwrite, staging=staging, keep_rows=keep) as writer:
             streamed = case.solver.method == "kernel"
-            with importing_meanwhile(["rockslide.plots"] if outputs.plot else []):
+            with importing_meanwhile(["rockslide.plots"] if outputs.plot and on_machine_code(device) else []):
                 result = engine.simulate_prepared(prepared, on_chunk=writer.append_history if streamed else None,
                                                   progress=progress)
                 if eplan is not None:

@@ -267,7 +267,8 @@ def _execute(plan, store, outputs, *, what, description, label, unit, workers, s
                 progress(cases)
 
         try:
-            with importing_meanwhile(output_modules(None if shard is not None else outputs)):
+            with importing_meanwhile(output_modules(None if shard is not None else outputs, device=device,
+                                                    scheduler=scheduler)):
                 done = execute(plan, held, workers=workers, scheduler=scheduler, device=device, progress=tell,
                                report=say, what=what, label=label, description=description, unit=unit,
                                free_space_at=None if outputs is None else outputs.folder, shard=shard,
