@@ -168,7 +168,7 @@ def importing_meanwhile(modules: Sequence[str]):
 
 
 def output_modules(outputs, *, device: str = "cpu", scheduler=None) -> list[str]:
-    """The modules a study's ``outputs`` (`outputs.Outputs`, or None) are written with, to load
+    """The modules a study's ``outputs`` (`outputs.OutputSet`, or None) are written with, to load
     while it computes (`importing_meanwhile`): only where it computes locally on the build's
     machine code, whose threads import nothing and whose main thread only waits (numba's JIT, the
     GPU and a cluster import modules of their own meanwhile, which a second importing thread could

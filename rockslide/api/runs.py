@@ -12,7 +12,16 @@ from pathlib import Path
 from ..case import Case
 from ..core.simulate import Result, Summary
 from ..errors import CaseError, OutputError
-from ._shared import as_case, callable_arg, check_where, importing_meanwhile, path_arg, whole, with_scale
+from ._shared import (
+    as_case,
+    callable_arg,
+    check_where,
+    importing_meanwhile,
+    output_modules,
+    path_arg,
+    whole,
+    with_scale,
+)
 
 #: A single run expected to take longer than this [s] says so before it starts (and shows a
 #: progress bar on a terminal).
@@ -338,7 +347,6 @@ def _neighbourhood(eplan, result, *, device="cpu", workers=None, say=None, bars=
 def _run_into(outputs, prepared, eplan, started, *, say, progress, device, workers, bars, folder) -> RunResult:
     """`run` with its files (``outputs``): the command line's run."""
     from ..engine import prepare as engine
-    from ..engine.execute import on_machine_code
     from ..io import results
 
     case = prepared.case
@@ -359,7 +367,7 @@ def _run_into(outputs, prepared, eplan, started, *, say, progress, device, worke
         keep = KEEP_HISTORY_ROWS if outputs.plot else 0
         with results.ResultWriter(outputs.h5, overwrite=outputs.overwrite, staging=staging, keep_rows=keep) as writer:
             streamed = case.solver.method == "kernel"
-            with importing_meanwhile(["rockslide.plots"] if outputs.plot and on_machine_code(device) else []):
+            with importing_meanwhile(output_modules(outputs, device=device)):
                 result = engine.simulate_prepared(prepared, on_chunk=writer.append_history if streamed else None,
                                                   progress=progress)
                 if eplan is not None:
