@@ -20,7 +20,6 @@ the dotted key (``contact.mu_static``) or the line and column, what was given an
 from __future__ import annotations
 
 import dataclasses
-import difflib
 import math
 import os
 import re
@@ -1244,6 +1243,8 @@ def _read_mapping(data, keys: Mapping[str, dict], path: str, ctx: _Ctx, what: st
 
 
 def _suggest(name: str, keys: Mapping[str, dict]) -> str:
+    import difflib
+
     close = difflib.get_close_matches(name, list(keys), n=1)
     if close:
         return f"did you mean {close[0]!r}?"
@@ -1298,7 +1299,7 @@ def _read_value(value, spec: dict, path: str, ctx: _Ctx):
     if kind == "string":
         if not isinstance(value, str) or not value.strip():
             ctx.fail(path, f"expected a non-empty string, got {_show(value)}")
-        if not all(c.isprintable() or c in " \t" for c in value):
+        if not (value.isprintable() or all(c.isprintable() or c in " \t" for c in value)):
             ctx.fail(path, f"expected text without control characters (such as NUL or a line break), "
                      f"got {_show(value)}")
         return value
@@ -1307,6 +1308,8 @@ def _read_value(value, spec: dict, path: str, ctx: _Ctx):
         if not isinstance(value, str) or value not in choices:
             hint = ""
             if isinstance(value, str):
+                import difflib
+
                 close = difflib.get_close_matches(value, choices, n=1)
                 hint = f" (did you mean {close[0]!r}?)" if close else ""
             ctx.fail(path, f"expected one of {', '.join(repr(c) for c in choices)}, "

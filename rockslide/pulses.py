@@ -50,7 +50,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
-from fractions import Fraction
 from typing import NamedTuple
 
 import numpy as np
@@ -204,6 +203,8 @@ def common_intervals(lengths) -> int:
     ValueError
         A ratio is not a fraction with a denominator of at most `MAX_DENOMINATOR` (within 1e-9).
     """
+    from fractions import Fraction
+
     lengths = [float(x) for x in lengths]
     longest = max(lengths)
     q = 1

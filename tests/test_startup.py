@@ -19,6 +19,7 @@ import pytest
 from click.testing import CliRunner
 
 from rockslide.api import runs as api_runs
+from rockslide.api._shared import ANALYSIS_MODULES
 from rockslide.cli import main
 from rockslide.io import results
 
@@ -213,8 +214,49 @@ def test_a_study_loads_its_output_modules_meanwhile_only_on_the_builds_code(monk
     assert output_modules(bare) == (["rockslide.io.results"] if on_build else [])
     assert output_modules(drawn, device="gpu") == output_modules(drawn, scheduler="tcp://127.0.0.1:8786") == []
     assert output_modules(None) == []
+    assert output_modules(bare, analysis=("numpy.ma",)) == (["rockslide.io.results", "numpy.ma"] if on_build else [])
+    assert output_modules(None, analysis=("numpy.ma",)) == (["numpy.ma"] if on_build else [])
+    assert output_modules(None, device="gpu", analysis=("numpy.ma",)) == []
     monkeypatch.setattr(execute, "local_kernel", lambda: None)          # numba's JIT: no build
     assert output_modules(drawn) == []
+
+
+ANALYSED = """
+import sys
+from rockslide.api import _shared
+from rockslide.cli.app import main
+from rockslide.engine import execute
+wanted = _shared.ANALYSIS_MODULES[{study!r}]
+_shared.ANALYSIS_MODULES.update(dict.fromkeys(_shared.ANALYSIS_MODULES, ()))   # none meanwhile
+compute = execute.compute
+def computed(*args, **kwargs):
+    done = compute(*args, **kwargs)
+    print("after the compute", *[m in sys.modules for m in wanted])
+    return done
+execute.compute = computed
+try:
+    main({arguments!r}, standalone_mode=False)
+finally:
+    print("at the end", *[m in sys.modules for m in wanted])
+"""
+
+
+@pytest.mark.parametrize("study, arguments", [
+    ("ensemble", ["run", "configs/example.yaml", "--ensemble", "20"]),
+    ("fragility", ["fragility", "configs/example.yaml", "--suite", "records/suite-synthetic.yaml", "--levels",
+                   "0.2g:1.0g:0.4g"]),
+])
+def test_the_analysis_modules_are_what_the_analysis_loads_after_the_compute(study, arguments, tmp_path):
+    """`api._shared.ANALYSIS_MODULES`, which a study loads while it computes: with none loaded
+    meanwhile, none of a study's is loaded when its compute ends, and each is by the end of the
+    study (its analysis loads it), so that the list names what the analysis needs, no more."""
+    arguments = [*arguments, "--no-plot", "--out-dir", str(tmp_path)]
+    done = subprocess.run([sys.executable, "-c", ANALYSED.format(study=study, arguments=arguments)], cwd=REPO,
+                          capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr[-3000:]
+    lines = [line.split() for line in done.stdout.splitlines() if line.startswith(("after", "at the end"))]
+    wanted = len(ANALYSIS_MODULES[study])
+    assert lines == [["after", "the", "compute", *["False"] * wanted], ["at", "the", "end", *["True"] * wanted]]
 
 
 def short_example(folder: Path) -> Path:

@@ -296,6 +296,30 @@ def test_a_pool_of_threads_gives_the_batch_result(mixed, tmp_path):
     assert np.array_equal(chunks.collect(plan, store), direct, equal_nan=True)
 
 
+def test_a_failure_in_one_thread_is_raised_once_the_others_are_done(mixed):
+    """A chunk that fails on one of the threads (here its store cannot save it) is raised where the
+    sweep waits, after the other threads have stopped; the chunks finished are kept, and no thread
+    of the pool is left running."""
+    import threading
+
+    plan, _ = mixed
+
+    class FailingStore(chunks.MemoryStore):
+        def save(self, chunk, indices, states):
+            if chunk == 2:
+                raise OSError("disk full")
+            super().save(chunk, indices, states)
+
+    store = FailingStore(plan.key)
+    before = threading.active_count()
+    with pytest.raises(OSError, match="disk full"):
+        ex.compute(plan, store, range(plan.n_chunks), workers=3)
+    assert threading.active_count() == before
+    # chunks 0 and 1 are taken before chunk 2 and finished whatever happens after; chunk 2 never is
+    assert plan.n_chunks == 5 and 2 <= store.count() <= 4 and 2 not in store._chunks
+    assert not any(t.name.startswith("rockslide-sweep") for t in threading.enumerate())
+
+
 # --------------------------------------------------------------------------------------------------
 # The result file and the maps
 # --------------------------------------------------------------------------------------------------

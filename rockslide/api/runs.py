@@ -13,6 +13,7 @@ from ..case import Case
 from ..core.simulate import Result, Summary
 from ..errors import CaseError, OutputError
 from ._shared import (
+    ANALYSIS_MODULES,
     as_case,
     callable_arg,
     check_where,
@@ -367,7 +368,8 @@ def _run_into(outputs, prepared, eplan, started, *, say, progress, device, worke
         keep = KEEP_HISTORY_ROWS if outputs.plot else 0
         with results.ResultWriter(outputs.h5, overwrite=outputs.overwrite, staging=staging, keep_rows=keep) as writer:
             streamed = case.solver.method == "kernel"
-            with importing_meanwhile(output_modules(outputs, device=device)):
+            analysis = ANALYSIS_MODULES["ensemble"] if eplan is not None else ()
+            with importing_meanwhile(output_modules(outputs, device=device, analysis=analysis)):
                 result = engine.simulate_prepared(prepared, on_chunk=writer.append_history if streamed else None,
                                                   progress=progress)
                 if eplan is not None:

@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING
 
 from ..errors import CaseError
 from ._shared import (
+    ANALYSIS_MODULES,
     as_case,
     axis_text,
     axis_values,
@@ -267,8 +268,9 @@ def _execute(plan, store, outputs, *, what, description, label, unit, workers, s
                 progress(cases)
 
         try:
+            analysis = () if shard is not None else ANALYSIS_MODULES.get(what, ())
             with importing_meanwhile(output_modules(None if shard is not None else outputs, device=device,
-                                                    scheduler=scheduler)):
+                                                    scheduler=scheduler, analysis=analysis)):
                 done = execute(plan, held, workers=workers, scheduler=scheduler, device=device, progress=tell,
                                report=say, what=what, label=label, description=description, unit=unit,
                                free_space_at=None if outputs is None else outputs.folder, shard=shard,

@@ -192,40 +192,64 @@ def check_workers(workers: int | None) -> None:
 
 def _compute_local(plan, store, chunks, workers, progress, out=None):
     """The chunks on a pool of threads running the compiled kernel (`local_kernel`, which releases
-    the GIL), one chunk per task: each thread takes the next chunk as soon as it is done, so cases
+    the GIL), one chunk at a time: each thread takes the next chunk as soon as it is done, so cases
     that rock for a minute and cases at rest even out and every core is busy to the end. Each chunk
     is stored as soon as it is done; Ctrl-C is checked while waiting, and the chunks being computed
-    are finished and kept."""
-    from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
+    are finished and kept. A failure in a thread is raised here once the others have finished their
+    chunks.
+
+    The pool is plain threads and a queue: `concurrent.futures` imports `logging`, 30-40 ms of a
+    study's start on a 2-core machine (issue 41, item 4)."""
+    import queue
+    import threading
 
     check_workers(workers)
-    threads = int(workers) if workers is not None else local_threads()
+    threads = min(int(workers) if workers is not None else local_threads(), len(chunks))
     run = local_kernel()
+    todo = iter(chunks)
+    taking = threading.Lock()
+    stop = threading.Event()
+    finished = queue.SimpleQueue()   # a chunk's number of cases, a thread's exception, or None as it ends
 
-    def task(chunk: int) -> int:
-        if interrupts.requested() is not None:      # stopping: start no new chunk
-            return 0
-        indices = plan.chunk_indices(chunk)
-        states = run(*_chunk_inputs(plan, indices))
-        store.save(chunk, indices, states)
-        if out is not None:             # the chunks' cases are disjoint: the threads write apart
-            out[indices] = states
-        return indices.size
-
-    with ThreadPoolExecutor(max_workers=threads, thread_name_prefix="rockslide-sweep") as pool:
-        pending = {pool.submit(task, chunk) for chunk in chunks}
+    def work() -> None:
         try:
-            while pending:
-                interrupts.check()
-                done, pending = wait(pending, timeout=0.2, return_when=FIRST_COMPLETED)
-                for future in done:
-                    cases = future.result()
-                    if progress is not None:
-                        progress(cases)
-        except BaseException:
-            for future in pending:
-                future.cancel()
-            raise
+            while not stop.is_set() and interrupts.requested() is None:   # stopping: no new chunk
+                with taking:
+                    chunk = next(todo, None)
+                if chunk is None:
+                    break
+                indices = plan.chunk_indices(chunk)
+                states = run(*_chunk_inputs(plan, indices))
+                store.save(chunk, indices, states)
+                if out is not None:     # the chunks' cases are disjoint: the threads write apart
+                    out[indices] = states
+                finished.put(indices.size)
+        except BaseException as exc:
+            finished.put(exc)
+        finally:
+            finished.put(None)
+
+    pool = [threading.Thread(target=work, name=f"rockslide-sweep-{i}") for i in range(threads)]
+    for thread in pool:
+        thread.start()
+    try:
+        running = len(pool)
+        while running:
+            interrupts.check()
+            try:
+                done = finished.get(timeout=0.2)
+            except queue.Empty:
+                continue
+            if done is None:
+                running -= 1
+            elif isinstance(done, BaseException):
+                raise done
+            elif progress is not None:
+                progress(done)
+    finally:
+        stop.set()
+        for thread in pool:
+            thread.join()
     interrupts.check()
 
 

@@ -40,7 +40,6 @@ import itertools
 import math
 import os
 import re
-import tempfile
 import warnings
 from dataclasses import dataclass
 from functools import cache
@@ -53,7 +52,6 @@ from .. import interrupts
 from ..errors import CaseError, RecordError
 from ..inputs import open_regular
 from ..units import STANDARD_GRAVITY, unit_factor
-from . import cosmos
 from .files import atomic_write, expand_user
 
 if TYPE_CHECKING:
@@ -367,6 +365,8 @@ def _parse(ctx: _Context, raw: bytes, kind: str, options: _Options) -> tuple[_Pa
     elif kind == "knet":
         parsed = _read_knet(ctx, raw)
     elif kind == "cosmos":
+        from . import cosmos
+
         series = cosmos.parse(_decode(raw), ctx.error)
         parsed = _Parsed(series.values * _unit_to_si(ctx, series.units, "COSMOS"), series.dt, series.units,
                          lines=series.lines, stats=series.header)
@@ -484,6 +484,8 @@ def _choose_format(ctx: _Context, raw: bytes, format: str | None, options: _Opti
         return "at2"
     if raw.startswith(b"Origin Time"):
         return "knet"
+    from . import cosmos  # here: most records are not COSMOS files
+
     if cosmos.looks_like_cosmos(first_line):
         return "cosmos"
     if b"\0" not in raw[:4096] and _looks_like_text_table(_decode(raw), options.skip_lines):
@@ -1258,6 +1260,8 @@ def _obspy_trace(ctx: _Context, raw: bytes, obspy_format: str | None) -> obspy.T
 def _detect_obspy_format(raw: bytes) -> str | None:
     """The first obspy waveform format whose detector accepts ``raw`` (obspy's own order), None if
     none does. Like ``obspy.read(format=None)``, but never tries the UNSAFE_OBSPY_FORMATS."""
+    import tempfile
+
     from obspy.core.util.base import ENTRY_POINTS, buffered_load_entry_point
 
     with tempfile.TemporaryDirectory(prefix="rockslide-") as folder:
