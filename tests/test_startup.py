@@ -94,12 +94,13 @@ def test_a_sweep_loads_no_numba_with_the_build(tmp_path):
 def test_a_risk_of_a_given_fragility_loads_no_numba(tmp_path):
     """``rockslide risk --median --beta`` measures no record, runs no kernel and reads no case: it
     loads neither numba (the intensity measures' oscillator), scipy (the fits' statistics are
-    `core.normal`'s), yaml and the case files' module, nor the engine and the fragility analysis
-    (the intensity measures are `analyses.measures`)."""
+    `core.normal`'s), yaml and the case files' module, nor the engine, the fragility analysis (the
+    intensity measures are `analyses.measures`) and the core's simulation (a risk file has no
+    events)."""
     code = ("import sys\nfrom rockslide.cli import main\n"
             "main(sys.argv[1:], prog_name='rockslide', standalone_mode=False)\n"
             "print(sorted(m for m in ('numba', 'scipy', 'yaml', 'rockslide.case', 'rockslide.engine',"
-            " 'rockslide.analyses.fragility') if m in sys.modules))")
+            " 'rockslide.analyses.fragility', 'rockslide.core.simulate') if m in sys.modules))")
     done = subprocess.run([sys.executable, "-c", code, "risk", "--median", "0.5g", "--beta", "0.4", "--hazard",
                            str(REPO / "rockslide" / "hazard-example-PGA.csv"), "--out-dir", str(tmp_path),
                            "--no-plot"], cwd=REPO, capture_output=True, text=True, timeout=600)

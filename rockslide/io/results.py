@@ -100,6 +100,7 @@ import threading
 from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import h5py
 import numpy as np
@@ -107,11 +108,13 @@ import numpy as np
 from .. import interrupts
 from .._version import __version__
 from ..core.layout import HISTORY_COLUMNS, STATE_NAMES
-from ..core.simulate import EVENT_DTYPE, Result, Summary
 from ..errors import OutputError
 from ..inputs import regular_size
 from . import h5checked
 from .files import Staging, check_destination, open_new, publish, remove_quietly, temporary_path
+
+if TYPE_CHECKING:
+    from ..core.simulate import Result, Summary
 
 FORMAT = "rockslide-result"
 FORMAT_VERSION = 1
@@ -144,10 +147,6 @@ _COMPRESSION = {"compression": "gzip", "compression_opts": 1, "shuffle": True}
 _SUMMARY_SCALARS = ("overturned", "overturn_time", "direction", "fall_start_time", "max_rotation",
                     "max_rotation_time", "max_slip", "residual_slip", "impacts", "status", "end_time",
                     "alpha", "max_rotation_ratio", "undecided", "alpha_2")
-#: ``/events`` in the file: `EVENT_DTYPE` with its names as UTF-8 text (variable length) instead of
-#: the core's fixed-length bytes.
-EVENT_FILE_DTYPE = np.dtype([(name, h5py.string_dtype("utf-8") if EVENT_DTYPE[name].kind == "S"
-                              else EVENT_DTYPE[name]) for name in EVENT_DTYPE.names])
 #: The ground motion as applied (`records.GroundMotion.as_applied`), root attributes ``ground_<key>``.
 GROUND_KEYS = ("pga_horizontal", "pga_vertical", "scale_horizontal", "scale_vertical")
 _PROVENANCE = ("verdict", "name", "integration_step", "format", "format_version", "created",
@@ -436,7 +435,8 @@ def _write_body(f: h5py.File, result: Result, *, name, case_text, case, records,
         ds = group.create_dataset(key, data=values, **options)
         ds.attrs["units"] = GROUND_UNITS[key]
 
-    ds = f.create_dataset("events", data=_events_for_file(result.events), dtype=EVENT_FILE_DTYPE)
+    events = _events_for_file(result.events)
+    ds = f.create_dataset("events", data=events, dtype=events.dtype)
     _label_dimensions(f, ds)
     ds.attrs["units"] = "time: s, energy_loss: J"
     ds.attrs["description"] = ("time [s], from/to: state names, cause, edge: pivot lam (+1 left, "
@@ -534,9 +534,13 @@ def _label_dimensions(f: h5py.File, events) -> None:
 
 
 def _events_for_file(events) -> np.ndarray:
-    """The event log with its names as text (`EVENT_FILE_DTYPE`)."""
+    """The event log as ``/events`` holds it: `core.simulate.EVENT_DTYPE` with its names as UTF-8
+    text (variable length) instead of the core's fixed-length bytes."""
+    from ..core.simulate import EVENT_DTYPE  # here: a file of a risk or a sweep has no events
+
     events = np.asarray(events).astype(EVENT_DTYPE)
-    out = np.empty(events.shape, dtype=EVENT_FILE_DTYPE)
+    out = np.empty(events.shape, dtype=[(name, h5py.string_dtype("utf-8") if EVENT_DTYPE[name].kind == "S"
+                                        else EVENT_DTYPE[name]) for name in EVENT_DTYPE.names])
     for name in EVENT_DTYPE.names:
         out[name] = ([v.decode() for v in events[name]] if EVENT_DTYPE[name].kind == "S"
                      else events[name])
@@ -546,6 +550,8 @@ def _events_for_file(events) -> np.ndarray:
 def _events_from_file(stored: np.ndarray) -> np.ndarray:
     """The event log as the core holds it (`EVENT_DTYPE`), from text names or, in files written
     before they were text, fixed-length bytes (fields a file lacks stay empty)."""
+    from ..core.simulate import EVENT_DTYPE
+
     out = np.zeros(stored.shape, dtype=EVENT_DTYPE)
     for name in EVENT_DTYPE.names:
         if name not in stored.dtype.names:        # written before impacts were described
@@ -915,6 +921,8 @@ def _read_body(f: h5py.File, attrs: dict, budget: h5checked.Budget) -> StoredRes
 
     history = {name: column("time_history", name, np.int8 if name == "state" else np.float64)
                for name in HISTORY_COLUMNS}
+    from ..core.simulate import Result
+
     events = _events_from_file(h5checked.read_dataset(f["events"], budget, kinds="V"))
     result = Result(
         history=history,
@@ -963,6 +971,8 @@ def _summary_from_attrs(attrs: dict) -> Summary:
         raise ValueError(f"direction = {attrs['direction']!r}; expected -1, 0 or 1")
     direction = int(attrs["direction"])
     seen = attrs["states_seen"]
+    from ..core.simulate import Summary
+
     return Summary(
         overturned=overturned,
         overturn_time=time_or_none("overturn_time"),
