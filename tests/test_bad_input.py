@@ -49,6 +49,7 @@ from conftest import invoke as shared_invoke
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from rockslide.api import runs as api_runs
 from rockslide.engine import prepare as runner
 from rockslide.io import results
 from rockslide.io.records import read_record, write_at2
@@ -741,6 +742,7 @@ def test_system_error_names_the_file_in_one_line(ws, monkeypatch):
     def disk_full(self, rows):
         raise OSError(28, "No space left on device", str(self.tmp))
 
+    monkeypatch.setattr(api_runs, "HELD_HISTORY_ROWS", 0)       # the history streams into the file
     monkeypatch.setattr(results.ResultWriter, "append_history", disk_full)
     (ws / "case.yaml").write_text(case_text(QUICK))
     result = invoke(["run", "case.yaml"])

@@ -58,6 +58,7 @@ from hypothesis import strategies as st
 
 from rockslide import interrupts
 from rockslide.analyses import sweep as sw
+from rockslide.api import runs as api_runs
 from rockslide.case import case_with, load_case
 from rockslide.core import batch
 from rockslide.engine import chunks
@@ -246,11 +247,15 @@ def fill_disk_after(monkeypatch, budget: int) -> None:
     monkeypatch.setattr(results._RawFile, "__init__", init)
 
 
-def test_injected_enospc_while_streaming_is_one_line_and_leaves_nothing(ws, monkeypatch):
-    """The disk fills after 20 kB of the result file, while the history streams: one line naming
-    the file and the reason, exit 2, nothing in the output folder (libhdf5 crashed at exit on such
-    a file before); and the process goes on writing HDF5 files normally afterwards."""
+@pytest.mark.parametrize("streamed", [True, False])
+def test_injected_enospc_while_writing_a_run_is_one_line_and_leaves_nothing(ws, monkeypatch, streamed):
+    """The disk fills after 20 kB of the result file, while the history streams into it or, held in
+    memory (`api.runs.HELD_HISTORY_ROWS`), is written after the compute: one line naming the file
+    and the reason, exit 2, nothing in the output folder (libhdf5 crashed at exit on such a file
+    before); and the process goes on writing HDF5 files normally afterwards."""
     (ws / "case.yaml").write_text(case_text({"solver.dt": "1 ms"}))
+    if streamed:
+        monkeypatch.setattr(api_runs, "HELD_HISTORY_ROWS", 0)
     with monkeypatch.context() as patch:
         fill_disk_after(patch, 20_000)
         result = invoke("run", "case.yaml")
@@ -259,6 +264,44 @@ def test_injected_enospc_while_streaming_is_one_line_and_leaves_nothing(ws, monk
     assert listing(ws / "out") == []
     assert invoke("run", "case.yaml").exit_code == 0
     assert results.read_result(ws / "out" / "example.h5").name == "example"
+
+
+def test_a_held_history_writes_the_file_a_streamed_one_writes(ws, monkeypatch):
+    """A run's history held in memory and written after the compute (`api.runs.HELD_HISTORY_ROWS`)
+    gives the file the streamed history gives: the same history, events, summary and attributes
+    (but the time it was written)."""
+    (ws / "case.yaml").write_text(case_text({"solver.dt": "1 ms"}))
+    assert invoke("run", "case.yaml", "--no-plot", "--out-dir", "held").exit_code == 0
+    monkeypatch.setattr(api_runs, "HELD_HISTORY_ROWS", 0)
+    assert invoke("run", "case.yaml", "--no-plot", "--out-dir", "streamed").exit_code == 0
+    held, streamed = (results.read_result(ws / folder / "example.h5") for folder in ("held", "streamed"))
+    assert held.result.history["time"].size == 22_001
+    for name, column in streamed.result.history.items():
+        assert np.array_equal(held.result.history[name], column) and held.result.history[name].dtype == column.dtype
+    assert np.array_equal(held.result.events, streamed.result.events)
+    assert held.result.summary == streamed.result.summary
+    assert {k: str(v) for k, v in held.attrs.items() if k != "created"} == \
+        {k: str(v) for k, v in streamed.attrs.items() if k != "created"}
+
+
+def test_a_run_into_a_folder_that_takes_no_file_is_refused_before_it_computes(ws, monkeypatch):
+    """The file of a held history is written after the compute, so its folder is tried first
+    (`files.check_writable`): a folder that refuses a new file (here the system's refusal injected,
+    as root writes any folder) is one line naming it, exit 2, before anything is computed."""
+    computed = []
+    monkeypatch.setattr(runner, "simulate_prepared", lambda *args, **kwargs: computed.append(1))
+    real_open_new = files.open_new
+
+    def open_new(path, *args, **kwargs):
+        if Path(path).parent.name == "locked":
+            raise PermissionError(errno.EACCES, "Permission denied", str(path))
+        return real_open_new(path, *args, **kwargs)
+
+    monkeypatch.setattr(files, "open_new", open_new)
+    (ws / "case.yaml").write_text(case_text(QUICK))
+    result = invoke("run", "case.yaml", "--no-plot", "--out-dir", "locked")
+    one_error_line(result, "locked: cannot write in this folder (Permission denied)")
+    assert computed == [] and listing(ws / "locked") == []
 
 
 def test_injected_enospc_in_the_sweep_file_keeps_the_chunks(ws, monkeypatch):

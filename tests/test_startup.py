@@ -260,6 +260,31 @@ def test_the_analysis_modules_are_what_the_analysis_loads_after_the_compute(stud
     assert lines == [["after", "the", "compute", *["False"] * wanted], ["at", "the", "end", *["True"] * wanted]]
 
 
+def test_a_run_needs_no_h5py_before_its_compute(tmp_path):
+    """A run's history of at most `api.runs.HELD_HISTORY_ROWS` rows is held in memory and its file
+    written after the compute: with nothing loaded meanwhile, h5py is not loaded when the compute
+    starts, and is by the end (the file is written), so that it can load while the run computes."""
+    code = f"""
+import contextlib, sys
+from rockslide.api import _shared, runs
+from rockslide.cli.app import main
+from rockslide.engine import prepare
+runs.importing_meanwhile = lambda modules: contextlib.nullcontext()
+simulate = prepare.simulate_prepared
+def simulated(*args, **kwargs):
+    print("at the compute", "h5py" in sys.modules)
+    return simulate(*args, **kwargs)
+prepare.simulate_prepared = simulated
+main(["run", "configs/example.yaml", "--no-plot", "--out-dir", {str(tmp_path)!r}], standalone_mode=False)
+print("at the end", "h5py" in sys.modules)
+"""
+    done = subprocess.run([sys.executable, "-c", code], cwd=REPO, capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr[-3000:]
+    assert [line for line in done.stdout.splitlines() if line.startswith("at ")] == ["at the compute False",
+                                                                                    "at the end True"]
+    assert (tmp_path / "example.h5").is_file()
+
+
 def short_example(folder: Path) -> Path:
     """The shipped example on its own records, output every millisecond (22 000 rows): quick."""
     case = folder / "example.yaml"

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import time
@@ -39,6 +40,12 @@ PLAN_SECONDS_PER_MEMBER = 6e-5
 #: A run's figure is drawn from its history kept in memory while it has at most this many rows (96
 #: MB; reading the file back would take as much); a longer history is read back from the file.
 KEEP_HISTORY_ROWS = 2_000_000
+
+#: A run's history of at most this many rows (12 MB; the paper's 150 s records with a row every
+#: millisecond) is held in memory and its file written after the compute, so that h5py loads while
+#: it computes (0.05-0.07 s of a run on the 2-core development machine); a longer one streams into
+#: the file as it is computed (bounded memory), the file opened first.
+HELD_HISTORY_ROWS = 250_000
 
 
 @dataclass
@@ -346,9 +353,14 @@ def _neighbourhood(eplan, result, *, device="cpu", workers=None, say=None, bars=
 
 
 def _run_into(outputs, prepared, eplan, started, *, say, progress, device, workers, bars, folder) -> RunResult:
-    """`run` with its files (``outputs``): the command line's run."""
+    """`run` with its files (``outputs``): the command line's run.
+
+    A history of at most `HELD_HISTORY_ROWS` rows is held in memory and the file written after the
+    compute, so that the file's modules (h5py) load while it computes (`importing_meanwhile`); a
+    longer one streams into the file as it is computed (bounded memory)."""
+    from ..core.layout import HISTORY_COLUMNS
     from ..engine import prepare as engine
-    from ..io import results
+    from ..io import files
 
     case = prepared.case
     if outputs.check():
@@ -357,30 +369,42 @@ def _run_into(outputs, prepared, eplan, started, *, say, progress, device, worke
     work = engine.work(prepared)
     if work.seconds > LONG_RUN:
         say(f"rockslide: note: {work.describe()}")
-    from ..io import files
-    files.warn_free_space(outputs.folder, work.rows * results.BYTES_PER_ROW)
+    files.warn_free_space(outputs.folder, work.rows * 8 * len(HISTORY_COLUMNS))   # float64 columns at most
     _compile_note(say)
     ensemble_png = outputs.folder / f"{case.name}.ensemble.png"
     body_png = outputs.folder / f"{case.name}.body.png"
     bodies = _block_bodies(case, prepared)
     summary = group = None
-    with outputs.staging() as staging:
-        keep = KEEP_HISTORY_ROWS if outputs.plot else 0
-        with results.ResultWriter(outputs.h5, overwrite=outputs.overwrite, staging=staging, keep_rows=keep) as writer:
-            streamed = case.solver.method == "kernel"
-            analysis = ANALYSIS_MODULES["ensemble"] if eplan is not None else ()
-            with importing_meanwhile(output_modules(outputs, device=device, analysis=analysis)):
-                result = engine.simulate_prepared(prepared, on_chunk=writer.append_history if streamed else None,
-                                                  progress=progress)
-                if eplan is not None:
-                    summary, dimension, group = _neighbourhood(eplan, result, device=device, workers=workers, say=say,
-                                                               bars=bars)
-            planes = _planes(prepared, result, folder)
-            stored = _stored_run(case, prepared, summary, None if group is None else (dimension, group))
-            if planes is not None:
-                stored["extra_attrs"] = {**stored["extra_attrs"], "planes": json.dumps(planes, allow_nan=True)}
-            writer.finish(result, **stored)
+    streamed = case.solver.method == "kernel" and work.rows > HELD_HISTORY_ROWS
+    with outputs.staging() as staging, contextlib.ExitStack() as opened:
+        def open_writer():
+            from ..io import results
+
+            keep = KEEP_HISTORY_ROWS if outputs.plot else 0
+            return opened.enter_context(results.ResultWriter(outputs.h5, overwrite=outputs.overwrite,
+                                                             staging=staging, keep_rows=keep))
+
+        if streamed:
+            writer = open_writer()
+        else:                   # the file is written after the compute: its folder is tried before
+            files.check_writable(outputs.h5)
+            writer = None
+        analysis = ANALYSIS_MODULES["ensemble"] if eplan is not None else ()
+        with importing_meanwhile(output_modules(outputs, device=device, analysis=analysis)):
+            result = engine.simulate_prepared(prepared, on_chunk=writer.append_history if streamed else None,
+                                              progress=progress)
+            if eplan is not None:
+                summary, dimension, group = _neighbourhood(eplan, result, device=device, workers=workers, say=say,
+                                                           bars=bars)
+        if writer is None:
+            writer = open_writer()
+        planes = _planes(prepared, result, folder)
+        stored = _stored_run(case, prepared, summary, None if group is None else (dimension, group))
+        if planes is not None:
+            stored["extra_attrs"] = {**stored["extra_attrs"], "planes": json.dumps(planes, allow_nan=True)}
+        writer.finish(result, **stored)
         if outputs.plot:
+            from ..io import results
             from ..plots import response_figure
             kept = writer.written_result()
             drawn = kept if kept is not None else results.read_result(writer.tmp).result

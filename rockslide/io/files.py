@@ -72,6 +72,25 @@ def check_destination(path, *, overwrite: bool = False, example: str = "out/case
     return path
 
 
+def check_writable(path) -> None:
+    """Refuse an output ``path`` whose folder takes no new file (no permission, a read-only file
+    system, no room for a name), by creating and removing an empty temporary file there: for a
+    result written after its computation, so that the refusal comes before it.
+
+    Raises
+    ------
+    OutputError
+        The temporary file cannot be created.
+    """
+    tmp = temporary_path(path)
+    try:
+        open_new(tmp).close()
+    except OSError as exc:
+        reason = " ".join(str(exc.strerror or exc).split())
+        raise OutputError(f"cannot write in this folder ({reason})", source=str(Path(path).parent)) from None
+    remove_quietly(tmp)
+
+
 def check_name(path: Path) -> None:
     """Refuse a path the file system cannot take: a NUL character, or a name (or one of the
     folder names) that would be too long once made a temporary name."""
