@@ -358,7 +358,6 @@ def _run_into(outputs, prepared, eplan, started, *, say, progress, device, worke
     A history of at most `HELD_HISTORY_ROWS` rows is held in memory and the file written after the
     compute, so that the file's modules (h5py) load while it computes (`importing_meanwhile`); a
     longer one streams into the file as it is computed (bounded memory)."""
-    from ..core.layout import HISTORY_COLUMNS
     from ..engine import prepare as engine
     from ..io import files
 
@@ -369,7 +368,7 @@ def _run_into(outputs, prepared, eplan, started, *, say, progress, device, worke
     work = engine.work(prepared)
     if work.seconds > LONG_RUN:
         say(f"rockslide: note: {work.describe()}")
-    files.warn_free_space(outputs.folder, work.rows * 8 * len(HISTORY_COLUMNS))   # float64 columns at most
+    files.warn_free_space(outputs.folder, work.rows * files.BYTES_PER_ROW)
     _compile_note(say)
     ensemble_png = outputs.folder / f"{case.name}.ensemble.png"
     body_png = outputs.folder / f"{case.name}.body.png"

@@ -86,9 +86,19 @@ def check_writable(path) -> None:
     try:
         open_new(tmp).close()
     except OSError as exc:
-        reason = " ".join(str(exc.strerror or exc).split())
-        raise OutputError(f"cannot write in this folder ({reason})", source=str(Path(path).parent)) from None
+        raise cannot_write_in_folder(path, exc) from None
     remove_quietly(tmp)
+
+
+def cannot_write_in_folder(path, exc: OSError) -> OutputError:
+    """The refusal of a new file beside ``path`` (``exc``: the system's), naming the folder."""
+    return OutputError(f"cannot write in this folder ({error_reason(exc)})", source=str(Path(path).parent))
+
+
+def error_reason(exc: BaseException) -> str:
+    """The system's reason for ``exc`` on one line: its ``strerror``, else its text, else its type."""
+    text = getattr(exc, "strerror", None) or str(exc) or type(exc).__name__
+    return " ".join(str(text).split())
 
 
 def check_name(path: Path) -> None:
@@ -126,6 +136,11 @@ def free_space(folder) -> int | None:
         return shutil.disk_usage(folder).free
     except OSError:
         return None
+
+
+#: Bytes of one history row of a result file before compression (five float64 columns and the int8
+#: state): an upper bound of the size of a result, used to warn when the disk may be too small.
+BYTES_PER_ROW = 5 * 8 + 1
 
 
 def warn_free_space(folder, needed: float) -> None:

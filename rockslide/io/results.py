@@ -111,7 +111,16 @@ from ..core.layout import HISTORY_COLUMNS, STATE_NAMES
 from ..errors import OutputError
 from ..inputs import regular_size
 from . import h5checked
-from .files import Staging, check_destination, open_new, publish, remove_quietly, temporary_path
+from .files import (
+    Staging,
+    cannot_write_in_folder,
+    check_destination,
+    error_reason,
+    open_new,
+    publish,
+    remove_quietly,
+    temporary_path,
+)
 
 if TYPE_CHECKING:
     from ..core.simulate import Result, Summary
@@ -136,9 +145,6 @@ COMPONENT_KEYS = ("azimuth_1", "azimuth_2", "orientation", "pga_1", "pga_2", "pg
 #: Packages whose versions are stored as ``<name>_version`` root attributes.
 VERSIONED_PACKAGES = ("rockslide", "python", "numpy", "numba", "h5py", "obspy", "scipy", "matplotlib")
 
-#: Bytes of one history row before compression (five float64 columns and the int8 state): an upper
-#: bound of the size of a result, used to warn when the disk may be too small.
-BYTES_PER_ROW = 5 * 8 + 1
 _CHUNK_ROWS = 16384
 #: gzip level 1 with shuffle: 1.7 times as fast as level 4 both ways, for a file 10 % larger (the
 #: shipped example's result: 382 KB against 345 KB, written in 44 ms against 74 ms, read in 24 ms
@@ -760,7 +766,7 @@ def _create_hdf5(tmp: Path, path: Path):
     try:
         raw = _RawFile(tmp)
     except OSError as exc:
-        raise OutputError(f"cannot write in this folder ({_reason(exc)})", source=str(path.parent)) from None
+        raise cannot_write_in_folder(path, exc) from None
     try:
         return h5py.File(raw, "w", track_order=True), raw
     except BaseException as exc:
@@ -776,7 +782,7 @@ def _raise_write_error(exc: BaseException, raw: _RawFile, path: Path):
         cause = raw.error if raw.error is not None else exc
         hint = "; free some space or choose another output folder" if getattr(cause, "errno", None) in (
             errno.ENOSPC, errno.EDQUOT, errno.EFBIG) else ""
-        raise OutputError(f"cannot write the file ({_reason(cause)}); nothing was written{hint}",
+        raise OutputError(f"cannot write the file ({error_reason(cause)}); nothing was written{hint}",
                           source=str(path)) from None
     raise exc
 
@@ -814,7 +820,7 @@ def read_result(path) -> StoredResult:
     try:
         f = h5py.File(path, "r", locking=False)    # our own lock guards the files (io.files)
     except OSError as exc:
-        reason = "not an HDF5 file" if "signature" in str(exc) or "file format" in str(exc) else _reason(exc)
+        reason = "not an HDF5 file" if "signature" in str(exc) or "file format" in str(exc) else error_reason(exc)
         raise OutputError(f"cannot read as a rockslide result ({reason})", source=source) from None
     with f:
         attrs = h5checked.attribute_values(f, source)
@@ -836,7 +842,7 @@ def read_result(path) -> StoredResult:
         except OutputError:
             raise
         except (KeyError, ValueError, TypeError, OverflowError, IndexError, OSError) as exc:
-            raise OutputError(f"damaged rockslide result ({_reason(exc)})", source=source) from None
+            raise OutputError(f"damaged rockslide result ({error_reason(exc)})", source=source) from None
 
 
 #: Largest attribute read from a file rockslide is given [bytes] (`h5checked.MAX_ATTRIBUTE_BYTES`).
@@ -1254,7 +1260,7 @@ def read_dataset(path, *, format: str) -> StoredDataset:
     try:
         f = h5py.File(path, "r", locking=False)    # our own lock guards the files (io.files)
     except OSError as exc:
-        raise OutputError(f"cannot read as a rockslide {short} ({_reason(exc)})", source=source) from None
+        raise OutputError(f"cannot read as a rockslide {short} ({error_reason(exc)})", source=source) from None
     with f:
         attrs = h5checked.attribute_values(f, source)
         if attrs.get("format") != format:
@@ -1281,7 +1287,7 @@ def read_dataset(path, *, format: str) -> StoredDataset:
         except OutputError:
             raise
         except (KeyError, ValueError, TypeError, IndexError, OSError, RuntimeError) as exc:
-            raise OutputError(f"damaged rockslide {short} ({_reason(exc)})", source=source) from None
+            raise OutputError(f"damaged rockslide {short} ({error_reason(exc)})", source=source) from None
     for _, _, a in coords:
         a.pop("_Netcdf4Dimid", None)
     return StoredDataset(coords=coords, variables=variables, attrs=attrs)
@@ -1478,11 +1484,6 @@ def _sigint_held():
     finally:
         if held:
             signal.pthread_sigmask(signal.SIG_SETMASK, old)
-
-
-def _reason(exc: BaseException) -> str:
-    text = getattr(exc, "strerror", None) or str(exc) or type(exc).__name__
-    return " ".join(str(text).split())
 
 
 __all__ = ["write_result", "read_result", "ResultWriter", "StoredResult", "summary_to_json_dict", "json_ready",
