@@ -762,7 +762,7 @@ LONG_CASE = {
     "ground.scale": {"pga_horizontal": "400 gal"},
     "ground.tail": "1800 s",            # half an hour of free vibration...
     "solver.dt": "0.001 ms",            # ...at one microsecond: a run of a minute or so
-    "output.interval": "10 ms",
+    "output.interval": "5 ms",          # 364 001 rows: they stream into a temporary file from the start
 }
 
 
@@ -776,6 +776,7 @@ def write_long_case(ws: Path) -> None:
         write_at2(ws / f"fine_{component}.at2", np.interp(fine, t, record.data) / 9.80665, 0.001,
                   title="synthetic, resampled at 1 kHz", component=component)
     (ws / "case.yaml").write_text(case_text(LONG_CASE))
+    assert (20.0 + 1800.0) / 0.005 > api_runs.HELD_HISTORY_ROWS      # streamed, not held until the end
 
 
 def wait_for_temporary_file(proc, folder: Path, name: str, timeout: float = 120.0) -> Path:
@@ -853,6 +854,31 @@ def test_interrupted_run_exits_cleanly_without_any_file(ws, signum, code, word):
     assert last == f"rockslide: {word} (no partial result was written)", stderr
     assert all(line.startswith("rockslide: note: ") for line in notes), stderr   # the work estimate
     assert listing(out) == []                           # no result, no temporary file
+
+
+@posix_signals
+@pytest.mark.slow      # a subprocess of `python -m rockslide`
+def test_interrupted_run_of_a_held_history_exits_cleanly_without_any_file(ws):
+    """A history of at most `api.runs.HELD_HISTORY_ROWS` rows is held in memory, its file written
+    after the compute: Ctrl-C sent once the run has said its work estimate (said just before the
+    compute, of a minute) ends it with 130, one line, and nothing in the output folder, wherever
+    the signal lands."""
+    write_long_case(ws)
+    (ws / "case.yaml").write_text(case_text({**LONG_CASE, "output.interval": "100 ms"}))     # 18 201 rows
+    out = ws / "out"
+    proc = cli_subprocess(["run", "case.yaml", "--no-plot"], ws, preexec_fn=_default_sigint)
+    try:
+        said = proc.stderr.readline()
+        proc.send_signal(signal.SIGINT)
+        _, stderr = proc.communicate(timeout=120)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
+    assert said.startswith("rockslide: note: ") and "integration steps" in said, said
+    assert proc.returncode == 130, stderr
+    assert stderr.splitlines()[-1] == "rockslide: interrupted (no partial result was written)", stderr
+    assert listing(out) == []
 
 
 # ------------------------------------------------------------------------------------------------
