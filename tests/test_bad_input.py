@@ -856,31 +856,6 @@ def test_interrupted_run_exits_cleanly_without_any_file(ws, signum, code, word):
     assert listing(out) == []                           # no result, no temporary file
 
 
-@posix_signals
-@pytest.mark.slow      # a subprocess of `python -m rockslide`
-def test_interrupted_run_of_a_held_history_exits_cleanly_without_any_file(ws):
-    """A history of at most `api.runs.HELD_HISTORY_ROWS` rows is held in memory, its file written
-    after the compute: Ctrl-C sent once the run has said its work estimate (said just before the
-    compute, of a minute) ends it with 130, one line, and nothing in the output folder, wherever
-    the signal lands."""
-    write_long_case(ws)
-    (ws / "case.yaml").write_text(case_text({**LONG_CASE, "output.interval": "100 ms"}))     # 18 201 rows
-    out = ws / "out"
-    proc = cli_subprocess(["run", "case.yaml", "--no-plot"], ws, preexec_fn=_default_sigint)
-    try:
-        said = proc.stderr.readline()
-        proc.send_signal(signal.SIGINT)
-        _, stderr = proc.communicate(timeout=120)
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.communicate()
-    assert said.startswith("rockslide: note: ") and "integration steps" in said, said
-    assert proc.returncode == 130, stderr
-    assert stderr.splitlines()[-1] == "rockslide: interrupted (no partial result was written)", stderr
-    assert listing(out) == []
-
-
 # ------------------------------------------------------------------------------------------------
 # Properties: whatever the input, a result or a clean error
 # ------------------------------------------------------------------------------------------------

@@ -922,13 +922,13 @@ def _data_only(f: h5py.File, source: str) -> None:
 
 
 def _read_body(f: h5py.File, attrs: dict, budget: h5checked.Budget) -> StoredResult:
+    from ..core.simulate import Result
+
     def column(group, name, dtype):
         return h5checked.read_dataset(f[group][name], budget).astype(dtype, copy=False)
 
     history = {name: column("time_history", name, np.int8 if name == "state" else np.float64)
                for name in HISTORY_COLUMNS}
-    from ..core.simulate import Result
-
     events = _events_from_file(h5checked.read_dataset(f["events"], budget, kinds="V"))
     result = Result(
         history=history,
@@ -968,6 +968,8 @@ def _group(f: h5py.File, name: str) -> h5py.Group:
 
 
 def _summary_from_attrs(attrs: dict) -> Summary:
+    from ..core.simulate import Summary
+
     def time_or_none(key):
         value = attrs[key]
         return None if math.isnan(value) else float(value)
@@ -977,8 +979,6 @@ def _summary_from_attrs(attrs: dict) -> Summary:
         raise ValueError(f"direction = {attrs['direction']!r}; expected -1, 0 or 1")
     direction = int(attrs["direction"])
     seen = attrs["states_seen"]
-    from ..core.simulate import Summary
-
     return Summary(
         overturned=overturned,
         overturn_time=time_or_none("overturn_time"),
