@@ -94,6 +94,31 @@ def test_bootstrap_intervals_cover_the_true_median_and_beta():
     assert held["median"] >= 34 and held["beta"] >= 34, held
 
 
+def test_the_bootstrap_fits_each_resample_as_a_fit_of_it_alone():
+    """The bootstrap fits each distinct resample once, all at once, iterating only on those not yet
+    converged; a resample's (median, beta) must be what `probit_mle` gives for its counts alone.
+    6 records give at most 462 distinct resamples of 1000, so most are repeats. Each resample is
+    drawn here as `_bootstrap` draws it (the same generator and seed) and fitted by itself: equal
+    to the bit, since every row's arithmetic is the same whichever rows it is fitted with."""
+    levels = np.linspace(0.1, 1.5, 15)
+    rng = np.random.default_rng(5)
+    capacity = 0.7 * np.exp(0.4 * rng.standard_normal((6, 1)) + 0.1 * rng.standard_normal((6, 15)))
+    exceeded = (levels[None, :] >= capacity).astype(np.int8)
+    fit = fr.fit_state(levels, exceeded, resamples=200, seed=11)
+    picks = np.random.default_rng(11).integers(0, 6, size=(200, 6))
+    expected = []
+    for pick in picks:
+        n, z = fr.stripe_counts(exceeded[pick])
+        low, high = fr._separation(n[None, :], z[None, :])
+        if low[0] >= 0 and high[0] > low[0]:
+            a, b, converged = fr.probit_mle(np.log(levels), n[None, :], z[None, :])
+            if converged[0] and b[0] > 0:
+                expected.append((math.exp(-a[0] / b[0]), 1.0 / b[0]))
+    assert len({tuple(p) for p in np.sort(picks, axis=1)}) < 150          # repeats: the case above
+    assert fit.resamples_fitted == len(expected) > 150
+    assert np.array_equal(fit.samples, np.array(expected))
+
+
 @pytest.mark.parametrize("rows, note", [
     ([[0, 0, 0], [0, 0, 0]], "no run exceeds"),
     ([[1, 1, 1], [1, 1, 1]], "every run exceeds"),

@@ -934,35 +934,40 @@ def probit_mle(s: np.ndarray, n: np.ndarray, z: np.ndarray):
 
 
 def _newton(a, b, s, n, z):
-    """`probit_mle`'s iterations from the start ``(a, b)``."""
+    """`probit_mle`'s iterations from the start ``(a, b)``, each on the data sets not yet converged
+    (a data set's iterates depend on its own rows only)."""
     ll = _log_likelihood(a, b, s, n, z)
     converged = np.zeros(a.shape, dtype=bool)
+    active = np.arange(a.size)
     log_phi_const = 0.5 * math.log(2.0 * math.pi)
     for _ in range(FIT_ITERATIONS):
-        eta = a[:, None] + b[:, None] * s
+        ai, bi, ni, zi, lli = a[active], b[active], n[active], z[active], ll[active]
+        eta = ai[:, None] + bi[:, None] * s
         log_phi = -0.5 * eta * eta - log_phi_const
         up = np.exp(log_phi - log_normal_cdf(eta))        # phi / Phi
         down = np.exp(log_phi - log_normal_cdf(-eta))     # phi / (1 - Phi)
-        d1 = z * up - (n - z) * down                      # d ll / d eta
-        d2 = z * up * (eta + up) + (n - z) * down * (down - eta)   # -d2 ll / d eta2 >= 0
+        d1 = zi * up - (ni - zi) * down                   # d ll / d eta
+        d2 = zi * up * (eta + up) + (ni - zi) * down * (down - eta)   # -d2 ll / d eta2 >= 0
         g0, g1 = d1.sum(-1), (d1 * s).sum(-1)
         h00, h01, h11 = d2.sum(-1), (d2 * s).sum(-1), (d2 * s * s).sum(-1)
         det = h00 * h11 - h01 * h01
         with np.errstate(divide="ignore", invalid="ignore"):
-            da = np.where(converged, 0.0, (h11 * g0 - h01 * g1) / det)
-            db = np.where(converged, 0.0, (h00 * g1 - h01 * g0) / det)
-        da, db = np.nan_to_num(da), np.nan_to_num(db)
-        t = np.ones_like(a)
+            da = np.nan_to_num((h11 * g0 - h01 * g1) / det)
+            db = np.nan_to_num((h00 * g1 - h01 * g0) / det)
+        t = np.ones_like(ai)
         for _ in range(60):
-            trial = _log_likelihood(a + t * da, b + t * db, s, n, z)
-            worse = ~(trial >= ll - 1e-13 * np.abs(ll))
+            trial = _log_likelihood(ai + t * da, bi + t * db, s, ni, zi)
+            worse = ~(trial >= lli - 1e-13 * np.abs(lli))
             if not worse.any():
                 break
             t = np.where(worse, 0.5 * t, t)
-        a, b, ll = a + t * da, b + t * db, np.where(np.isfinite(trial), trial, ll)
-        converged |= (np.abs(t * da) <= FIT_TOLERANCE * (1.0 + np.abs(a))) & \
-                     (np.abs(t * db) <= FIT_TOLERANCE * (1.0 + np.abs(b)))
-        if converged.all():
+        ai, bi = ai + t * da, bi + t * db
+        a[active], b[active], ll[active] = ai, bi, np.where(np.isfinite(trial), trial, lli)
+        done = (np.abs(t * da) <= FIT_TOLERANCE * (1.0 + np.abs(ai))) & \
+               (np.abs(t * db) <= FIT_TOLERANCE * (1.0 + np.abs(bi)))
+        converged[active[done]] = True
+        active = active[~done]
+        if active.size == 0:
             break
     return a, b, converged
 
@@ -1025,22 +1030,42 @@ def fit_state(levels, exceeded: np.ndarray, *, resamples: int = BOOTSTRAP_RESAMP
     return out
 
 
-def _resample_weights(records: int, resamples: int, seed: int, per_record: int) -> np.ndarray:
-    """``float64[resamples, records * per_record]``: how often each row is drawn when the records
-    are resampled with replacement (each with its ``per_record`` rows); `_bootstrap`'s draws."""
+def _resample_weights(records: int, resamples: int, seed: int, per_record: int):
+    """The bootstrap's draws of the records with replacement, each record with its ``per_record``
+    rows: ``float64[resamples, records * per_record]``, how often each row is drawn, and
+    ``int[resamples, records * per_record]``, the rows drawn."""
     rng = np.random.default_rng(seed)
     picks = rng.integers(0, records, size=(resamples, records))
     weights = np.zeros((resamples, records))
     np.add.at(weights, (np.repeat(np.arange(resamples), records), picks.ravel()), 1.0)
-    return np.repeat(weights, per_record, axis=1) if per_record > 1 else weights
+    if per_record > 1:
+        weights = np.repeat(weights, per_record, axis=1)
+        picks = (picks[:, :, None] * per_record + np.arange(per_record)).reshape(resamples, -1)
+    return weights, picks
+
+
+def _distinct_rows(n: np.ndarray, z: np.ndarray):
+    """The distinct rows of the counts ``(n, z)`` (float64[B, L] each) and, for each row, the index
+    of its distinct row. A resample's fits depend on its counts only, and few records give few
+    distinct resamples (at most C(2R-1, R): 462 for 6 records), so each is fitted once."""
+    rows = np.concatenate([n, z], axis=1)
+    order = np.lexsort(rows.T[::-1])
+    rows = rows[order]
+    first = np.ones(len(rows), dtype=bool)            # the first of its kind in sorted order
+    first[1:] = (rows[1:] != rows[:-1]).any(axis=1)
+    which = np.empty(len(rows), dtype=np.intp)
+    which[order] = np.cumsum(first) - 1
+    distinct = rows[first]
+    return distinct[:, :n.shape[1]], distinct[:, n.shape[1]:], which
 
 
 def _isotonic_band(exceeded, resamples: int, seed: int, per_record: int) -> np.ndarray:
     """The percentile band (:data:`CONFIDENCE`) of the isotonic curve over resamples of the records."""
-    weights = _resample_weights(exceeded.shape[0] // per_record, resamples, seed, per_record)
+    weights, _ = _resample_weights(exceeded.shape[0] // per_record, resamples, seed, per_record)
     n = weights @ (exceeded >= 0).astype(np.float64)
     z = weights @ (exceeded == 1).astype(np.float64)
-    curves = gf.isotonic(n, z)
+    n_distinct, z_distinct, which = _distinct_rows(n, z)
+    curves = gf.isotonic(n_distinct, z_distinct)[which]
     tails = (50.0 * (1.0 - CONFIDENCE), 100.0 - 50.0 * (1.0 - CONFIDENCE))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)          # a level without runs in every resample
@@ -1082,14 +1107,7 @@ def _first_exceedance(levels, exceeded, show):
 def _bootstrap(out: StateFit, s, exceeded, capacity, resamples, seed, per_record: int = 1) -> None:
     """Percentile intervals of both fits over resamples of the records (each record with its
     ``per_record`` consecutive rows)."""
-    rng = np.random.default_rng(seed)
-    records = exceeded.shape[0] // per_record
-    picks = rng.integers(0, records, size=(resamples, records))
-    weights = np.zeros((resamples, records))
-    np.add.at(weights, (np.repeat(np.arange(resamples), records), picks.ravel()), 1.0)
-    if per_record > 1:
-        weights = np.repeat(weights, per_record, axis=1)
-        picks = (picks[:, :, None] * per_record + np.arange(per_record)).reshape(resamples, -1)
+    weights, picks = _resample_weights(exceeded.shape[0] // per_record, resamples, seed, per_record)
     inside = (exceeded >= 0).astype(np.float64)
     hits = (exceeded == 1).astype(np.float64)
     n, z = weights @ inside, weights @ hits
@@ -1097,7 +1115,8 @@ def _bootstrap(out: StateFit, s, exceeded, capacity, resamples, seed, per_record
     if out.median is not None:
         low, high = _separation(n, z)
         ok = (low >= 0) & (high > low)
-        a, b, converged = probit_mle(s, n[ok], z[ok])
+        n_distinct, z_distinct, which = _distinct_rows(n[ok], z[ok])
+        a, b, converged = (v[which] for v in probit_mle(s, n_distinct, z_distinct))
         good = converged & (b > 0)
         samples = np.column_stack([np.exp(-a[good] / b[good]), 1.0 / b[good]])
         out.samples, out.resamples_fitted = samples, int(good.sum())
