@@ -12,6 +12,7 @@ from __future__ import annotations
 import importlib.util
 import json
 import os
+import signal
 import subprocess
 import sys
 from pathlib import Path
@@ -247,3 +248,72 @@ def test_warp_efficiency_counts_the_slowest_case_of_each_warp():
     assert issued == pytest.approx(32 * 31 + 32 * 39)     # warps of cases 0-31 and 32-39 (padded)
     _, sorted_issued = gpu.warp_efficiency(states, params, np.arange(40)[::-1])
     assert sorted_issued == pytest.approx(32 * 39 + 32 * 7)
+
+
+def test_a_device_run_stores_a_chunk_a_launch_and_reads_nothing_back(tmp_path, monkeypatch):
+    """On the GPU a chunk is up to a launch (`execute.device_chunks`: 12 cases at 5 a launch are 3
+    chunks of 4, not the plan's 6 of 2), a launch holds the chunks that fit in
+    `DEVICE_CASES_PER_LAUNCH` (a larger chunk goes alone), and the states come from the launches,
+    not read back from the chunk files. The device here is the CPU's batch driver under
+    `gpu.compute`'s name: what is tested is the launches and the files (the simulator tests above
+    hold the device's arithmetic)."""
+    from rockslide.analyses import sweep as sw
+    from rockslide.case import load_case
+    from rockslide.engine import chunks
+    from rockslide.engine import execute as ex
+
+    launched = []
+
+    def device(*inputs):
+        launched.append(len(inputs[0]))
+        return batch.compute(*inputs)
+
+    monkeypatch.setattr(ex, "DEVICE_CASES_PER_LAUNCH", 5)
+    monkeypatch.setattr(gpu, "compute", device)
+    monkeypatch.setattr(gpu, "require_device", lambda: None)
+    monkeypatch.setattr(ex, "warm_up", lambda device, say: None)
+    monkeypatch.setattr(ex, "collect", lambda *args: pytest.fail("the states were read back from the files"))
+    axes = [sw.parse_axis("mu", "0.2,0.4,0.6"), sw.parse_axis("pga", "100gal,300gal,600gal,900gal")]
+    cpu = ex.execute(sw.plan_sweep(load_case(EXAMPLE), axes, records_dir=RECORDS, chunk_size=2))
+    for chunk_size, launches in ((2, [4, 4, 4]), (3, [4, 4, 4]), (6, [6, 6])):
+        plan = sw.plan_sweep(load_case(EXAMPLE), axes, records_dir=RECORDS, chunk_size=chunk_size)
+        store = chunks.ChunkStore.beside(tmp_path / f"{chunk_size}.sweep.h5", plan.key)
+        launched.clear()
+        done = ex.execute(plan, store, device="gpu")
+        assert launched == launches
+        assert done.chunks == done.store.count() == len(launches)
+        assert done.store.folder != store.for_plan(plan.key).folder          # the device's own store
+        assert np.array_equal(done.states, cpu.states, equal_nan=True)
+        again = ex.execute(plan, store, device="gpu")                       # resumed: nothing to launch
+        assert launched == launches and again.computed == 0
+        assert np.array_equal(again.states, cpu.states, equal_nan=True)
+
+
+def test_an_interrupted_device_run_says_where_its_chunks_are(tmp_path, monkeypatch):
+    """Ctrl-C between launches: the exception carries the device's store and its chunk count, which
+    the message names (`api.studies`), not the CPU's folder and chunking."""
+    from rockslide import interrupts
+    from rockslide.analyses import sweep as sw
+    from rockslide.case import load_case
+    from rockslide.engine import chunks
+    from rockslide.engine import execute as ex
+
+    launches = []
+
+    def device(*inputs):
+        launches.append(len(inputs[0]))
+        if len(launches) == 2:
+            os.kill(os.getpid(), signal.SIGINT)     # Ctrl-C during the second launch
+        return batch.compute(*inputs)
+
+    monkeypatch.setattr(ex, "DEVICE_CASES_PER_LAUNCH", 5)
+    monkeypatch.setattr(gpu, "compute", device)
+    monkeypatch.setattr(gpu, "require_device", lambda: None)
+    monkeypatch.setattr(ex, "warm_up", lambda device, say: None)
+    axes = [sw.parse_axis("mu", "0.2,0.4,0.6"), sw.parse_axis("pga", "100gal,300gal,600gal,900gal")]
+    plan = sw.plan_sweep(load_case(EXAMPLE), axes, records_dir=RECORDS, chunk_size=2)
+    store = chunks.ChunkStore.beside(tmp_path / "x.sweep.h5", plan.key)
+    with interrupts.handling_signals(), pytest.raises(interrupts.Interrupted) as stopped:
+        ex.execute(plan, store, device="gpu")
+    assert stopped.value.chunks == 3 and stopped.value.store.count() == 2
+    assert stopped.value.store.folder == store.for_plan(plan.key).for_device("gpu").folder

@@ -277,13 +277,13 @@ def _execute(plan, store, outputs, *, what, description, label, unit, workers, s
                                wait_workers=wait_workers)
         except interrupts.Interrupted as exc:
             if isinstance(held, ChunkStore):
-                kept = held.for_plan(plan.key)
-                exc.kept = (f"{kept.count()} of {plan.n_chunks} chunks are kept in {kept.folder}; the same command "
-                            "resumes from them")
+                kept = getattr(exc, "store", None) or held.for_plan(plan.key)
+                exc.kept = (f"{kept.count()} of {getattr(exc, 'chunks', plan.n_chunks)} chunks are kept in "
+                            f"{kept.folder}; the same command resumes from them")
             raise
     if shard is not None:
         say(f"{what} {label}: shard {shard[0]}/{shard[1]} computed {done.computed} {unit}s in {done.seconds:.1f} s; "
-            f"{done.store.count()} of {plan.n_chunks} chunks are in {done.store.folder} (the same command without "
+            f"{done.store.count()} of {done.chunks} chunks are in {done.store.folder} (the same command without "
             "--shard collects them)")
         return None
     return done

@@ -153,8 +153,13 @@ def launch_order(params, base, first, count, kh):
     """
     first = np.broadcast_to(np.asarray(first, dtype=np.int64), params.shape[:1])
     count = np.broadcast_to(np.asarray(count, dtype=np.int64), params.shape[:1])
-    records, which = np.unique(np.stack([first, count]), axis=1, return_inverse=True)
-    peak = np.array([np.abs(base[:2, f:f + c]).max(initial=0.0) for f, c in records.T])[which.ravel()]
+    # the distinct records (first, count) as one integer each (both are at most the base's length):
+    # numpy's unique of a 1-D int64 is a plain sort, where unique(axis=1) sorts a structured type,
+    # 0.1 s per launch of 65536 cases
+    span = base.shape[1] + 1
+    records, which = np.unique(first * span + count, return_inverse=True)
+    peak = np.array([np.abs(base[:2, f:f + c]).max(initial=0.0)
+                     for f, c in zip(records // span, records % span, strict=True)])[which.ravel()]
     tan_alpha = np.where(params[:, K.P_ASYM] != 0.0, np.minimum(params[:, K.P_TAN_ALPHA], params[:, K.P_TAN_ALPHA2]),
                          params[:, K.P_TAN_ALPHA])        # the weaker pivot of an asymmetric body
     threshold = np.minimum(params[:, K.P_MU], tan_alpha) * params[:, K.P_G]

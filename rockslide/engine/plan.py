@@ -263,7 +263,9 @@ def definition_key(plan: Plan) -> str:
 
     The case text, the axes (values as given and in SI), the kinetic friction ratio, the chunk size,
     every point's kernel parameters, initial state and scale factors, the unscaled ground samples,
-    the package version and the compiled core's sources (`native.source_stamp`).
+    the package version and the compiled core's sources (`native.source_stamp`). A plan with
+    ``rows`` is hashed as it is held, its distinct rows and each point's row, which fix every
+    point's parameters and state (expanding them took 0.5 s of the planning of 10^6 points).
     """
     digest = hashlib.sha256()
     header = {
@@ -274,16 +276,14 @@ def definition_key(plan: Plan) -> str:
         "kernel_source": native.source_stamp(),
     }
     digest.update(json.dumps(header, sort_keys=True).encode())
-    for rows_of in (plan.case_params, plan.case_states):          # every point's, a block at a time
-        for start in range(0, plan.n_cases, HASH_BLOCK):
-            digest.update(np.ascontiguousarray(rows_of(slice(start, start + HASH_BLOCK)), dtype=np.float64))
+    for array in (plan.params, plan.states):
+        digest.update(np.ascontiguousarray(array, dtype=np.float64))
+    if plan.rows is not None:
+        digest.update(b"rows")
+        digest.update(np.ascontiguousarray(plan.rows, dtype=np.int64))
     for array in (plan.factor_h, plan.factor_v, plan.base, plan.first, plan.count):
         digest.update(np.ascontiguousarray(array, dtype=np.float64))
     return digest.hexdigest()
-
-
-#: Points hashed at a time by `definition_key` (a plan with ``rows`` is expanded a block at a time).
-HASH_BLOCK = 1 << 16
 
 
 def bytes_needed(plan: Plan, n_chunks: int) -> int:
