@@ -22,7 +22,7 @@ help:
 	@echo "               the hypothesis fuzzers of 100 to 500 examples; the list with reasons is in"
 	@echo "               tests/conftest.py (SLOW_MODULES, SLOW_TESTS) and @pytest.mark.slow. make test runs them all"
 	@echo "make check     lint, import contracts, then the tests"
-	@echo "make bench     speed and accuracy benchmarks -> results/bench.md, bench_kernel.md, bench_sweep.md, bench_fragility.md, bench_startup.md, bench_overhead.md, bench_large.md, bench_auto_step.md, work_precision.png"
+	@echo "make bench     speed and accuracy benchmarks -> results/bench.md, bench_kernel.md, bench_sweep.md, bench_fragility.md, bench_startup.md, bench_overhead.md, bench_gpu_host.md, bench_large.md, bench_auto_step.md, work_precision.png"
 	@echo "make table1    the paper's Table 1 and Figures 5-10 -> results/ (needs the paper's records)"
 	@echo "make example   run configs/example.yaml"
 	@echo "make spectrum  an overturning spectrum under one-sine pulses -> results/spectrum.png"
@@ -53,6 +53,7 @@ bench:
 	$(PYTHON) benchmarks/bench_startup.py --cold >> results/bench.md
 	$(PYTHON) benchmarks/bench_startup.py > results/bench_startup.md
 	$(PYTHON) benchmarks/bench_overhead.py --out results > /dev/null
+	$(PYTHON) benchmarks/bench_gpu_host.py --out results > /dev/null
 
 table1:
 	$(PYTHON) -m rockslide table1 --records-dir "$(ROCKSLIDE_RECORDS)" --out-dir results
