@@ -97,16 +97,20 @@ def rocking_plan(tmp: Path, cases: int, auto: bool = False):
 
 
 def timed_sweep(plan, out: Path, device: str):
+    """The compute of ``plan`` on ``device`` as `rockslide sweep` makes it (chunk files included; on
+    the GPU, chunks of a launch: `execute.device_chunks`): its wall time and the final states."""
+    from rockslide.core import kernel as K
     from rockslide.engine import chunks
     from rockslide.engine import execute as ex
 
-
-    store = chunks.ChunkStore.beside(out / f"{device}.sweep.h5", plan.key)
+    if device == "gpu":
+        plan = ex.device_chunks(plan)
+    store = chunks.ChunkStore.beside(out / f"{device}.sweep.h5", plan.key).for_device(device)
     store.remove()
+    states = np.empty((plan.n_cases, K.N_STATE))
     started = time.perf_counter()
-    ex.compute(plan, store, range(plan.n_chunks), device=device)
+    ex.compute(plan, store, range(plan.n_chunks), device=device, out=states)
     wall = time.perf_counter() - started
-    states = chunks.collect(plan, store)
     store.remove()
     return wall, states
 
@@ -142,7 +146,7 @@ def bench(plan, title: str, out: Path, cpu_only: bool = False) -> dict:
     cpu_wall, cpu = timed_sweep(plan, out, "cpu")
     gpu_wall, device = timed_sweep(plan, out, "gpu") if not cpu_only else (None, None)
     moving = cpu[:, K.S_T_SLIP] + cpu[:, K.S_T_ROCK] + cpu[:, K.S_T_ROCKSLIP]
-    params = plan.case_params(plan.rows if plan.rows is not None else slice(None))
+    params = plan.case_params()
     steps = float((moving / params[:, K.P_STEP]).sum())
     order = gpu.launch_order(params, plan.base, plan.first, plan.count, plan.factor_h)
     useful, issued = gpu.warp_efficiency(cpu, params, order)

@@ -277,7 +277,8 @@ def _execute(plan, store, outputs, *, what, description, label, unit, workers, s
                                wait_workers=wait_workers)
         except interrupts.Interrupted as exc:
             if isinstance(held, ChunkStore):
-                kept = getattr(exc, "store", None) or held.for_plan(plan.key)
+                kept = getattr(exc, "store", None)         # where the compute kept them (the GPU's own)
+                kept = held.for_plan(plan.key) if kept is None else kept
                 exc.kept = (f"{kept.count()} of {getattr(exc, 'chunks', plan.n_chunks)} chunks are kept in "
                             f"{kept.folder}; the same command resumes from them")
             raise
