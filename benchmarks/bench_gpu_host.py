@@ -31,19 +31,10 @@ import sys
 import tempfile
 from pathlib import Path
 
-from bench_startup import KOBE, find_records, machine
+from bench_gpu import ROCKING_CASE, kobe_records
+from bench_startup import KOBE, machine
 
 REPO = Path(__file__).resolve().parents[1]
-CASE = """\
-name: rocking
-block:   {{height: 2.5 m, width: 0.5 m, mass: 500 kg}}
-contact: {{mu_static: 0.9, mu_kinetic: 0.855, restitution: 0.9}}
-ground:
-  horizontal: {{file: {horizontal}}}
-  vertical: {{file: {vertical}}}
-  scale: {{pga_horizontal: 500 gal}}
-solver:  {{dt: auto, events: located}}
-"""
 #: The child: installs the stand-in device, times the command's steps, prints them as JSON last.
 CHILD = r"""
 import json, sys, time, types
@@ -132,12 +123,13 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=3, help="runs (default 3)")
     parser.add_argument("--out", type=Path, default=None, help="also write FOLDER/bench_gpu_host.md")
     args = parser.parse_args()
-    records = find_records()
-    if records is None:
+    horizontal, vertical, _ = kobe_records()
+    if vertical is None:
         raise SystemExit(f"needs the Kobe records ({KOBE[0]}, {KOBE[1]}): set ROCKSLIDE_RECORDS")
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
-        (folder / "rocking.yaml").write_text(CASE.format(horizontal=records / KOBE[0], vertical=records / KOBE[1]))
+        case = ROCKING_CASE.format(horizontal=horizontal, vertical=f"  vertical: {{file: {vertical}}}\n")
+        (folder / "rocking.yaml").write_text(case.replace("dt: 0.1 ms", "dt: auto"))
         runs = [run(folder, args.cases) for _ in range(args.repeat)]
     lines = ["# The host's part of a GPU study (the device an instant stand-in)", "",
              *(f"{line}  " for line in machine()), "",
