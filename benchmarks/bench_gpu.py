@@ -20,8 +20,9 @@ such differences near 1e-13), and a case near an overturning threshold may chang
 Writes results/bench_gpu.md (``--out``) from what it measured; ``--auto`` runs the grids with
 ``solver.dt: auto`` (the device's launch order weighs each case's step count, `gpu.launch_order`).
 Without a GPU (or without numba-cuda) it prints why, writes nothing and exits with status 0;
-``--cpu-only`` measures the CPU side alone (and writes the file with the device's columns empty),
-which is how the writing is tested on a machine without a GPU. Asserts nothing.
+``--cpu-only`` measures the CPU side alone (and, given ``--out``, writes the file with the device's
+columns empty, which is how the writing is tested on a machine without a GPU; without ``--out`` it
+writes nothing, so as not to replace the device's figures in results/). Asserts nothing.
 
 Usage: python benchmarks/bench_gpu.py [--cases N] [--grid fragility|rocking|both] [--auto] [--cpu-only]
                                       [--out results]
@@ -195,7 +196,9 @@ def main(argv=None) -> int:
     parser.add_argument("--grid", choices=("fragility", "rocking", "both"), default="both")
     parser.add_argument("--auto", action="store_true", help="solver.dt: auto instead of 0.1 ms")
     parser.add_argument("--cpu-only", action="store_true", help="the CPU side alone (no GPU needed)")
-    parser.add_argument("--out", type=Path, default=REPO / "results")
+    parser.add_argument("--out", type=Path, default=None,
+                        help="where bench_gpu.md goes (default results/; with --cpu-only, nowhere unless given: a "
+                             "run without the device must not replace the device's figures)")
     args = parser.parse_args(argv)
 
     from rockslide.core import gpu
@@ -223,10 +226,13 @@ def main(argv=None) -> int:
             measured.append(bench(*fragility_plan(tmp, args.auto), tmp, args.cpu_only))
         if args.grid in ("rocking", "both"):
             measured.append(bench(*rocking_plan(tmp, args.cases, args.auto), tmp, args.cpu_only))
-    args.out.mkdir(parents=True, exist_ok=True)
+    out = args.out if args.out is not None or args.cpu_only else REPO / "results"
+    if out is None:
+        return 0
+    out.mkdir(parents=True, exist_ok=True)
     command = "python benchmarks/bench_gpu.py " + " ".join(argv if argv is not None else sys.argv[1:])
-    (args.out / "bench_gpu.md").write_text(markdown(name, measured, command.strip()))
-    print(f"wrote {args.out / 'bench_gpu.md'}")
+    (out / "bench_gpu.md").write_text(markdown(name, measured, command.strip()))
+    print(f"wrote {out / 'bench_gpu.md'}")
     return 0
 
 

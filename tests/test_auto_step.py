@@ -158,8 +158,9 @@ def test_the_device_launch_order_counts_each_cases_steps():
 
 
 def test_bench_gpu_writes_its_file_from_what_it_measured(tmp_path):
-    """``bench_gpu.py --cpu-only`` (no GPU here) measures a tiny grid at auto and writes
-    results/bench_gpu.md with its numbers; the device's columns say 'not measured'."""
+    """``bench_gpu.py --cpu-only --out FOLDER`` (no GPU here) measures a tiny grid at auto and writes
+    FOLDER/bench_gpu.md with its numbers; the device's columns say 'not measured'. Without ``--out``
+    it writes nothing."""
     import subprocess
     import sys
 
@@ -172,3 +173,9 @@ def test_bench_gpu_writes_its_file_from_what_it_measured(tmp_path):
     text = (tmp_path / "bench_gpu.md").read_text()
     assert "| GPU | not measured |" in text and "4 cases at " in text and "(auto)" in text
     assert "--cpu-only" in text
+    # without --out, a run without the device leaves the device's figures in results/ alone
+    kept = (REPO / "results" / "bench_gpu.md").read_bytes()
+    done = subprocess.run([sys.executable, str(REPO / "benchmarks" / "bench_gpu.py"), "--cpu-only", "--grid",
+                           "rocking", "--cases", "4"], capture_output=True, text=True, timeout=600, cwd=REPO)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert "wrote" not in done.stdout and (REPO / "results" / "bench_gpu.md").read_bytes() == kept
