@@ -87,8 +87,7 @@ def timed(fn):
 
 def steps_of(plan) -> float:
     """Integration steps the plan asks for (record intervals times steps per interval, every case)."""
-    params = plan.case_params(plan.rows if plan.rows is not None else slice(None))
-    return float(np.sum(plan.count * params[:, L.P_N_SUB]))
+    return float(np.sum(plan.count * plan.case_column(L.P_N_SUB)))
 
 
 def statue(folder: Path, members: int) -> dict:
