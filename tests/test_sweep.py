@@ -590,3 +590,12 @@ def test_options_of_result_figures_are_refused_for_a_sweep_file(swept, tmp_path,
     one_line_error(invoke("plot", out / "example.sweep.h5", option, value, "-o", tmp_path / "x.png"),
                    f"{option}: applies to result files, not to sweep files")
     assert not (tmp_path / "x.png").exists()
+
+
+def test_a_sweep_of_one_point_says_one_case_and_one_chunk(tmp_path):
+    """The printout's counts agree with their nouns at one (the GPU's chunks of a launch make a
+    study of a single chunk common)."""
+    result = invoke(*sweep_args(tmp_path, "--mu", "0.5", "--pga", "500gal", extra=["--no-plot"]))
+    assert result.exit_code == 0, result.output
+    assert "= 1 case in 1 chunk, on this machine" in result.stdout
+    assert "computed 1 case in " in result.stdout

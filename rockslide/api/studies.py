@@ -320,9 +320,9 @@ def _write(result: StudyResult, outputs, *, figure, table, more=None) -> None:
 
 
 def _rate(done, unit: str) -> str:
-    """``1517 cases in 1.2 s (1264 cases/s)``."""
+    """``1517 cases in 1.2 s (1264 cases/s)`` (``unit`` plural; ``1 case``)."""
     rate = f" ({done.computed / done.seconds:.0f} {unit}/s)" if done.computed and done.seconds > 0 else ""
-    return f"{done.computed} {unit} in {done.seconds:.1f} s{rate}"
+    return f"{done.computed} {unit if done.computed != 1 else unit[:-1]} in {done.seconds:.1f} s{rate}"
 
 
 def _step_note(plan) -> list[str]:

@@ -445,7 +445,7 @@ def execute(plan: Plan, store=None, *, workers: int | None = None, scheduler: st
              "on this machine's GPU" if device == "gpu" else "on this machine")
     where += f" (--device auto: {why})" if why else ""
     if description:
-        say(f"{what} {label}: {description} in {plan.n_chunks} chunks, {where}")
+        say(f"{what} {label}: {description} in {plan.n_chunks} chunk{'s' if plan.n_chunks != 1 else ''}, {where}")
     if reused:
         say(f"  reused {reused} of {plan.n_chunks} chunks ({reused_cases} {unit}s) from {store.folder}")
     if shard is not None:
