@@ -1047,7 +1047,10 @@ def _resample_weights(records: int, resamples: int, seed: int, per_record: int):
 def _distinct_rows(n: np.ndarray, z: np.ndarray):
     """The distinct rows of the counts ``(n, z)`` (float64[B, L] each) and, for each row, the index
     of its distinct row. A resample's fits depend on its counts only, and few records give few
-    distinct resamples (at most C(2R-1, R): 462 for 6 records), so each is fitted once."""
+    distinct resamples (at most C(2R-1, R): 462 for 6 records), so each is fitted once. What
+    ``np.unique(rows, axis=0, return_inverse=True)`` gives, in the same order, by a lexicographic
+    sort of the columns: numpy sorts the rows as one structured type, 11.5 ms against 0.5 ms for
+    1000 rows of 30 counts."""
     rows = np.concatenate([n, z], axis=1)
     order = np.lexsort(rows.T[::-1])
     rows = rows[order]
