@@ -889,8 +889,11 @@ def _support_note(levels: np.ndarray, n: np.ndarray, z: np.ndarray, show) -> str
 
 
 def _log_likelihood(a, b, s, n, z):
+    """The log-likelihood of each data set at ``(a, b)``, and ``ln Phi(eta)``, ``ln Phi(-eta)``
+    at its levels (what Newton's next step at ``(a, b)`` takes)."""
     eta = a[:, None] + b[:, None] * s
-    return np.sum(z * log_normal_cdf(eta) + (n - z) * log_normal_cdf(-eta), axis=-1)
+    log_p, log_q = log_normal_cdf(eta), log_normal_cdf(-eta)
+    return np.sum(z * log_p + (n - z) * log_q, axis=-1), log_p, log_q
 
 
 def probit_mle(s: np.ndarray, n: np.ndarray, z: np.ndarray):
@@ -935,8 +938,9 @@ def probit_mle(s: np.ndarray, n: np.ndarray, z: np.ndarray):
 
 def _newton(a, b, s, n, z):
     """`probit_mle`'s iterations from the start ``(a, b)``, each on the data sets not yet converged
-    (a data set's iterates depend on its own rows only)."""
-    ll = _log_likelihood(a, b, s, n, z)
+    (a data set's iterates depend on its own rows only). A step's derivatives take ``ln Phi(+-eta)``
+    from the line search's last evaluation, which was at that very point (the same numbers)."""
+    ll, log_p, log_q = _log_likelihood(a, b, s, n, z)
     converged = np.zeros(a.shape, dtype=bool)
     active = np.arange(a.size)
     log_phi_const = 0.5 * math.log(2.0 * math.pi)
@@ -944,8 +948,8 @@ def _newton(a, b, s, n, z):
         ai, bi, ni, zi, lli = a[active], b[active], n[active], z[active], ll[active]
         eta = ai[:, None] + bi[:, None] * s
         log_phi = -0.5 * eta * eta - log_phi_const
-        up = np.exp(log_phi - log_normal_cdf(eta))        # phi / Phi
-        down = np.exp(log_phi - log_normal_cdf(-eta))     # phi / (1 - Phi)
+        up = np.exp(log_phi - log_p)                      # phi / Phi
+        down = np.exp(log_phi - log_q)                    # phi / (1 - Phi)
         d1 = zi * up - (ni - zi) * down                   # d ll / d eta
         d2 = zi * up * (eta + up) + (ni - zi) * down * (down - eta)   # -d2 ll / d eta2 >= 0
         g0, g1 = d1.sum(-1), (d1 * s).sum(-1)
@@ -956,11 +960,13 @@ def _newton(a, b, s, n, z):
             db = np.nan_to_num((h00 * g1 - h01 * g0) / det)
         t = np.ones_like(ai)
         for _ in range(60):
-            trial = _log_likelihood(ai + t * da, bi + t * db, s, ni, zi)
+            trial, log_p, log_q = _log_likelihood(ai + t * da, bi + t * db, s, ni, zi)
             worse = ~(trial >= lli - 1e-13 * np.abs(lli))
             if not worse.any():
                 break
             t = np.where(worse, 0.5 * t, t)
+        else:                                             # never better: the point moves on untried
+            log_p = log_q = None
         ai, bi = ai + t * da, bi + t * db
         a[active], b[active], ll[active] = ai, bi, np.where(np.isfinite(trial), trial, lli)
         done = (np.abs(t * da) <= FIT_TOLERANCE * (1.0 + np.abs(ai))) & \
@@ -969,6 +975,11 @@ def _newton(a, b, s, n, z):
         active = active[~done]
         if active.size == 0:
             break
+        if log_p is None:
+            eta = a[active][:, None] + b[active][:, None] * s
+            log_p, log_q = log_normal_cdf(eta), log_normal_cdf(-eta)
+        else:
+            log_p, log_q = log_p[~done], log_q[~done]
     return a, b, converged
 
 

@@ -102,7 +102,9 @@ def isotonic(n, z) -> np.ndarray:
     flat_n, flat_z = n.reshape(-1, levels), z.reshape(-1, levels)
     out = np.empty(flat_n.shape)
     before = ~np.triu(np.ones((levels, levels), dtype=bool))       # [i, k]: i > k, no pool
-    chunk = max(1, (1 << 21) // max(1, levels * levels))          # 16 MB of pools at a time
+    # 1 MB of pools at a time: within a core's cache, twice as fast as 16 MB (2000 rows of 15 levels:
+    # 8 ms against 14-18 ms on the 2-core development machine)
+    chunk = max(1, (1 << 17) // max(1, levels * levels))
     for start in range(0, flat_n.shape[0], chunk):
         part = slice(start, start + chunk)
         ends_n, ends_z = np.cumsum(flat_n[part], axis=1), np.cumsum(flat_z[part], axis=1)
