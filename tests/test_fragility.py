@@ -22,6 +22,7 @@ from rockslide.analyses import fragility as fr
 from rockslide.case import case_to_dict, load_suite
 from rockslide.core import batch, intensity
 from rockslide.core import kernel as K
+from rockslide.core.normal import log_normal_cdf
 from rockslide.engine import chunks
 from rockslide.engine import execute as ex
 from rockslide.engine import prepare as runner
@@ -117,6 +118,78 @@ def test_the_bootstrap_fits_each_resample_as_a_fit_of_it_alone():
     assert len({tuple(p) for p in np.sort(picks, axis=1)}) < 150          # repeats: the case above
     assert fit.resamples_fitted == len(expected) > 150
     assert np.array_equal(fit.samples, np.array(expected))
+
+
+def plain_newton(a, b, s, n, z):
+    """`fr._newton` as a textbook writes it, one data set at a time, every quantity evaluated anew
+    at every point; with the number of line searches that found no better point in 60 halvings.
+    The reference of the one below."""
+    a, b = a.copy(), b.copy()
+    converged = np.zeros(a.shape, dtype=bool)
+    exhausted = 0
+
+    def log_likelihood(ar, br, nr, zr):
+        eta = ar + br * s
+        return np.sum(zr * log_normal_cdf(eta) + (nr - zr) * log_normal_cdf(-eta))
+
+    for r in range(a.size):
+        nr, zr = n[r], z[r]
+        ll = log_likelihood(a[r], b[r], nr, zr)
+        for _ in range(fr.FIT_ITERATIONS):
+            eta = a[r] + b[r] * s
+            log_phi = -0.5 * eta * eta - 0.5 * math.log(2.0 * math.pi)
+            up = np.exp(log_phi - log_normal_cdf(eta))
+            down = np.exp(log_phi - log_normal_cdf(-eta))
+            d1 = zr * up - (nr - zr) * down
+            d2 = zr * up * (eta + up) + (nr - zr) * down * (down - eta)
+            g0, g1 = d1.sum(), (d1 * s).sum()
+            h00, h01, h11 = d2.sum(), (d2 * s).sum(), (d2 * s * s).sum()
+            det = h00 * h11 - h01 * h01
+            da = np.nan_to_num((h11 * g0 - h01 * g1) / det)
+            db = np.nan_to_num((h00 * g1 - h01 * g0) / det)
+            t = 1.0
+            for _ in range(60):
+                trial = log_likelihood(a[r] + t * da, b[r] + t * db, nr, zr)
+                if trial >= ll - 1e-13 * abs(ll):
+                    break
+                t *= 0.5
+            else:
+                exhausted += 1
+            a[r], b[r] = a[r] + t * da, b[r] + t * db
+            ll = trial if np.isfinite(trial) else ll
+            if abs(t * da) <= fr.FIT_TOLERANCE * (1.0 + abs(a[r])) and \
+                    abs(t * db) <= fr.FIT_TOLERANCE * (1.0 + abs(b[r])):
+                converged[r] = True
+                break
+    return a, b, converged, exhausted
+
+
+def test_newton_takes_its_log_cdfs_from_the_line_search_to_the_bit():
+    """`fr._newton` evaluates ``ln Phi(+-eta)`` once per point: a step takes them from the line
+    search's last evaluation, which was at that point. 228 data sets fitted together: overlapping
+    ones from a near start and from a steep one (where about one in 60 overshoots at some step and
+    halves it), and nearly separated ones (whose estimates run away, line searches running out on
+    the way); against the textbook iterations one data set at a time: the same numbers to the bit.
+    Taking them from the search's first trial instead, or from the wrong data sets, fails here."""
+    rng = np.random.default_rng(17)
+    levels = np.linspace(0.1, 1.5, 9)
+    s = np.log(levels)
+    n = rng.integers(0, 6, size=(600, 9)).astype(float)
+    z = rng.binomial(n.astype(int), stats.norm.cdf(np.log(levels / 0.6) / 0.4)).astype(float)
+    low, high = fr._separation(n, z)
+    overlap = np.flatnonzero((low >= 0) & (high > low))[:220]
+    # nearly separated: no run below a level reaches the state, every run above it does, half at it
+    cut, level = rng.integers(1, 8, size=(8, 1)), np.arange(9)[None, :]
+    n = np.concatenate([n[overlap], np.full((8, 9), 4.0)])
+    z = np.concatenate([z[overlap], np.where(level > cut, 4.0, np.where(level == cut, 2.0, 0.0))])
+    kind = np.repeat([0, 1, 2], [20, 200, 8])       # 0: near start, 1: steep start, 2: separated
+    start_a, start_b = np.where(kind == 1, 0.0, 0.5), np.where(kind == 1, 30.0, 2.0)
+    with np.errstate(all="ignore"):
+        a, b, converged = fr._newton(start_a.copy(), start_b.copy(), s, n, z)
+        expected_a, expected_b, expected_converged, exhausted = plain_newton(start_a, start_b, s, n, z)
+    assert exhausted > 0 and converged[kind < 2].all()                  # both kinds of path taken
+    assert np.array_equal(a, expected_a) and np.array_equal(b, expected_b)
+    assert np.array_equal(converged, expected_converged)
 
 
 @pytest.mark.parametrize("rows, note", [
