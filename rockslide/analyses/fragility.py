@@ -965,8 +965,8 @@ def _newton(a, b, s, n, z):
             if not worse.any():
                 break
             t = np.where(worse, 0.5 * t, t)
-        else:                                             # never better: the point moves on untried
-            log_p = log_q = None
+        else:                       # 60 halvings, none better: the point taken (the last t) is untried
+            _, log_p, log_q = _log_likelihood(ai + t * da, bi + t * db, s, ni, zi)
         ai, bi = ai + t * da, bi + t * db
         a[active], b[active], ll[active] = ai, bi, np.where(np.isfinite(trial), trial, lli)
         done = (np.abs(t * da) <= FIT_TOLERANCE * (1.0 + np.abs(ai))) & \
@@ -975,11 +975,7 @@ def _newton(a, b, s, n, z):
         active = active[~done]
         if active.size == 0:
             break
-        if log_p is None:
-            eta = a[active][:, None] + b[active][:, None] * s
-            log_p, log_q = log_normal_cdf(eta), log_normal_cdf(-eta)
-        else:
-            log_p, log_q = log_p[~done], log_q[~done]
+        log_p, log_q = log_p[~done], log_q[~done]
     return a, b, converged
 
 
