@@ -281,6 +281,28 @@ def pytest_collection_modifyitems(config, items):
             item.add_marker(pytest.mark.slow)
 
 
+#: Tests whose work starts in a process of its own as soon as the session has collected (and
+#: selected) them, so that it computes on a second core while the other tests run: the test -> the
+#: function of its module that starts the work and returns an object with ``stop()`` (None: nothing
+#: started), which the session calls at its end.
+STARTED_EARLY = {"test_gpu_compile.py::test_run_cases_compiles_for_sm_90": "start_compile"}
+_started_early = []
+
+
+def pytest_collection_finish(session):
+    for item in session.items:
+        starter = STARTED_EARLY.get(f"{item.path.name}::{item.name}")
+        if starter is not None and not session.config.option.collectonly:
+            started = getattr(item.module, starter)()
+            if started is not None:
+                _started_early.append(started)
+
+
+def pytest_sessionfinish(session, exitstatus):
+    while _started_early:
+        _started_early.pop().stop()
+
+
 # --------------------------------------------------------------------------------------------------
 # Shared by several test files (tests import this module, never each other)
 # --------------------------------------------------------------------------------------------------
