@@ -253,6 +253,40 @@ def test_root_attributes(tmp_path, result):
     assert attrs["h5py_version"] == h5py.__version__
 
 
+
+@pytest.mark.parametrize("value", [
+    "", "text", "Δt = 0.1 ms, µ", "a\nb", 0.0, -0.0, 1.5, math.nan, math.inf, -math.inf, 5e-324, 0, -1, 2**63 - 1,
+    -2**63, 2**63, -2**63 - 1, True, False, np.float64(2.5), np.int32(3), np.bool_(True), np.arange(3),
+    np.array([0.5, 1.5]), b"bytes"], ids=repr)
+def test_attributes_are_stored_as_h5pys_attrs_stores_them(tmp_path, value):
+    """`results._Attributes` takes plain scalars through h5py's low-level API (its docstring): the
+    HDF5 type (H5Tequal), shape and value of each attribute are those of ``attrs[name] = value``,
+    h5py's own path, for new names, a name already there (replaced) and a name that is not ASCII;
+    values h5py refuses are refused alike."""
+    with h5py.File(tmp_path / "a.h5", "w") as f:
+        fast, plain = f.create_group("fast"), f.create_group("plain")
+        for name in ("new", "was_there", "Δ"):
+            refused = []
+            for group, write in ((fast, lambda g, n, v: results._Attributes(g).__setitem__(n, v)),
+                                 (plain, lambda g, n, v: g.attrs.__setitem__(n, v))):
+                group.attrs["was_there"] = "an older value, of another type"
+                try:
+                    write(group, name, value)
+                except Exception as exc:  # noqa: BLE001 - what h5py refuses, both must refuse
+                    refused.append(type(exc))
+            assert refused in ([], [OverflowError, OverflowError], [TypeError, TypeError]), refused
+            if refused:
+                continue
+            a, b = fast.attrs.get_id(name), plain.attrs.get_id(name)
+            assert a.get_type() == b.get_type() and a.shape == b.shape and a.dtype == b.dtype, name
+            if a.get_type().get_class() == h5py.h5t.STRING:        # H5Tequal leaves the character set out
+                assert (a.get_type().get_cset(), a.get_type().is_variable_str()) == \
+                    (b.get_type().get_cset(), b.get_type().is_variable_str()), name
+            x, y = fast.attrs[name], plain.attrs[name]
+            assert type(x) is type(y) and np.array_equal(x, y, equal_nan=np.asarray(x).dtype.kind == "f"), (x, y)
+            assert name in results._Attributes(fast)
+
+
 def test_case_is_flattened_with_dotted_keys(tmp_path, result):
     path = write_full(tmp_path / "demo.h5", result, tmp_path)
     with h5py.File(path) as f:
