@@ -446,8 +446,9 @@ def _write_body(f: h5py.File, result: Result, *, name, case_text, case, records,
     _label_dimensions(f, ds)
     _Attributes(ds)["units"] = "time: s, energy_loss: J"
     _Attributes(ds)["description"] = ("time [s], from/to: state names, cause, edge: pivot lam (+1 left, "
-                               "-1 right, 0 none), slip_direction: sigma, impact: branch of the impact "
-                               "law (stick, slip, flat), energy_loss: kinetic energy the impact took [J]")
+                                      "-1 right, 0 none), slip_direction: sigma, impact: branch of the "
+                                      "impact law (stick, slip, flat), energy_loss: kinetic energy the "
+                                      "impact took [J]")
 
     if case_text or case:
         group = f.create_group("case", track_order=True)
