@@ -25,7 +25,6 @@ from __future__ import annotations
 import contextlib
 import errno
 import math
-import multiprocessing
 import os
 import random
 import shutil
@@ -554,18 +553,26 @@ def test_a_sweep_stopped_in_its_final_phase_is_finished_by_a_rerun(ws):
                    "example.sweep.h5 exists")
 
 
-def _race(folder: str, tag: str, start, results_queue) -> None:
-    """Publish a staged pair (NAME.h5, NAME.png) as soon as ``start`` is set."""
-    staging = files.Staging(overwrite=False)
-    for suffix in (".h5", ".png"):
-        Path(staging.stage(Path(folder) / f"same{suffix}")).write_text(tag)
-    start.wait()
-    try:
-        staging.publish()
-        results_queue.put((tag, "won"))
-    except Exception as exc:  # noqa: BLE001 - the loser's OutputError
-        staging.discard()
-        results_queue.put((tag, type(exc).__name__))
+#: One side of a publication race: stage NAME.h5 and NAME.png in the folder argv[1], each holding
+#: the text argv[2]; say "staged"; publish the pair when a line arrives on standard input; print
+#: "won", or the name of the exception that refused it.
+RACER = """
+import sys
+from pathlib import Path
+from rockslide.io import files
+folder, tag = Path(sys.argv[1]), sys.argv[2]
+staging = files.Staging(overwrite=False)
+for suffix in (".h5", ".png"):
+    Path(staging.stage(folder / f"same{suffix}")).write_text(tag)
+print("staged", flush=True)
+sys.stdin.readline()
+try:
+    staging.publish()
+    print("won")
+except Exception as exc:
+    staging.discard()
+    print(type(exc).__name__)
+"""
 
 
 @posix
@@ -573,20 +580,28 @@ def test_concurrent_publications_have_one_winner_and_no_mixed_pair(tmp_path):
     """20 rounds of two processes publishing a pair of files under the same names at the same
     instant (the publication `run` and `sweep` end with): exactly one wins each round, the other is
     refused, and both files are the winner's. (Two whole runs started together rarely meet in the
-    window between a check and a rename: 6 of 40 pairs did; the barrier here meets it every round.)"""
-    context = multiprocessing.get_context("fork")
+    window between a check and a rename: 6 of 40 pairs did. Here both have staged their files and
+    wait on their standard input, which is written to both at once.) The racers are new
+    interpreters, not forks of this one: other tests leave threads behind here (dask's offload
+    thread), and a fork of a process with threads may deadlock in the child."""
+    env = {**os.environ, "PYTHONPATH": str(REPO)}
     for round_ in range(20):
         folder = tmp_path / str(round_)
         folder.mkdir()
-        start, queue = context.Event(), context.Queue()
-        procs = [context.Process(target=_race, args=(str(folder), tag, start, queue)) for tag in "ab"]
-        for p in procs:
-            p.start()
-        time.sleep(0.01)
-        start.set()
-        for p in procs:
-            p.join(30)
-        outcomes = dict(queue.get(timeout=10) for _ in procs)
+        racers = {tag: subprocess.Popen([sys.executable, "-c", RACER, str(folder), tag], stdin=subprocess.PIPE,
+                                        stdout=subprocess.PIPE, text=True, env=env) for tag in "ab"}
+        try:
+            for racer in racers.values():
+                assert racer.stdout.readline().strip() == "staged"
+            for racer in racers.values():
+                racer.stdin.write("go\n")
+                racer.stdin.flush()
+            outcomes = {tag: racer.communicate(timeout=60)[0].strip() for tag, racer in racers.items()}
+        finally:
+            for racer in racers.values():
+                if racer.poll() is None:
+                    racer.kill()
+                    racer.wait()
         winners = [tag for tag, what in outcomes.items() if what == "won"]
         assert len(winners) == 1 and set(outcomes.values()) == {"won", "OutputError"}, outcomes
         assert {(folder / n).read_text() for n in ("same.h5", "same.png")} == set(winners)
