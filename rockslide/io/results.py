@@ -249,9 +249,10 @@ class ResultWriter:
                 dtype = np.int8 if name == "state" else np.float64
                 ds = history.create_dataset(name, shape=(0,), maxshape=(None,), dtype=dtype,
                                             chunks=(_CHUNK_ROWS,), **_COMPRESSION)
-                _Attributes(ds)["units"] = HISTORY_UNITS[name]
+                attrs = _Attributes(ds)
+                attrs["units"] = HISTORY_UNITS[name]
                 if name == "state":
-                    _Attributes(ds)["codes"] = STATE_CODES
+                    attrs["codes"] = STATE_CODES
                 self._datasets[name] = ds
             self._raw.check()
         except BaseException as exc:
@@ -444,19 +445,20 @@ def _write_body(f: h5py.File, result: Result, *, name, case_text, case, records,
     events = _events_for_file(result.events)
     ds = f.create_dataset("events", data=events, dtype=events.dtype)
     _label_dimensions(f, ds)
-    _Attributes(ds)["units"] = "time: s, energy_loss: J"
-    _Attributes(ds)["description"] = ("time [s], from/to: state names, cause, edge: pivot lam (+1 left, "
-                                      "-1 right, 0 none), slip_direction: sigma, impact: branch of the "
-                                      "impact law (stick, slip, flat), energy_loss: kinetic energy the "
-                                      "impact took [J]")
+    attrs = _Attributes(ds)
+    attrs["units"] = "time: s, energy_loss: J"
+    attrs["description"] = ("time [s], from/to: state names, cause, edge: pivot lam (+1 left, -1 right, 0 "
+                            "none), slip_direction: sigma, impact: branch of the impact law (stick, slip, "
+                            "flat), energy_loss: kinetic energy the impact took [J]")
 
     if case_text or case:
         group = f.create_group("case", track_order=True)
-        _Attributes(group)["yaml"] = case_text or ""
+        attrs = _Attributes(group)
+        attrs["yaml"] = case_text or ""
         for key, value in _flatten(case or {}).items():
             if key == "yaml":
                 raise ValueError("a case key may not be called 'yaml'")
-            _Attributes(group)[key] = value
+            attrs[key] = value
 
     records = list(records or ())
     if records:
@@ -465,12 +467,12 @@ def _write_body(f: h5py.File, result: Result, *, name, case_text, case, records,
             role = str(record.get("role") or "")
             if role not in RECORD_ROLES:
                 raise ValueError(f"record role must be one of {', '.join(RECORD_ROLES)}, got {role!r}")
-            group = top.create_group(role, track_order=True)
+            attrs = _Attributes(top.create_group(role, track_order=True))
             for key in RECORD_KEYS:
                 value = record.get(key)
                 if key == "path" and value not in (None, ""):
                     value = _file_name(value)
-                _Attributes(group)[key] = _attr_value(value)
+                attrs[key] = _attr_value(value)
 
     for group_name, (dimension, variables) in (extra_groups or {}).items():
         _write_labelled(f.create_group(group_name, track_order=True), [dimension], variables)
@@ -505,17 +507,19 @@ def _write_labelled(group, coords, variables) -> None:
     scales = {}
     for i, (name, values, a) in enumerate(coords):
         ds = group.create_dataset(name, data=_column(values))
+        attrs = _Attributes(ds)
         for key, value in a.items():
-            _Attributes(ds)[key] = _attr_value(value)
+            attrs[key] = _attr_value(value)
         ds.make_scale(name)
-        _Attributes(ds)["_Netcdf4Dimid"] = np.int32(i)
+        attrs["_Netcdf4Dimid"] = np.int32(i)
         scales[name] = ds
     for name, (dims, values, a) in variables.items():
         values = _array(values)          # a variable keeps its type (flags and counts: integers)
         options = {"chunks": True, **_COMPRESSION} if values.size > 65536 else {}
         ds = group.create_dataset(name, data=values, **options)
+        attrs = _Attributes(ds)
         for key, value in a.items():
-            _Attributes(ds)[key] = value if isinstance(value, np.ndarray) else _attr_value(value)
+            attrs[key] = value if isinstance(value, np.ndarray) else _attr_value(value)
         for i, dim in enumerate(dims):
             ds.dims[i].attach_scale(scales[dim])
 
@@ -534,8 +538,9 @@ def _label_dimensions(f: h5py.File, events) -> None:
             if name != "time":
                 ds.dims[0].attach_scale(time)
     index = f.create_dataset("event", data=np.arange(events.shape[0], dtype=np.int64))
-    _Attributes(index)["units"] = "1"
-    _Attributes(index)["long_name"] = "index of the event in the log"
+    attrs = _Attributes(index)
+    attrs["units"] = "1"
+    attrs["long_name"] = "index of the event in the log"
     index.make_scale("event")
     events.dims[0].attach_scale(index)
 
