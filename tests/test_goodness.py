@@ -130,6 +130,35 @@ def test_isotonic_is_pool_adjacent_violators_to_the_bit(levels):
                           expected.reshape(3, 1000, levels), equal_nan=True)
 
 
+@pytest.mark.parametrize("ends", ["zeros first", "all runs last", "both", "all runs first", "zeros last",
+                                  "nothing but zeros", "nothing but all runs"])
+def test_isotonic_of_rows_whose_ends_are_certain_is_pool_adjacent_violators_to_the_bit(ends):
+    """`gf.isotonic` pools only the levels between leading levels without a success and trailing
+    levels where every run succeeds (in every row): held against pooling adjacent violators where
+    such ends exist, and where the ends are the other way round (all runs first, zeros last: those
+    are violators to pool, not ends to leave out)."""
+    rng = np.random.default_rng(len(ends))
+    levels = 15
+    n = rng.integers(0, 6, size=(2000, levels)).astype(float)
+    n[:, [3, 12]] = 0.0                                  # levels without runs, inside the ends too
+    p = np.sort(rng.random(levels))
+    zeros, full = slice(0, 5), slice(10, levels)
+    if ends in ("zeros first", "both"):
+        p[zeros] = 0.0
+    if ends in ("all runs last", "both"):
+        p[full] = 1.0
+    if ends == "all runs first":
+        p[zeros] = 1.0
+    if ends == "zeros last":
+        p[full] = 0.0
+    if ends.startswith("nothing"):
+        p[:] = 0.0 if ends.endswith("zeros") else 1.0
+    z = rng.binomial(n.astype(int), p).astype(float)
+    expected = np.array([pool_adjacent_violators(nr, zr) for nr, zr in zip(n, z, strict=True)])
+    assert np.array_equal(gf.isotonic(n, z), expected, equal_nan=True)
+    assert np.array_equal(gf.isotonic(n[7], z[7]), expected[7], equal_nan=True)
+
+
 def test_a_true_lognormal_is_rejected_no_more_often_than_the_level_allows():
     """200 suites drawn from a known lognormal (10 levels, 40 runs each), fitted and tested at level
     0.05: the rejections are Binomial(200, 0.05) if the test holds its level; more than its 99.9 %

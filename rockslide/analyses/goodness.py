@@ -95,12 +95,32 @@ def isotonic(n, z) -> np.ndarray:
     pooled fraction ``sum z / sum n`` over levels ``i..k``, the pools that pooling adjacent
     violators would form. All rows at once on numpy: ``L^2`` pools a row, where pooling adjacent
     violators takes a Python loop a row (4.7 times slower for 1000 rows of 15 levels, 2.3 times
-    for 40)."""
+    for 40).
+
+    Leading levels where no row has a success are 0 and trailing levels where every run of every
+    row succeeds are 1 (no pool through them is lower, or higher, than the pools without them), so
+    only the levels between are pooled: a fragility's lowest and highest stripes often are such
+    levels (the parametric bootstrap of the example's fragility, 2000 rows: 8 of its 15 levels
+    pooled, 6.5 ms against 12.3 on the 2-core development machine)."""
     n = np.asarray(n, dtype=np.float64)
     z = np.asarray(z, dtype=np.float64)
-    levels = n.shape[-1]
-    flat_n, flat_z = n.reshape(-1, levels), z.reshape(-1, levels)
+    flat_n, flat_z = n.reshape(-1, n.shape[-1]), z.reshape(-1, n.shape[-1])
+    levels = flat_n.shape[1]
+    lead = int(np.argmin(np.append((flat_z == 0).all(axis=0), False)))         # levels: all rows 0
+    trail = int(np.argmin(np.append((flat_z == flat_n).all(axis=0)[::-1], False)))  # all rows n
+    middle = slice(lead, max(lead, levels - trail))
     out = np.empty(flat_n.shape)
+    out[:, :lead], out[:, middle.stop:] = 0.0, 1.0
+    out[:, middle] = _pooled_isotonic(flat_n[:, middle], flat_z[:, middle])
+    return np.where(flat_n > 0, out, np.nan).reshape(n.shape)
+
+
+def _pooled_isotonic(flat_n: np.ndarray, flat_z: np.ndarray) -> np.ndarray:
+    """`isotonic` of rows ``float64[R, L]`` by the max-min formula over all their pools."""
+    levels = flat_n.shape[-1]
+    out = np.empty(flat_n.shape)
+    if levels == 0:
+        return out
     before = ~np.triu(np.ones((levels, levels), dtype=bool))       # [i, k]: i > k, no pool
     # 1 MB of pools at a time: within a core's cache, twice as fast as 16 MB (2000 rows of 15 levels:
     # 8 ms against 14-18 ms on the 2-core development machine)
@@ -117,7 +137,7 @@ def isotonic(n, z) -> np.ndarray:
         np.minimum.accumulate(reverse, axis=2, out=reverse)       # [row, i, j]: min over k >= j
         pooled[:, before] = -np.inf
         out[part] = np.where(flat_n[part] > 0, pooled.max(axis=1), np.nan)
-    return out.reshape(n.shape)
+    return out
 
 
 def monotone_test(n, z, *, resamples: int = MONOTONE_RESAMPLES, seed: int = MONOTONE_SEED) -> tuple[float, float]:
