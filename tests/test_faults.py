@@ -37,6 +37,7 @@ import warnings
 from http.server import BaseHTTPRequestHandler, HTTPServer
 from pathlib import Path
 
+import h5py
 import numpy as np
 import pytest
 from conftest import (
@@ -246,18 +247,20 @@ def fill_disk_after(monkeypatch, budget: int) -> None:
     monkeypatch.setattr(results._RawFile, "__init__", init)
 
 
-@pytest.mark.parametrize("streamed", [True, False])
+@pytest.mark.parametrize("streamed", [True, False, "ensemble"])
 def test_injected_enospc_while_writing_a_run_is_one_line_and_leaves_nothing(ws, monkeypatch, streamed):
     """The disk fills after 20 kB of the result file, while the history streams into it or, held in
-    memory (`api.runs.HELD_HISTORY_ROWS`), is written after the compute: one line naming the file
-    and the reason, exit 2, nothing in the output folder (libhdf5 crashed at exit on such a file
-    before); and the process goes on writing HDF5 files normally afterwards."""
+    memory (`api.runs.HELD_HISTORY_ROWS`), is written after the compute, or is written on a thread
+    of its own while the run's ensemble computes (`api._shared.Meanwhile`): one line naming the
+    file and the reason, exit 2, nothing in the output folder (libhdf5 crashed at exit on such a
+    file before); and the process goes on writing HDF5 files normally afterwards."""
     (ws / "case.yaml").write_text(case_text({"solver.dt": "1 ms"}))
-    if streamed:
+    if streamed is True:
         monkeypatch.setattr(api_runs, "HELD_HISTORY_ROWS", 0)
+    ensemble = ["--ensemble", "4"] if streamed == "ensemble" else []
     with monkeypatch.context() as patch:
         fill_disk_after(patch, 20_000)
-        result = invoke("run", "case.yaml")
+        result = invoke("run", "case.yaml", *ensemble)
     one_error_line(result, "out/example.h5: cannot write the file (No space left on device)",
                    "free some space")
     assert listing(ws / "out") == []
@@ -281,6 +284,70 @@ def test_a_held_history_writes_the_file_a_streamed_one_writes(ws, monkeypatch):
     assert held.result.summary == streamed.result.summary
     assert {k: str(v) for k, v in held.attrs.items() if k != "created"} == \
         {k: str(v) for k, v in streamed.attrs.items() if k != "created"}
+
+
+def test_an_ensemble_writes_the_history_while_it_computes_and_the_same_file(ws, monkeypatch):
+    """With an ensemble on the build's machine code, the run's history is written on a thread of
+    its own while the neighbours compute (`api._shared.Meanwhile`): the file is the one written
+    after the compute (no second thread: `output_modules` says none), every dataset and attribute
+    (but the time it was written)."""
+    (ws / "case.yaml").write_text(case_text({"solver.dt": "1 ms"}))
+    threads = []
+    write_history = results.ResultWriter.write_history
+
+    def noting_the_thread(self, history):
+        threads.append(threading.current_thread().name)
+        return write_history(self, history)
+
+    monkeypatch.setattr(results.ResultWriter, "write_history", noting_the_thread)
+    assert invoke("run", "case.yaml", "--ensemble", "6", "--no-plot", "--out-dir", "meanwhile").exit_code == 0
+    assert threads == ["rockslide-meanwhile"]
+    monkeypatch.setattr(api_runs, "output_modules", lambda *args, **kwargs: [])
+    assert invoke("run", "case.yaml", "--ensemble", "6", "--no-plot", "--out-dir", "after").exit_code == 0
+    assert threads == ["rockslide-meanwhile"]
+    meanwhile, after = (results.read_result(ws / folder / "example.h5") for folder in ("meanwhile", "after"))
+    for name, column in after.result.history.items():
+        early = meanwhile.result.history[name]
+        assert np.array_equal(early, column) and early.dtype == column.dtype, name
+    assert np.array_equal(meanwhile.result.events, after.result.events)
+    assert meanwhile.result.summary == after.result.summary
+    assert {k: str(v) for k, v in meanwhile.attrs.items() if k not in ("created", "command_line")} == \
+        {k: str(v) for k, v in after.attrs.items() if k not in ("created", "command_line")}
+    with h5py.File(ws / "meanwhile" / "example.h5") as a, h5py.File(ws / "after" / "example.h5") as b:
+        assert sorted(a["ensemble"]) == sorted(b["ensemble"])
+        for name in a["ensemble"]:
+            assert np.array_equal(a["ensemble"][name][()], b["ensemble"][name][()], equal_nan=True), name
+
+
+@pytest.mark.parametrize("fails", ["interrupted", "writer fails too"])
+def test_an_ensemble_stopped_while_its_history_is_written_leaves_nothing(ws, monkeypatch, fails):
+    """Ctrl-C while the neighbours compute, once the history's file was made on its own thread
+    (or while that thread failed as well: the interruption is what is said): exit 130, the
+    interruption's line, nothing in the output folder, no temporary file, no HDF5 file left open."""
+    (ws / "case.yaml").write_text(case_text({"solver.dt": "1 ms"}))
+    files_open = h5py.h5f.get_obj_count(h5py.h5f.OBJ_ALL, h5py.h5f.OBJ_FILE)
+    written = threading.Event()
+    write_history = results.ResultWriter.write_history
+
+    def write_then_tell(self, history):
+        try:
+            if fails == "writer fails too":
+                raise OSError(errno.EIO, "Input/output error")
+            return write_history(self, history)
+        finally:
+            written.set()
+
+    def interrupted_neighbourhood(*args, **kwargs):
+        assert written.wait(60)          # the writer has its file (or failed): then the signal comes
+        raise interrupts.Interrupted(signal.SIGINT)
+
+    monkeypatch.setattr(results.ResultWriter, "write_history", write_then_tell)
+    monkeypatch.setattr(api_runs, "_neighbourhood", interrupted_neighbourhood)
+    result = invoke("run", "case.yaml", "--ensemble", "6")
+    assert result.exit_code == 130, result.output
+    assert result.output.splitlines()[-1] == "rockslide: interrupted (no partial result was written)"
+    assert listing(ws / "out") == [] and temporaries(ws / "out") == []
+    assert h5py.h5f.get_obj_count(h5py.h5f.OBJ_ALL, h5py.h5f.OBJ_FILE) == files_open
 
 
 def test_a_run_into_a_folder_that_takes_no_file_is_refused_before_it_computes(ws, monkeypatch):

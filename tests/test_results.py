@@ -355,13 +355,18 @@ def assert_same_result(a, b):
         assert np.array_equal(getattr(a, key), getattr(b, key)), key
 
 
-@pytest.mark.parametrize("chunk_steps", [97 * 100, None])
+@pytest.mark.parametrize("chunk_steps", [97 * 100, None, "early"])
 def test_the_result_kept_in_memory_is_the_file_read_back(tmp_path, chunk_steps):
     """What the writer keeps for the run's figure (`ResultWriter.written_result`) equals what
-    `read_result` gives back from the file: a history streamed in 13 chunks, or given whole."""
+    `read_result` gives back from the file: a history streamed in 13 chunks, given whole to
+    `finish`, or written whole before it (`ResultWriter.write_history`)."""
     with ResultWriter(tmp_path / "r.h5", keep_rows=10**6) as writer:
         if chunk_steps is None:
             kept = pulse_result()
+        elif chunk_steps == "early":
+            kept = pulse_result()
+            writer.write_history(kept.history)
+            assert writer.rows_written == kept.history["time"].size
         else:
             kept = pulse_result(chunk_steps=chunk_steps, on_chunk=writer.append_history)
             assert kept.history["time"].size == 0 and writer.rows_written == 119_901
@@ -397,6 +402,35 @@ def test_streamed_rows_win_over_result_history(tmp_path, result):
     back = read_result(tmp_path / "s.h5").result
     assert np.array_equal(back.history["rotation"], result.history["rotation"][:25])
     assert np.array_equal(back.history["state"], result.history["state"][:25])
+
+
+def test_a_history_written_before_finish_gives_the_file_finish_writes(tmp_path, result):
+    """`ResultWriter.write_history` (a run's history written while its ensemble computes) then
+    `finish` with that result: the same datasets, attributes and values as `finish` alone; the
+    history is not written twice, and no rows may be appended or the history written again."""
+    with ResultWriter(tmp_path / "alone.h5") as writer:
+        writer.finish(result, name="r", case_text=CASE_TEXT, case=CASE)
+    with ResultWriter(tmp_path / "early.h5") as writer:
+        writer.write_history(result.history)
+        with pytest.raises(ValueError, match="already written"):
+            writer.write_history(result.history)
+        with pytest.raises(ValueError, match="already written"):
+            writer.append_history(np.zeros((1, 6)))
+        writer.finish(result, name="r", case_text=CASE_TEXT, case=CASE)
+    alone, early = read_result(tmp_path / "alone.h5"), read_result(tmp_path / "early.h5")
+    assert_same_result(alone.result, early.result)
+    assert early.result.history["time"].size == result.history["time"].size
+    assert {k: str(v) for k, v in alone.attrs.items() if k != "created"} == \
+        {k: str(v) for k, v in early.attrs.items() if k != "created"}
+    with h5py.File(tmp_path / "alone.h5") as a, h5py.File(tmp_path / "early.h5") as b:
+        names_a, names_b = [], []
+        a.visit(names_a.append)
+        b.visit(names_b.append)
+        assert names_a == names_b
+        for name in names_a:
+            if isinstance(a[name], h5py.Dataset):
+                assert (a[name].shape, a[name].dtype, a[name].compression, a[name].shuffle, a[name].chunks) == \
+                    (b[name].shape, b[name].dtype, b[name].compression, b[name].shuffle, b[name].chunks), name
 
 
 def test_writer_rejects_bad_rows_and_second_finish(tmp_path, result):

@@ -167,6 +167,31 @@ def importing_meanwhile(modules: Sequence[str]):
         loader.join()
 
 
+class Meanwhile:
+    """``task()`` on a thread of its own, started at once, while the caller computes; `result`
+    waits for it and gives its value or raises its exception. For the work on a study's outputs
+    that needs nothing of what is being computed (a run's history, written while its ensemble
+    computes), only where `output_modules` allows a second thread (the build's machine code)."""
+
+    def __init__(self, task):
+        self._value = self._error = None
+        self._thread = threading.Thread(target=self._run, args=(task,), name="rockslide-meanwhile", daemon=True)
+        self._thread.start()
+
+    def _run(self, task) -> None:
+        try:
+            self._value = task()
+        except BaseException as exc:  # noqa: BLE001 - raised again by result(), in the caller's thread
+            self._error = exc
+
+    def result(self):
+        """The task's value, once it is done; its exception raised here."""
+        self._thread.join()
+        if self._error is not None:
+            raise self._error
+        return self._value
+
+
 def output_modules(outputs, *, device: str = "cpu", scheduler=None, analysis: Sequence[str] = ()) -> list[str]:
     """The modules a study's ``outputs`` (`outputs.OutputSet`, or None) are written with, and the
     modules its ``analysis`` of the results loads (`ANALYSIS_MODULES`), to load while it computes

@@ -15,6 +15,7 @@ from ..core.simulate import Result, Summary
 from ..errors import CaseError, OutputError
 from ._shared import (
     ANALYSIS_MODULES,
+    Meanwhile,
     as_case,
     callable_arg,
     check_where,
@@ -357,7 +358,9 @@ def _run_into(outputs, prepared, eplan, started, *, say, progress, device, worke
 
     A history of at most `HELD_HISTORY_ROWS` rows is held in memory and the file written after the
     compute, so that the file's modules (h5py) load while it computes (`importing_meanwhile`); a
-    longer one streams into the file as it is computed (bounded memory)."""
+    longer one streams into the file as it is computed (bounded memory). With an ensemble, the
+    run's history is written and compressed on a thread of its own while the neighbours compute
+    (`Meanwhile`, where `output_modules` allows it), the rest of the file after them."""
     from ..engine import prepare as engine
     from ..io import files
 
@@ -376,27 +379,44 @@ def _run_into(outputs, prepared, eplan, started, *, say, progress, device, worke
     summary = group = None
     streamed = case.solver.method == "kernel" and work.rows > HELD_HISTORY_ROWS
     with outputs.staging() as staging, contextlib.ExitStack() as opened:
-        def open_writer():
+        def new_writer():
             from ..io import results
 
             keep = KEEP_HISTORY_ROWS if outputs.plot else 0
-            return opened.enter_context(results.ResultWriter(outputs.h5, overwrite=outputs.overwrite,
-                                                             staging=staging, keep_rows=keep))
+            return results.ResultWriter(outputs.h5, overwrite=outputs.overwrite, staging=staging, keep_rows=keep)
+
+        def writer_with_history(history):
+            made = new_writer()
+            try:
+                made.write_history(history)
+            except BaseException:
+                made.discard()
+                raise
+            return made
 
         if streamed:
-            writer = open_writer()
+            writer = opened.enter_context(new_writer())
         else:                   # the file is written after the compute: its folder is tried before
             files.check_writable(outputs.h5)
             writer = None
         analysis = ANALYSIS_MODULES["ensemble"] if eplan is not None else ()
-        with importing_meanwhile(output_modules(outputs, device=device, analysis=analysis)):
+        meanwhile = output_modules(outputs, device=device, analysis=analysis)
+        with importing_meanwhile(meanwhile):
             result = engine.simulate_prepared(prepared, on_chunk=writer.append_history if streamed else None,
                                               progress=progress)
             if eplan is not None:
-                summary, dimension, group = _neighbourhood(eplan, result, device=device, workers=workers, say=say,
-                                                           bars=bars)
+                # the run's history is written (and compressed) while its neighbours compute
+                early = Meanwhile(lambda: writer_with_history(result.history)) if writer is None and meanwhile else None
+                try:
+                    summary, dimension, group = _neighbourhood(eplan, result, device=device, workers=workers, say=say,
+                                                               bars=bars)
+                except BaseException:
+                    _discard_meanwhile(early)
+                    raise
+                if early is not None:
+                    writer = opened.enter_context(early.result())
         if writer is None:
-            writer = open_writer()
+            writer = opened.enter_context(new_writer())
         planes = _planes(prepared, result, folder)
         stored = _stored_run(case, prepared, summary, None if group is None else (dimension, group))
         if planes is not None:
@@ -426,6 +446,17 @@ def _run_into(outputs, prepared, eplan, started, *, say, progress, device, worke
     written = outputs.written() + (f" and {ensemble_png}" if summary is not None and outputs.plot else "") \
         + (f" and {body_png}" if bodies and outputs.plot else "")
     return _run_result(prepared, result, summary, files=outputs, written=written, planes=planes)
+
+
+def _discard_meanwhile(early) -> None:
+    """After the compute failed or was interrupted: wait for the writer that `_run_into` made
+    meanwhile (if any) and discard it; its own failure, if any, is not the one to report."""
+    if early is None:
+        return
+    try:
+        early.result().discard()
+    except BaseException:  # noqa: BLE001, S110 - the compute's exception is the one raised
+        pass
 
 
 def _stored_run(case, prepared, summary, group) -> dict:

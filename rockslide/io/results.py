@@ -237,6 +237,7 @@ class ResultWriter:
         self.staging = staging
         self.tmp = staging.stage(self.path) if staging is not None else temporary_path(self.path)
         self._rows = 0
+        self._whole_history = False         # written at once by write_history, not streamed
         self._done = False
         self._keep_rows = keep_rows
         self._kept: list[np.ndarray] | None = [] if keep_rows > 0 else None
@@ -277,6 +278,8 @@ class ResultWriter:
     def append_history(self, rows: np.ndarray) -> None:
         """Append history rows (``float64[n, 6]``, columns ``kernel.HISTORY_COLUMNS``)."""
         self._check_open()
+        if self._whole_history:
+            raise ValueError("the whole time history was already written (write_history)")
         rows = np.asarray(rows, dtype=np.float64)
         if rows.ndim != 2 or rows.shape[1] != len(HISTORY_COLUMNS):
             raise ValueError(f"history rows must be float64[n, {len(HISTORY_COLUMNS)}], got {rows.shape}")
@@ -301,14 +304,32 @@ class ResultWriter:
             else:
                 self._kept = None                    # too long to keep: the caller reads the file
 
+    def write_history(self, history: dict) -> None:
+        """Write a whole time history held in memory (a `Result`'s ``history``) and compress it
+        now: what `finish` does with ``result.history``, done before it (a run's history, on a
+        thread of its own while its ensemble computes). `finish` is then given that result."""
+        self._check_open()
+        if self._rows:
+            raise ValueError("the time history was already written")
+        try:
+            interrupts.check()
+            if history and len(history.get("time", ())):
+                self._write_history_dict(history)
+                self._file.flush()              # its chunks are compressed now, not at finish
+            self._raw.check()
+        except BaseException as exc:
+            self.discard()
+            _raise_write_error(exc, self._raw, self.path)
+        self._whole_history = True
+
     def finish(self, result: Result, *, name: str, case_text: str = "", case: dict | None = None,
                records=(), extra_attrs: dict | None = None, ground: dict | None = None,
                extra_groups: dict | None = None) -> Path:
         """Write the ground motion, events, summary and metadata, then publish the file (or leave it
         to the writer's ``staging``).
 
-        The streamed history is used if rows were appended; otherwise ``result.history``. The
-        arguments are those of `write_result`.
+        The streamed history is used if rows were appended, the one `write_history` wrote if it was
+        called; otherwise ``result.history`` is written. The arguments are those of `write_result`.
 
         Returns
         -------
@@ -318,8 +339,8 @@ class ResultWriter:
         self._check_open()
         try:
             interrupts.check()
-            streamed = self._rows > 0
-            if not streamed and result.history and len(result.history.get("time", ())):
+            streamed = self._rows > 0 and not self._whole_history
+            if not self._whole_history and not streamed and result.history and len(result.history.get("time", ())):
                 self._write_history_dict(result.history)
             _write_body(self._file, result, name=name, case_text=case_text, case=case,
                         records=records, extra_attrs=extra_attrs, ground=ground, extra_groups=extra_groups)
@@ -800,7 +821,9 @@ class _RawFile:
         return max([on_disk] + [offset + len(data) for offset, data in self._patches])
 
     def seek(self, offset, whence=0):
-        base = {0: 0, 1: self._pos, 2: self._size()}[whence]
+        if whence not in (0, 1, 2):
+            raise ValueError(f"invalid whence ({whence!r})")
+        base = 0 if whence == 0 else self._pos if whence == 1 else self._size()   # only the end asks the disk
         self._pos = base + offset
         return self._pos
 
