@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import math
 import statistics
+import warnings
 
 import mpmath as mp
 import numpy as np
@@ -58,6 +59,24 @@ def test_the_log_normal_cdf_is_mpmaths_in_both_tails():
     assert np.all(error <= 2 * ULP * (1 + x * x))
     assert np.all(error[x < 0] <= 4 * ULP)
     assert np.allclose(N.log_normal_cdf(x), sp.log_ndtr(x), rtol=1e-13, atol=0)
+
+
+def test_the_pair_is_the_log_cdf_at_x_and_at_minus_x_to_the_bit():
+    """`N.log_normal_cdf_pair` (the probit fits' Newton steps) is `N.log_normal_cdf` at ``x`` and at
+    ``-x``, bit for bit, over every branch of both and at their edges: ``|x| = 1`` and the pieces'
+    bounds of ``|x| / sqrt 2`` (1, 8, 26, 27) on either side, signed zeros, infinities and NaN; no
+    warning (from a branch not taken)."""
+    bounds = np.array([1.0, 8.0, 26.0, 27.0]) / N.SQRT_HALF
+    edges = np.concatenate([bounds, np.nextafter(bounds, 0), np.nextafter(bounds, np.inf), [1.0, np.nextafter(1.0, 0),
+                            np.nextafter(1.0, 2), 0.0, 1e10, 1e300, np.inf]])
+    x = np.concatenate([RNG.uniform(-60, 60, 4000), 10.0 ** RNG.uniform(-6, 10, 1000), edges])
+    x = np.concatenate([x, -x, [np.nan, -0.0]]).reshape(-1, 4)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")          # numpy's default error state: underflow is silent
+        log_p, log_q = N.log_normal_cdf_pair(x)
+        assert np.array_equal(log_p, N.log_normal_cdf(x), equal_nan=True)
+        assert np.array_equal(log_q, N.log_normal_cdf(-x), equal_nan=True)
+        assert N.log_normal_cdf_pair(-3.0) == (N.log_normal_cdf(-3.0), N.log_normal_cdf(3.0))
 
 
 def test_erfcx_is_mpmaths_over_every_branch():

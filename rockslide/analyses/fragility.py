@@ -59,7 +59,7 @@ import numpy as np
 
 from ..case import Case, RecordSpec, Suite, SuiteEntry, case_with, load_suite, with_orientations
 from ..core import layout as L
-from ..core.normal import log_normal_cdf, normal_cdf, normal_quantile
+from ..core.normal import log_normal_cdf_pair, normal_cdf, normal_quantile
 from ..core.simulate import ground_array
 from ..engine.plan import MAX_POINTS, Plan, assemble, case_inputs, default_chunk_size
 from ..engine.prepare import (
@@ -892,7 +892,7 @@ def _log_likelihood(a, b, s, n, z):
     """The log-likelihood of each data set at ``(a, b)``, and ``ln Phi(eta)``, ``ln Phi(-eta)``
     at its levels (what Newton's next step at ``(a, b)`` takes)."""
     eta = a[:, None] + b[:, None] * s
-    log_p, log_q = log_normal_cdf(eta), log_normal_cdf(-eta)
+    log_p, log_q = log_normal_cdf_pair(eta)
     return np.sum(z * log_p + (n - z) * log_q, axis=-1), log_p, log_q
 
 
@@ -918,7 +918,8 @@ def probit_mle(s: np.ndarray, n: np.ndarray, z: np.ndarray):
     Newton's method on the log-likelihood ``sum z ln Phi(eta) + (n - z) ln Phi(-eta)``, which is
     concave in ``(a, b)``, with step halving so that it never decreases; started from the
     weighted least-squares line through the probits of ``(z + 1/2) / (n + 1)``. The derivatives in
-    ``eta`` use the ratios ``phi / Phi`` evaluated through `core.normal.log_normal_cdf` (no underflow in the tails).
+    ``eta`` use the ratios ``phi / Phi`` evaluated through `core.normal.log_normal_cdf_pair` (no underflow in the
+    tails).
     """
     s = np.asarray(s, dtype=np.float64)
     n = np.atleast_2d(np.asarray(n, dtype=np.float64))

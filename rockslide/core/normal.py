@@ -14,7 +14,8 @@ ufunc does).
 - `log_normal_cdf` is scipy's ``log_ndtr`` (by way of the Faddeeva package: ``ln(erfcx(-x/sqrt 2)
   / 2) - x^2/2`` below -1, ``log1p(-erfc(x/sqrt 2) / 2)`` above), with the scaled complementary
   error function `erfcx` from Cephes' erfc approximations, which are approximations of ``erfcx``
-  times ``exp(-y^2)``; no underflow however far in the lower tail.
+  times ``exp(-y^2)``; no underflow however far in the lower tail. `log_normal_cdf_pair` gives
+  ``ln Phi(x)`` and ``ln Phi(-x)`` together, from one evaluation of the error functions.
 - `normal_quantile` is Wichura's AS241, as Python's ``statistics.NormalDist`` writes it.
 - `chi2_sf` is the chi-square survival function for whole degrees of freedom, by its finite sums.
 """
@@ -82,17 +83,6 @@ def _erf_small(y):
     return y * _horner(_T, z) / _horner(_U, z)
 
 
-def _by_range(y, pieces) -> np.ndarray:
-    """``f(y)`` of the piece ``(low, high, f)`` whose ``low <= y < high`` (the last piece's ``high``
-    included), each ``f`` evaluated on its own elements only; NaN elsewhere."""
-    out = np.full(y.shape, np.nan)
-    for i, (low, high, f) in enumerate(pieces):
-        inside = (y >= low) & ((y <= high) if i == len(pieces) - 1 else (y < high))
-        if inside.any():
-            out[inside] = f(y[inside])
-    return out
-
-
 def _erfcx_series(y):
     with np.errstate(under="ignore"):             # 1/y^2 of a huge y: its terms vanish, as they should
         w = 0.5 / y / y
@@ -103,29 +93,43 @@ def _erfcx_series(y):
         return series / (y * math.sqrt(math.pi))
 
 
-_ERFCX = ((0.0, 1.0, lambda y: np.exp(y * y) * (1.0 - _erf_small(y))),
-          (1.0, 8.0, lambda y: _horner(_P, y) / _horner(_Q, y)),
-          (8.0, _SERIES_FROM, lambda y: _horner(_R, y) / _horner(_S, y)),
-          (_SERIES_FROM, math.inf, _erfcx_series))
-
-
-def erfcx(y) -> np.ndarray:
-    """The scaled complementary error function ``exp(y^2) erfc(y)`` for ``y >= 0`` (float64 array;
-    NaN below 0, 0 at ``inf``). Relative error about 1e-15 (tests/test_normal.py)."""
-    return _by_range(np.asarray(y, dtype=np.float64), _ERFCX)[()]
-
-
 def _exp_minus_square(y):
     with np.errstate(under="ignore"):
         return np.exp(-(y * y))
 
 
-#: erfc(y) for y >= 0 as Cephes evaluates it (``exp(-y^2) P / Q`` from y = 1); 0 from y = 27, where
-#: ``exp(-y^2)`` has underflowed.
-_ERFC = ((0.0, 1.0, lambda y: 1.0 - _erf_small(y)),
-         (1.0, 8.0, lambda y: _exp_minus_square(y) * _horner(_P, y) / _horner(_Q, y)),
-         (8.0, 27.0, lambda y: _exp_minus_square(y) * _horner(_R, y) / _horner(_S, y)),
-         (27.0, math.inf, np.zeros_like))
+def _error_functions(y, scaled) -> tuple[np.ndarray, np.ndarray]:
+    """``erfc(y)`` and ``erfcx(y) = exp(y^2) erfc(y)`` for ``y >= 0`` (NaN below 0 and at NaN), as
+    Cephes evaluates them (ndtr.c), each of its rational functions evaluated once for both: for
+    ``y < 1``, ``erfc = 1 - erf(y)`` and ``erfcx = exp(y^2) erfc`` (only where ``scaled``: NaN
+    elsewhere); for ``1 <= y < 8``, ``erfc = exp(-y^2) P / Q`` and ``erfcx = P / Q``; for ``8 <= y``,
+    ``R / S`` likewise, with ``erfc = 0`` from 27, where ``exp(-y^2)`` has underflowed, and ``erfcx``
+    its asymptotic series from `_SERIES_FROM`."""
+    erfc, erfcx = np.full(y.shape, np.nan), np.full(y.shape, np.nan)
+    near = (y >= 0.0) & (y < 1.0)
+    if near.any():
+        erfc[near] = 1.0 - _erf_small(y[near])
+        both = near & scaled
+        erfcx[both] = np.exp(y[both] * y[both]) * erfc[both]
+    for low, high, top, bottom in ((1.0, 8.0, _P, _Q), (8.0, 27.0, _R, _S)):
+        inside = (y >= low) & (y < high)
+        if inside.any():
+            part = y[inside]
+            numerator, denominator = _horner(top, part), _horner(bottom, part)
+            erfc[inside] = _exp_minus_square(part) * numerator / denominator
+            erfcx[inside] = numerator / denominator
+    erfc[y >= 27.0] = 0.0
+    series = y >= _SERIES_FROM
+    if series.any():
+        erfcx[series] = _erfcx_series(y[series])
+    return erfc, erfcx
+
+
+def erfcx(y) -> np.ndarray:
+    """The scaled complementary error function ``exp(y^2) erfc(y)`` for ``y >= 0`` (float64 array;
+    NaN below 0, 0 at ``inf``). Relative error about 1e-15 (tests/test_normal.py)."""
+    y = np.asarray(y, dtype=np.float64)
+    return _error_functions(y, np.True_)[1][()]
 
 
 def normal_cdf(x) -> np.ndarray:
@@ -139,9 +143,18 @@ def normal_cdf(x) -> np.ndarray:
     small = z < 1.0
     out[small] = 0.5 + 0.5 * _erf_small(t[small])
     rest = z >= 1.0
-    half_erfc = 0.5 * _by_range(z[rest], _ERFC)
+    half_erfc = 0.5 * _error_functions(z[rest], np.False_)[0]
     out[rest] = np.where(t[rest] > 0.0, 1.0 - half_erfc, half_erfc)
     return out[()]
+
+
+def _log_cdf(x, t, y, erfc, erfcx) -> np.ndarray:
+    """`log_normal_cdf` at ``x`` from ``t = x / sqrt 2``, ``y = |t|`` and the error functions at
+    ``y`` (`_error_functions`, ``erfcx`` needed where ``x < -1``)."""
+    with np.errstate(divide="ignore", over="ignore"):      # at elements of the other branch, unused
+        lower = np.log(0.5 * erfcx) - y * y
+        upper = np.log1p(-0.5 * np.where(t < 0.0, 2.0 - erfc, erfc))   # erfc(t) below 0 as 2 - erfc(-t)
+    return np.where(x < -1.0, lower, np.where(x >= -1.0, upper, np.nan))
 
 
 def log_normal_cdf(x) -> np.ndarray:
@@ -150,16 +163,19 @@ def log_normal_cdf(x) -> np.ndarray:
     2)`` above (about ``-Phi(-x)`` in the upper tail). ``-inf`` at ``-inf``, 0 at ``inf``."""
     x = np.asarray(x, dtype=np.float64)
     t = x * SQRT_HALF
-    out = np.full(x.shape, np.nan)
-    lower = x < -1.0
-    y = -t[lower]
-    with np.errstate(divide="ignore", over="ignore"):
-        out[lower] = np.log(0.5 * _by_range(y, _ERFCX)) - y * y
-    upper = x >= -1.0
-    a = t[upper]            # >= -1/sqrt 2: erfc(a) below 0 as 2 - erfc(-a)
-    erfc = _by_range(np.abs(a), _ERFC)
-    out[upper] = np.log1p(-0.5 * np.where(a < 0.0, 2.0 - erfc, erfc))
-    return out[()]
+    y = np.abs(t)
+    return _log_cdf(x, t, y, *_error_functions(y, x < -1.0))[()]
+
+
+def log_normal_cdf_pair(x) -> tuple[np.ndarray, np.ndarray]:
+    """``(ln Phi(x), ln Phi(-x))``: `log_normal_cdf` at ``x`` and at ``-x``, the same numbers to the
+    bit, from one evaluation of the error functions at ``|x| / sqrt 2`` (what the probit fits' Newton
+    steps take at every ``eta``)."""
+    x = np.asarray(x, dtype=np.float64)
+    t = x * SQRT_HALF
+    y = np.abs(t)
+    erfc, erfcx = _error_functions(y, np.abs(x) > 1.0)
+    return _log_cdf(x, t, y, erfc, erfcx)[()], _log_cdf(-x, -t, y, erfc, erfcx)[()]
 
 
 def normal_quantile(p) -> np.ndarray:
