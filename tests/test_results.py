@@ -422,6 +422,10 @@ def test_a_history_written_before_finish_gives_the_file_finish_writes(tmp_path, 
     assert early.result.history["time"].size == result.history["time"].size
     assert {k: str(v) for k, v in alone.attrs.items() if k != "created"} == \
         {k: str(v) for k, v in early.attrs.items() if k != "created"}
+    with ResultWriter(tmp_path / "none.h5") as writer:
+        writer.write_history({})                          # no history: nothing written, once
+        with pytest.raises(ValueError, match="already written"):
+            writer.write_history(result.history)
     with h5py.File(tmp_path / "alone.h5") as a, h5py.File(tmp_path / "early.h5") as b:
         names_a, names_b = [], []
         a.visit(names_a.append)

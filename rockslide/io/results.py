@@ -309,7 +309,7 @@ class ResultWriter:
         now: what `finish` does with ``result.history``, done before it (a run's history, on a
         thread of its own while its ensemble computes). `finish` is then given that result."""
         self._check_open()
-        if self._rows:
+        if self._rows or self._whole_history:
             raise ValueError("the time history was already written")
         try:
             interrupts.check()
