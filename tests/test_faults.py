@@ -301,10 +301,11 @@ def test_an_ensemble_writes_the_history_while_it_computes_and_the_same_file(ws, 
 
     monkeypatch.setattr(results.ResultWriter, "write_history", noting_the_thread)
     assert invoke("run", "case.yaml", "--ensemble", "6", "--no-plot", "--out-dir", "meanwhile").exit_code == 0
-    assert threads == ["rockslide-meanwhile"]
+    early = ["rockslide-meanwhile"] if ex.on_machine_code("cpu") else []     # numba's JIT: after the compute
+    assert threads == early
     monkeypatch.setattr(api_runs, "output_modules", lambda *args, **kwargs: [])
     assert invoke("run", "case.yaml", "--ensemble", "6", "--no-plot", "--out-dir", "after").exit_code == 0
-    assert threads == ["rockslide-meanwhile"]
+    assert threads == early
     meanwhile, after = (results.read_result(ws / folder / "example.h5") for folder in ("meanwhile", "after"))
     for name, column in after.result.history.items():
         early = meanwhile.result.history[name]
@@ -324,6 +325,8 @@ def test_an_ensemble_stopped_while_its_history_is_written_leaves_nothing(ws, mon
     """Ctrl-C while the neighbours compute, once the history's file was made on its own thread
     (or while that thread failed as well: the interruption is what is said): exit 130, the
     interruption's line, nothing in the output folder, no temporary file, no HDF5 file left open."""
+    if not ex.on_machine_code("cpu"):
+        pytest.skip("the history is written meanwhile only on the build's machine code, which this installation lacks")
     (ws / "case.yaml").write_text(case_text({"solver.dt": "1 ms"}))
     files_open = h5py.h5f.get_obj_count(h5py.h5f.OBJ_ALL, h5py.h5f.OBJ_FILE)
     written = threading.Event()
