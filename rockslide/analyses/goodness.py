@@ -136,7 +136,7 @@ def _pooled_isotonic(flat_n: np.ndarray, flat_z: np.ndarray) -> np.ndarray:
         reverse = pooled[:, :, ::-1]
         np.minimum.accumulate(reverse, axis=2, out=reverse)       # [row, i, j]: min over k >= j
         pooled[:, before] = -np.inf
-        out[part] = np.where(flat_n[part] > 0, pooled.max(axis=1), np.nan)
+        out[part] = pooled.max(axis=1)      # NaN at levels without runs: `isotonic` sets them
     return out
 
 

@@ -139,6 +139,32 @@ def axis_values(values, name: str):
     return items
 
 
+class Meanwhile:
+    """``task()`` on a thread of its own, started at once, while the caller computes; `result`
+    waits for it and gives its value or raises its exception. For the work on a study's outputs
+    that needs nothing of what is being computed (the modules they are written with,
+    `importing_meanwhile`; a run's history, written while its ensemble computes), only where
+    `output_modules` allows a second thread (the build's machine code)."""
+
+    def __init__(self, task, *, name: str = "rockslide-meanwhile"):
+        self._value = self._error = None
+        self._thread = threading.Thread(target=self._run, args=(task,), name=name, daemon=True)
+        self._thread.start()
+
+    def _run(self, task) -> None:
+        try:
+            self._value = task()
+        except BaseException as exc:  # noqa: BLE001 - raised again by result(), in the caller's thread
+            self._error = exc
+
+    def result(self):
+        """The task's value, once it is done; its exception raised here."""
+        self._thread.join()
+        if self._error is not None:
+            raise self._error
+        return self._value
+
+
 @contextlib.contextmanager
 def importing_meanwhile(modules: Sequence[str]):
     """Import ``modules`` on a thread of their own while the block runs; wait for it at the end.
@@ -159,37 +185,11 @@ def importing_meanwhile(modules: Sequence[str]):
     if not modules:
         yield
         return
-    loader = threading.Thread(target=load, name="rockslide-imports", daemon=True)
-    loader.start()
+    loader = Meanwhile(load, name="rockslide-imports")
     try:
         yield
     finally:
-        loader.join()
-
-
-class Meanwhile:
-    """``task()`` on a thread of its own, started at once, while the caller computes; `result`
-    waits for it and gives its value or raises its exception. For the work on a study's outputs
-    that needs nothing of what is being computed (a run's history, written while its ensemble
-    computes), only where `output_modules` allows a second thread (the build's machine code)."""
-
-    def __init__(self, task):
-        self._value = self._error = None
-        self._thread = threading.Thread(target=self._run, args=(task,), name="rockslide-meanwhile", daemon=True)
-        self._thread.start()
-
-    def _run(self, task) -> None:
-        try:
-            self._value = task()
-        except BaseException as exc:  # noqa: BLE001 - raised again by result(), in the caller's thread
-            self._error = exc
-
-    def result(self):
-        """The task's value, once it is done; its exception raised here."""
-        self._thread.join()
-        if self._error is not None:
-            raise self._error
-        return self._value
+        loader.result()
 
 
 def output_modules(outputs, *, device: str = "cpu", scheduler=None, analysis: Sequence[str] = ()) -> list[str]:

@@ -340,7 +340,7 @@ class ResultWriter:
         try:
             interrupts.check()
             streamed = self._rows > 0 and not self._whole_history
-            if not self._whole_history and not streamed and result.history and len(result.history.get("time", ())):
+            if self._rows == 0 and not self._whole_history and result.history and len(result.history.get("time", ())):
                 self._write_history_dict(result.history)
             _write_body(self._file, result, name=name, case_text=case_text, case=case,
                         records=records, extra_attrs=extra_attrs, ground=ground, extra_groups=extra_groups)
