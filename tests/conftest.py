@@ -466,3 +466,43 @@ def _case(folder):
     (folder / "case.yaml").write_text(yaml.safe_dump(data))
     for name in SHIPPED:
         shutil.copy(REPO / "records" / name, folder / name)
+
+
+def cpu_as_device(monkeypatch, launched=lambda inputs: None, log=None, per_launch=5):
+    """The GPU path of `execute` with the CPU's batch driver as the device (`core.gpu.prepare` and
+    `core.gpu.Launch` replaced), ``per_launch`` cases a launch: each launch calls ``launched(its
+    batch.compute inputs)``, and ``log`` (a list) gets ``("prepare", n)``, ``("launch", n)``,
+    ``("result", n)`` and ``("store", chunk)`` in the order they happen."""
+    from rockslide.core import batch, gpu
+    from rockslide.engine import chunks
+    from rockslide.engine import execute as ex
+
+    log = [] if log is None else log
+
+    class Launch:
+        def __init__(self, *inputs):
+            launched(inputs)
+            log.append(("launch", len(inputs[0])))
+            self.states = batch.compute(*inputs)
+
+        def result(self):
+            log.append(("result", len(self.states)))
+            return self.states
+
+    def prepare(*inputs):
+        log.append(("prepare", len(inputs[0])))
+        return inputs
+
+    save = chunks.ChunkStore.save
+
+    def logged_save(store, chunk, *args):
+        log.append(("store", chunk))
+        return save(store, chunk, *args)
+
+    monkeypatch.setattr(ex, "DEVICE_CASES_PER_LAUNCH", per_launch)
+    monkeypatch.setattr(gpu, "prepare", prepare)
+    monkeypatch.setattr(gpu, "Launch", Launch)
+    monkeypatch.setattr(ex, "check_device", lambda device: None)
+    monkeypatch.setattr(ex, "warm_up", lambda device, say: None)
+    monkeypatch.setattr(chunks.ChunkStore, "save", logged_save)
+

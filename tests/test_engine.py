@@ -19,7 +19,7 @@ import shutil
 import numpy as np
 import pytest
 import yaml
-from conftest import REPO, SHIPPED, invoke
+from conftest import REPO, SHIPPED, cpu_as_device, invoke
 
 import rockslide
 from rockslide.io import results
@@ -266,7 +266,6 @@ def test_the_device_gets_many_chunks_per_launch(monkeypatch):
     """The example's 1517-case grid in chunks of 16 (95 chunks) goes to the device in one launch,
     and each chunk is still stored on its own (resume works as on the CPU)."""
     from rockslide.analyses import sweep as sw
-    from rockslide.core import batch, gpu
     from rockslide.engine import chunks
     from rockslide.engine import execute as ex
 
@@ -274,13 +273,8 @@ def test_the_device_gets_many_chunks_per_launch(monkeypatch):
     plan = sw.plan_sweep(case, [sw.parse_axis("mu", "0.30:0.70:0.01"), sw.parse_axis("pga", "100gal:1000gal:25gal")],
                          records_dir=REPO / "records", chunk_size=16)
     launches = []
-
-    def device(*inputs):
-        launches.append(inputs[0].shape[0])
-        return batch.compute(*inputs)
-
-    monkeypatch.setattr(ex, "check_device", lambda device: None)
-    monkeypatch.setattr(gpu, "compute", device)
+    cpu_as_device(monkeypatch, lambda inputs: launches.append(inputs[0].shape[0]),
+                  per_launch=ex.DEVICE_CASES_PER_LAUNCH)
     store = chunks.MemoryStore(plan.key)
     ex.compute(plan, store, range(plan.n_chunks), device="gpu")
     assert plan.n_chunks == 95 and launches == [1517]
@@ -293,9 +287,8 @@ def test_the_device_gets_many_chunks_per_launch(monkeypatch):
 def test_a_resume_never_mixes_chunks_of_the_gpu_and_the_cpu(tmp_path, monkeypatch):
     """Chunks computed on the CPU are not reused by a run on the GPU, nor the reverse: the GPU rounds
     the last bits its own way (fused multiply-adds), so its chunks live under a key of their own
-    (`ChunkStore.for_device`). The GPU here is the CPU's kernel behind the device's entry point."""
+    (`ChunkStore.for_device`). The GPU here is the CPU's kernel behind the device's entry points."""
     from rockslide.analyses import sweep as sw
-    from rockslide.core import batch, gpu
     from rockslide.engine import chunks
     from rockslide.engine import execute as ex
 
@@ -303,9 +296,7 @@ def test_a_resume_never_mixes_chunks_of_the_gpu_and_the_cpu(tmp_path, monkeypatc
     plan = sw.plan_sweep(case, [sw.parse_axis("mu", "0.3,0.5"), sw.parse_axis("pga", "300gal,900gal")],
                          records_dir=REPO / "records", chunk_size=1)
     launched = []
-    monkeypatch.setattr(ex, "check_device", lambda device: None)
-    monkeypatch.setattr(ex, "warm_up", lambda device, say: None)
-    monkeypatch.setattr(gpu, "compute", lambda *inputs: launched.append(len(inputs[0])) or batch.compute(*inputs))
+    cpu_as_device(monkeypatch, lambda inputs: launched.append(len(inputs[0])), per_launch=ex.DEVICE_CASES_PER_LAUNCH)
     store = chunks.ChunkStore.beside(tmp_path / "example.sweep.h5", plan.key)
     assert ex.execute(plan, store, workers=1).computed == 4
     assert ex.execute(plan, store, device="gpu").computed == 4 and launched == [4]

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import invoke, one_line_error
+from conftest import cpu_as_device, invoke, one_line_error
 
 from rockslide.core import batch, gpu
 from rockslide.core import kernel as K
@@ -250,28 +250,40 @@ def test_warp_efficiency_counts_the_slowest_case_of_each_warp():
     assert sorted_issued == pytest.approx(32 * 39 + 32 * 7)
 
 
+def test_the_host_prepares_and_stores_while_the_device_computes(tmp_path, monkeypatch):
+    """`execute._compute_device` prepares launch k + 1 before it waits for launch k, and stores
+    launch k after launch k + 1 has started: the device waits only for the copies (12 cases at 5 a
+    launch: 3 launches of 4)."""
+    from rockslide.analyses import sweep as sw
+    from rockslide.case import load_case
+    from rockslide.engine import chunks
+    from rockslide.engine import execute as ex
+
+    log = []
+    cpu_as_device(monkeypatch, log=log)
+    axes = [sw.parse_axis("mu", "0.2,0.4,0.6"), sw.parse_axis("pga", "100gal,300gal,600gal,900gal")]
+    plan = sw.plan_sweep(load_case(EXAMPLE), axes, records_dir=RECORDS, chunk_size=2)
+    ex.execute(plan, chunks.ChunkStore.beside(tmp_path / "x.sweep.h5", plan.key), device="gpu")
+    assert log == [("prepare", 4), ("launch", 4),
+                   ("prepare", 4), ("result", 4), ("launch", 4), ("store", 0),
+                   ("prepare", 4), ("result", 4), ("launch", 4), ("store", 1),
+                   ("result", 4), ("store", 2)]
+
+
 def test_a_device_run_stores_a_chunk_a_launch_and_reads_nothing_back(tmp_path, monkeypatch):
     """On the GPU a chunk is up to a launch (`execute.device_chunks`: 12 cases at 5 a launch are 3
     chunks of 4, not the plan's 6 of 2), a launch holds the chunks that fit in
     `DEVICE_CASES_PER_LAUNCH` (a larger chunk goes alone), and the states come from the launches,
-    not read back from the chunk files. The device here is the CPU's batch driver under
-    `gpu.compute`'s name: what is tested is the launches and the files (the simulator tests above
-    hold the device's arithmetic)."""
+    not read back from the chunk files. The device here is the CPU's batch driver (`cpu_as_device`):
+    what is tested is the launches and the files (the simulator tests above hold the device's
+    arithmetic)."""
     from rockslide.analyses import sweep as sw
     from rockslide.case import load_case
     from rockslide.engine import chunks
     from rockslide.engine import execute as ex
 
     launched = []
-
-    def device(*inputs):
-        launched.append(len(inputs[0]))
-        return batch.compute(*inputs)
-
-    monkeypatch.setattr(ex, "DEVICE_CASES_PER_LAUNCH", 5)
-    monkeypatch.setattr(gpu, "compute", device)
-    monkeypatch.setattr(gpu, "require_device", lambda: None)
-    monkeypatch.setattr(ex, "warm_up", lambda device, say: None)
+    cpu_as_device(monkeypatch, lambda inputs: launched.append(len(inputs[0])))
     monkeypatch.setattr(ex, "collect", lambda *args: pytest.fail("the states were read back from the files"))
     axes = [sw.parse_axis("mu", "0.2,0.4,0.6"), sw.parse_axis("pga", "100gal,300gal,600gal,900gal")]
     cpu = ex.execute(sw.plan_sweep(load_case(EXAMPLE), axes, records_dir=RECORDS, chunk_size=2))
@@ -300,16 +312,12 @@ def test_an_interrupted_device_run_says_where_its_chunks_are(tmp_path, monkeypat
 
     launches = []
 
-    def device(*inputs):
+    def launched(inputs):
         launches.append(len(inputs[0]))
         if len(launches) == 2:
-            os.kill(os.getpid(), signal.SIGINT)     # Ctrl-C during the second launch
-        return batch.compute(*inputs)
+            os.kill(os.getpid(), signal.SIGINT)     # Ctrl-C during the second launch, which is stored
 
-    monkeypatch.setattr(ex, "DEVICE_CASES_PER_LAUNCH", 5)
-    monkeypatch.setattr(gpu, "compute", device)
-    monkeypatch.setattr(gpu, "require_device", lambda: None)
-    monkeypatch.setattr(ex, "warm_up", lambda device, say: None)
+    cpu_as_device(monkeypatch, launched)
     axes = [sw.parse_axis("mu", "0.2,0.4,0.6"), sw.parse_axis("pga", "100gal,300gal,600gal,900gal")]
     plan = sw.plan_sweep(load_case(EXAMPLE), axes, records_dir=RECORDS, chunk_size=2)
     store = chunks.ChunkStore.beside(tmp_path / "x.sweep.h5", plan.key)

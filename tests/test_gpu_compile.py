@@ -91,8 +91,7 @@ def device_type(host):
 
 
 # The production launch (`gpu.compute`) on `batch.warm_up_case`, up to the arrays it sends.
-params, states, base, count = batch.kernel_inputs(*batch.warm_up_case())
-order, host = gpu.launch_arguments(params, states, base, count)
+order, host = gpu.prepare(*batch.warm_up_case())
 argtypes = tuple(device_type(a) for a in host)
 
 out = {"simulator": gpu.cuda_simulator(), "run_case_is_kernel_run": gpu.run_case is K.run,

@@ -705,3 +705,33 @@ def test_after_the_disk_fills_hdf5_reads_back_what_it_wrote(tmp_path):
         raw.check()
     raw.close()
     assert (tmp_path / "f.tmp").read_bytes() == b"A" * 10      # nothing after the failure reached the disk
+
+
+@pytest.mark.parametrize(("shape", "dtype"), [((1000, 1001), np.float64), ((70001,), np.float64),
+                                              ((333, 777), np.int8), ((301, 300), np.int32), ((65537,), np.int64)])
+def test_a_large_variable_is_stored_as_hdf5_would_store_it(tmp_path, shape, dtype):
+    """`results._compressed_dataset` compresses the chunks itself, on threads: the dataset has the
+    chunks and filters of h5py's own compressed write of the same array, HDF5 reads the values back
+    through its filters (edge chunks included), and each stored chunk, all filters applied (mask 0),
+    holds the bytes of h5py's chunk at the same place once inflated (shuffled alike, an edge chunk's
+    padding alike)."""
+    import zlib
+
+    rng = np.random.default_rng(7)
+    values = (rng.random(shape) * 100).astype(dtype)
+    if values.dtype.kind == "f":
+        values[values < 30] = np.nan
+    with h5py.File(tmp_path / "x.h5", "w") as f:
+        results._compressed_dataset(f, "ours", values)
+        f.create_dataset("theirs", data=values, chunks=True, **results._COMPRESSION)
+    with h5py.File(tmp_path / "x.h5") as f:
+        ours, theirs = f["ours"], f["theirs"]
+        assert (ours.chunks, ours.compression, ours.compression_opts, ours.shuffle, ours.dtype) == \
+               (theirs.chunks, theirs.compression, theirs.compression_opts, theirs.shuffle, theirs.dtype)
+        assert np.array_equal(ours[...], values, equal_nan=True)
+        assert ours.id.get_num_chunks() == theirs.id.get_num_chunks() > 1
+        for i in range(ours.id.get_num_chunks()):
+            start = ours.id.get_chunk_info(i).chunk_offset
+            mask, stored = ours.id.read_direct_chunk(start)
+            assert mask == 0
+            assert zlib.decompress(stored) == zlib.decompress(theirs.id.read_direct_chunk(start)[1])

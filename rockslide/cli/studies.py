@@ -83,7 +83,7 @@ def where_options(what: str, unit: str):
                           "and the study has 10000 cases or more, else the CPU (the printout says why)."),
         click.option("--chunk-size", type=int, default=None, metavar="N",
                      help=f"{unit.capitalize()}s per chunk (default: about 1/100 of them, 4 to 256; on the GPU a "
-                          f"launch's, up to 65536). Part of the {what}'s definition: a different size does not "
+                          f"launch's, up to 262144). Part of the {what}'s definition: a different size does not "
                           "resume an interrupted run."),
         click.option("--wait-workers", type=click.FloatRange(0, 86400), default=None, metavar="SECONDS",
                      help="With --scheduler: how long to wait for a first worker to join the scheduler "

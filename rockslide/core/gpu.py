@@ -35,7 +35,7 @@ from . import batch
 from . import kernel as K
 
 __all__ = ["DeviceUnavailable", "cuda_module", "require_device", "device_kernel", "compute", "warm_up",
-           "launch_order", "launch_arguments", "warp_efficiency", "THREADS_PER_BLOCK", "WARP_SIZE"]
+           "prepare", "Launch", "launch_order", "warp_efficiency", "THREADS_PER_BLOCK", "WARP_SIZE"]
 
 #: Threads per block: the state machine needs many registers per thread, so small blocks keep
 #: several blocks resident per multiprocessor (the cases are already ordered by work).
@@ -168,24 +168,6 @@ def launch_order(params, base, first, count, kh):
     return np.lexsort((-intensity, -steps)).astype(np.int64)
 
 
-def launch_arguments(params, states, base, count):
-    """The arguments of `run_cases`, as host arrays in the kernel's order, and the case order.
-
-    ``params``, ``states``, ``base`` and ``count`` are `batch.kernel_inputs`; the cases go in
-    `launch_order`. Each array goes to the device as it is (``cuda.to_device``), so these arrays fix
-    the types the kernel is compiled for.
-
-    Returns
-    -------
-    tuple
-        ``(order, (params, states, base, bounds, count, history, events))``.
-    """
-    order = launch_order(params, base, params[:, K.P_FIRST], count, params[:, K.P_KH])
-    return order, (np.ascontiguousarray(params[order]), np.ascontiguousarray(states[order]), base,
-                   K.rest_bounds(base), count[order], np.empty((len(K.HISTORY_COLUMNS), 0)),
-                   np.empty((0, len(K.EVENT_COLUMNS))))
-
-
 def _ignore_performance_warnings():
     """Ignore numba's performance warnings (in a ``warnings.catch_warnings()`` block).
 
@@ -205,26 +187,74 @@ def _ignore_performance_warnings():
 def compute(params, states, base, first, count, kh, kv):
     """Run a batch of cases on the GPU and return their final states (the inputs are not changed).
 
-    Same parameters and result as `batch.compute`, which this is the device version of.
+    Same parameters and result as `batch.compute`, which this is the device version of: the batch
+    is made ready (`prepare`), launched (`Launch`) and waited for.
 
     Raises
     ------
     DeviceUnavailable
         numba-cuda is not installed or finds no GPU.
     """
-    kernel = device_kernel()
-    params, out, base, count = batch.kernel_inputs(params, states, base, first, count, kh, kv)
+    return Launch(*prepare(params, states, base, first, count, kh, kv)).result()
+
+
+def prepare(params, states, base, first, count, kh, kv):
+    """A batch made ready for the device on the host alone (no device call): `Launch`'s arguments.
+
+    The parameters are `batch.compute`'s. The cases go in `launch_order`, gathered once into the
+    kernel's inputs (`batch.kernel_inputs`). Each array goes to the device as it is
+    (``cuda.to_device``), so these arrays fix the types the kernel is compiled for. A caller with
+    several batches prepares the next one while the device computes the last (`engine.execute`),
+    so that the host's share is not added to the device's.
+
+    Returns
+    -------
+    tuple
+        ``(order, (params, states, base, bounds, count, history, events))``: the case order, and
+        `run_cases`' arguments as host arrays in that order.
+    """
+    params = np.asarray(params, dtype=np.float64)
     n = params.shape[0]
-    if n == 0:
-        return out
-    order, host = launch_arguments(params, out, base, count)
-    blocks = math.ceil(n / THREADS_PER_BLOCK)
-    with warnings.catch_warnings():
-        _ignore_performance_warnings()
-        device = [cuda.to_device(a) for a in host]
-        kernel[blocks, THREADS_PER_BLOCK](*device)
-        out[order] = device[1].copy_to_host()
-    return out
+    first, count, kh, kv = (np.broadcast_to(np.asarray(a), (n,)) for a in (first, count, kh, kv))
+    order = launch_order(params, np.asarray(base, dtype=np.float64), first, count, kh)
+    params, states, base, count = batch.kernel_inputs(params[order], np.asarray(states, dtype=np.float64)[order],
+                                                      base, first[order], count[order], kh[order], kv[order],
+                                                      copy=False)
+    return order, (params, states, base, K.rest_bounds(base), count, np.empty((len(K.HISTORY_COLUMNS), 0)),
+                   np.empty((0, len(K.EVENT_COLUMNS))))
+
+
+class Launch:
+    """A prepared batch (`prepare`) sent to the device and launched: the kernel runs while the host
+    goes on, until `result` waits for it.
+
+    Raises
+    ------
+    DeviceUnavailable
+        numba-cuda is not installed or finds no GPU.
+    """
+
+    def __init__(self, order, host):
+        self._order, self._states, self._out = order, None, None
+        if not len(order):
+            return
+        kernel = device_kernel()
+        with warnings.catch_warnings():
+            _ignore_performance_warnings()
+            device = [cuda.to_device(a) for a in host]
+            kernel[math.ceil(len(order) / THREADS_PER_BLOCK), THREADS_PER_BLOCK](*device)
+        self._states = device[1]
+
+    def result(self):
+        """The batch's final states in its own order (float64[n, N_STATE]), once the device is done."""
+        if self._out is None:
+            self._out = np.empty((len(self._order), K.N_STATE))
+            if self._states is not None:
+                with warnings.catch_warnings():
+                    _ignore_performance_warnings()
+                    self._out[self._order] = self._states.copy_to_host()
+                self._states = None
+        return self._out
 
 
 def warp_efficiency(states, params, order):

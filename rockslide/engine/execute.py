@@ -115,10 +115,14 @@ DEVICES = ("cpu", "gpu", "auto")
 AUTO_GPU_CASES = 10_000
 
 
-#: Cases per launch of the GPU kernel: enough to fill a large GPU many times over (an H100 keeps
-#: some 10^4 to 10^5 threads of a register-heavy kernel resident) and to sort by work over many
-#: chunks, few enough for the progress bar and Ctrl-C to come every launch.
-DEVICE_CASES_PER_LAUNCH = 1 << 16
+#: Cases per launch of the GPU kernel. A launch ends with its slowest warps while the rest of the
+#: device idles, and the kernel's 255 registers a thread leave room for some 34000 resident threads
+#: on an H200 (132 multiprocessors): launches of several such waves waste less of their tail.
+#: Measured on lent H200s (2026-11-29, 10^6 rocking cases at ``dt: auto``, host and device
+#: overlapped; results/bench_gpu.md): 2^16 cases a launch 7.3 s, 2^17 5.5 s, 2^18 4.8-5.3 s, 2^19
+#: 5.1 s, one launch of 2^20 5.4 s (its inputs made before, its chunks stored after the device's
+#: work). Few enough for the progress bar and Ctrl-C to come every launch (about a second there).
+DEVICE_CASES_PER_LAUNCH = 1 << 18
 
 
 def check_device(device: str) -> None:
@@ -155,32 +159,56 @@ def choose_device(device: str, n_cases: int) -> tuple[str, str]:
 
 
 def _compute_device(plan, store, chunks, progress, out=None):
-    """The chunks on the GPU (`core.gpu.compute`), as many per launch as fit in
-    `DEVICE_CASES_PER_LAUNCH` cases (at least one; the device sorts a launch's cases by work); each
-    chunk of a launch is stored, and put in ``out`` if given, when the launch is done. Ctrl-C is
-    checked between launches."""
+    """The chunks on the GPU (`core.gpu`), as many per launch as fit in `DEVICE_CASES_PER_LAUNCH`
+    cases (at least one; the device sorts a launch's cases by work); each chunk of a launch is
+    stored, and put in ``out`` if given, when the launch is done.
+
+    The host works while the device computes: the next launch is prepared (`gpu.prepare`: its order
+    by work, its inputs) before the running one is waited for, and the finished launch's chunks are
+    stored after the next one has started, so that the device waits only for the copies between two
+    launches. Ctrl-C lets the launch in flight finish and be stored."""
     from ..core import gpu
 
-    sizes = [plan.chunk_indices(c).size for c in chunks]
+    running = None      # (chunks, their case indices, the launch on the device)
+    for group in _launch_groups(plan, chunks):
+        if interrupts.requested() is not None:
+            break
+        parts = [plan.chunk_indices(c) for c in group]
+        prepared = gpu.prepare(*_chunk_inputs(plan, np.concatenate(parts)))
+        finished = None if running is None else (*running[:2], running[2].result())
+        running = (group, parts, gpu.Launch(*prepared))
+        if finished is not None:
+            _store_launch(store, progress, out, *finished)
+    if running is not None:
+        _store_launch(store, progress, out, *running[:2], running[2].result())
+    interrupts.check()
+
+
+def _launch_groups(plan, chunks):
+    """``chunks`` in consecutive groups of at most `DEVICE_CASES_PER_LAUNCH` cases (at least one
+    chunk each): the launches of `_compute_device`."""
     group: list[int] = []
     cases = 0
-    for position, chunk in enumerate(chunks):
+    for chunk in chunks:
+        size = plan.chunk_indices(chunk).size
+        if group and cases + size > DEVICE_CASES_PER_LAUNCH:
+            yield group
+            group, cases = [], 0
         group.append(chunk)
-        cases += sizes[position]
-        if position + 1 < len(chunks) and cases + sizes[position + 1] <= DEVICE_CASES_PER_LAUNCH:
-            continue
-        interrupts.check()
-        parts = [plan.chunk_indices(c) for c in group]
-        final = gpu.compute(*_chunk_inputs(plan, np.concatenate(parts)))
-        for c, indices, part in zip(group, parts, np.split(final, np.cumsum([p.size for p in parts])[:-1]),
-                                    strict=True):
-            store.save(c, indices, part)
-            if out is not None:
-                out[indices] = part
-        if progress is not None:
-            progress(cases)
-        group, cases = [], 0
-    interrupts.check()
+        cases += size
+    if group:
+        yield group
+
+
+def _store_launch(store, progress, out, group, parts, final):
+    """A finished launch's chunks stored (and put in ``out`` if given), then counted in ``progress``."""
+    for c, indices, part in zip(group, parts, np.split(final, np.cumsum([p.size for p in parts])[:-1]),
+                                strict=True):
+        store.save(c, indices, part)
+        if out is not None:
+            out[indices] = part
+    if progress is not None:
+        progress(sum(p.size for p in parts))
 
 
 def device_chunks(plan: Plan) -> Plan:

@@ -39,7 +39,9 @@ def sweep_variables(plan: Plan, states: np.ndarray) -> dict:
     end = np.where(np.isnan(st[:, L.S_END_TIME]), plan.record_end, st[:, L.S_END_TIME])
     alpha = plan.case_column(L.P_ALPHA)
     undecided = np.zeros(len(st), dtype=bool)
-    moving = np.flatnonzero(st[:, L.S_MODE] != L.REST)                   # a block at rest stands
+    # a block at rest stands, an overturned one has fallen, one outside the model is not decided
+    # here: `may_still_overturn` says False for each, and only the others are asked, one at a time
+    moving = np.flatnonzero((st[:, L.S_MODE] != L.REST) & ~overturned & (st[:, L.S_STATUS] == L.STATUS_OK))
     for i, row in zip(moving, moving if plan.rows is None else plan.rows[moving], strict=True):
         p = plan.params[row]
         undecided[i] = may_still_overturn_params(st[i], p)
