@@ -100,7 +100,10 @@ def test_the_bootstrap_fits_each_resample_as_a_fit_of_it_alone():
     converged; a resample's (median, beta) must be what `probit_mle` gives for its counts alone.
     6 records give at most 462 distinct resamples of 1000, so most are repeats. Each resample is
     drawn here as `_bootstrap` draws it (the same generator and seed) and fitted by itself: equal
-    to the bit, since every row's arithmetic is the same whichever rows it is fitted with."""
+    to the bit, since every row's arithmetic is the same whichever rows it is fitted with, where
+    numpy's exp and log are the C library's. On a CPU with AVX-512 numpy's own vector code (SVML)
+    can round a row's last bit differently in a larger array (2026-11-29: 7 of 198 resamples, 1 ulp
+    each): within 2 ulp there, and most to the bit."""
     levels = np.linspace(0.1, 1.5, 15)
     rng = np.random.default_rng(5)
     capacity = 0.7 * np.exp(0.4 * rng.standard_normal((6, 1)) + 0.1 * rng.standard_normal((6, 15)))
@@ -117,7 +120,9 @@ def test_the_bootstrap_fits_each_resample_as_a_fit_of_it_alone():
                 expected.append((math.exp(-a[0] / b[0]), 1.0 / b[0]))
     assert len({tuple(p) for p in np.sort(picks, axis=1)}) < 150          # repeats: the case above
     assert fit.resamples_fitted == len(expected) > 150
-    assert np.array_equal(fit.samples, np.array(expected))
+    expected = np.array(expected)
+    assert np.all(np.abs(fit.samples - expected) <= 2 * np.spacing(np.abs(expected)))
+    assert np.count_nonzero((fit.samples != expected).any(axis=1)) <= len(expected) // 10
 
 
 def plain_newton(a, b, s, n, z):

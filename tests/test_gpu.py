@@ -325,3 +325,42 @@ def test_an_interrupted_device_run_says_where_its_chunks_are(tmp_path, monkeypat
         ex.execute(plan, store, device="gpu")
     assert stopped.value.chunks == 3 and stopped.value.store.count() == 2
     assert stopped.value.store.folder == store.for_plan(plan.key).for_device("gpu").folder
+
+
+def test_a_launch_holds_its_device_arrays_until_its_result(monkeypatch):
+    """numba-cuda frees a dropped device array later, with others, and CUDA's free waits for the
+    device: `gpu.Launch` keeps every array it sent until `Launch.result` has copied the states back,
+    so that no free waits for its kernel while the host has work to do beside it. A stand-in for
+    numba.cuda tells which arrays are alive (its kernel changes nothing: the states come back as
+    they went, in the batch's order)."""
+    import gc
+    import types
+    import weakref
+
+    alive = []
+
+    class DeviceArray:
+        def __init__(self, array):
+            self.array = np.array(array)
+            alive.append(weakref.ref(self))
+
+        def copy_to_host(self):
+            return self.array.copy()
+
+    class Kernel:
+        def __getitem__(self, config):
+            return lambda *arrays: None
+
+    monkeypatch.setattr(gpu, "cuda", types.SimpleNamespace(to_device=DeviceArray))
+    monkeypatch.setattr(gpu, "device_kernel", lambda: Kernel())
+    params, states, base, first, count, kh, kv = batch.warm_up_case()
+    params, states = np.repeat(params, 5, axis=0), np.repeat(states, 5, axis=0)
+    states[:, K.S_MAX_X] = np.arange(5.0)                     # tells the cases apart
+    order, host = gpu.prepare(params, states, base, first, count, kh, kv)
+    launch = gpu.Launch(order, host)
+    gc.collect()
+    assert len(alive) == 7 and all(ref() is not None for ref in alive)
+    final = launch.result()
+    gc.collect()
+    assert [ref() for ref in alive] == [None] * 7
+    assert np.array_equal(final[:, K.S_MAX_X], np.arange(5.0))

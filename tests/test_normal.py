@@ -101,15 +101,23 @@ def test_the_edges_are_scipys():
 
 def test_the_normal_quantile_is_pythons_and_scipys():
     """`normal_quantile` (AS241 on arrays): Python's ``NormalDist.inv_cdf`` (the same algorithm, in
-    C) to the bit over the central region, both tails and down to the smallest double; scipy's
-    ``ndtri`` (Cephes, another algorithm) within 1.1e-15 relative; -inf, inf at 0, 1 and NaN
-    outside [0, 1] as ndtri; and the inverse of `normal_cdf` (within the two functions' errors)."""
+    C) over the central region, both tails and down to the smallest double, to the bit where numpy's
+    log is the C library's; scipy's ``ndtri`` (Cephes, another algorithm) within 1.1e-15 relative;
+    -inf, inf at 0, 1 and NaN outside [0, 1] as ndtri; and the inverse of `normal_cdf` (within the
+    two functions' errors).
+
+    On a CPU with AVX-512 numpy computes log with its own vector code (SVML), which differs from the
+    C library's in the last bit now and then: there 12 of 840 000 quantiles in the tails (30 draws
+    like this one, 2026-11-29) differed from Python's by up to 3 ulp. So: all within 4 ulp, and all
+    but one in 1000 to the bit (another algorithm, or a changed coefficient, misses that)."""
     p = np.concatenate([RNG.random(20_000), 10.0 ** -RNG.uniform(0, 320, 4000), 1 - 10.0 ** -RNG.uniform(0, 16, 4000),
                         [0.075, 0.925, 0.5 - 0.425, 0.5 + 0.425, np.exp(-25.0), 5e-324]])
     p = p[(p > 0) & (p < 1)]
     x = N.normal_quantile(p)
     inv_cdf = statistics.NormalDist().inv_cdf
-    assert np.array_equal(x, [inv_cdf(v) for v in p])
+    python = np.array([inv_cdf(v) for v in p])
+    assert np.all(np.abs(x - python) <= 4 * np.spacing(np.abs(python)))
+    assert np.count_nonzero(x != python) <= p.size // 1000
     reference = sp.ndtri(p)
     assert np.all(np.abs(x - reference) <= 1.1e-15 * np.abs(reference))
     edges = np.array([0.0, 1.0, -0.1, 1.1, np.nan])

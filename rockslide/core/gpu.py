@@ -228,6 +228,11 @@ class Launch:
     """A prepared batch (`prepare`) sent to the device and launched: the kernel runs while the host
     goes on, until `result` waits for it.
 
+    The launch holds its device arrays until `result` has copied the states back. numba-cuda frees
+    a dropped device array later, with others, and CUDA's free waits for the device: arguments
+    dropped as the kernel starts would, every few launches, stop the host until the kernel ends,
+    and the host's work meant to run beside it (`engine.execute`) would run after it.
+
     Raises
     ------
     DeviceUnavailable
@@ -235,25 +240,25 @@ class Launch:
     """
 
     def __init__(self, order, host):
-        self._order, self._states, self._out = order, None, None
+        self._order, self._device, self._out = order, None, None
         if not len(order):
             return
         kernel = device_kernel()
         with warnings.catch_warnings():
             _ignore_performance_warnings()
-            device = [cuda.to_device(a) for a in host]
-            kernel[math.ceil(len(order) / THREADS_PER_BLOCK), THREADS_PER_BLOCK](*device)
-        self._states = device[1]
+            self._device = [cuda.to_device(a) for a in host]
+            kernel[math.ceil(len(order) / THREADS_PER_BLOCK), THREADS_PER_BLOCK](*self._device)
 
     def result(self):
-        """The batch's final states in its own order (float64[n, N_STATE]), once the device is done."""
+        """The batch's final states in its own order (float64[n, N_STATE]), once the device is done;
+        its device arrays are let go then."""
         if self._out is None:
             self._out = np.empty((len(self._order), K.N_STATE))
-            if self._states is not None:
+            if self._device is not None:
                 with warnings.catch_warnings():
                     _ignore_performance_warnings()
-                    self._out[self._order] = self._states.copy_to_host()
-                self._states = None
+                    self._out[self._order] = self._device[1].copy_to_host()
+                self._device = None
         return self._out
 
 
