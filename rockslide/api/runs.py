@@ -222,8 +222,8 @@ def ensemble_note(prepared, members: int, workers: int | None) -> str:
     """What an ensemble of ``members`` of ``prepared``'s case may take, said before it is planned: its
     planning (`PLAN_SECONDS_PER_MEMBER`) and an upper estimate of its compute on ``workers`` threads
     (every member moving to the end, as `engine.prepare.work` estimates a run)."""
+    from ..core import local_threads
     from ..engine import prepare as engine
-    from ..engine.execute import local_threads
 
     threads = int(workers) if workers is not None else local_threads()
     computing = members * engine.work(prepared).steps / (engine.STEPS_PER_SECOND * threads)

@@ -17,3 +17,14 @@ contract in ``pyproject.toml`` enforces it.
 - `normal`: the normal distribution's CDF, log-CDF and quantile and the chi-square tail, on numpy
   (the fits' and the ensembles' statistics, without scipy.special).
 """
+
+import os
+
+
+def local_threads() -> int:
+    """Threads to run on by default: every core this process may run on (a study's batches, a
+    file's compression)."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:                    # not on Linux
+        return os.cpu_count() or 1

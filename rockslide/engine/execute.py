@@ -26,6 +26,7 @@ import numpy as np
 
 from .. import interrupts
 from ..core import layout as L
+from ..core import local_threads
 from ..errors import CaseError, exception_text
 from .chunks import ChunkStore, MemoryStore, collect, missing_chunks
 from .cluster import (  # noqa: F401  (the cluster's names, used here and re-exported: `execute.find_scheduler`...)
@@ -315,16 +316,6 @@ def local_kernel() -> Callable:
         return compute_batch
     from ..core import batch
     return batch.compute
-
-
-def local_threads() -> int:
-    """Threads a local sweep uses by default: every core this process may run on."""
-    import os
-
-    try:
-        return len(os.sched_getaffinity(0))
-    except AttributeError:                    # not on Linux
-        return os.cpu_count() or 1
 
 
 def _chunk_inputs(plan: Plan, indices: np.ndarray):

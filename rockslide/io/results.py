@@ -108,6 +108,7 @@ import numpy as np
 
 from .. import interrupts
 from .._version import __version__
+from ..core import local_threads
 from ..core.layout import HISTORY_COLUMNS, STATE_NAMES
 from ..errors import OutputError
 from ..inputs import regular_size
@@ -573,7 +574,7 @@ def _compressed_dataset(group, name: str, values: np.ndarray):
         shuffled = np.ascontiguousarray(block).view(np.uint8).reshape(-1, values.dtype.itemsize).T
         return zlib.compress(shuffled.tobytes(), _COMPRESSION["compression_opts"])
 
-    with ThreadPoolExecutor(max_workers=max(1, min(len(starts), os.cpu_count() or 1))) as pool:
+    with ThreadPoolExecutor(max_workers=max(1, min(len(starts), local_threads()))) as pool:
         for start, data in zip(starts, pool.map(compressed, starts), strict=True):
             ds.id.write_direct_chunk(start, data)
     return ds
